@@ -1,0 +1,180 @@
+"""Joint conventions: the book's variables <-> servo angles by official joint name <-> Dynamixel ticks.
+
+Book variables (seed 001, code 2.4/2.10): ``th`` (11 sagittal angles, positive about -Y), ``phi`` (6 coronal
+angles, positive about +X), ``psi`` (3 transverse angles, positive about +Z) and the support foot. th1-th3,
+phi1-phi2, psi1 belong to the support leg, th4-th6, phi3-phi4, psi2 to the swing leg. Servo angles follow the
+official ROBOTIS description (0 at tick 2048). The spec holds the per-joint linear map for each support foot, so
+book -> servo -> book is exact and servo -> ticks -> servo is within half a tick.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from .errors import InputError
+from .spec import BOOK_VARS, SUPPORTS, Spec
+
+N_TH, N_PHI, N_PSI = 11, 6, 3
+#: The book's standing pose (code 2.4) [deg]: arms hanging straight, legs straight, head up.
+STANDING_TH_DEG = (90.0, 0.0, 0.0, 180.0, 0.0, 0.0, 180.0, 0.0, 180.0, 0.0, 0.0)
+STANDING_PHI_DEG = (0.0, 0.0, 180.0, 0.0, 180.0, 180.0)
+STANDING_PSI_DEG = (0.0, 0.0, 0.0)
+
+
+def check_support(support: str) -> str:
+    """Return ``support`` if it is ``left`` or ``right``, else raise :class:`InputError`."""
+    if support not in SUPPORTS:
+        raise InputError(f"support: expected 'left' or 'right', got {support!r}")
+    return support
+
+
+def _angles(name: str, values: object, n: int) -> np.ndarray:
+    try:
+        arr = np.array(values, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected {n} numbers, got {values!r}") from None
+    if arr.ndim == 1:
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != n:
+        got = arr.shape[-1] if arr.ndim else 0
+        raise InputError(f"{name}: expected {n} angles, got {got}")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{name}: expected finite angles, got NaN or infinity")
+    return arr
+
+
+@dataclass(frozen=True)
+class BookAngles:
+    """A batch of N poses in the book's variables [rad]: th (N,11), phi (N,6), psi (N,3), one support foot."""
+
+    th: np.ndarray
+    phi: np.ndarray
+    psi: np.ndarray
+    support: str
+
+    @classmethod
+    def make(cls, th: object, phi: object, psi: object = None, support: str = "left") -> "BookAngles":
+        """Validate angles [rad] (one pose as 1-D sequences, or N poses as 2-D arrays)."""
+        th_a, phi_a = _angles("th", th, N_TH), _angles("phi", phi, N_PHI)
+        psi_a = np.zeros((th_a.shape[0], N_PSI)) if psi is None else _angles("psi", psi, N_PSI)
+        n = {th_a.shape[0], phi_a.shape[0], psi_a.shape[0]}
+        if len(n) != 1:
+            raise InputError(f"th, phi, psi: expected the same number of poses, got {sorted(n)}")
+        return cls(th_a, phi_a, psi_a, check_support(support))
+
+    @classmethod
+    def from_deg(cls, th: object, phi: object, psi: object = None, support: str = "left") -> "BookAngles":
+        """Like :meth:`make` with angles in degrees."""
+        conv = lambda v, name, n: np.radians(_angles(name, v, n))  # noqa: E731
+        return cls.make(conv(th, "th", N_TH), conv(phi, "phi", N_PHI),
+                        None if psi is None else conv(psi, "psi", N_PSI), support)
+
+    @classmethod
+    def standing(cls, support: str = "left", n: int = 1) -> "BookAngles":
+        """The book's standing pose, repeated ``n`` times."""
+        rep = lambda v: np.radians(np.tile(np.array(v, dtype=float), (n, 1)))  # noqa: E731
+        return cls.make(rep(STANDING_TH_DEG), rep(STANDING_PHI_DEG), rep(STANDING_PSI_DEG), support)
+
+    @classmethod
+    def from_vector(cls, x: np.ndarray, support: str = "left") -> "BookAngles":
+        """From the PSO vector layout (N,20) = [th(11), phi(6), psi(3)] [rad] (book code 2.11)."""
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        if x.shape[1] != N_TH + N_PHI + N_PSI:
+            raise InputError(f"book vector: expected 20 values per pose, got {x.shape[1]}")
+        return cls(x[:, :N_TH], x[:, N_TH:N_TH + N_PHI], x[:, N_TH + N_PHI:], check_support(support))
+
+    @property
+    def n(self) -> int:
+        """Number of poses in the batch."""
+        return self.th.shape[0]
+
+    def vector(self) -> np.ndarray:
+        """The (N,20) vector [th, phi, psi] [rad]."""
+        return np.concatenate([self.th, self.phi, self.psi], axis=1)
+
+    def row(self, i: int) -> "BookAngles":
+        """Pose ``i`` as a batch of one."""
+        return BookAngles(self.th[i:i + 1], self.phi[i:i + 1], self.psi[i:i + 1], self.support)
+
+    def degrees(self, i: int = 0) -> dict[str, list[float]]:
+        """Pose ``i`` as ``{"th": [...], "phi": [...], "psi": [...]}`` in degrees (for humans and JSON)."""
+        return {k: [float(v) for v in np.degrees(getattr(self, k)[i])] for k in ("th", "phi", "psi")}
+
+
+def _map_arrays(spec: Spec, support: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    idx = np.array([BOOK_VARS.index(j.book[support].var) for j in spec.joints])
+    sign = np.array([float(j.book[support].sign) for j in spec.joints])
+    offset = np.array([j.book[support].offset for j in spec.joints])
+    return idx, sign, offset
+
+
+def book_to_servo(angles: BookAngles, spec: Spec) -> np.ndarray:
+    """Servo angles (N,20) [rad] in Dynamixel ID order (``spec.joint_names``)."""
+    idx, sign, offset = _map_arrays(spec, angles.support)
+    return sign * angles.vector()[:, idx] + offset
+
+
+def servo_to_book(servo: np.ndarray, support: str, spec: Spec) -> BookAngles:
+    """Book variables for servo angles (N,20) or (20,) [rad] in ID order, seen from ``support``."""
+    servo = _angles("servo angles", servo, len(spec.joints))
+    idx, sign, offset = _map_arrays(spec, check_support(support))
+    vec = np.empty_like(servo)
+    vec[:, idx] = (servo - offset) * sign
+    return BookAngles.from_vector(vec, support)
+
+
+def servo_from_mapping(values: Mapping[str, object], spec: Spec, degrees: bool = True) -> np.ndarray:
+    """A (20,) servo vector [rad] from ``{joint name: angle}``; every joint exactly once."""
+    if not isinstance(values, Mapping):
+        raise InputError(f"servo angles: expected an object {{joint: angle}}, got {type(values).__name__}")
+    names = spec.joint_names
+    unknown = sorted(set(values) - set(names))
+    if unknown:
+        raise InputError(f"servo angles: unknown joint {unknown[0]!r}; expected the official names ({names[0]}, ...)")
+    missing = [n for n in names if n not in values]
+    if missing:
+        raise InputError(f"servo angles: expected all 20 joints, missing {', '.join(missing)}")
+    out = np.array([_scalar(values[n], n) for n in names])
+    return np.radians(out) if degrees else out
+
+
+def _scalar(value: object, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise InputError(f"{name}: expected a finite number, got {value!r}")
+    return float(value)
+
+
+def servo_to_ticks(servo: np.ndarray, spec: Spec) -> np.ndarray:
+    """Goal-position ticks for servo angles [rad] (nearest tick); angles beyond the servo's range are an error."""
+    s = spec.servo
+    ticks = np.rint(np.asarray(servo, dtype=float) / s.rad_per_tick).astype(np.int64) + s.center_tick
+    bad = (ticks < s.min_tick) | (ticks > s.max_tick)
+    if np.any(bad):
+        i = int(np.argwhere(bad.reshape(-1))[0][0]) % len(spec.joints)
+        raise InputError(f"{spec.joints[i].name}: angle outside the servo range ±180°")
+    return ticks
+
+
+def ticks_to_servo(ticks: np.ndarray, spec: Spec) -> np.ndarray:
+    """Servo angles [rad] for goal-position ticks."""
+    return (np.asarray(ticks, dtype=float) - spec.servo.center_tick) * spec.servo.rad_per_tick
+
+
+def limit_violations(servo: Sequence[float], spec: Spec) -> list[dict[str, float | str]]:
+    """Joints of one pose outside their cable-safe limits: ``[{joint, deg, lower_deg, upper_deg}]``."""
+    out: list[dict[str, float | str]] = []
+    for joint, q in zip(spec.joints, np.asarray(servo, dtype=float).reshape(-1)):
+        if not joint.lower - 1e-9 <= q <= joint.upper + 1e-9:
+            out.append({"joint": joint.name, "deg": round(math.degrees(q), 4),
+                        "lower_deg": round(math.degrees(joint.lower), 4), "upper_deg": round(math.degrees(joint.upper), 4)})
+    return out
+
+
+def servo_dict(servo_row: Sequence[float], spec: Spec, degrees: bool = True) -> dict[str, float]:
+    """``{joint name: angle}`` for one pose, in degrees by default."""
+    conv = math.degrees if degrees else float
+    return {j.name: conv(float(q)) for j, q in zip(spec.joints, servo_row)}

@@ -1,0 +1,32 @@
+"""Full-body forward kinematics: the D-H and projection models, one result type (:class:`BodyPoints`)."""
+
+from __future__ import annotations
+
+from typing import Iterable
+
+from ..errors import InputError
+from ..joints import BookAngles
+from ..spec import Spec
+from .dh import forward_dh
+from .points import POINT_NAMES, BodyPoints
+from .projection import forward_pb
+
+MODELS = ("dh", "pb")
+
+__all__ = ["MODELS", "POINT_NAMES", "BodyPoints", "forward", "forward_dh", "forward_pb"]
+
+
+def forward(angles: BookAngles, spec: Spec, model: str = "dh", sp: Iterable[float] = (0.0, 0.0, 0.0),
+            gamma: float = 0.0) -> BodyPoints:
+    """Body points of a batch of poses with ``model`` ("dh" or "pb"), support sole centre at ``sp`` [m],
+    heading ``gamma`` [rad] about Z (book fig. 2.17)."""
+    if model == "dh":
+        points = forward_dh(angles, spec)
+    elif model == "pb":
+        points = forward_pb(angles, spec)
+    else:
+        raise InputError(f"model: expected 'dh' or 'pb', got {model!r}")
+    sp = tuple(sp)
+    if gamma != 0.0 or any(v != 0.0 for v in sp):
+        points = points.placed(sp, gamma)
+    return points

@@ -1,0 +1,85 @@
+"""Batched rigid transforms for the kinematic chains.
+
+A :class:`Frame` holds N homogeneous transforms as the three columns of the rotation and the origin, each a
+(3, N) array, so that one NumPy operation updates the whole batch. Composition with a Denavit-Hartenberg joint
+(book eq. 2.40, ``DHMat``: Rz(delta) Tz(d) Tx(a) Rx(alpha)) uses precomputed cos/sin of delta and a constant
+alpha, which keeps a step to a handful of array operations.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+
+def _snap(v: float) -> float:
+    """Round cos/sin of multiples of pi/2 to exact 0 or ±1 so that constant steps cost nothing."""
+    for exact in (0.0, 1.0, -1.0):
+        if abs(v - exact) < 1e-15:
+            return exact
+    return v
+
+
+@dataclass(frozen=True)
+class Frame:
+    """N transforms: rotation columns ``x``, ``y``, ``z`` and origin ``p``, each (3, N) [m]."""
+
+    x: np.ndarray
+    y: np.ndarray
+    z: np.ndarray
+    p: np.ndarray
+
+    @classmethod
+    def constant(cls, rotation: Sequence[Sequence[float]], origin: Sequence[float], n: int) -> "Frame":
+        """The same transform N times (rotation given as a 3x3 matrix, origin [m])."""
+        r = np.asarray(rotation, dtype=float)
+        rep = lambda v: np.repeat(np.asarray(v, dtype=float)[:, None], n, axis=1)  # noqa: E731
+        return cls(rep(r[:, 0]), rep(r[:, 1]), rep(r[:, 2]), rep(origin))
+
+    def dh(self, cos_d: np.ndarray, sin_d: np.ndarray, d: float, a: float, alpha: float) -> "Frame":
+        """Compose with the D-H matrix of joint angle delta (given as cos/sin), offset d, length a, twist alpha."""
+        x = cos_d * self.x + sin_d * self.y
+        y = cos_d * self.y - sin_d * self.x
+        ca, sa = _snap(math.cos(alpha)), _snap(math.sin(alpha))
+        if sa == 0.0:
+            y2, z2 = (y, self.z) if ca > 0 else (-y, -self.z)
+        elif ca == 0.0:
+            y2, z2 = (self.z, -y) if sa > 0 else (-self.z, y)
+        else:
+            y2, z2 = ca * y + sa * self.z, ca * self.z - sa * y
+        p = self.p
+        if a != 0.0:
+            p = p + a * x
+        if d != 0.0:
+            p = p + d * self.z
+        return Frame(x, y2, z2, p)
+
+    def fixed(self, rotation: Sequence[Sequence[float]] | None = None, origin: Sequence[float] = (0.0, 0.0, 0.0)) -> "Frame":
+        """Compose with a constant transform (the book's "additional transform" matrices)."""
+        cols = (self.x, self.y, self.z)
+        p = self.point(origin)
+        if rotation is None:
+            return Frame(self.x, self.y, self.z, p)
+        r = np.asarray(rotation, dtype=float)
+        new = []
+        for j in range(3):
+            acc = None
+            for k in range(3):
+                w = _snap(float(r[k, j]))
+                if w == 0.0:
+                    continue
+                term = cols[k] if w == 1.0 else -cols[k] if w == -1.0 else w * cols[k]
+                acc = term if acc is None else acc + term
+            new.append(acc)
+        return Frame(new[0], new[1], new[2], p)
+
+    def point(self, local: Sequence[float]) -> np.ndarray:
+        """A point given in this frame [m], as (3, N) in the parent frame."""
+        p = self.p
+        for col, v in zip((self.x, self.y, self.z), local):
+            if v != 0.0:
+                p = p + v * col
+        return p

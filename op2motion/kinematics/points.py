@@ -1,0 +1,115 @@
+"""BodyPoints: the one result type of both kinematic models.
+
+Every joint centre under its official joint name, the hands, sole centres, pelvis centre (midpoint of the hip-yaw
+joints), neck (the torso origin: shoulder-pitch height on the centre line), head top and the four corners of each
+foot, for N poses, in the world frame (support-foot sole centre, X forward, Y left, Z up; ``sp`` shifts it,
+``gamma`` turns it). Joints whose axes intersect share a row (hip roll/pitch, ankle pitch/roll).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Iterable
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from ..spec import Foot
+
+#: Unique point rows, in storage order.
+ROWS: tuple[str, ...] = (
+    "l_ankle", "l_knee", "l_hip", "l_hip_yaw", "r_ankle", "r_knee", "r_hip", "r_hip_yaw",
+    "pelvis", "neck", "head_pan", "head_tilt", "head_top",
+    "l_sho_pitch", "l_sho_roll", "l_el", "left_hand", "r_sho_pitch", "r_sho_roll", "r_el", "right_hand",
+    "left_sole", "right_sole",
+)
+#: Foot corners in each foot's frame order: front-left, front-right, back-right, back-left.
+CORNER_ROWS: tuple[str, ...] = tuple(f"{side}_foot_{i}" for side in ("left", "right") for i in range(4))
+ALL_ROWS = ROWS + CORNER_ROWS
+ROW = {name: i for i, name in enumerate(ALL_ROWS)}
+#: Public point names -> storage rows (official joint names share rows where axes intersect).
+ALIASES: dict[str, str] = {
+    "l_ank_pitch": "l_ankle", "l_ank_roll": "l_ankle", "r_ank_pitch": "r_ankle", "r_ank_roll": "r_ankle",
+    "l_hip_pitch": "l_hip", "l_hip_roll": "l_hip", "r_hip_pitch": "r_hip", "r_hip_roll": "r_hip",
+    "l_knee": "l_knee", "r_knee": "r_knee", "l_hip_yaw": "l_hip_yaw", "r_hip_yaw": "r_hip_yaw",
+}
+POINT_NAMES: tuple[str, ...] = tuple(
+    n for n in ("r_sho_pitch", "l_sho_pitch", "r_sho_roll", "l_sho_roll", "r_el", "l_el", "r_hip_yaw", "l_hip_yaw",
+                "r_hip_roll", "l_hip_roll", "r_hip_pitch", "l_hip_pitch", "r_knee", "l_knee", "r_ank_pitch",
+                "l_ank_pitch", "r_ank_roll", "l_ank_roll", "head_pan", "head_tilt", "left_hand", "right_hand",
+                "left_sole", "right_sole", "pelvis", "neck", "head_top"))
+
+
+def row_of(name: str) -> int:
+    """Storage row of a public point name or row name."""
+    return ROW[ALIASES.get(name, name)]
+
+
+def new_slab(n: int) -> np.ndarray:
+    """An uninitialised (rows, 3, N) array for a model to fill."""
+    return np.empty((len(ALL_ROWS), 3, n))
+
+
+@dataclass(frozen=True)
+class BodyPoints:
+    """Named body points for N poses: ``data`` is (rows, 3, N) [m] in the world frame."""
+
+    data: np.ndarray
+    support: str
+    model: str
+
+    @property
+    def n(self) -> int:
+        """Number of poses."""
+        return self.data.shape[2]
+
+    @property
+    def swing(self) -> str:
+        """The swing side (``left`` or ``right``)."""
+        return "right" if self.support == "left" else "left"
+
+    def point(self, name: str) -> np.ndarray:
+        """Point ``name`` for every pose, (N, 3) [m]."""
+        return self.data[row_of(name)].T
+
+    def foot_corners(self, side: str) -> np.ndarray:
+        """Corners of the ``left`` or ``right`` foot sole, (N, 4, 3) [m] (front-left, front-right, back-right, back-left)."""
+        start = ROW[f"{side}_foot_0"]
+        return self.data[start:start + 4].transpose(2, 0, 1)
+
+    @property
+    def swing_foot_corners(self) -> np.ndarray:
+        """Corners of the swing foot's sole, (N, 4, 3) [m]."""
+        return self.foot_corners(self.swing)
+
+    @property
+    def swing_foot_min_z(self) -> np.ndarray:
+        """Lowest swing-foot corner height, (N,) [m] (book code 2.11 ``sft_z_min``)."""
+        start = ROW[f"{self.swing}_foot_0"]
+        return self.data[start:start + 4, 2].min(axis=0)
+
+    def placed(self, sp: Iterable[float] = (0.0, 0.0, 0.0), gamma: float = 0.0) -> "BodyPoints":
+        """The same points with the support sole centre moved to ``sp`` [m] and turned by ``gamma`` [rad] about Z."""
+        c, s = np.cos(gamma), np.sin(gamma)
+        x, y = self.data[:, 0], self.data[:, 1]
+        out = self.data.copy()
+        out[:, 0], out[:, 1] = c * x - s * y, s * x + c * y
+        out += np.asarray(tuple(sp), dtype=float)[None, :, None]
+        return BodyPoints(out, self.support, self.model)
+
+    def as_dict(self, i: int = 0) -> dict[str, list[float]]:
+        """Pose ``i`` as ``{point name: [x, y, z]}`` [m]."""
+        return {name: [float(v) for v in self.data[row_of(name), :, i]] for name in POINT_NAMES}
+
+    def select(self, i: int) -> "BodyPoints":
+        """Pose ``i`` as a batch of one."""
+        return BodyPoints(self.data[:, :, i:i + 1], self.support, self.model)
+
+
+def foot_corner_offsets(foot: "Foot", side: str) -> tuple[tuple[float, float], ...]:
+    """Sole corners (forward, left) [m] about the sole centre: front-left, front-right, back-right, back-left.
+
+    The outer edge is on the left of the left foot and on the right of the right foot (book fig. 2.30).
+    """
+    left_w, right_w = (foot.outer, foot.inner) if side == "left" else (foot.inner, foot.outer)
+    return ((foot.front, left_w), (foot.front, -right_w), (-foot.back, -right_w), (-foot.back, left_w))
