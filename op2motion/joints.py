@@ -23,6 +23,9 @@ N_TH, N_PHI, N_PSI = 11, 6, 3
 STANDING_TH_DEG = (90.0, 0.0, 0.0, 180.0, 0.0, 0.0, 180.0, 0.0, 180.0, 0.0, 0.0)
 STANDING_PHI_DEG = (0.0, 0.0, 180.0, 0.0, 180.0, 180.0)
 STANDING_PSI_DEG = (0.0, 0.0, 0.0)
+#: The book's PSO search box (code 2.10, pso_posture_opt.m) [deg], in the vector order [th(11), phi(6), psi(3)].
+BOOK_PSO_LOWER_DEG = (30, 0, -90, 90, -90, -30, 90, 0, 90, 0, -40, -30, -30, 150, -30, 180, 90, -30, -30, -20)
+BOOK_PSO_UPPER_DEG = (90, 60, 0, 270, 0, 30, 270, 90, 270, 90, 40, 30, 30, 210, 30, 270, 180, 30, 30, 20)
 
 
 def check_support(support: str) -> str:
@@ -86,6 +89,15 @@ class BookAngles:
         if x.shape[1] != N_TH + N_PHI + N_PSI:
             raise InputError(f"book vector: expected 20 values per pose, got {x.shape[1]}")
         return cls(x[:, :N_TH], x[:, N_TH:N_TH + N_PHI], x[:, N_TH + N_PHI:], check_support(support))
+
+    @classmethod
+    def random(cls, n: int, rng: np.random.Generator, support: str = "left", psi: bool = True) -> "BookAngles":
+        """``n`` poses drawn uniformly from the book's PSO box (psi = 0 unless ``psi``)."""
+        lo, hi = np.radians(BOOK_PSO_LOWER_DEG), np.radians(BOOK_PSO_UPPER_DEG)
+        x = lo + (hi - lo) * rng.random((n, lo.size))
+        if not psi:
+            x[:, N_TH + N_PHI:] = 0.0
+        return cls.from_vector(x, support)
 
     @property
     def n(self) -> int:

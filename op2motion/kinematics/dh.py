@@ -18,10 +18,10 @@ import numpy as np
 from ..joints import BookAngles
 from ..spec import Spec
 from ..trig import sincos
+from .batch import run_chunked
 from .frames import Frame
 from .points import ROW, BodyPoints, foot_corner_offsets, new_slab
 
-CHUNK = 4096  # poses per block: keeps every temporary in cache
 _HALF_PI = math.pi / 2
 # World axes of frame 0 (book W with gamma = 0): x0 = +Y, y0 = +Z, z0 = +X.
 _W0 = ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
@@ -37,10 +37,9 @@ _NECK_ROT = {True: ((0.0, 1.0, 0.0), (-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
 def forward_dh(angles: BookAngles, spec: Spec) -> BodyPoints:
     """Body points of N poses in the support-foot frame (sole centre at the origin, gamma = 0)."""
     out = new_slab(angles.n)
-    for start in range(0, angles.n, CHUNK):
-        stop = min(angles.n, start + CHUNK)
-        _chunk(angles.th[start:stop], angles.phi[start:stop], angles.psi[start:stop], out[:, :, start:stop],
-               spec, angles.support == "left")
+    left = angles.support == "left"
+    run_chunked(angles.n, lambda a, b: _chunk(angles.th[a:b], angles.phi[a:b], angles.psi[a:b], out[:, :, a:b],
+                                             spec, left))
     return BodyPoints(out, angles.support, "dh")
 
 
@@ -55,9 +54,9 @@ def _chunk(th: np.ndarray, phi: np.ndarray, psi: np.ndarray, out: np.ndarray, sp
            keep: dict[str, Frame] | None = None) -> None:
     g = spec.geometry
     m = th.shape[0]
-    st = [sincos(th[:, i]) for i in range(11)]  # (sin, cos) of th1..th11
-    sf = [sincos(phi[:, i]) for i in range(6)]
-    sy = [sincos(psi[:, i]) for i in range(3)]
+    sin_a, cos_a = sincos(np.concatenate([th, phi, psi], axis=1).T)  # one call for all 20 angles
+    pairs = [(sin_a[i], cos_a[i]) for i in range(20)]
+    st, sf, sy = pairs[:11], pairs[11:17], pairs[17:]                    # (sin, cos) of th, phi, psi
     sgn = 1.0 if left else -1.0
 
     # Support leg, from the ankle up (B1-B6). Shifted angles use cos/sin identities instead of new trig.

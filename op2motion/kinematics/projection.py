@@ -29,9 +29,9 @@ from ..errors import ModelError
 from ..joints import BookAngles
 from ..spec import Spec
 from ..trig import sincos
+from .batch import run_chunked
 from .points import ROW, BodyPoints, foot_corner_offsets, new_slab
 
-CHUNK = 4096
 PSI_TOLERANCE_RAD = 1e-12  # psi must be zero for this model
 
 
@@ -40,9 +40,8 @@ def forward_pb(angles: BookAngles, spec: Spec) -> BodyPoints:
     if np.any(np.abs(angles.psi) > PSI_TOLERANCE_RAD):
         raise ModelError("the projection model assumes psi = 0 (no transverse rotation); use --model dh")
     out = new_slab(angles.n)
-    for start in range(0, angles.n, CHUNK):
-        stop = min(angles.n, start + CHUNK)
-        _chunk(angles.th[start:stop], angles.phi[start:stop], out[:, :, start:stop], spec, angles.support == "left")
+    left = angles.support == "left"
+    run_chunked(angles.n, lambda a, b: _chunk(angles.th[a:b], angles.phi[a:b], out[:, :, a:b], spec, left))
     return BodyPoints(out, angles.support, "pb")
 
 
@@ -71,16 +70,26 @@ class _Link:
 
 def _chunk(th: np.ndarray, phi: np.ndarray, out: np.ndarray, spec: Spec, left: bool) -> None:
     g = spec.geometry
-    cum_t = np.cumsum(th[:, :6], axis=1)          # th1, th12, ..., th123456
-    t123 = cum_t[:, 2]
-    cum_f = np.cumsum(phi[:, :4], axis=1)         # phi1, phi12, phi123, phi1234
-    p12 = cum_f[:, 1]
-    trig_t = [sincos(cum_t[:, i]) for i in range(6)]
-    t1237 = t123 + th[:, 6]
-    t1239 = t123 + th[:, 8]
-    arm_t = [sincos(a) for a in (t1237, t1237 + th[:, 7], t1239, t1239 + th[:, 9], t123 + th[:, 10])]
-    trig_f = [sincos(cum_f[:, i]) for i in range(4)]
-    arm_f = [sincos(p12 + phi[:, 4]), sincos(p12 + phi[:, 5])]
+    m = th.shape[0]
+    # All 17 cumulative angles of the chunk in one (17, m) array, so one sincos call serves them all.
+    a = np.empty((17, m))
+    np.copyto(a[0], th[:, 0])
+    for i in range(1, 6):                                   # th1, th12, ..., th123456
+        np.add(a[i - 1], th[:, i], out=a[i])
+    np.add(a[2], th[:, 6], out=a[6])                        # th1237
+    np.add(a[6], th[:, 7], out=a[7])                        # th12378
+    np.add(a[2], th[:, 8], out=a[8])                        # th1239
+    np.add(a[8], th[:, 9], out=a[9])                        # th123910
+    np.add(a[2], th[:, 10], out=a[10])                      # th12311
+    np.copyto(a[11], phi[:, 0])
+    for i in range(1, 4):                                   # phi1, phi12, phi123, phi1234
+        np.add(a[10 + i], phi[:, i], out=a[11 + i])
+    np.add(a[12], phi[:, 4], out=a[15])                     # phi125
+    np.add(a[12], phi[:, 5], out=a[16])                     # phi126
+    sin_a, cos_a = sincos(a)
+    trig = [(sin_a[i], cos_a[i]) for i in range(17)]
+    trig_t, arm_t = trig[:6], trig[6:11]
+    trig_f, arm_f = trig[11:15], trig[15:17]
 
     calf, femur = _Link(trig_t[0], trig_f[0]), _Link(trig_t[1], trig_f[0])
     torso = _Link(trig_t[2], trig_f[1])
