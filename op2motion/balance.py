@@ -12,35 +12,18 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import InputError
-from .kinematics.points import ALL_ROWS, BodyPoints, row_of
+from .kinematics.com import mass_weights
+from .kinematics.points import BodyPoints
 from .spec import Spec
 
 PENALTY = 100.0  # the book's penalty value (code 2.8, 2.9)
 FLOOR_TOLERANCE_M = 1e-9  # a swing foot this close to the floor counts as on it (rounding of a flat foot)
 COM_MODEL_LUMPED = "lumped (book table 2.8 masses at link midpoints)"
-_WEIGHTS: dict[str, np.ndarray] = {}
-
-
-def mass_weights(spec: Spec) -> np.ndarray:
-    """Mass [kg] attributed to each body-point row, so that CoM = sum(w * point) / sum(w)."""
-    key = spec.sha256
-    if key not in _WEIGHTS:
-        w = np.zeros(len(ALL_ROWS))
-        for m in spec.lumped_masses:
-            try:
-                a, b = row_of(m.start), row_of(m.end)
-            except KeyError as exc:
-                raise InputError(f"{spec.path}: lumped_mass {m.name!r}: unknown body point {exc.args[0]!r}") from None
-            w[a] += m.mass * (1.0 - m.fraction)
-            w[b] += m.mass * m.fraction
-        _WEIGHTS[key] = w
-    return _WEIGHTS[key]
 
 
 def com_lumped(points: BodyPoints, spec: Spec) -> np.ndarray:
-    """Lumped-mass centre of mass of each pose, (N, 3) [m] in the world frame."""
-    w = mass_weights(spec)
-    return np.tensordot(w, points.data, axes=(0, 0)).T / w.sum()
+    """Lumped-mass centre of mass of each pose, (N, 3) [m] in the world frame (computed by the models)."""
+    return points.com.T
 
 
 def support_extents(spec: Spec, support: str, br: float = 1.0) -> tuple[float, float, float, float]:

@@ -19,6 +19,7 @@ from ..joints import BookAngles
 from ..spec import Spec
 from ..trig import sincos
 from .batch import run_chunked
+from .com import slab_com
 from .frames import Frame
 from .points import ROW, BodyPoints, foot_corner_offsets, new_slab
 
@@ -38,9 +39,14 @@ def forward_dh(angles: BookAngles, spec: Spec) -> BodyPoints:
     """Body points of N poses in the support-foot frame (sole centre at the origin, gamma = 0)."""
     out = new_slab(angles.n)
     left = angles.support == "left"
-    run_chunked(angles.n, lambda a, b: _chunk(angles.th[a:b], angles.phi[a:b], angles.psi[a:b], out[:, :, a:b],
-                                             spec, left))
-    return BodyPoints(out, angles.support, "dh")
+    com = np.empty((3, angles.n))
+
+    def work(a: int, b: int) -> None:
+        _chunk(angles.th[a:b], angles.phi[a:b], angles.psi[a:b], out[:, :, a:b], spec, left)
+        com[:, a:b] = slab_com(out[:, :, a:b], spec)
+
+    run_chunked(angles.n, work)
+    return BodyPoints(out, com, angles.support, "dh")
 
 
 def chain_frames(angles: BookAngles, spec: Spec) -> dict[str, Frame]:

@@ -52,9 +52,11 @@ def new_slab(n: int) -> np.ndarray:
 
 @dataclass(frozen=True)
 class BodyPoints:
-    """Named body points for N poses: ``data`` is (rows, 3, N) [m] in the world frame."""
+    """Named body points for N poses: ``data`` is (rows, 3, N) [m] in the world frame; ``com`` is the lumped-mass
+    centre of mass (3, N) [m] (book table 2.8 masses, see :mod:`op2motion.kinematics.com`)."""
 
     data: np.ndarray
+    com: np.ndarray
     support: str
     model: str
 
@@ -92,10 +94,14 @@ class BodyPoints:
         """The same points with the support sole centre moved to ``sp`` [m] and turned by ``gamma`` [rad] about Z."""
         c, s = np.cos(gamma), np.sin(gamma)
         x, y = self.data[:, 0], self.data[:, 1]
+        shift = np.asarray(tuple(sp), dtype=float)
         out = self.data.copy()
         out[:, 0], out[:, 1] = c * x - s * y, s * x + c * y
-        out += np.asarray(tuple(sp), dtype=float)[None, :, None]
-        return BodyPoints(out, self.support, self.model)
+        out += shift[None, :, None]
+        com = self.com.copy()
+        com[0], com[1] = c * self.com[0] - s * self.com[1], s * self.com[0] + c * self.com[1]
+        com += shift[:, None]
+        return BodyPoints(out, com, self.support, self.model)
 
     def as_dict(self, i: int = 0) -> dict[str, list[float]]:
         """Pose ``i`` as ``{point name: [x, y, z]}`` [m]."""
@@ -103,7 +109,7 @@ class BodyPoints:
 
     def select(self, i: int) -> "BodyPoints":
         """Pose ``i`` as a batch of one."""
-        return BodyPoints(self.data[:, :, i:i + 1], self.support, self.model)
+        return BodyPoints(self.data[:, :, i:i + 1], self.com[:, i:i + 1], self.support, self.model)
 
 
 def foot_corner_offsets(foot: "Foot", side: str) -> tuple[tuple[float, float], ...]:

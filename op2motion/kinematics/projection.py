@@ -30,6 +30,7 @@ from ..joints import BookAngles
 from ..spec import Spec
 from ..trig import sincos
 from .batch import run_chunked
+from .com import slab_com
 from .points import ROW, BodyPoints, foot_corner_offsets, new_slab
 
 PSI_TOLERANCE_RAD = 1e-12  # psi must be zero for this model
@@ -41,8 +42,14 @@ def forward_pb(angles: BookAngles, spec: Spec) -> BodyPoints:
         raise ModelError("the projection model assumes psi = 0 (no transverse rotation); use --model dh")
     out = new_slab(angles.n)
     left = angles.support == "left"
-    run_chunked(angles.n, lambda a, b: _chunk(angles.th[a:b], angles.phi[a:b], out[:, :, a:b], spec, left))
-    return BodyPoints(out, angles.support, "pb")
+    com = np.empty((3, angles.n))
+
+    def work(a: int, b: int) -> None:
+        _chunk(angles.th[a:b], angles.phi[a:b], out[:, :, a:b], spec, left)
+        com[:, a:b] = slab_com(out[:, :, a:b], spec)
+
+    run_chunked(angles.n, work)
+    return BodyPoints(out, com, angles.support, "pb")
 
 
 class _Link:
