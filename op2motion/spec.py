@@ -303,6 +303,12 @@ def _geometry(path: str, joints: Mapping[str, Joint], points: Mapping[str, Point
         if not cond:
             raise SpecError(f"{path}: joint table: {what} (the kinematic models assume it)")
 
+    for name, joint in joints.items():
+        if name.startswith("l_") and "r_" + name[2:] in joints:
+            mirror = joints["r_" + name[2:]]
+            (x, y, z), (rr, pp, yy) = joint.origin_xyz, joint.origin_rpy
+            need(mirror.origin_xyz == (x, -y, z) and mirror.origin_rpy == (-rr, pp, -yy),
+                 f"{mirror.name} origin must mirror {name}'s (x, -y, z; -roll, pitch, -yaw)")
     for side, sgn in (("l", 1.0), ("r", -1.0)):
         for joint in ("hip_pitch", "ank_roll"):
             need(origin(f"{side}_{joint}") == (0.0, 0.0, 0.0), f"{side}_{joint} origin must be at its parent's origin")
