@@ -1,0 +1,91 @@
+"""The command line: design.md §4 keys, exit codes 0/2, one-line errors, nothing written on bad input."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from op2motion.cli import main
+
+STAND_TH = "90 0 0 180 0 0 180 0 180 0 0".split()
+STAND_PHI = "0 0 180 0 180 180".split()
+CODE_2_6 = ["--th", *"80 10 0 210 -10 -5 170 10 200 20 0".split(), "--phi", *"-10 5 170 10 200 170".split()]
+
+
+def run(capsys, *argv: str) -> tuple[int, str, str]:
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_fk_json_has_the_contract_keys(capsys):
+    code, out, err = run(capsys, "fk", "--model", "dh", "--support", "left", *CODE_2_6, "--psi", "10", "-5", "0",
+                         "--json")
+    assert code == 0 and err == ""
+    doc = json.loads(out)
+    for key in ("points", "com", "left_hand", "right_hand", "swing_foot_corners", "swing_foot_min_z", "servo_deg"):
+        assert key in doc
+    assert len(doc["points"]) >= 27 and "l_el" in doc["points"] and "right_sole" in doc["points"]
+    assert len(doc["swing_foot_corners"]) == 4 and len(doc["servo_deg"]) == 20
+    assert doc["left_hand"] == doc["points"]["left_hand"]
+
+
+def test_fk_human_output_and_pb_model(capsys):
+    code, out, _ = run(capsys, "fk", "--model", "pb", *CODE_2_6)
+    assert code == 0 and "centre of mass" in out and "stability margin" in out
+
+
+def test_convert_round_trip(capsys):
+    code, out, _ = run(capsys, "convert", "--th", *STAND_TH, "--phi", *STAND_PHI, "--support", "right", "--json")
+    doc = json.loads(out)
+    assert code == 0 and doc["ticks"]["4"] == 2560 and doc["servo_deg"]["l_el"] == pytest.approx(90.0)
+    code, out, _ = run(capsys, "convert", "--servo-deg", json.dumps(doc["servo_deg"]), "--support", "right", "--json")
+    back = json.loads(out)
+    assert code == 0 and back["th"] == pytest.approx([float(v) for v in STAND_TH], abs=1e-9)
+    assert back["phi"] == pytest.approx([float(v) for v in STAND_PHI], abs=1e-9)
+
+
+def test_plot_writes_a_png(capsys, tmp_path):
+    png = tmp_path / "standing.png"
+    code, out, _ = run(capsys, "plot", "--model", "both", "-o", str(png), "--target", "0.1", "0.05", "0.07")
+    assert code == 0 and "wrote" in out
+    data = png.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["fk", "--th", "1", "2", "--phi", *STAND_PHI], "expected 11 angles, got 2"),
+    (["fk", "--th", "nan", *STAND_TH[1:], "--phi", *STAND_PHI], "finite"),
+    (["fk", "--support", "up"], "invalid choice"),
+    (["fk", "--pose", "/no/such/pose.json"], "no such pose file"),
+    (["fk", "--model", "pb", *CODE_2_6, "--psi", "5", "0", "0"], "--model dh"),
+    (["fk", "--br", "0", "--th", *STAND_TH, "--phi", *STAND_PHI], "br"),
+    (["convert", "--servo-deg", '{"l_knee": 0}'], "missing"),
+    (["plot", "/no/such/pose.json", "-o", "OUT"], "no such pose file"),
+    (["--spec", "/no/spec.toml", "fk"], "cannot read spec"),
+    (["frobnicate"], "invalid choice"),
+])
+def test_bad_input_is_one_line_exit_2_and_writes_nothing(capsys, tmp_path, monkeypatch, argv, needle):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run(capsys, *argv)
+    assert code == 2 and out == ""
+    assert err.count("\n") == 1 and needle in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_malformed_spec_file_is_exit_2(capsys, tmp_path):
+    bad = tmp_path / "op2.toml"
+    bad.write_text('schema = "op2motion.spec/1"\nname = 3\n', encoding="utf-8")
+    code, _, err = run(capsys, "--spec", str(bad), "fk")
+    assert code == 2 and str(bad) in err and "name" in err
+
+
+def test_module_entry_point_exit_codes():
+    ok = subprocess.run([sys.executable, "-m", "op2motion", "fk", "--th", *STAND_TH, "--phi", *STAND_PHI, "--json"],
+                        capture_output=True, text=True)
+    assert ok.returncode == 0 and json.loads(ok.stdout)["support"] == "left"
+    bad = subprocess.run([sys.executable, "-m", "op2motion", "fk", "--th", "1"], capture_output=True, text=True)
+    assert bad.returncode == 2 and bad.stdout == "" and len(bad.stderr.strip().splitlines()) == 1
