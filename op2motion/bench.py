@@ -29,7 +29,7 @@ def _best_ms(fn: Callable[[], Any], repeat: int) -> float:
     return best * 1000.0
 
 
-def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 5, seed: int = 0) -> dict[str, Any]:
+def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0) -> dict[str, Any]:
     """Time batched forward kinematics + CoM for ``n`` poses with each model; figures in milliseconds."""
     rng = np.random.default_rng(seed)
     poses_dh = BookAngles.random(n, rng, "left", psi=True)

@@ -188,7 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = add("bench", cmd_bench, "speed figures of the batched kinematic models")
     p.add_argument("--poses", type=int, default=40_000, help="batch size (figures are scaled to 40 000)")
-    p.add_argument("--repeat", type=int, default=5, help="runs per figure; the best is reported")
+    p.add_argument("--repeat", type=int, default=9, help="runs per figure; the best is reported")
     return parser
 
 

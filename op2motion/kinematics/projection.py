@@ -53,17 +53,17 @@ def forward_pb(angles: BookAngles, spec: Spec) -> BodyPoints:
 
 
 class _Link:
-    """Precomputed trig of one (T, F) pair: the unit projected vector and its forward normal."""
+    """A unit projected link vector for one (T, F) pair, and the forward normal of its sagittal direction."""
 
     __slots__ = ("cx", "sy", "cz", "fx", "fz")
 
-    def __init__(self, t: tuple[np.ndarray, np.ndarray], f: tuple[np.ndarray, np.ndarray]):
-        sin_t, cos_t = t
-        sin_f, cos_f = f
-        acf = np.abs(cos_f)
-        self.cx = acf * cos_t          # x per unit length
-        self.sy = -np.abs(sin_t) * sin_f  # y per unit length
-        self.cz = acf * sin_t          # z per unit length
+    def __init__(self, t: tuple[np.ndarray, np.ndarray, np.ndarray], f: tuple[np.ndarray, np.ndarray, np.ndarray]):
+        sin_t, cos_t, abs_sin_t = t
+        sin_f, _, abs_cos_f = f
+        self.cx = abs_cos_f * cos_t       # x per unit length
+        self.sy = abs_sin_t * sin_f       # -y per unit length
+        np.negative(self.sy, out=self.sy)
+        self.cz = abs_cos_f * sin_t       # z per unit length
         self.fx, self.fz = -sin_t, cos_t  # sagittal direction turned by +90° (book foot corners)
 
     def add(self, base: np.ndarray, length: float, out: np.ndarray) -> np.ndarray:
@@ -78,23 +78,27 @@ class _Link:
 def _chunk(th: np.ndarray, phi: np.ndarray, out: np.ndarray, spec: Spec, left: bool) -> None:
     g = spec.geometry
     m = th.shape[0]
+    th, phi = np.ascontiguousarray(th.T), np.ascontiguousarray(phi.T)  # (11, m), (6, m): contiguous rows
     # All 17 cumulative angles of the chunk in one (17, m) array, so one sincos call serves them all.
     a = np.empty((17, m))
-    np.copyto(a[0], th[:, 0])
+    np.copyto(a[0], th[0])
     for i in range(1, 6):                                   # th1, th12, ..., th123456
-        np.add(a[i - 1], th[:, i], out=a[i])
-    np.add(a[2], th[:, 6], out=a[6])                        # th1237
-    np.add(a[6], th[:, 7], out=a[7])                        # th12378
-    np.add(a[2], th[:, 8], out=a[8])                        # th1239
-    np.add(a[8], th[:, 9], out=a[9])                        # th123910
-    np.add(a[2], th[:, 10], out=a[10])                      # th12311
-    np.copyto(a[11], phi[:, 0])
+        np.add(a[i - 1], th[i], out=a[i])
+    np.add(a[2], th[6], out=a[6])                        # th1237
+    np.add(a[6], th[7], out=a[7])                        # th12378
+    np.add(a[2], th[8], out=a[8])                        # th1239
+    np.add(a[8], th[9], out=a[9])                        # th123910
+    np.add(a[2], th[10], out=a[10])                      # th12311
+    np.copyto(a[11], phi[0])
     for i in range(1, 4):                                   # phi1, phi12, phi123, phi1234
-        np.add(a[10 + i], phi[:, i], out=a[11 + i])
-    np.add(a[12], phi[:, 4], out=a[15])                     # phi125
-    np.add(a[12], phi[:, 5], out=a[16])                     # phi126
+        np.add(a[10 + i], phi[i], out=a[11 + i])
+    np.add(a[12], phi[4], out=a[15])                     # phi125
+    np.add(a[12], phi[5], out=a[16])                     # phi126
     sin_a, cos_a = sincos(a)
-    trig = [(sin_a[i], cos_a[i]) for i in range(17)]
+    abs_a = np.empty_like(a)
+    np.abs(sin_a[:11], out=abs_a[:11])   # |sin T| for the sagittal angles
+    np.abs(cos_a[11:], out=abs_a[11:])   # |cos F| for the coronal angles
+    trig = [(sin_a[i], cos_a[i], abs_a[i]) for i in range(17)]
     trig_t, arm_t = trig[:6], trig[6:11]
     trig_f, arm_f = trig[11:15], trig[15:17]
 
@@ -113,8 +117,8 @@ def _chunk(th: np.ndarray, phi: np.ndarray, out: np.ndarray, spec: Spec, left: b
     knee = calf.add(ankle, g.calf, row(f"{s}_knee"))
     hip = femur.add(knee, g.thigh, row(f"{s}_hip"))
     # Pelvis link, support hip -> swing hip: the book's l4s = l4 cos(phi12 +/- pi/2) without abs.
-    sin12, cos12 = trig_f[1]
-    sin123, cos123 = trig_t[2]
+    sin12, cos12, abs_cos12 = trig_f[1]
+    sin123, cos123, _ = trig_t[2]
     across = -(1.0 if left else -1.0) * 2.0 * g.hip_half_width
     swing_hip = row(f"{w}_hip")
     swing_hip[0] = across * sin12 * cos123
@@ -131,7 +135,7 @@ def _chunk(th: np.ndarray, phi: np.ndarray, out: np.ndarray, spec: Spec, left: b
     torso.add(hip, g.hip_yaw_to_roll, row(f"{s}_hip_yaw"))
     torso.add(swing_hip, g.hip_yaw_to_roll, row(f"{w}_hip_yaw"))
     neck = torso.add(centre, g.hip_yaw_to_roll + g.torso, row("neck"))
-    forward = -g.hip_x * np.abs(cos12)  # the torso origin lies -hip_x ahead of the hip-yaw axes
+    forward = -g.hip_x * abs_cos12  # the torso origin lies -hip_x ahead of the hip-yaw axes
     neck[0] += forward * sin123
     neck[2] -= forward * cos123
     torso.add(neck, g.head_pan_height, row("head_pan"))
