@@ -398,8 +398,18 @@ def load_spec(path: str | Path | None = None) -> Spec:
     return parse_spec(text, str(p))
 
 
+def _shipped_spec_text() -> str:
+    """``specs/op2.toml``: installed as package data ``op2motion.specs``, or beside the package in a source tree."""
+    source_tree = Path(__file__).resolve().parents[1] / "specs" / "op2.toml"
+    if source_tree.is_file():
+        return source_tree.read_text(encoding="utf-8")
+    try:
+        return resources.files("op2motion.specs").joinpath("op2.toml").read_text(encoding="utf-8")
+    except (ModuleNotFoundError, OSError) as exc:
+        raise SpecError(f"specs/op2.toml: the shipped spec is missing from this installation ({exc})") from None
+
+
 @functools.lru_cache(maxsize=1)
 def default_spec() -> Spec:
     """The shipped OP2 spec (``specs/op2.toml``), loaded once."""
-    ref = resources.files("op2motion.specs").joinpath("op2.toml")
-    return parse_spec(ref.read_text(encoding="utf-8"), "specs/op2.toml")
+    return parse_spec(_shipped_spec_text(), "specs/op2.toml")
