@@ -11,7 +11,7 @@ chained from the support ankle. The method assumes psi = 0 (no transverse rotati
 * the pelvis link joins the two hip roll/pitch points; the torso runs from their midpoint to the torso origin
   (hip-yaw segment plus torso, 0.1222 m on the OP2), with the hip-yaw axes' 5 mm offset behind the origin;
 * each arm hangs from the shoulder-roll point of the standing robot (fixed to the torso) with the real upper
-  (0.06 m) and lower (0.129 m) arm. It leaves out what the book's PB leaves out: the shoulder-roll point moving
+  and lower arm. It leaves out what the book's PB leaves out: the shoulder-roll point moving
   with shoulder pitch and the 0.016 m elbow offset, so hands differ from the D-H model by up to a few cm;
 * one deliberate fix: the book takes ``abs`` of the pelvis link's sagittal length, which makes the swing hip
   rise whichever way the torso rolls; here it keeps its sign (rigid-body correct, identical for phi1+phi2 on
