@@ -139,6 +139,54 @@ def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
     return 0
 
 
+def cmd_arm_ik(args: argparse.Namespace, spec: Spec) -> int:
+    from .arm_ik import ARMS, solve_arm_ik
+    from .errors import CheckFailed
+    from .joints import book_to_servo, servo_dict
+    from .kinematics import forward
+    from .plot import PoseFigure, plot_poses
+
+    angles, name = _angles_from(args, spec)
+    delta = _vec3(args.delta, "--delta")
+    if not (math.isfinite(args.tol_mm) and args.tol_mm > 0):
+        raise InputError(f"--tol-mm: expected a positive number, got {args.tol_mm}")
+    res = solve_arm_ik(angles, args.hand, delta, spec, args.model, args.single_step, args.tol_mm / 1000.0,
+                       enforce_limits=not args.allow_limits)
+    arm = ARMS[args.hand]
+    converged = res.mode == "single-step" or res.error_m <= args.tol_mm / 1000.0
+    result = {
+        "hand": args.hand, "model": res.model, "mode": res.mode, "iterations": res.iterations,
+        "joint_deltas_deg": {n: float(math.degrees(v)) for n, v in zip(arm.names, res.deltas)},
+        **res.angles.degrees(),
+        "requested_delta": [float(v) for v in res.requested],
+        "achieved_delta": [float(v) for v in res.achieved],
+        "error_m": res.error_m, "converged": converged,
+        "servo_deg": servo_dict(book_to_servo(res.angles, spec)[0], spec),
+        "limit_violations": res.limit_violations,
+    }
+    if args.plot:
+        after = forward(res.angles, spec, res.model)
+        before = forward(res.initial, spec, res.model)
+        target = before.point(arm.hand)[0] + res.requested
+        fig = PoseFigure(after, after.com[:, 0], f"{name} + arm IK ({res.model.upper()})", target=target, ghost=before)
+        result["png"] = str(plot_poses([fig], spec, args.plot, title=f"{args.hand} hand moved by "
+                                       f"{', '.join(f'{v * 1000:+.0f}' for v in res.requested)} mm"))
+    deltas = ", ".join(f"d{n} = {math.degrees(v):+.2f}°" for n, v in zip(arm.names, res.deltas))
+    text = (f"{res.mode} on the {res.model.upper()} model, {res.iterations} iteration(s): {deltas}\n"
+            f"hand moved {', '.join(f'{v * 1000:+.2f}' for v in res.achieved)} mm "
+            f"(asked {', '.join(f'{v * 1000:+.2f}' for v in res.requested)} mm), error {res.error_m * 1000:.3f} mm")
+    _emit(args, result, text)
+    if res.limit_violations and not args.allow_limits:
+        v = res.limit_violations[0]
+        raise CheckFailed(f"refused: {v['joint']} would be at {v['deg']:.1f}° outside [{v['lower_deg']}, "
+                          f"{v['upper_deg']}]°; pass --allow-limits to accept")
+    if not converged:
+        raise CheckFailed(f"target not reached: best residual {res.error_m * 1000:.3f} mm "
+                          f"(tolerance {args.tol_mm} mm); it lies outside what this arm can reach on the "
+                          f"{res.model.upper()} model")
+    return 0
+
+
 def cmd_bench(args: argparse.Namespace, spec: Spec) -> int:
     from .bench import run_bench
 
@@ -185,6 +233,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--br", type=float, default=1.0, help="boundary ratio of the drawn support rectangle")
     p.add_argument("--target", type=float, nargs=3, metavar=("X", "Y", "Z"), help="mark a target [m]")
     p.add_argument("-o", "--output", required=True, metavar="PNG", help="where to write the PNG")
+
+    p = add("arm-ik", cmd_arm_ik, "move one hand by a displacement with the Taylor-linearised arm IK")
+    p.add_argument("--hand", choices=("left", "right"), required=True, help="which hand to move")
+    p.add_argument("--delta", type=float, nargs=3, required=True, metavar=("DX", "DY", "DZ"),
+                   help="hand displacement in the world frame [m]")
+    _book_args(p)
+    p.add_argument("--pose", metavar="FILE", help="a pose file instead of --th/--phi")
+    p.add_argument("--single-step", action="store_true", help="the book's single Taylor step (code 2.15/2.17)")
+    p.add_argument("--model", choices=("pb", "dh"), default="pb",
+                   help="model to iterate on: pb (book, default) or dh (true geometry, for the real robot)")
+    p.add_argument("--tol-mm", type=float, default=0.1, help="iterated mode: target tolerance [mm] (default 0.1)")
+    p.add_argument("--allow-limits", action="store_true", help="accept a result outside the servo limits")
+    p.add_argument("--plot", metavar="PNG", help="draw the initial and the changed pose")
 
     p = add("bench", cmd_bench, "speed figures of the batched kinematic models")
     p.add_argument("--poses", type=int, default=40_000, help="batch size (figures are scaled to 40 000)")

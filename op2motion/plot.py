@@ -42,6 +42,7 @@ class PoseFigure:
     label: str
     br: float = 1.0
     target: Sequence[float] | None = None
+    ghost: BodyPoints | None = None  # an earlier pose drawn in grey (e.g. before an arm IK step)
 
 
 def _draw(ax, xyz: dict[str, np.ndarray], fig: PoseFigure, spec: Spec, h: int | None, v: int | None) -> None:
@@ -51,6 +52,10 @@ def _draw(ax, xyz: dict[str, np.ndarray], fig: PoseFigure, spec: Spec, h: int | 
         else:
             ax.plot(pts[:, h], pts[:, v], **kw)
 
+    if fig.ghost is not None:
+        ghost = {name: np.array(val) for name, val in fig.ghost.as_dict(0).items()}
+        for names, _ in _CHAINS:
+            line(np.array([ghost[n] for n in names]), color="grey", linestyle="--", linewidth=1, alpha=0.7)
     for names, colour in _CHAINS:
         line(np.array([xyz[n] for n in names]), color=colour, marker="o", markersize=3, linewidth=2)
     for side, colour in (("left", LEFT_COLOUR), ("right", RIGHT_COLOUR)):
@@ -111,7 +116,7 @@ def plot_poses(figures: Sequence[PoseFigure], spec: Spec, path: str | Path, titl
     if title:
         fig.suptitle(title)
     fig.text(0.01, 0.005, "blue: left limbs, red: right limbs, shaded: support foot; green square: CoM, "
-             "dashed: support rectangle (br); star: target", fontsize=8)
+             "dashed green: support rectangle (br); star: target; grey dashed: initial pose", fontsize=8)
     fig.tight_layout(rect=(0, 0.02, 1, 0.97 if title else 1))
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=90)
