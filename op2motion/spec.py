@@ -85,8 +85,6 @@ class Foot:
     back: float
     inner: float
     outer: float
-    box: tuple[float, float, float]
-    box_centre: tuple[float, float, float]
 
 
 @dataclass(frozen=True)
@@ -119,6 +117,21 @@ class Inertial:
     inertia: tuple[float, float, float, float, float, float]
     webots_frame_xyz: tuple[float, float, float]
     webots_frame_rpy: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Collision:
+    """A collision shape fixed to a link: ``box`` (size x, y, z), ``cylinder`` (radius, length along z) or
+    ``sphere`` (radius) [m], at ``origin_xyz`` [m] / ``origin_rpy`` [rad] in the link frame."""
+
+    link: str
+    shape: str
+    size: tuple[float, ...]
+    origin_xyz: tuple[float, float, float]
+    origin_rpy: tuple[float, float, float]
+
+
+COLLISION_SIZES = {"box": 3, "cylinder": 2, "sphere": 1}
 
 
 @dataclass(frozen=True)
@@ -155,6 +168,7 @@ class Spec:
     joints: tuple[Joint, ...]
     lumped_masses: tuple[LumpedMass, ...]
     inertials: tuple[Inertial, ...]
+    collisions: tuple[Collision, ...]
     geometry: Geometry
     path: str
     sha256: str
@@ -242,11 +256,8 @@ def _servo(r: _Reader) -> Servo:
 
 def _foot(r: _Reader) -> Foot:
     f = Foot(r.number("sole_below_ankle_m", positive=True), r.number("front_m", positive=True),
-             r.number("back_m", positive=True), r.number("inner_m", positive=True), r.number("outer_m", positive=True),
-             r.vector("box_m"), r.vector("box_centre_m"))  # type: ignore[arg-type]
+             r.number("back_m", positive=True), r.number("inner_m", positive=True), r.number("outer_m", positive=True))
     r.done()
-    if min(f.box) <= 0:
-        raise SpecError(f"{r.path}: foot.box_m: expected positive sizes, got {list(f.box)}")
     return f
 
 
@@ -379,11 +390,26 @@ def parse_spec(text: str, path: str = "<spec>") -> Spec:
                                   r.vector("webots_frame_xyz_m"),  # type: ignore[arg-type]
                                   tuple(math.radians(v) for v in r.vector("webots_frame_rpy_deg"))))  # type: ignore[arg-type]
         r.done()
+    collisions = []
+    for r in top.array("collision"):
+        shape = r.get("shape", str)
+        if shape not in COLLISION_SIZES:
+            raise SpecError(f"{path}: {r.where}.shape: expected box, cylinder or sphere, got {shape!r}")
+        size = r.vector("size_m", COLLISION_SIZES[shape])
+        if min(size) <= 0:
+            raise SpecError(f"{path}: {r.where}.size_m: expected positive sizes, got {list(size)}")
+        collisions.append(Collision(r.get("link", str), shape, size, r.vector("origin_xyz_m"),  # type: ignore[arg-type]
+                                    tuple(math.radians(v) for v in r.vector("origin_rpy_deg"))))  # type: ignore[arg-type]
+        r.done()
     top.done()
+    links = {root} | {j.child for j in joints}
+    for item, kind in [(i, "inertial") for i in inertials] + [(c, "collision") for c in collisions]:
+        if item.link not in links:
+            raise SpecError(f"{path}: {kind} link {item.link!r}: expected one of the joint tree's links")
     by_name = {j.name: j for j in joints}
     geometry = _geometry(path, by_name, points, foot)
-    return Spec(name, root, servo, foot, points, tuple(joints), tuple(masses), tuple(inertials), geometry, path,
-                hashlib.sha256(text.encode("utf-8")).hexdigest())
+    return Spec(name, root, servo, foot, points, tuple(joints), tuple(masses), tuple(inertials), tuple(collisions),
+                geometry, path, hashlib.sha256(text.encode("utf-8")).hexdigest())
 
 
 def load_spec(path: str | Path | None = None) -> Spec:

@@ -1,0 +1,124 @@
+"""Rigid-body dynamics of the generated URDF with pinocchio: placements, full-inertia CoM, Jacobians, and the
+static joint torques that hold a pose on its support foot (or feet), compared with the MX-28 stall torque.
+
+The model has a free-flyer root (the torso floats), so one model serves either support foot: results are
+expressed in the support sole frame, the same world frame as the kinematic models (X forward, Y left, Z up).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..spec import Spec
+from .urdf import build_urdf
+
+COM_MODEL_FULL = "full inertia (Webots per-link masses, CoMs and tensors; pinocchio)"
+
+
+@dataclass(frozen=True)
+class TorqueReport:
+    """Static joint torques [N·m] (ID order) holding a pose, and the worst joint against the stall torque."""
+
+    torques: np.ndarray
+    worst_joint: str
+    worst_torque_nm: float
+    stall_torque_nm: float
+
+    @property
+    def worst_ratio(self) -> float:
+        """|worst torque| / stall torque."""
+        return abs(self.worst_torque_nm) / self.stall_torque_nm
+
+
+class Dynamics:
+    """A pinocchio model of the robot built from the generated URDF string."""
+
+    def __init__(self, spec: Spec):
+        import pinocchio as pin
+
+        self.pin, self.spec = pin, spec
+        self.model = pin.buildModelFromXML(build_urdf(spec), pin.JointModelFreeFlyer())
+        self.data = self.model.createData()
+        self.q_index = np.array([self.model.joints[self.model.getJointId(n)].idx_q for n in spec.joint_names])
+        self.v_index = np.array([self.model.joints[self.model.getJointId(n)].idx_v for n in spec.joint_names])
+        self.joint_ids = [self.model.getJointId(n) for n in spec.joint_names]
+        self.sole_ids = {side: self.model.getFrameId(f"{side}_sole_link") for side in ("left", "right")}
+
+    @property
+    def total_mass(self) -> float:
+        """Total mass of the model [kg]."""
+        return float(sum(inertia.mass for inertia in self.model.inertias))
+
+    def configuration(self, servo: np.ndarray) -> np.ndarray:
+        """Pinocchio configuration: free flyer at identity, joints from servo angles (20,) [rad] in ID order."""
+        servo = np.asarray(servo, dtype=float).reshape(-1)
+        if servo.size != len(self.spec.joints) or not np.all(np.isfinite(servo)):
+            raise InputError(f"servo angles: expected {len(self.spec.joints)} finite values, got {servo.size}")
+        q = self.pin.neutral(self.model)
+        q[self.q_index] = servo
+        return q
+
+    def _sole_frame(self, q: np.ndarray, support: str) -> Any:
+        self.pin.framesForwardKinematics(self.model, self.data, q)
+        return self.data.oMf[self.sole_ids["right" if support == "right" else "left"]]
+
+    def joint_centres(self, servo: np.ndarray, support: str) -> dict[str, np.ndarray]:
+        """Joint origins and named frames [m] in the support sole frame."""
+        q = self.configuration(servo)
+        inv = self._sole_frame(q, support).inverse()
+        out = {n: (inv * self.data.oMi[i]).translation.copy() for n, i in zip(self.spec.joint_names, self.joint_ids)}
+        for frame in self.model.frames:
+            if frame.name.endswith("_link") and frame.name[:-5] in ("left_hand", "right_hand", "left_sole",
+                                                                    "right_sole", "head_top", "camera"):
+                out[frame.name[:-5]] = (inv * self.data.oMf[self.model.getFrameId(frame.name)]).translation.copy()
+        return out
+
+    def com(self, servo: np.ndarray, support: str) -> np.ndarray:
+        """Full-inertia centre of mass [m] in the support sole frame."""
+        q = self.configuration(servo)
+        c = self.pin.centerOfMass(self.model, self.data, q)
+        return self._sole_frame(q, support).inverse().act(c)
+
+    def static_torques(self, servo: np.ndarray, support: str) -> TorqueReport:
+        """Joint torques [N·m] that hold the pose still on ``support`` ("left", "right" or "double").
+
+        Generalised gravity from RNEA at rest, balanced by a contact wrench at the support sole(s): the torso's six
+        free-flyer rows fix the wrench (least norm over both soles for double support), the joint rows give the
+        torques the servos must supply.
+        """
+        pin = self.pin
+        q = self.configuration(servo)
+        zero = np.zeros(self.model.nv)
+        gravity = pin.rnea(self.model, self.data, q, zero, zero)
+        pin.computeJointJacobians(self.model, self.data, q)
+        pin.framesForwardKinematics(self.model, self.data, q)
+        sides = ("left", "right") if support == "double" else ("right",) if support == "right" else ("left",)
+        jac = np.vstack([pin.getFrameJacobian(self.model, self.data, self.sole_ids[s], pin.ReferenceFrame.LOCAL)
+                         for s in sides])
+        wrench = np.linalg.lstsq(jac[:, :6].T, gravity[:6], rcond=None)[0]
+        torques = (gravity - jac.T @ wrench)[self.v_index]
+        worst = int(np.argmax(np.abs(torques)))
+        return TorqueReport(torques, self.spec.joint_names[worst], float(torques[worst]), self.spec.servo.stall_torque_nm)
+
+    def com_loop(self, servo_batch: np.ndarray) -> np.ndarray:
+        """pinocchio ``centerOfMass`` called once per configuration (the baseline of ``op2motion bench``)."""
+        out = np.empty((len(servo_batch), 3))
+        q = self.pin.neutral(self.model)
+        for k, servo in enumerate(servo_batch):
+            q[self.q_index] = servo
+            out[k] = self.pin.centerOfMass(self.model, self.data, q)
+        return out
+
+
+_CACHE: dict[str, Dynamics] = {}
+
+
+def dynamics_for(spec: Spec) -> Dynamics:
+    """A :class:`Dynamics` for ``spec``, built once per spec file content."""
+    if spec.sha256 not in _CACHE:
+        _CACHE[spec.sha256] = Dynamics(spec)
+    return _CACHE[spec.sha256]
