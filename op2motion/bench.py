@@ -12,11 +12,14 @@ from typing import Any, Callable
 import numpy as np
 
 from .balance import com_lumped
-from .joints import BookAngles
+from .joints import BookAngles, book_to_servo
 from .kinematics import forward
+from .model.dynamics import dynamics_for
+from .physics import validate_servo
 from .spec import Spec
 
 BENCH_POSES = 40_000
+
 
 
 def _best_ms(fn: Callable[[], Any], repeat: int) -> float:
@@ -38,11 +41,18 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0) 
     scale = BENCH_POSES / n
     pb_ms = _best_ms(lambda: full(poses_pb, "pb"), repeat) * scale
     dh_ms = _best_ms(lambda: full(poses_dh, "dh"), repeat) * scale
+    dyn = dynamics_for(spec)
+    servo = book_to_servo(poses_dh, spec)
+    pin_ms = _best_ms(lambda: dyn.com_loop(servo), 1) * scale
+    stand = book_to_servo(BookAngles.standing("left"), spec)[0]
+    validate_ms = _best_ms(lambda: validate_servo(stand, "double", spec, 3.0), 1)
     return {
         "poses": n,
         "repeat": repeat,
         "fk_pb_40k_ms": round(pb_ms, 2),
         "fk_dh_40k_ms": round(dh_ms, 2),
+        "pinocchio_com_40k_ms": round(pin_ms, 1),
+        "validate_ms": round(validate_ms, 1),
         "book_matlab_pb_40k_ms": 780.0,
         "book_matlab_dh_40k_ms": 3350.0,
     }

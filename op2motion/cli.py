@@ -187,6 +187,60 @@ def cmd_arm_ik(args: argparse.Namespace, spec: Spec) -> int:
     return 0
 
 
+def cmd_urdf(args: argparse.Namespace, spec: Spec) -> int:
+    from .fileio import write_atomic
+    from .model.urdf import build_urdf, total_mass
+
+    text = build_urdf(spec)
+    if args.output:
+        write_atomic(args.output, text)
+        result = {"path": args.output, "joints": len(spec.joints), "mass_kg": round(total_mass(spec), 6)}
+        _emit(args, result, f"wrote {args.output}: {len(spec.joints)} joints, {total_mass(spec):.3f} kg")
+    elif args.json:
+        _emit(args, {"urdf": text, "joints": len(spec.joints), "mass_kg": round(total_mass(spec), 6)}, "")
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
+def cmd_validate(args: argparse.Namespace, spec: Spec) -> int:
+    from tqdm import tqdm
+
+    from .errors import CheckFailed
+    from .export.library import read_pose
+    from .model.dynamics import COM_MODEL_FULL, dynamics_for
+    from .physics import steps_for, validate_servo
+    from .kinematics import forward
+
+    pose = read_pose(args.pose, spec)
+    with tqdm(total=steps_for(args.seconds), desc="physics", unit="step", disable=not sys.stderr.isatty(),
+              leave=False) as bar:
+        v = validate_servo(pose.servo, pose.support, spec, args.seconds, args.gui_png, on_step=bar.update)
+    dyn = dynamics_for(spec)
+    static = dyn.static_torques(pose.servo, pose.support)
+    root = "right" if pose.support == "right" else "left"
+    lumped = forward(pose.book(spec), spec).com[:, 0]
+    result = {**v.as_dict(), "pose": pose.name, "support": pose.support,
+              "static_torque_nm": {n: float(x) for n, x in zip(spec.joint_names, static.torques)},
+              "static_worst_joint": static.worst_joint, "static_worst_ratio": round(static.worst_ratio, 4),
+              "com_full": [float(x) for x in dyn.com(pose.servo, root)], "com_full_model": COM_MODEL_FULL,
+              "com_lumped": [float(x) for x in lumped]}
+    if args.gui_png:
+        result["png"] = args.gui_png
+    text = (f"{pose.name} ({pose.support} support), {args.seconds:g} s of PyBullet: "
+            f"{'STABLE' if v.stable else 'NOT STABLE'} ({v.reason})\n"
+            f"  torso tilt max {v.max_tilt_deg:.2f}°, CoM drift {v.com_drift_m * 1000:.1f} mm, "
+            f"feet slip {v.feet_slip_m * 1000:.1f} mm\n"
+            f"  servo torque (steady) max {v.max_torque_nm:.2f} N·m at {v.worst_joint} "
+            f"({'ok' if v.torque_ok else 'SATURATED'}; stall {spec.servo.stall_torque_nm} N·m); static model: "
+            f"{abs(static.worst_torque_nm):.2f} N·m at {static.worst_joint}\n"
+            f"  self-collisions: {', '.join('-'.join(p) for p in v.self_collisions) or 'none'}")
+    _emit(args, result, text)
+    if not v.stable:
+        raise CheckFailed(f"{pose.name} does not stand: {v.reason}")
+    return 0
+
+
 def cmd_bench(args: argparse.Namespace, spec: Spec) -> int:
     from .bench import run_bench
 
@@ -195,7 +249,9 @@ def cmd_bench(args: argparse.Namespace, spec: Spec) -> int:
     result = run_bench(spec, args.poses, args.repeat)
     lines = [f"{result['poses']} poses, best of {result['repeat']}, scaled to 40 000 full-body evaluations:",
              f"  projection model  {result['fk_pb_40k_ms']:8.2f} ms   (book MATLAB: 780 ms)",
-             f"  D-H model         {result['fk_dh_40k_ms']:8.2f} ms   (book MATLAB: 3350 ms)"]
+             f"  D-H model         {result['fk_dh_40k_ms']:8.2f} ms   (book MATLAB: 3350 ms)",
+             f"  pinocchio loop    {result['pinocchio_com_40k_ms']:8.2f} ms   (centerOfMass per configuration)",
+             f"one PyBullet validation (3 s simulated): {result['validate_ms']:.0f} ms"]
     _emit(args, result, "\n".join(lines))
     return 0
 
@@ -246,6 +302,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tol-mm", type=float, default=0.1, help="iterated mode: target tolerance [mm] (default 0.1)")
     p.add_argument("--allow-limits", action="store_true", help="accept a result outside the servo limits")
     p.add_argument("--plot", metavar="PNG", help="draw the initial and the changed pose")
+
+    p = add("urdf", cmd_urdf, "the URDF generated from the spec (stdout, or -o FILE)")
+    p.add_argument("-o", "--output", metavar="FILE", help="write the URDF here (atomically)")
+
+    p = add("validate", cmd_validate, "PyBullet check: does a pose stand?")
+    p.add_argument("pose", metavar="POSE", help="pose file (schema op2motion.pose/1)")
+    p.add_argument("--seconds", type=float, default=3.0, help="simulated time [s] (default 3)")
+    p.add_argument("--gui-png", metavar="PNG", help="snapshot of the final state (TinyRenderer)")
 
     p = add("bench", cmd_bench, "speed figures of the batched kinematic models")
     p.add_argument("--poses", type=int, default=40_000, help="batch size (figures are scaled to 40 000)")

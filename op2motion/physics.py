@@ -21,7 +21,7 @@ import sys
 import tempfile
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 import numpy as np
 
@@ -247,8 +247,13 @@ def _tilt_deg(q0: tuple, q1: tuple, client: Any) -> float:
     return math.degrees(math.acos(float(np.clip(np.dot(z0, z1), -1.0, 1.0))))
 
 
+def steps_for(seconds: float) -> int:
+    """Simulation steps in ``seconds``."""
+    return int(round(seconds / TIME_STEP_S))
+
+
 def validate_servo(servo: np.ndarray, support: str, spec: Spec, seconds: float = 3.0,
-                   snapshot: str | Path | None = None, progress: Iterator | None = None) -> Validation:
+                   snapshot: str | Path | None = None, on_step: Callable[[], Any] | None = None) -> Validation:
     """Simulate a pose held by the servos for ``seconds`` and judge whether it stands (see module docstring)."""
     if support not in SOLE_LINKS:
         raise InputError(f"support: expected left, right or double, got {support!r}")
@@ -264,7 +269,7 @@ def validate_servo(servo: np.ndarray, support: str, spec: Spec, seconds: float =
         start_soles = {s: np.asarray(sim.link_frame(s)[0]) for s in sole_names}
         start_orn = sim.base_link_frame()[1]
         com0 = sim.com()
-        steps = int(round(seconds / TIME_STEP_S))
+        steps = steps_for(seconds)
         window = max(1, int(round(STEADY_WINDOW_S / TIME_STEP_S)))
         tilt = drift = slip = peak = 0.0
         collisions: set[tuple[str, str]] = set()
@@ -285,8 +290,8 @@ def validate_servo(servo: np.ndarray, support: str, spec: Spec, seconds: float =
             peak = max(peak, float(np.max(np.abs(tau))))
             if k >= steps - window:
                 torque_sum += np.abs(tau)
-            if progress is not None:
-                next(progress, None)
+            if on_step is not None:
+                on_step()
         steady = torque_sum / min(window, steps)
         worst = int(np.argmax(steady))
         com_end = sim.com()

@@ -89,3 +89,40 @@ def test_module_entry_point_exit_codes():
     assert ok.returncode == 0 and json.loads(ok.stdout)["support"] == "left"
     bad = subprocess.run([sys.executable, "-m", "op2motion", "fk", "--th", "1"], capture_output=True, text=True)
     assert bad.returncode == 2 and bad.stdout == "" and len(bad.stderr.strip().splitlines()) == 1
+
+
+def test_urdf_command(capsys, tmp_path):
+    import xml.etree.ElementTree as ET
+
+    out_file = tmp_path / "op2.urdf"
+    code, out, _ = run(capsys, "urdf", "-o", str(out_file))
+    assert code == 0 and "20 joints" in out
+    assert ET.parse(out_file).getroot().get("name") == "robotis_op2"
+    code, out, _ = run(capsys, "urdf")
+    assert code == 0 and out.startswith("<?xml")
+
+
+def test_validate_command(capsys, tmp_path):
+    import os
+
+    poses = os.path.join(os.path.dirname(__file__), "..", "poses")
+    png = tmp_path / "snap.png"
+    code, out, err = run(capsys, "validate", os.path.join(poses, "walkready.json"), "--seconds", "1",
+                         "--gui-png", str(png), "--json")
+    doc = json.loads(out)
+    assert code == 0 and err == ""
+    for key in ("stable", "max_tilt_deg", "com_drift_m", "feet_slip_m", "self_collisions", "max_torque_nm",
+                "torque_ok"):
+        assert key in doc
+    assert doc["stable"] is True and png.read_bytes()[:4] == b"\x89PNG"
+    # A pose that falls: exit 1, one line on stderr, the measurements still on stdout.
+    stand = json.load(open(os.path.join(poses, "standing.json"), encoding="utf-8"))
+    stand["servo_deg"]["l_ank_pitch"], stand["servo_deg"]["r_ank_pitch"] = 35.0, -35.0
+    stand["name"] = "lean_back"
+    del stand["book_deg"]
+    falling = tmp_path / "lean_back.json"
+    falling.write_text(json.dumps(stand), encoding="utf-8")
+    code, out, err = run(capsys, "validate", str(falling), "--seconds", "2")
+    assert code == 1 and "does not stand" in err and err.count("\n") == 1 and "NOT STABLE" in out
+    code, out, err = run(capsys, "validate", str(tmp_path / "none.json"))
+    assert code == 2 and out == "" and err.count("\n") == 1

@@ -62,6 +62,13 @@ class Dynamics:
         q[self.q_index] = servo
         return q
 
+    def level_configuration(self, servo: np.ndarray, support: str) -> np.ndarray:
+        """Configuration whose free flyer puts the support sole at the world origin, level: gravity (world -Z)
+        then acts as it does on the robot standing on that foot."""
+        q = self.configuration(servo)
+        q[:7] = self.pin.SE3ToXYZQUAT(self._sole_frame(q, support).inverse())
+        return q
+
     def _sole_frame(self, q: np.ndarray, support: str) -> Any:
         self.pin.framesForwardKinematics(self.model, self.data, q)
         return self.data.oMf[self.sole_ids["right" if support == "right" else "left"]]
@@ -91,7 +98,7 @@ class Dynamics:
         torques the servos must supply.
         """
         pin = self.pin
-        q = self.configuration(servo)
+        q = self.level_configuration(servo, "right" if support == "right" else "left")
         zero = np.zeros(self.model.nv)
         gravity = pin.rnea(self.model, self.data, q, zero, zero)
         pin.computeJointJacobians(self.model, self.data, q)
