@@ -100,3 +100,19 @@ def test_stock_standing_pages_are_within_the_servo_torque(spec, stock_action_byt
     for page in (1, 9, 16):
         servo = ticks_to_servo(page_last_step_ticks(stock_action_bytes, page), spec)
         assert dyn.static_torques(servo, "double").worst_ratio < 0.6
+
+
+@pytest.mark.parametrize("support", ["left", "right"])
+def test_frame_jacobian_matches_finite_differences_of_dh(spec, rng, support):
+    from op2motion.joints import servo_to_book
+
+    dyn = dynamics_for(spec)
+    servo = book_to_servo(BookAngles.random(1, rng, support, psi=True), spec)[0]
+    jac = dyn.frame_jacobian(servo, "right_hand", support)
+    step = 1e-6
+    for k in range(20):
+        plus, minus = servo.copy(), servo.copy()
+        plus[k] += step
+        minus[k] -= step
+        hand = lambda s: forward(servo_to_book(s, support, spec), spec).point("right_hand")[0]  # noqa: E731
+        assert jac[:3, k] == pytest.approx((hand(plus) - hand(minus)) / (2 * step), abs=1e-8)

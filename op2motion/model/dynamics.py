@@ -84,6 +84,24 @@ class Dynamics:
                 out[frame.name[:-5]] = (inv * self.data.oMf[self.model.getFrameId(frame.name)]).translation.copy()
         return out
 
+    def frame_jacobian(self, servo: np.ndarray, frame: str, support: str) -> np.ndarray:
+        """Jacobian (6, 20) of a named frame (e.g. ``left_hand``) w.r.t. the servo angles, with the support sole
+        fixed and level: rows are linear [m/rad] then angular [rad/rad] velocity in the support sole frame."""
+        pin = self.pin
+        q = self.level_configuration(servo, "right" if support == "right" else "left")
+        pin.computeJointJacobians(self.model, self.data, q)
+        pin.framesForwardKinematics(self.model, self.data, q)
+        fid = self.model.getFrameId(f"{frame}_link")
+        if fid >= len(self.model.frames):
+            raise InputError(f"frame: unknown frame {frame!r}")
+        world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        jac = pin.getFrameJacobian(self.model, self.data, fid, world)
+        sole = pin.getFrameJacobian(self.model, self.data, self.sole_ids["right" if support == "right" else "left"],
+                                    world)
+        # Hold the sole still: the free-flyer velocity is whatever cancels the sole's motion (J_sole v = 0).
+        base = -np.linalg.solve(sole[:, :6], sole[:, 6:])
+        return (jac[:, 6:] + jac[:, :6] @ base)[:, self.v_index - 6]
+
     def com(self, servo: np.ndarray, support: str) -> np.ndarray:
         """Full-inertia centre of mass [m] in the support sole frame."""
         q = self.configuration(servo)
