@@ -25,8 +25,13 @@ def _tables() -> tuple[np.ndarray, np.ndarray]:
     return np.sin(angles), np.cos(angles)
 
 
+SMALL = 4096  # below this many elements NumPy's own sin/cos are faster (fewer calls)
+
+
 def sincos(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Return ``(sin(x), cos(x))`` for an array of angles [rad] with |x| < 1e6."""
+    if np.size(x) < SMALL:
+        return np.sin(x), np.cos(x)
     sin_t, cos_t = _tables()
     k = np.rint(x * _INV_STEP)
     r = x - k * _STEP_HI

@@ -224,14 +224,14 @@ def test_projection_error_over_the_pso_box_is_bounded(spec, rng, support):
 
 
 def test_batched_equals_one_by_one(spec, rng):
-    """Large batches run in chunks on threads: they must equal pose-by-pose evaluation exactly."""
+    """Large batches run in chunks on threads (column evaluator), single poses as 4x4 matrices: the same answer."""
     book = BookAngles.random(20001, rng, "right", psi=False)
     for model in MODELS:
         batch = forward(book, spec, model)
         for i in (0, 9999, 10000, 20000):
             one = forward(book.row(i), spec, model)
-            assert np.array_equal(one.data[:, :, 0], batch.data[:, :, i])
-            assert np.array_equal(one.com[:, 0], batch.com[:, i])
+            assert np.abs(one.data[:, :, 0] - batch.data[:, :, i]).max() < 1e-15
+            assert np.abs(one.com[:, 0] - batch.com[:, i]).max() < 1e-15
 
 
 def test_sp_and_gamma_place_the_body_in_the_world(spec):

@@ -7,22 +7,28 @@ support feet and the transverse angles psi are supported. Lengths are the real r
 chain adds the fixed transforms the book leaves out: the hip-yaw axes 5 mm behind the torso origin and the
 0.016 m forward elbow offset; the shoulder-roll offset is 0.0245 m (book 0.024). With these the joint centres
 coincide with the official ROBOTIS description for the servo angles of :func:`op2motion.joints.book_to_servo`.
+
+The chain is one table (:func:`chain`). Two evaluators read it: column arithmetic for large batches (few, long
+NumPy calls; chunked on all cores) and 4x4 matrix products for small ones such as a PSO swarm, where the number of
+NumPy calls, not arithmetic, sets the time.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..joints import BookAngles
-from ..spec import Spec
+from ..spec import BOOK_VARS, Spec
 from ..trig import sincos
 from .batch import run_chunked
 from .com import slab_com
 from .frames import Frame
 from .points import ROW, BodyPoints, foot_corner_offsets, new_slab
 
+MATRIX_BELOW = 64  # batches smaller than this (a PSO swarm) use the 4x4 matrix evaluator
 _HALF_PI = math.pi / 2
 # World axes of frame 0 (book W with gamma = 0): x0 = +Y, y0 = +Z, z0 = +X.
 _W0 = ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
@@ -33,91 +39,247 @@ _ARM_ROT = {True: ((0.0, 0.0, -1.0), (0.0, 1.0, 0.0), (1.0, 0.0, 0.0)),
             False: ((0.0, 0.0, 1.0), (0.0, -1.0, 0.0), (1.0, 0.0, 0.0))}
 _NECK_ROT = {True: ((0.0, 1.0, 0.0), (-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
              False: ((0.0, -1.0, 0.0), (1.0, 0.0, 0.0), (0.0, 0.0, 1.0))}
+_V = {name: i for i, name in enumerate(BOOK_VARS)}
+
+
+@dataclass(frozen=True)
+class Step:
+    """One frame of the chain: ``frame = parent · DH(sign·q[var] + offset, d, a, alpha) · Trans(trans) · Rot(rot)``;
+    a step without ``var`` is the fixed part alone (the book's additional transforms)."""
+
+    frame: str
+    parent: str
+    var: int | None = None
+    sign: float = 1.0
+    offset: float = 0.0
+    d: float = 0.0
+    a: float = 0.0
+    alpha: float = 0.0
+    trans: tuple[float, float, float] | None = None
+    rot: tuple[tuple[float, ...], ...] | None = None
+
+
+_CACHE: dict[tuple[str, str, str], object] = {}
+
+
+def _cached(kind: str, spec: Spec, support: str, build):  # type: ignore[no-untyped-def]
+    key = (kind, spec.sha256, support)
+    if key not in _CACHE:
+        _CACHE[key] = build(spec, support)
+    return _CACHE[key]
+
+
+def chain(spec: Spec, support: str) -> tuple[Step, ...]:
+    """The book's D-H chain with the real robot's lengths, rooted at the ``support`` ankle (frame "0")."""
+    return _cached("chain", spec, support, _build_chain)  # type: ignore[return-value]
+
+
+def _build_chain(spec: Spec, support: str) -> tuple[Step, ...]:
+    g = spec.geometry
+    left = support == "left"
+    sgn = 1.0 if left else -1.0
+    hw, sh, fwd, pi = g.hip_half_width, g.shoulder_half_width, -g.hip_x * sgn, math.pi
+    steps = [
+        Step("1", "0", _V["phi1"], 1, _HALF_PI, alpha=_HALF_PI),
+        Step("2", "1", _V["th1"], -1, _HALF_PI, a=g.calf),
+        Step("3", "2", _V["th2"], -1, a=g.thigh),
+        Step("4", "3", _V["th3"], -1, alpha=-_HALF_PI),
+        Step("5", "4", _V["phi2"], 1, a=g.hip_yaw_to_roll, rot=_HIP),
+        Step("6", "5", _V["psi1"], 1, 0.0 if left else pi, a=2.0 * hw),
+        Step("7", "6", _V["psi2"], 1, alpha=-sgn * _HALF_PI, trans=(0.0, sgn * g.hip_yaw_to_roll, 0.0)),
+        Step("8", "7", _V["phi3"], 1, -sgn * _HALF_PI, alpha=-_HALF_PI),
+        Step("9", "8", _V["th4"], -1, pi, a=g.thigh),
+        Step("10", "9", _V["th5"], -1, a=g.calf),
+        Step("11", "10", _V["th6"], -1, alpha=_HALF_PI),
+        Step("12", "11", _V["phi4"], 1, a=g.ankle_to_sole),
+        # Upper body hung from frame 6; the torso origin sits -hip_x forward of the hip-yaw axes.
+        Step("13", "6", trans=(-hw - sgn * sh, fwd, g.torso), rot=_ARM_ROT[left]),
+        Step("17", "6", trans=(-hw + sgn * sh, fwd, g.torso), rot=_ARM_ROT[left]),
+        Step("21", "6", trans=(-hw, fwd, g.torso), rot=_NECK_ROT[left]),
+        Step("22", "21", _V["psi3"], 1, d=g.head_tilt_height, alpha=_HALF_PI),
+        Step("23", "22", _V["th11"], -1, _HALF_PI, a=g.head_length),
+    ]
+    for first, pitch, roll, elbow, lateral in ((13, "th7", "phi5", "th8", 1.0), (17, "th9", "phi6", "th10", -1.0)):
+        f = str(first)
+        steps += [
+            Step(str(first + 1), f, _V[pitch], -1, d=lateral * g.shoulder_roll_lateral, a=g.shoulder_roll_drop,
+                 alpha=_HALF_PI),
+            Step(str(first + 2), str(first + 1), _V[roll], 1, -pi, a=g.upper_arm, alpha=-_HALF_PI,
+                 trans=(0.0, -g.elbow_forward, 0.0)),  # the real elbow offset, then the elbow axis
+            Step(str(first + 3), str(first + 2), _V[elbow], -1, a=g.lower_arm),
+        ]
+    return tuple(steps)
+
+
+def _points(spec: Spec, support: str) -> tuple[tuple[str, str, tuple[float, float, float]], ...]:
+    """(row, frame, point in that frame) of every body point the chain gives (pelvis and soles aside)."""
+    g = spec.geometry
+    s, w = ("l", "r") if support == "left" else ("r", "l")
+    o = (0.0, 0.0, 0.0)
+    rows = [(f"{s}_ankle", "0", o), (f"{s}_knee", "2", o), (f"{s}_hip", "3", o), (f"{s}_hip_yaw", "5", o),
+            (f"{w}_hip_yaw", "6", o), (f"{w}_hip", "7", o), (f"{w}_knee", "9", o), (f"{w}_ankle", "10", o),
+            (f"{'right' if support == 'left' else 'left'}_sole", "12", o),
+            ("neck", "21", o), ("head_pan", "21", (0.0, 0.0, g.head_pan_height)), ("head_tilt", "22", o),
+            ("head_top", "23", o), ("l_sho_pitch", "13", o), ("l_sho_roll", "14", o), ("l_el", "15", o),
+            ("left_hand", "16", o), ("r_sho_pitch", "17", o), ("r_sho_roll", "18", o), ("r_el", "19", o),
+            ("right_hand", "20", o)]
+    swing_side = "right" if support == "left" else "left"
+    rows += [(f"{swing_side}_foot_{i}", "12", (0.0, dy, dx))        # frame 12: y left, z forward
+             for i, (dx, dy) in enumerate(foot_corner_offsets(spec.foot, swing_side))]
+    return tuple(rows)
+
+
+def _shifted(c: np.ndarray, s: np.ndarray, sign: float, offset: float) -> tuple[np.ndarray, np.ndarray]:
+    """cos and sin of sign·q + offset from cos q, sin q (offset a multiple of pi/2: swaps and signs only)."""
+    quarter = round(offset / _HALF_PI) % 4
+    s = s if sign > 0 else -s
+    return ((c, s), (-s, c), (-c, -s), (s, -c))[quarter]
+
+
+def _fill_fixed(out: np.ndarray, spec: Spec, support: str) -> None:
+    """Rows that do not depend on the angles: the support sole and its corners."""
+    out[ROW[f"{support}_sole"]] = 0.0
+    for i, (dx, dy) in enumerate(foot_corner_offsets(spec.foot, support)):
+        out[ROW[f"{support}_foot_{i}"]] = np.array([dx, dy, 0.0])[:, None]
+
+
+def _columns(q: np.ndarray, out: np.ndarray, spec: Spec, support: str) -> None:
+    """Column evaluator: q is (m, 20) [rad]; fills out (rows, 3, m)."""
+    m = q.shape[0]
+    sin_q, cos_q = sincos(np.ascontiguousarray(q.T))
+    frames = {"0": Frame.constant(_W0, (0.0, 0.0, spec.geometry.ankle_to_sole), m)}
+    for st in chain(spec, support):
+        f = frames[st.parent]
+        if st.var is not None:
+            c, s = _shifted(cos_q[st.var], sin_q[st.var], st.sign, st.offset)
+            f = f.dh(c, s, st.d, st.a, st.alpha)
+        if st.trans is not None or st.rot is not None:
+            f = f.fixed(st.rot, st.trans or (0.0, 0.0, 0.0))
+        frames[st.frame] = f
+    for row, frame, local in _points(spec, support):
+        out[ROW[row]] = frames[frame].point(local)
+    np.add(frames["5"].p, frames["6"].p, out=out[ROW["pelvis"]])
+    out[ROW["pelvis"]] *= 0.5
+    _fill_fixed(out, spec, support)
+
+
+@dataclass(frozen=True)
+class _MatrixPlan:
+    """Constants of the matrix evaluator for one spec and support foot. Frames are stored in level order (slot 0 is
+    frame "0"), so that each level of the tree, and the parents of each level, are contiguous slices."""
+
+    var: np.ndarray          # (J,) book-variable index of each joint step, in slot order
+    sign: np.ndarray         # (J, 1)
+    offset: np.ndarray       # (J, 1)
+    basis: np.ndarray        # (J, 3, 16): local matrix = [cos(delta), sin(delta), 1] @ basis
+    joint_slots: np.ndarray  # (J,) slot index - 1 of each joint step in the local array
+    fixed_slots: np.ndarray  # slot index - 1 of the fixed-only steps
+    fixed_local: np.ndarray  # (F, 4, 4) their constant transforms
+    root: np.ndarray         # (4, 4) frame 0
+    levels: tuple            # ((start, stop, parent start, parent stop), ...) slot ranges per level
+    slots: dict              # frame name -> slot
+
+
+def _matrix_plan(spec: Spec, support: str) -> _MatrixPlan:
+    return _cached("matrix", spec, support, _build_matrix_plan)  # type: ignore[return-value]
+
+
+def _build_matrix_plan(spec: Spec, support: str) -> _MatrixPlan:
+    steps = chain(spec, support)
+    by_frame = {st.frame: st for st in steps}
+    # Level order: each level lists children of the previous level's frames in that order, so ranges are contiguous.
+    order, previous, levels = [], ["0"], []
+    while len(order) < len(steps):
+        level = [st.frame for parent in previous for st in steps if st.parent == parent]
+        parents = sorted({by_frame[f].parent for f in level}, key=previous.index)
+        start = len(order) + 1
+        order += level
+        first = (start - len(previous)) if previous != ["0"] else 0
+        p_start = first + previous.index(parents[0])
+        levels.append((start, start + len(level), p_start, p_start + len(parents)))
+        i = previous.index(parents[0])
+        if previous[i:i + len(parents)] != parents or len(parents) not in (1, len(level)):
+            raise RuntimeError("chain levels must fan out from one frame or continue one-to-one")
+        previous = level
+    slots = {"0": 0, **{f: i + 1 for i, f in enumerate(order)}}
+    joint = [f for f in order if by_frame[f].var is not None]
+    fixed_only = [f for f in order if by_frame[f].var is None]
+
+    def fixed_of(st: Step) -> np.ndarray:
+        m = np.eye(4)
+        if st.rot is not None:
+            m[:3, :3] = np.asarray(st.rot)
+        if st.trans is not None:
+            m[:3, 3] = st.trans
+        return m
+
+    basis = np.zeros((len(joint), 3, 4, 4))
+    for j, f in enumerate(joint):
+        st = by_frame[f]
+        ca, sa = round(math.cos(st.alpha), 15), round(math.sin(st.alpha), 15)
+        # DHMat (book eq. 2.40) = cos(delta) K_cos + sin(delta) K_sin + K_one, then the step's fixed part.
+        k = basis[j]
+        k[0, 0, 0], k[0, 0, 3], k[0, 1, 1], k[0, 1, 2] = 1.0, st.a, ca, -sa
+        k[1, 0, 1], k[1, 0, 2], k[1, 1, 0], k[1, 1, 3] = -ca, sa, 1.0, st.a
+        k[2, 2, 1], k[2, 2, 2], k[2, 2, 3], k[2, 3, 3] = sa, ca, st.d, 1.0
+        basis[j] = k @ fixed_of(st)
+    root = np.eye(4)
+    root[:3, :3], root[2, 3] = np.asarray(_W0), spec.geometry.ankle_to_sole
+    return _MatrixPlan(np.array([by_frame[f].var for f in joint]),
+                       np.array([by_frame[f].sign for f in joint])[:, None],
+                       np.array([by_frame[f].offset for f in joint])[:, None], basis.reshape(len(joint), 3, 16),
+                       np.array([slots[f] - 1 for f in joint]), np.array([slots[f] - 1 for f in fixed_only]),
+                       np.array([fixed_of(by_frame[f]) for f in fixed_only]), root, tuple(levels), slots)
+
+
+def _matrices(q: np.ndarray, out: np.ndarray, spec: Spec, support: str) -> None:
+    """4x4 matrix evaluator for small batches; fills out (rows, 3, m) like :func:`_columns`."""
+    m = q.shape[0]
+    plan = _matrix_plan(spec, support)
+    delta = plan.sign * q.T[plan.var] + plan.offset                  # (joints, m)
+    coef = np.empty((len(plan.var), m, 3))
+    coef[:, :, 0], coef[:, :, 1], coef[:, :, 2] = np.cos(delta), np.sin(delta), 1.0
+    local = np.empty((len(plan.slots) - 1, m, 4, 4))
+    local[plan.joint_slots] = (coef @ plan.basis).reshape(len(plan.var), m, 4, 4)
+    local[plan.fixed_slots] = plan.fixed_local[:, None]
+    frames = np.empty((len(plan.slots), m, 4, 4))
+    frames[0] = plan.root
+    for start, stop, p_start, p_stop in plan.levels:   # one level of the tree in one batched product
+        np.matmul(frames[p_start:p_stop], local[start - 1:stop - 1], out=frames[start:stop])
+    _, origin_rows, origin_frames, offset_rows, offset_frames, offsets = _point_layout(spec, support)
+    out[origin_rows] = frames[origin_frames, :, :3, 3].transpose(0, 2, 1)
+    rot = frames[offset_frames, :, :3, :3]
+    out[offset_rows] = np.einsum("fmij,fj->fim", rot, offsets) + frames[offset_frames, :, :3, 3].transpose(0, 2, 1)
+    five, six = plan.slots["5"], plan.slots["6"]
+    out[ROW["pelvis"]] = 0.5 * (frames[five, :, :3, 3] + frames[six, :, :3, 3]).T
+    _fill_fixed(out, spec, support)
+
+
+def _point_layout(spec: Spec, support: str) -> tuple:
+    """Index arrays for the matrix evaluator's point gathering (cached per spec and support)."""
+    return _cached("layout", spec, support, _build_point_layout)
+
+
+def _build_point_layout(spec: Spec, support: str) -> tuple:
+    slots = _matrix_plan(spec, support).slots
+    points = _points(spec, support)
+    origin = [(ROW[r], slots[f]) for r, f, p in points if p == (0.0, 0.0, 0.0)]
+    offset = [(ROW[r], slots[f], p) for r, f, p in points if p != (0.0, 0.0, 0.0)]
+    return (None, np.array([r for r, _ in origin]), np.array([f for _, f in origin]),
+            np.array([r for r, _, _ in offset]), np.array([f for _, f, _ in offset]),
+            np.array([p for _, _, p in offset], dtype=float))
 
 
 def forward_dh(angles: BookAngles, spec: Spec) -> BodyPoints:
     """Body points of N poses in the support-foot frame (sole centre at the origin, gamma = 0)."""
-    out = new_slab(angles.n)
-    left = angles.support == "left"
-    com = np.empty((3, angles.n))
+    n, support = angles.n, angles.support
+    out, com = new_slab(n), np.empty((3, n))
+    q = angles.vector()
+    evaluate = _matrices if n < MATRIX_BELOW else _columns
 
     def work(a: int, b: int) -> None:
-        _chunk(angles.th[a:b], angles.phi[a:b], angles.psi[a:b], out[:, :, a:b], spec, left)
+        evaluate(q[a:b], out[:, :, a:b], spec, support)
         com[:, a:b] = slab_com(out[:, :, a:b], spec)
 
-    run_chunked(angles.n, work)
-    return BodyPoints(out, com, angles.support, "dh")
-
-
-def chain_frames(angles: BookAngles, spec: Spec) -> dict[str, Frame]:
-    """All book frames (``"0"``..``"23"``, plus ``"15e"``/``"19e"`` at the elbows) for a small batch."""
-    frames: dict[str, Frame] = {}
-    _chunk(angles.th, angles.phi, angles.psi, new_slab(angles.n), spec, angles.support == "left", frames)
-    return frames
-
-
-def _chunk(th: np.ndarray, phi: np.ndarray, psi: np.ndarray, out: np.ndarray, spec: Spec, left: bool,
-           keep: dict[str, Frame] | None = None) -> None:
-    g = spec.geometry
-    m = th.shape[0]
-    sin_a, cos_a = sincos(np.concatenate([th, phi, psi], axis=1).T)  # one call for all 20 angles
-    pairs = [(sin_a[i], cos_a[i]) for i in range(20)]
-    st, sf, sy = pairs[:11], pairs[11:17], pairs[17:]                    # (sin, cos) of th, phi, psi
-    sgn = 1.0 if left else -1.0
-
-    # Support leg, from the ankle up (B1-B6). Shifted angles use cos/sin identities instead of new trig.
-    f0 = Frame.constant(_W0, (0.0, 0.0, g.ankle_to_sole), m)
-    f1 = f0.dh(-sf[0][0], sf[0][1], 0.0, 0.0, _HALF_PI)                     # delta = phi1 + pi/2
-    f2 = f1.dh(st[0][0], st[0][1], 0.0, g.calf, 0.0)                        # delta = -th1 + pi/2
-    f3 = f2.dh(st[1][1], -st[1][0], 0.0, g.thigh, 0.0)                      # delta = -th2
-    f4 = f3.dh(st[2][1], -st[2][0], 0.0, 0.0, -_HALF_PI)                    # delta = -th3
-    f5 = f4.dh(sf[1][1], sf[1][0], 0.0, g.hip_yaw_to_roll, 0.0).fixed(_HIP)  # delta = phi2
-    f6 = f5.dh(sgn * sy[0][1], sgn * sy[0][0], 0.0, 2.0 * g.hip_half_width, 0.0)  # psi1 (+pi on right support)
-    # Swing leg, from the hip yaw down (B7-B12).
-    f7 = f6.dh(sy[1][1], sy[1][0], 0.0, 0.0, -sgn * _HALF_PI).fixed(None, (0.0, sgn * g.hip_yaw_to_roll, 0.0))
-    f8 = f7.dh(sgn * sf[2][0], -sgn * sf[2][1], 0.0, 0.0, -_HALF_PI)        # delta = phi3 -/+ pi/2
-    f9 = f8.dh(-st[3][1], st[3][0], 0.0, g.thigh, 0.0)                      # delta = -th4 + pi
-    f10 = f9.dh(st[4][1], -st[4][0], 0.0, g.calf, 0.0)                      # delta = -th5
-    f11 = f10.dh(st[5][1], -st[5][0], 0.0, 0.0, _HALF_PI)                   # delta = -th6
-    f12 = f11.dh(sf[3][1], sf[3][0], 0.0, g.ankle_to_sole, 0.0)             # delta = phi4
-    # Upper body hung from frame 6; the torso origin sits -hip_x forward of the hip-yaw axes.
-    hw, sh, fwd = g.hip_half_width, g.shoulder_half_width, -g.hip_x * sgn
-    f13 = f6.fixed(_ARM_ROT[left], (-hw - sgn * sh, fwd, g.torso))
-    f17 = f6.fixed(_ARM_ROT[left], (-hw + sgn * sh, fwd, g.torso))
-    f21 = f6.fixed(_NECK_ROT[left], (-hw, fwd, g.torso))
-    arms = {}
-    for first, base, t_pitch, s_roll, t_elbow, lateral in ((13, f13, 6, 4, 7, 1.0), (17, f17, 8, 5, 9, -1.0)):
-        fa = base.dh(st[t_pitch][1], -st[t_pitch][0], lateral * g.shoulder_roll_lateral, g.shoulder_roll_drop,
-                     _HALF_PI)                                              # delta = -th7 / -th9
-        fb = fa.dh(-sf[s_roll][1], -sf[s_roll][0], 0.0, g.upper_arm, -_HALF_PI)  # delta = phi5 - pi / phi6 - pi
-        fe = fb.fixed(None, (0.0, -g.elbow_forward, 0.0))                   # the real elbow offset
-        fh = fe.dh(st[t_elbow][1], -st[t_elbow][0], 0.0, g.lower_arm, 0.0)  # delta = -th8 / -th10
-        arms[first] = (base, fa, fb, fe, fh)
-    f22 = f21.dh(sy[2][1], sy[2][0], g.head_tilt_height, 0.0, _HALF_PI)     # delta = psi3
-    f23 = f22.dh(st[10][0], st[10][1], 0.0, g.head_length, 0.0)             # delta = -th11 + pi/2
-
-    s, w = ("l", "r") if left else ("r", "l")
-    rows = {
-        f"{s}_ankle": f0.p, f"{s}_knee": f2.p, f"{s}_hip": f3.p, f"{s}_hip_yaw": f5.p,
-        f"{w}_hip_yaw": f6.p, f"{w}_hip": f7.p, f"{w}_knee": f9.p, f"{w}_ankle": f10.p,
-        "neck": f21.p, "head_pan": f21.point((0.0, 0.0, g.head_pan_height)), "head_tilt": f22.p, "head_top": f23.p,
-        "l_sho_pitch": arms[13][0].p, "l_sho_roll": arms[13][1].p, "l_el": arms[13][3].p, "left_hand": arms[13][4].p,
-        "r_sho_pitch": arms[17][0].p, "r_sho_roll": arms[17][1].p, "r_el": arms[17][3].p, "right_hand": arms[17][4].p,
-    }
-    for name, value in rows.items():
-        out[ROW[name]] = value
-    np.add(f5.p, f6.p, out=out[ROW["pelvis"]])
-    out[ROW["pelvis"]] *= 0.5
-    support_side, swing_side = ("left", "right") if left else ("right", "left")
-    out[ROW[f"{support_side}_sole"]] = 0.0
-    out[ROW[f"{swing_side}_sole"]] = f12.p
-    for i, (dx, dy) in enumerate(foot_corner_offsets(spec.foot, support_side)):
-        out[ROW[f"{support_side}_foot_{i}"]] = np.array([dx, dy, 0.0])[:, None]
-    for i, (dx, dy) in enumerate(foot_corner_offsets(spec.foot, swing_side)):
-        out[ROW[f"{swing_side}_foot_{i}"]] = f12.point((0.0, dy, dx))    # frame 12: y left, z forward
-    if keep is not None:
-        keep.update({str(i): f for i, f in enumerate((f0, f1, f2, f3, f4, f5, f6, f7, f8, f9, f10, f11, f12))})
-        for first, (base, fa, fb, fe, fh) in arms.items():
-            keep.update({str(first): base, str(first + 1): fa, str(first + 2): fb, f"{first + 2}e": fe,
-                         str(first + 3): fh})
-        keep.update({"21": f21, "22": f22, "23": f23})
+    run_chunked(n, work)
+    return BodyPoints(out, com, support, "dh")

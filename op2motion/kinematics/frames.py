@@ -8,6 +8,7 @@ alpha, which keeps a step to a handful of array operations.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Sequence
@@ -23,6 +24,19 @@ def _snap(v: float) -> float:
     return v
 
 
+@functools.lru_cache(maxsize=None)
+def _twist(alpha: float) -> tuple[float, float]:
+    """(cos, sin) of a constant D-H twist, snapped."""
+    return _snap(math.cos(alpha)), _snap(math.sin(alpha))
+
+
+@functools.lru_cache(maxsize=None)
+def _sparse_columns(rotation: tuple[tuple[float, ...], ...]) -> tuple[tuple[tuple[int, float], ...], ...]:
+    """For each column of a constant rotation: the non-zero (row, weight) pairs."""
+    return tuple(tuple((k, _snap(rotation[k][j])) for k in range(3) if _snap(rotation[k][j]) != 0.0)
+                 for j in range(3))
+
+
 @dataclass(frozen=True)
 class Frame:
     """N transforms: rotation columns ``x``, ``y``, ``z`` and origin ``p``, each (3, N) [m]."""
@@ -36,14 +50,14 @@ class Frame:
     def constant(cls, rotation: Sequence[Sequence[float]], origin: Sequence[float], n: int) -> "Frame":
         """The same transform N times (rotation given as a 3x3 matrix, origin [m])."""
         r = np.asarray(rotation, dtype=float)
-        rep = lambda v: np.repeat(np.asarray(v, dtype=float)[:, None], n, axis=1)  # noqa: E731
+        rep = lambda v: np.broadcast_to(np.asarray(v, dtype=float)[:, None], (3, n))  # noqa: E731  (read-only)
         return cls(rep(r[:, 0]), rep(r[:, 1]), rep(r[:, 2]), rep(origin))
 
     def dh(self, cos_d: np.ndarray, sin_d: np.ndarray, d: float, a: float, alpha: float) -> "Frame":
         """Compose with the D-H matrix of joint angle delta (given as cos/sin), offset d, length a, twist alpha."""
         x = cos_d * self.x + sin_d * self.y
         y = cos_d * self.y - sin_d * self.x
-        ca, sa = _snap(math.cos(alpha)), _snap(math.sin(alpha))
+        ca, sa = _twist(alpha)
         if sa == 0.0:
             y2, z2 = (y, self.z) if ca > 0 else (-y, -self.z)
         elif ca == 0.0:
@@ -63,14 +77,10 @@ class Frame:
         p = self.point(origin)
         if rotation is None:
             return Frame(self.x, self.y, self.z, p)
-        r = np.asarray(rotation, dtype=float)
         new = []
-        for j in range(3):
+        for column in _sparse_columns(tuple(tuple(float(v) for v in row) for row in rotation)):
             acc = None
-            for k in range(3):
-                w = _snap(float(r[k, j]))
-                if w == 0.0:
-                    continue
+            for k, w in column:
                 term = cols[k] if w == 1.0 else -cols[k] if w == -1.0 else w * cols[k]
                 acc = term if acc is None else acc + term
             new.append(acc)
