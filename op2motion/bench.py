@@ -16,6 +16,8 @@ from .joints import BookAngles, book_to_servo
 from .kinematics import forward
 from .model.dynamics import dynamics_for
 from .physics import validate_servo
+from .posture.cost import PostureProblem
+from .posture.pso import PSOSettings, run_pso
 from .spec import Spec
 
 BENCH_POSES = 40_000
@@ -46,6 +48,8 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0) 
     pin_ms = _best_ms(lambda: dyn.com_loop(servo), 1) * scale
     stand = book_to_servo(BookAngles.standing("left"), spec)[0]
     validate_ms = _best_ms(lambda: validate_servo(stand, "double", spec, 3.0), 1)
+    problem = PostureProblem("left", "left", (0.10, 0.05, 0.07), 0.7)  # optimize's default problem
+    pso_ms = _best_ms(lambda: run_pso(problem, spec, PSOSettings()), 3)
     return {
         "poses": n,
         "repeat": repeat,
@@ -53,6 +57,7 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0) 
         "fk_dh_40k_ms": round(dh_ms, 2),
         "pinocchio_com_40k_ms": round(pin_ms, 1),
         "validate_ms": round(validate_ms, 1),
+        "pso_solve_ms": round(pso_ms, 1),
         "book_matlab_pb_40k_ms": 780.0,
         "book_matlab_dh_40k_ms": 3350.0,
     }

@@ -241,6 +241,151 @@ def cmd_validate(args: argparse.Namespace, spec: Spec) -> int:
     return 0
 
 
+def _default_pose_name(hand: str, support: str, target: Sequence[float], br: float) -> str:
+    mm = lambda v: f"{'m' if v < 0 else ''}{abs(round(v * 1000))}"  # noqa: E731
+    return f"reach-{hand[0]}{support[0]}-{mm(target[0])}-{mm(target[1])}-{mm(target[2])}-br{round(br * 100)}"
+
+
+def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
+    from tqdm import tqdm
+
+    from .errors import CheckFailed
+    from .export.library import pose_to_json, write_pose
+    from .plot import PoseFigure, plot_cost_curve, plot_poses
+    from .posture.cost import PostureProblem
+    from .posture.pso import PSOSettings
+    from .posture.solve import optimize_posture
+
+    target = _vec3(args.target, "--target")
+    problem = PostureProblem(args.support, args.hand, target, args.br, args.model).validated()
+    settings = PSOSettings(args.particles, args.iters, seed=args.seed).validated()
+    name = args.name or _default_pose_name(args.hand, args.support, target, args.br)
+    out = Path(args.out) if args.out else Path("poses") / f"{name}.json"
+    png = Path(args.plot) if args.plot else out.with_suffix(".png")
+    cost_png = out.with_name(out.stem + "_cost.png")
+    interactive = sys.stderr.isatty() and not args.json
+    validations: dict[int, Any] = {}
+
+    def physics_check(res: Any) -> tuple[bool, str]:
+        from .physics import validate_servo
+
+        v = validate_servo(res.pose(name, spec).servo, args.support, spec, args.seconds)
+        validations[res.settings.seed] = v
+        return v.stable, f"does not stand in physics ({v.reason})"
+
+    with tqdm(total=settings.iterations * (1 + args.restarts), desc="PSO", unit="it", disable=not interactive,
+              leave=False) as bar:
+        res = optimize_posture(problem, spec, settings, not args.no_refine,
+                               on_iteration=lambda best: (bar.update(), bar.set_postfix(cost=f"{best:.4f}")),
+                               restarts=args.restarts, check=physics_check if args.validate else None)
+    command = "op2motion optimize " + " ".join(sys.argv[2:]) if len(sys.argv) > 1 else "op2motion optimize"
+    pose = res.pose(name, spec, {"command": command})
+    m = res.metrics
+    result: dict[str, Any] = {
+        "pose": json.loads(pose_to_json(pose, spec)), "reached": res.reached, "message": res.message,
+        "cost": m["cost"], "hand_error_m": m["hand_error_m"], "com": m["com"],
+        "stability_margin_m": m["stability_margin_m"], "com_full": m["com_full"],
+        "stability_margin_full_m": m["stability_margin_full_m"], "swing_foot_min_z": m["swing_foot_min_z"],
+        "iterations": int(len(res.pso.history)), "attempts": m["attempts"], "refinement": res.method,
+        "seconds": round(res.seconds, 3),
+    }
+    lines = [f"{args.hand} hand to ({', '.join(f'{v:.3f}' for v in target)}) m on the {args.support} foot, "
+             f"br {args.br}: {res.message}",
+             f"  CoM ({m['com'][0]:+.3f}, {m['com'][1]:+.3f}, {m['com'][2]:.3f}) m [lumped], stability margin "
+             f"{m['stability_margin_m'] * 1000:.1f} mm (full-inertia CoM: {m['stability_margin_full_m'] * 1000:.1f} mm)"
+             f", swing foot {m['swing_foot_min_z'] * 1000:.1f} mm above the floor, torso tilt {m['torso_tilt_deg']:.0f}°",
+             f"  PSO {settings.particles} particles x {settings.iterations} iterations (seed {res.settings.seed}, "
+             f"attempt {m['attempts']}), refinement: {res.method}, {res.seconds:.2f} s"]
+    if res.settings.seed in validations:
+        v = validations[res.settings.seed]
+        result["validation"] = v.as_dict()
+        lines.append(f"  physics ({args.seconds:g} s): {'STABLE' if v.stable else 'NOT STABLE'} ({v.reason}), "
+                     f"tilt {v.max_tilt_deg:.1f}°, torque {v.max_torque_nm:.2f} N·m at {v.worst_joint}")
+    if not res.reached:
+        _emit(args, result, "\n".join(lines))
+        raise CheckFailed(f"{res.message}; nothing written")
+    write_pose(pose, out, spec)
+    fig = PoseFigure(forward_points(res, spec), np.array(m["com"]), name, args.br, target)
+    plot_poses([fig], spec, png, title=f"{name}: {res.message}")
+    plot_cost_curve(res.pso.history, cost_png, f"PSO cost, {name}")
+    result["files"] = {"pose": str(out), "png": str(png), "cost_png": str(cost_png)}
+    lines.append(f"  wrote {out}, {png}, {cost_png}")
+    _emit(args, result, "\n".join(lines))
+    return 0
+
+
+def forward_points(res: Any, spec: Spec) -> Any:
+    """D-H body points of a posture result (for its figure)."""
+    from .kinematics import forward
+
+    return forward(res.angles, spec, "dh")
+
+
+def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
+    from .export.action import read_action, write_poses
+    from .export.library import read_pose
+    from .export.tables import write_table
+
+    poses = [read_pose(p, spec) for p in args.poses]
+    if args.format == "action":
+        base = read_action(args.base, spec) if args.base else None
+        out = write_poses(poses, spec, args.output, args.page, args.time, base)
+        text = (f"wrote {out}: {len(poses)} pose(s) in pages {args.page}..{args.page + len(poses) - 1}"
+                if poses else f"wrote {out}: the base, unchanged")
+    else:
+        if not poses:
+            raise InputError(f"export --format {args.format}: expected at least one pose file")
+        out = write_table(args.format, poses, spec, args.output, args.time)
+        text = f"wrote {out}: {len(poses)} pose(s)"
+    _emit(args, {"path": str(out), "format": args.format, "poses": [p.name for p in poses]}, text)
+    return 0
+
+
+def cmd_import_action(args: argparse.Namespace, spec: Spec) -> int:
+    from .export.action import list_pages, page_to_pose, read_action, requested_page
+    from .export.library import pose_to_json, write_pose
+
+    data = read_action(args.file, spec)
+    if args.page is not None:
+        pose = page_to_pose(requested_page(data, args.page, spec, args.file), spec, args.name)
+        if args.out:
+            write_pose(pose, args.out, spec)
+        doc = json.loads(pose_to_json(pose, spec))
+        _emit(args, {"page": args.page, "pose": doc, "path": args.out},
+              f"page {args.page} -> pose {pose.name!r}" + (f", wrote {args.out}" if args.out else ""))
+        return 0
+    if args.out:
+        raise InputError("--out needs --page N")
+    pages = list_pages(data, spec, args.file)
+    result = {"pages": [{"index": p.index, "name": p.name, "repeat": p.repeat, "next": p.next,
+                         "steps": [{"ticks": {str(k): v for k, v in s.ticks.items()}, "pause": s.pause, "time": s.time}
+                                   for s in p.steps]} for p in pages]}
+    text = "\n".join(f"{p.index:3d} {p.name:<14} {len(p.steps)} step(s)" + (f" -> page {p.next}" if p.next else "")
+                     for p in pages)
+    _emit(args, result, text)
+    return 0
+
+
+def cmd_library_build(args: argparse.Namespace, spec: Spec) -> int:
+    from tqdm import tqdm
+
+    from .posture.library_build import axis, build_library, grid_jobs
+    from .posture.pso import PSOSettings
+
+    jobs = grid_jobs(args.hands, args.supports, args.br, axis(*args.x, "--x"), axis(*args.y, "--y"),
+                     axis(*args.z, "--z"))
+    settings = PSOSettings(args.particles, args.iters, seed=args.seed).validated()
+    if args.workers < 0:
+        raise InputError(f"--workers: expected 0 (all cores) or more, got {args.workers}")
+    with tqdm(total=len(jobs), desc="library", unit="pose", disable=not sys.stderr.isatty() or args.json) as bar:
+        summary = build_library(jobs, spec, args.out, settings, args.workers, args.validate, args.spec,
+                                on_done=lambda row: bar.update())
+    text = (f"{summary['targets']} targets: {summary['solved']} reached, {summary['failed']} not, "
+            f"{summary['skipped']} already done; {summary['seconds']:.1f} s; index {summary['index']}")
+    _emit(args, summary, text)
+    return 0
+
+
 def cmd_bench(args: argparse.Namespace, spec: Spec) -> int:
     from .bench import run_bench
 
@@ -251,7 +396,9 @@ def cmd_bench(args: argparse.Namespace, spec: Spec) -> int:
              f"  projection model  {result['fk_pb_40k_ms']:8.2f} ms   (book MATLAB: 780 ms)",
              f"  D-H model         {result['fk_dh_40k_ms']:8.2f} ms   (book MATLAB: 3350 ms)",
              f"  pinocchio loop    {result['pinocchio_com_40k_ms']:8.2f} ms   (centerOfMass per configuration)",
-             f"one PyBullet validation (3 s simulated): {result['validate_ms']:.0f} ms"]
+             f"one PyBullet validation (3 s simulated): {result['validate_ms']:.0f} ms",
+             f"one PSO posture solve (50 particles x 200 iterations, D-H): {result['pso_solve_ms']:.0f} ms "
+             "(target <= 150 ms)"]
     _emit(args, result, "\n".join(lines))
     return 0
 
@@ -302,6 +449,59 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--tol-mm", type=float, default=0.1, help="iterated mode: target tolerance [mm] (default 0.1)")
     p.add_argument("--allow-limits", action="store_true", help="accept a result outside the servo limits")
     p.add_argument("--plot", metavar="PNG", help="draw the initial and the changed pose")
+
+    p = add("optimize", cmd_optimize, "PSO posture: reach a target with one hand while the CoM stays over the foot")
+    p.add_argument("--support", choices=("left", "right"), default="left", help="support foot (default left)")
+    p.add_argument("--hand", choices=("left", "right"), default="left", help="reaching hand (default left)")
+    p.add_argument("--target", type=float, nargs=3, default=(0.10, 0.05, 0.07), metavar=("X", "Y", "Z"),
+                   help="target in the support-foot frame [m] (default 0.10 0.05 0.07)")
+    p.add_argument("--br", type=float, default=0.7, help="boundary ratio of the support rectangle (default 0.7)")
+    p.add_argument("--model", choices=("dh", "pb"), default="dh", help="kinematic model of the PSO (default dh)")
+    p.add_argument("--particles", type=int, default=50, help="swarm size (default 50)")
+    p.add_argument("--iters", type=int, default=200, help="PSO iterations (default 200)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--restarts", type=int, default=2, help="extra solves with the next seeds if one fails (default 2)")
+    p.add_argument("--no-refine", action="store_true", help="skip the local refinement (hand within 5 mm)")
+    p.add_argument("--name", help="pose name (default from hand, support, target, br)")
+    p.add_argument("--out", metavar="FILE", help="pose file (default poses/NAME.json)")
+    p.add_argument("--plot", metavar="PNG", help="pose figure (default beside the pose file)")
+    p.add_argument("--validate", action="store_true", help="check the pose in PyBullet before writing it")
+    p.add_argument("--seconds", type=float, default=3.0, help="simulated time of --validate [s]")
+
+    p = add("export", cmd_export, "pose files -> ROBOTIS action file, Webots motion or CSV")
+    p.add_argument("poses", nargs="*", metavar="POSE", help="pose files, in order")
+    p.add_argument("--format", choices=("action", "webots", "csv"), required=True, help="output format")
+    p.add_argument("--base", metavar="FILE", help="action file to start from (default: reset pages)")
+    p.add_argument("--page", type=int, default=1, help="first page to write (action format, default 1)")
+    p.add_argument("--time", type=float, default=1.0, help="seconds per pose (default 1.0)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT", help="file to write (atomically)")
+
+    p = add("import-action", cmd_import_action, "list the pages of a ROBOTIS action file, or turn one into a pose")
+    p.add_argument("file", metavar="FILE", help="motion_4096.bin")
+    p.add_argument("--page", type=int, help="page to turn into a pose (its last step)")
+    p.add_argument("--out", metavar="POSE", help="write that pose file (with --page)")
+    p.add_argument("--name", help="pose name (default: the page name)")
+
+    lib = sub.add_parser("library", help="the pose library", description="the pose library")
+    lib_sub = lib.add_subparsers(dest="library_command", required=True, parser_class=_Parser)
+    p = lib_sub.add_parser("build", help="optimise a grid of reach targets in parallel (resumable)")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.set_defaults(func=cmd_library_build)
+    p.add_argument("--hands", nargs="+", choices=("left", "right"), default=["left", "right"])
+    p.add_argument("--supports", nargs="+", choices=("left", "right"), default=["left", "right"])
+    p.add_argument("--br", type=float, nargs="+", default=[0.7], help="boundary ratios (default 0.7)")
+    p.add_argument("--x", type=float, nargs=3, default=(0.06, 0.14, 3), metavar=("START", "STOP", "N"),
+                   help="target x values [m] (default 0.06 0.14 3)")
+    p.add_argument("--y", type=float, nargs=3, default=(-0.06, 0.06, 3), metavar=("START", "STOP", "N"),
+                   help="target y values [m] (default -0.06 0.06 3)")
+    p.add_argument("--z", type=float, nargs=3, default=(0.05, 0.15, 3), metavar=("START", "STOP", "N"),
+                   help="target z values [m] (default 0.05 0.15 3)")
+    p.add_argument("--out", default="poses/library", help="library folder (default poses/library)")
+    p.add_argument("--workers", type=int, default=0, help="worker processes (default: one per core)")
+    p.add_argument("--particles", type=int, default=50)
+    p.add_argument("--iters", type=int, default=200)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--validate", action="store_true", help="check every reached pose in PyBullet (2 s)")
 
     p = add("urdf", cmd_urdf, "the URDF generated from the spec (stdout, or -o FILE)")
     p.add_argument("-o", "--output", metavar="FILE", help="write the URDF here (atomically)")

@@ -122,3 +122,25 @@ def plot_poses(figures: Sequence[PoseFigure], spec: Spec, path: str | Path, titl
     fig.savefig(buf, format="png", dpi=90)
     plt.close(fig)
     return write_atomic(path, buf.getvalue())
+
+
+def plot_cost_curve(history: Sequence[float], path: str | Path, title: str = "PSO cost") -> Path:
+    """Best cost after each PSO iteration (book fig. 2.43), log scale, as a PNG."""
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.semilogy(np.arange(1, len(history) + 1), np.maximum(np.asarray(history, dtype=float), 1e-9), color="tab:blue")
+    ax.set_xlabel("iteration")
+    ax.set_ylabel("best cost (log)")
+    ax.set_title(title)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=90)
+    plt.close(fig)
+    return write_atomic(path, buf.getvalue())

@@ -3,7 +3,8 @@
 from op2motion.bench import run_bench
 
 
-def test_bench_reports_both_models(spec):
+def test_bench_reports_every_figure(spec):
     result = run_bench(spec, n=500, repeat=1)
     assert result["poses"] == 500
-    assert result["fk_pb_40k_ms"] > 0 and result["fk_dh_40k_ms"] > 0
+    for key in ("fk_pb_40k_ms", "fk_dh_40k_ms", "pinocchio_com_40k_ms", "validate_ms", "pso_solve_ms"):
+        assert result[key] > 0, key

@@ -1,7 +1,8 @@
 """The posture cost (book eq. 2.87, code 2.8-2.11), evaluated for a whole swarm at once.
 
     cost = PenaltySwingFootHeight + PenaltyStability(br) + |hand - target|            (the book)
-         + W_MARGIN * (MARGIN_CAP - min(margin, MARGIN_CAP))                        (beyond the book)
+         + W_VIOLATION * (how far a violated constraint is violated)                (beyond the book)
+         + W_MARGIN * (MARGIN_CAP - min(margin, MARGIN_CAP))
          + W_UPRIGHT * torso_tilt^2 + PenaltySelfCollision
 
 The book's terms are a step penalty of 100 when the swing foot's lowest corner is below the floor or the CoM
@@ -24,6 +25,7 @@ from ..kinematics import BodyPoints, forward
 from ..kinematics.points import ROW, row_of
 from ..spec import Spec
 
+W_VIOLATION = 10.0     # cost per metre by which a violated constraint is violated, on top of the book's 100
 W_MARGIN = 0.02        # cost per metre of stability margin below MARGIN_CAP
 MARGIN_CAP_M = 0.02    # margins beyond this earn nothing more
 W_UPRIGHT = 0.002      # cost per rad² of torso tilt from vertical
@@ -140,12 +142,14 @@ class CostModel:
                            np.maximum(np.maximum(dy - left, -right - dy), 0.0))
         margin = np.where(inside >= 0.0, inside, -outside)  # balance.stability_margin, support frame (sp 0, gamma 0)
         # The book's penalties (code 2.8, 2.9): PenaltyStability is 100 exactly where the margin is negative.
-        book = (np.where(swing_min_z < -FLOOR_TOLERANCE_M, PENALTY, 0.0) + np.where(margin < 0.0, PENALTY, 0.0)
-                + hand_error)
+        below = swing_min_z < -FLOOR_TOLERANCE_M
+        book = np.where(below, PENALTY, 0.0) + np.where(margin < 0.0, PENALTY, 0.0) + hand_error
+        # Beyond the book: a slope inside the penalised region leads a swarm that starts there out of it.
+        slope = W_VIOLATION * (np.where(below, -swing_min_z, 0.0) + np.maximum(-margin, 0.0))
         tilt = torso_tilt(points)
         collision = self_collision_penalty(points)
-        total = (book + W_MARGIN * (MARGIN_CAP_M - np.minimum(margin, MARGIN_CAP_M)) + W_UPRIGHT * tilt * tilt
-                 + collision)
+        total = (book + slope + W_MARGIN * (MARGIN_CAP_M - np.minimum(margin, MARGIN_CAP_M))
+                 + W_UPRIGHT * tilt * tilt + collision)
         return CostTerms(total, book, hand_error, margin, swing_min_z, tilt, collision)
 
 

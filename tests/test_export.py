@@ -1,0 +1,181 @@
+"""ROBOTIS action files, Webots motions, CSV, and the library build."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from conftest import DATA, page_last_step_ticks
+from op2motion.cli import main
+from op2motion.errors import InputError, PoseFileError
+from op2motion.export.action import (FILE_SIZE, PAGE_SIZE, checksum_ok, list_pages, page_to_pose, requested_page,
+                                     reset_file, reset_page, write_poses)
+from op2motion.export.library import read_pose
+from op2motion.export.tables import csv_table, webots_motion
+from op2motion.joints import servo_to_ticks
+from op2motion.posture.library_build import axis, build_library, grid_jobs
+from op2motion.posture.pso import PSOSettings
+from op2motion.spec import default_spec
+
+POSES = os.path.join(os.path.dirname(__file__), "..", "poses")
+STOCK = str(DATA / "motion_4096.bin")
+STOCK_NAMES = {1: "init", 2: "ok", 3: "no", 4: "hi", 9: "walkready", 10: "f up", 11: "b up", 12: "rk", 13: "lk",
+               15: "sit down", 16: "stand up", 90: "lie down", 91: "lie up"}
+
+
+def test_stock_file_imports_with_all_its_pages(spec, stock_action_bytes):
+    pages = list_pages(stock_action_bytes, spec)
+    assert len(pages) == 45
+    names = {p.index: p.name for p in pages}
+    for index, name in STOCK_NAMES.items():
+        assert names[index] == name
+    assert len(next(p for p in pages if p.index == 6).steps) == 7          # talk1
+    assert next(p for p in pages if p.index == 17).next == 18              # mul1 -> mul2
+
+
+def test_reset_pages_match_the_action_editor(stock_action_bytes):
+    empty = [i for i in range(1, 256) if stock_action_bytes[i * PAGE_SIZE + 20] == 0
+             and checksum_ok(stock_action_bytes[i * PAGE_SIZE:(i + 1) * PAGE_SIZE])]
+    assert len(empty) == 210
+    assert all(stock_action_bytes[i * PAGE_SIZE:(i + 1) * PAGE_SIZE] == reset_page() for i in empty)
+    assert len(reset_file()) == FILE_SIZE and reset_file()[:PAGE_SIZE] == stock_action_bytes[:PAGE_SIZE]
+
+
+def _cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_reexport_is_byte_identical_and_pages_round_trip(capsys, spec, stock_action_bytes, tmp_path):
+    same = tmp_path / "same.bin"
+    assert _cli(capsys, "export", "--format", "action", "--base", STOCK, "-o", str(same))[0] == 0
+    assert same.read_bytes() == stock_action_bytes
+    # Turn page 9 into a pose, write it and two library poses from page 200 on: read back the same ticks.
+    pose_file = tmp_path / "walkready.json"
+    assert _cli(capsys, "import-action", STOCK, "--page", "9", "--out", str(pose_file))[0] == 0
+    files = [str(pose_file), os.path.join(POSES, "book_2_44.json"), os.path.join(POSES, "standing.json")]
+    out = tmp_path / "out.bin"
+    code, _, _ = _cli(capsys, "export", "--format", "action", *files, "--base", STOCK, "--page", "200",
+                      "--time", "1.5", "-o", str(out))
+    data = out.read_bytes()
+    assert code == 0 and len(data) == FILE_SIZE
+    for k, path in enumerate(files):
+        page = requested_page(data, 200 + k, spec, "out")
+        pose = read_pose(path, spec)
+        assert page.name == pose.name[:13] and page.steps[0].time == round(1.5 / 0.008)
+        ticks = np.array([page.steps[0].ticks[j.id] for j in spec.joints])
+        assert np.all(np.abs(ticks - servo_to_ticks(pose.servo, spec)) <= 1)
+    for i in set(range(256)) - {200, 201, 202}:  # every other page kept byte for byte, page 0 (invalid) included
+        assert data[i * PAGE_SIZE:(i + 1) * PAGE_SIZE] == stock_action_bytes[i * PAGE_SIZE:(i + 1) * PAGE_SIZE]
+    assert np.array_equal(page_last_step_ticks(data, 200), page_last_step_ticks(stock_action_bytes, 9))
+
+
+def test_invalid_pages_of_the_base_are_kept(spec, stock_action_bytes, tmp_path):
+    base = bytearray(stock_action_bytes)
+    base[30 * PAGE_SIZE + 5] ^= 0xFF                      # break page 30's checksum
+    out = write_poses([read_pose(os.path.join(POSES, "standing.json"), spec)], spec, tmp_path / "o.bin", 100,
+                      base=bytes(base))
+    assert out.read_bytes()[30 * PAGE_SIZE:31 * PAGE_SIZE] == bytes(base[30 * PAGE_SIZE:31 * PAGE_SIZE])
+    with pytest.raises(InputError, match="checksum"):
+        requested_page(bytes(base), 30, spec, "base")
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["import-action", "/no/such.bin"], "cannot read"),
+    (["import-action", STOCK, "--page", "300"], "--page"),
+    (["import-action", STOCK, "--page", "0"], "--page"),
+    (["import-action", STOCK, "--page", "7"], "no steps"),
+    (["import-action", STOCK, "--out", "x.json"], "--page"),
+    (["export", "--format", "webots", "-o", "x.motion"], "at least one pose"),
+    (["export", "--format", "action", "--time", "9", os.path.join(POSES, "standing.json"), "-o", "x.bin"], "--time"),
+])
+def test_bad_action_input(capsys, tmp_path, monkeypatch, argv, needle):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = _cli(capsys, *argv)
+    assert code == 2 and needle in err and out == "" and os.listdir(tmp_path) == []
+
+
+def test_truncated_file_is_a_clear_error(capsys, tmp_path, stock_action_bytes):
+    short = tmp_path / "short.bin"
+    short.write_bytes(stock_action_bytes[:-1])
+    code, _, err = _cli(capsys, "import-action", str(short))
+    assert code == 2 and "truncated" in err
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.one_of(st.binary(max_size=2048),
+                 st.lists(st.tuples(st.integers(0, FILE_SIZE - 1), st.integers(0, 255)), max_size=40)),
+       st.integers(1, 255))
+def test_reader_fuzz_only_clear_errors(blob, page):
+    """Random bytes, or the stock file with random bytes changed: the reader succeeds or raises InputError."""
+    spec = default_spec()
+    if isinstance(blob, bytes):
+        data = blob
+    else:
+        buf = bytearray((DATA / "motion_4096.bin").read_bytes())
+        for offset, value in blob:
+            buf[offset] = value
+        data = bytes(buf)
+    for call in (lambda: list_pages(data, spec), lambda: page_to_pose(requested_page(data, page, spec, "f"), spec)):
+        try:
+            call()
+        except InputError:
+            pass
+
+
+def test_webots_and_csv(spec):
+    poses = [read_pose(os.path.join(POSES, n), spec) for n in ("walkready.json", "standing.json")]
+    motion = webots_motion(poses, spec, 0.5).splitlines()
+    assert motion[0].split(",")[:4] == ["#WEBOTS_MOTION", "V1.0", "ShoulderR", "ShoulderL"]
+    assert motion[0].split(",")[-1] == "Head" and len(motion[0].split(",")) == 22
+    assert motion[2].startswith("00:00:500,standing,0.000000,0.000000,-0.785398,0.785398")
+    table = csv_table(poses, spec).splitlines()
+    assert table[0].startswith("name,time_s,support,r_sho_pitch_deg") and table[2].startswith("standing,1.000,double")
+
+
+def test_library_build_and_resume(spec, tmp_path):
+    jobs = grid_jobs(["left"], ["left", "right"], [0.7], axis(0.09, 0.11, 2, "x"), [0.03], [0.07])
+    settings = PSOSettings(iterations=120)
+    first = build_library(jobs, spec, tmp_path, settings, workers=2)
+    assert first["targets"] == 4 and first["solved"] + first["failed"] == 4 and first["skipped"] == 0
+    rows = json.loads((tmp_path / "index.json").read_text(encoding="utf-8"))
+    assert len(rows) == 4 and (tmp_path / "index.csv").read_text(encoding="utf-8").startswith("name,hand,support")
+    for row in rows:
+        if row["reached"]:
+            assert read_pose(tmp_path / row["file"], spec).name == row["name"]
+    again = build_library(jobs, spec, tmp_path, settings, workers=2)
+    assert again["skipped"] == 4 and again["seconds"] < 1.0
+
+
+def test_killed_library_build_leaves_no_half_written_file(tmp_path):
+    cmd = [sys.executable, "-m", "op2motion", "library", "build", "--x", "0.06", "0.14", "5", "--y", "0", "0.04",
+           "2", "--z", "0.07", "0.07", "1", "--hands", "left", "--supports", "left", "--workers", "2",
+           "--out", str(tmp_path / "lib")]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+    deadline = time.time() + 60
+    while time.time() < deadline and not list((tmp_path / "lib").glob("reach-*.json")):
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    spec = default_spec()
+    for path in (tmp_path / "lib").glob("*.json"):
+        if path.name == "index.json":
+            json.loads(path.read_text(encoding="utf-8"))
+        else:
+            read_pose(path, spec)                     # every pose file that exists is whole and valid
+    resumed = subprocess.run(cmd + ["--json"], capture_output=True, text=True, timeout=300)
+    summary = json.loads(resumed.stdout)
+    assert resumed.returncode == 0 and summary["targets"] == 10 and summary["skipped"] >= 1
+    assert not list((tmp_path / "lib").glob(".*.tmp"))
+    with pytest.raises(PoseFileError):
+        read_pose(tmp_path / "lib" / "missing.json", spec)

@@ -1,0 +1,133 @@
+"""PSO posture optimisation: the book's four scenarios, the cost, pyswarms hygiene, the optimize command."""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+
+import numpy as np
+import pytest
+
+from op2motion.balance import penalty_stability, stability_margin
+from op2motion.cli import main
+from op2motion.export.library import read_pose
+from op2motion.joints import BookAngles
+from op2motion.kinematics import forward
+from op2motion.physics import validate_servo
+from op2motion.posture.cost import PostureProblem, evaluate_cost
+from op2motion.posture.pso import PSOSettings, run_pso, variable_bounds
+from op2motion.posture.solve import optimize_posture
+
+POSES = os.path.join(os.path.dirname(__file__), "..", "poses")
+PSO_REACH_M = 5e-3
+REFINED_REACH_M = 1e-3
+# The book's scenarios (figs. 2.44-2.47): support, hand, target [m], br, committed pose.
+BOOK = [("left", "left", (0.1, 0.05, 0.07), 1.0, "book_2_44"),
+        ("left", "left", (0.1, -0.05, 0.07), 0.7, "book_2_45"),
+        ("right", "left", (0.1, 0.05, 0.07), 1.0, "book_2_46"),
+        ("right", "right", (0.1, -0.05, 0.07), 0.4, "book_2_47")]
+
+
+def test_cost_agrees_with_the_book_penalties(spec, rng):
+    problem = PostureProblem("left", "left", (0.1, 0.05, 0.07), 0.7)
+    book = BookAngles.random(500, rng, "left")
+    terms = evaluate_cost(book, problem, spec)
+    pts = forward(book, spec)
+    com_xy = pts.com[:2].T
+    assert np.array_equal(terms.margin < 0, penalty_stability(com_xy, spec, "left", 0.7) > 0)
+    assert np.allclose(terms.margin, stability_margin(com_xy, spec, "left", 0.7), atol=1e-15)
+    hand = np.linalg.norm(pts.point("left_hand") - np.array(problem.target), axis=1)
+    assert np.allclose(terms.hand_error, hand, atol=1e-15)
+    # Feasible poses always cost less than infeasible ones (the book's 100 dominates the tie-breakers).
+    feasible = (terms.margin >= 0) & (terms.swing_min_z >= 0) & (terms.collision == 0)
+    assert terms.total[feasible].max() < 100 <= terms.total[~feasible].min()
+    # One by one equals batched.
+    for i in (0, 7, 499):
+        assert evaluate_cost(book.row(i), problem, spec).total[0] == pytest.approx(terms.total[i], abs=1e-12)
+
+
+@pytest.mark.parametrize("support, hand, target, br, name", BOOK)
+def test_book_scenarios_are_solved(spec, support, hand, target, br, name):
+    problem = PostureProblem(support, hand, target, br)
+    pso = run_pso(problem, spec, PSOSettings(seed=0))
+    lo, hi = variable_bounds(problem, spec)
+    assert np.all(pso.x >= lo - 1e-12) and np.all(pso.x <= hi + 1e-12)     # the box is respected
+    assert np.all(np.diff(pso.history) <= 1e-15)                            # the best cost never rises
+    res = optimize_posture(problem, spec, PSOSettings(seed=0), restarts=2)
+    assert res.reached, res.message
+    assert res.terms.hand_error[0] <= REFINED_REACH_M
+    assert res.terms.margin[0] >= 0 and res.terms.swing_min_z[0] >= 0 and res.terms.collision[0] == 0
+    unrefined = optimize_posture(problem, spec, PSOSettings(seed=0), refine_result=False, restarts=2)
+    assert unrefined.terms.hand_error[0] <= PSO_REACH_M
+
+
+@pytest.mark.parametrize("support, hand, target, br, name", BOOK)
+def test_committed_book_poses_reach_balance_and_stand(spec, support, hand, target, br, name):
+    pose = read_pose(os.path.join(POSES, f"{name}.json"), spec)
+    assert pose.support == support
+    pts = forward(pose.book(spec), spec)
+    assert np.linalg.norm(pts.point(f"{hand}_hand")[0] - np.array(target)) <= REFINED_REACH_M + 1e-6
+    assert stability_margin(pts.com[:2].T, spec, support, br)[0] >= -1e-6
+    assert pts.swing_foot_min_z[0] >= 0
+    v = validate_servo(pose.servo, pose.support, spec, seconds=2.0)
+    assert v.stable, v.reason
+
+
+def test_seeded_runs_are_identical_and_pyswarms_leaks_nothing(spec, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    root = logging.getLogger()
+    mine = logging.getLogger("op2motion-test-user")
+    handler = logging.StreamHandler()
+    root.addHandler(handler)
+    before = (list(root.handlers), root.level)
+    try:
+        problem = PostureProblem("left", "left", (0.1, 0.05, 0.07), 0.7)
+        a = run_pso(problem, spec, PSOSettings(iterations=15, seed=7))
+        b = run_pso(problem, spec, PSOSettings(iterations=15, seed=7))
+        c = run_pso(problem, spec, PSOSettings(iterations=15, seed=8))
+        assert np.array_equal(a.x, b.x) and not np.array_equal(a.x, c.x)
+        assert os.listdir(tmp_path) == []                       # no report.log
+        assert (list(root.handlers), root.level) == before      # root logger untouched
+        assert not mine.disabled
+    finally:
+        root.removeHandler(handler)
+
+
+def _cli(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_optimize_default_writes_pose_and_figures(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = _cli(capsys, "optimize", "--json")
+    doc = json.loads(out)
+    assert code == 0 and err == ""
+    for key in ("pose", "cost", "hand_error_m", "com", "stability_margin_m", "swing_foot_min_z", "iterations",
+                "seconds"):
+        assert key in doc
+    assert doc["hand_error_m"] <= REFINED_REACH_M and doc["iterations"] == 200
+    files = sorted(os.listdir(tmp_path / "poses"))
+    assert files == ["reach-ll-100-50-70-br70.json", "reach-ll-100-50-70-br70.png", "reach-ll-100-50-70-br70_cost.png"]
+    assert doc["pose"]["provenance"]["seed"] == 0 and doc["pose"]["metrics"]["br"] == 0.7
+
+
+def test_unreachable_target_writes_nothing(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = _cli(capsys, "optimize", "--target", "0.5", "0", "0.07", "--restarts", "0", "--iters", "60")
+    assert code == 1 and "unreachable" in err and "nothing written" in err and err.count("\n") == 1
+    assert "residual" in out
+    assert not (tmp_path / "poses").exists()
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["optimize", "--br", "1.5"], "br"),
+    (["optimize", "--target", "nan", "0", "0"], "finite"),
+    (["optimize", "--particles", "1"], "particles"),
+])
+def test_optimize_bad_input(capsys, tmp_path, monkeypatch, argv, needle):
+    monkeypatch.chdir(tmp_path)
+    code, out, err = _cli(capsys, *argv)
+    assert code == 2 and needle in err and out == "" and os.listdir(tmp_path) == []
