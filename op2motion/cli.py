@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from pathlib import Path
 from typing import Any, Callable, Sequence
@@ -241,11 +242,6 @@ def cmd_validate(args: argparse.Namespace, spec: Spec) -> int:
     return 0
 
 
-def _default_pose_name(hand: str, support: str, target: Sequence[float], br: float) -> str:
-    mm = lambda v: f"{'m' if v < 0 else ''}{abs(round(v * 1000))}"  # noqa: E731
-    return f"reach-{hand[0]}{support[0]}-{mm(target[0])}-{mm(target[1])}-{mm(target[2])}-br{round(br * 100)}"
-
-
 def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     from tqdm import tqdm
 
@@ -259,7 +255,7 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     target = _vec3(args.target, "--target")
     problem = PostureProblem(args.support, args.hand, target, args.br, args.model).validated()
     settings = PSOSettings(args.particles, args.iters, seed=args.seed).validated()
-    name = args.name or _default_pose_name(args.hand, args.support, target, args.br)
+    name = args.name or problem.name
     out = Path(args.out) if args.out else Path("poses") / f"{name}.json"
     png = Path(args.plot) if args.plot else out.with_suffix(".png")
     cost_png = out.with_name(out.stem + "_cost.png")
@@ -531,3 +527,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         return 0
+    except Exception as exc:  # a bug, not bad input: still one line (OP2MOTION_DEBUG=1 shows the traceback)
+        if os.environ.get("OP2MOTION_DEBUG"):
+            raise
+        print(f"op2motion: internal error: {type(exc).__name__}: {exc} (set OP2MOTION_DEBUG=1 for details)",
+              file=sys.stderr)
+        return 1

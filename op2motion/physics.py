@@ -247,8 +247,13 @@ def _tilt_deg(q0: tuple, q1: tuple, client: Any) -> float:
     return math.degrees(math.acos(float(np.clip(np.dot(z0, z1), -1.0, 1.0))))
 
 
+MAX_SECONDS = 60.0
+
+
 def steps_for(seconds: float) -> int:
-    """Simulation steps in ``seconds``."""
+    """Simulation steps in ``seconds`` (0.1 to 60 s, else :class:`InputError`)."""
+    if not (math.isfinite(seconds) and 0.1 <= seconds <= MAX_SECONDS):
+        raise InputError(f"--seconds: expected 0.1 to {MAX_SECONDS:g} s, got {seconds!r}")
     return int(round(seconds / TIME_STEP_S))
 
 
@@ -257,8 +262,7 @@ def validate_servo(servo: np.ndarray, support: str, spec: Spec, seconds: float =
     """Simulate a pose held by the servos for ``seconds`` and judge whether it stands (see module docstring)."""
     if support not in SOLE_LINKS:
         raise InputError(f"support: expected left, right or double, got {support!r}")
-    if not (math.isfinite(seconds) and 0.1 <= seconds <= 60.0):
-        raise InputError(f"--seconds: expected 0.1 to 60 s, got {seconds!r}")
+    steps = steps_for(seconds)
     servo = np.asarray(servo, dtype=float)
     with Sim(spec) as sim:
         c = sim.client
@@ -269,7 +273,6 @@ def validate_servo(servo: np.ndarray, support: str, spec: Spec, seconds: float =
         start_soles = {s: np.asarray(sim.link_frame(s)[0]) for s in sole_names}
         start_orn = sim.base_link_frame()[1]
         com0 = sim.com()
-        steps = steps_for(seconds)
         window = max(1, int(round(STEADY_WINDOW_S / TIME_STEP_S)))
         tilt = drift = slip = peak = 0.0
         collisions: set[tuple[str, str]] = set()

@@ -5,11 +5,13 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
 from op2motion.cli import main
 
+STANDING_POSE = str(Path(__file__).parents[1] / "poses" / "standing.json")
 STAND_TH = "90 0 0 180 0 0 180 0 180 0 0".split()
 STAND_PHI = "0 0 180 0 180 180".split()
 CODE_2_6 = ["--th", *"80 10 0 210 -10 -5 170 10 200 20 0".split(), "--phi", *"-10 5 170 10 200 170".split()]
@@ -67,6 +69,7 @@ def test_plot_writes_a_png(capsys, tmp_path):
     (["plot", "/no/such/pose.json", "-o", "OUT"], "no such pose file"),
     (["--spec", "/no/spec.toml", "fk"], "cannot read spec"),
     (["frobnicate"], "invalid choice"),
+    (["validate", STANDING_POSE, "--seconds", "nan"], "--seconds"),
 ])
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(capsys, tmp_path, monkeypatch, argv, needle):
     monkeypatch.chdir(tmp_path)

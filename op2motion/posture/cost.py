@@ -64,6 +64,13 @@ class PostureProblem:
         """Body-point name of the reaching hand."""
         return f"{self.hand}_hand"
 
+    @property
+    def name(self) -> str:
+        """Default pose name, e.g. ``reach-ll-100-50-70-br70`` (hand, support, target in mm, br in %)."""
+        mm = lambda v: f"{'m' if v < 0 else ''}{abs(round(v * 1000))}"  # noqa: E731
+        x, y, z = self.target
+        return f"reach-{self.hand[0]}{self.support[0]}-{mm(x)}-{mm(y)}-{mm(z)}-br{round(self.br * 100)}"
+
 
 @dataclass(frozen=True)
 class CostTerms:

@@ -44,11 +44,14 @@ class Job:
     target: tuple[float, float, float]
 
     @property
+    def problem(self) -> PostureProblem:
+        """The posture problem of this grid point."""
+        return PostureProblem(self.support, self.hand, self.target, self.br)
+
+    @property
     def name(self) -> str:
         """Pose name of this grid point, e.g. ``reach-ll-100-50-70-br70``."""
-        mm = lambda v: f"{'m' if v < 0 else ''}{abs(round(v * 1000))}"  # noqa: E731
-        x, y, z = self.target
-        return f"reach-{self.hand[0]}{self.support[0]}-{mm(x)}-{mm(y)}-{mm(z)}-br{round(self.br * 100)}"
+        return self.problem.name
 
 
 def axis(start: float, stop: float, count: float, name: str) -> list[float]:
@@ -64,7 +67,7 @@ def grid_jobs(hands: Sequence[str], supports: Sequence[str], brs: Sequence[float
     jobs = [Job(h, s, float(b), (float(x), float(y), float(z)))
             for h, s, b, x, y, z in itertools.product(hands, supports, brs, xs, ys, zs)]
     for job in jobs:
-        PostureProblem(job.support, job.hand, job.target, job.br).validated()
+        job.problem.validated()
     return jobs
 
 
@@ -72,7 +75,7 @@ def _solve(job: Job, spec_path: str | None, settings: PSOSettings, validate: boo
     """Worker: solve one job, write its pose file if reached, return its index row."""
     spec = load_spec(spec_path)
     t0 = time.perf_counter()
-    res = optimize_posture(PostureProblem(job.support, job.hand, job.target, job.br), spec, settings, restarts=1)
+    res = optimize_posture(job.problem, spec, settings, restarts=1)
     row: dict[str, Any] = {"name": job.name, "hand": job.hand, "support": job.support, "br": job.br,
                            "x": job.target[0], "y": job.target[1], "z": job.target[2], "reached": res.reached,
                            "hand_error_m": round(float(res.terms.hand_error[0]), 6),
