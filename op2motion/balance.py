@@ -12,7 +12,6 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import InputError
-from .kinematics.com import mass_weights
 from .kinematics.points import BodyPoints
 from .spec import Spec
 

@@ -14,9 +14,10 @@ import math
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Mapping
 
 from .errors import SpecError
+from .tablereader import TableReader
 
 try:  # Python >= 3.11
     import tomllib
@@ -191,59 +192,7 @@ class Spec:
         return sum(m.mass for m in self.lumped_masses)
 
 
-class _Reader:
-    """Strict accessor for one TOML table: every key read once, unknown keys reported."""
-
-    def __init__(self, path: str, where: str, table: Any):
-        if not isinstance(table, dict):
-            raise SpecError(f"{path}: {where}: expected a table, got {type(table).__name__}")
-        self.path, self.where, self.table, self.used = path, where, table, set()
-
-    def _key(self, key: str) -> str:
-        return f"{self.where}.{key}" if self.where else key
-
-    def get(self, key: str, kind: type | tuple[type, ...]) -> Any:
-        if key not in self.table:
-            raise SpecError(f"{self.path}: missing key {self._key(key)!r}")
-        value = self.table[key]
-        self.used.add(key)
-        kinds = kind if isinstance(kind, tuple) else (kind,)
-        if float in kinds and isinstance(value, int) and not isinstance(value, bool):
-            value = float(value)
-        if isinstance(value, bool) or not isinstance(value, kinds):
-            names = "/".join(k.__name__ for k in kinds)
-            raise SpecError(f"{self.path}: {self._key(key)}: expected {names}, got {value!r}")
-        return value
-
-    def number(self, key: str, positive: bool = False, nonnegative: bool = False) -> float:
-        value = self.get(key, float)
-        if not math.isfinite(value) or (positive and value <= 0) or (nonnegative and value < 0):
-            need = "a positive number" if positive else "a non-negative number" if nonnegative else "a finite number"
-            raise SpecError(f"{self.path}: {self._key(key)}: expected {need}, got {value!r}")
-        return value
-
-    def vector(self, key: str, n: int = 3) -> tuple[float, ...]:
-        value = self.get(key, list)
-        if len(value) != n or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value):
-            raise SpecError(f"{self.path}: {self._key(key)}: expected {n} numbers, got {value!r}")
-        if not all(math.isfinite(v) for v in value):
-            raise SpecError(f"{self.path}: {self._key(key)}: expected finite numbers, got {value!r}")
-        return tuple(float(v) for v in value)
-
-    def sub(self, key: str) -> "_Reader":
-        return _Reader(self.path, self._key(key), self.get(key, dict))
-
-    def array(self, key: str) -> list["_Reader"]:
-        items = self.get(key, list)
-        return [_Reader(self.path, f"{self._key(key)}[{i}]", t) for i, t in enumerate(items)]
-
-    def done(self) -> None:
-        unknown = sorted(set(self.table) - self.used)
-        if unknown:
-            raise SpecError(f"{self.path}: unknown key {self._key(unknown[0])!r}")
-
-
-def _servo(r: _Reader) -> Servo:
+def _servo(r: TableReader) -> Servo:
     s = Servo(r.get("model", str), r.get("ticks_per_rev", int), r.get("center_tick", int), r.get("min_tick", int),
               r.get("max_tick", int), r.number("framework_deg_per_tick", positive=True),
               r.number("stall_torque_nm", positive=True), r.number("no_load_speed_rad_s", positive=True),
@@ -254,14 +203,14 @@ def _servo(r: _Reader) -> Servo:
     return s
 
 
-def _foot(r: _Reader) -> Foot:
+def _foot(r: TableReader) -> Foot:
     f = Foot(r.number("sole_below_ankle_m", positive=True), r.number("front_m", positive=True),
              r.number("back_m", positive=True), r.number("inner_m", positive=True), r.number("outer_m", positive=True))
     r.done()
     return f
 
 
-def _joint(r: _Reader) -> Joint:
+def _joint(r: TableReader) -> Joint:
     name = r.get("name", str)
     lower, upper = r.vector("limit_deg", 2)
     if not lower < upper:
@@ -357,7 +306,7 @@ def parse_spec(text: str, path: str = "<spec>") -> Spec:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SpecError(f"{path}: not valid TOML: {exc}") from None
-    top = _Reader(path, "", raw)
+    top = TableReader(path, "", raw)
     if top.get("schema", str) != SCHEMA:
         raise SpecError(f"{path}: schema: expected {SCHEMA!r}, got {raw['schema']!r}")
     name, root = top.get("name", str), top.get("root_link", str)
