@@ -13,6 +13,16 @@ from pathlib import Path
 from .errors import InputError
 
 
+def _mode_for(target: Path) -> int:
+    """An existing file's mode, else 0666 less the process umask (what ``open`` would give)."""
+    try:
+        return target.stat().st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
 def write_atomic(path: str | Path, data: bytes | str) -> Path:
     """Write ``data`` to ``path`` atomically; parent directories are created. Returns the path."""
     target = Path(path)
@@ -27,6 +37,7 @@ def write_atomic(path: str | Path, data: bytes | str) -> Path:
             handle.write(payload)
             handle.flush()
             os.fsync(handle.fileno())
+        os.chmod(tmp, _mode_for(target))  # mkstemp makes 0600 files; give the usual permissions
         os.replace(tmp, target)
     except BaseException:
         with contextlib.suppress(OSError):

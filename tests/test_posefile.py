@@ -72,3 +72,18 @@ def test_failed_write_keeps_the_existing_file(spec, tmp_path):
         write_pose(bad, path, spec)
     assert path.read_bytes() == before
     assert [p.name for p in tmp_path.iterdir()] == ["keep.json"]  # no temp file left behind
+
+
+def test_written_files_get_normal_permissions(spec, tmp_path):
+    import os
+    import stat
+
+    umask = os.umask(0o022)
+    try:
+        path = write_pose(_pose(spec), tmp_path / "perm.json", spec)
+        assert stat.S_IMODE(path.stat().st_mode) == 0o644        # not mkstemp's 0600
+        os.chmod(path, 0o640)
+        write_pose(_pose(spec), path, spec)
+        assert stat.S_IMODE(path.stat().st_mode) == 0o640        # an existing file keeps its mode
+    finally:
+        os.umask(umask)
