@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError, ModelError
-from .joints import BookAngles, book_to_servo, limit_violations
+from .errors import InputError, LimitViolation, ModelError
+from .joints import BookAngles, book_bounds, book_to_servo, limit_violations
 from .kinematics import forward
 from .spec import Spec
 
@@ -54,14 +54,14 @@ ARMS = {"left": Arm(6, 7, 4, "left_hand"), "right": Arm(8, 9, 5, "right_hand")}
 
 def _arm(hand: str) -> Arm:
     if hand not in ARMS:
-        raise InputError(f"hand: expected 'left' or 'right', got {hand!r}")
+        raise InputError(f"expected 'left' or 'right', got {hand!r}", "hand")
     return ARMS[hand]
 
 
 def _delta(delta: object) -> np.ndarray:
     d = np.asarray(delta, dtype=float).reshape(-1)
     if d.size != 3 or not np.all(np.isfinite(d)):
-        raise InputError(f"delta: expected 3 finite numbers [m], got {delta!r}")
+        raise InputError(f"expected 3 finite numbers [m], got {delta!r}", "delta")
     return d
 
 
@@ -136,18 +136,6 @@ def _hands(angles: BookAngles, arm: Arm, q: np.ndarray, spec: Spec, model: str) 
     return forward(_with_arm(angles, arm, q), spec, model).point(arm.hand)
 
 
-def arm_limits(spec: Spec, hand: str, support: str) -> tuple[np.ndarray, np.ndarray]:
-    """Book-variable bounds (lower (3,), upper (3,)) [rad] of one arm's variables from the servo limits."""
-    arm = _arm(hand)
-    lo, hi = np.empty(3), np.empty(3)
-    for k, var in enumerate(arm.names):
-        joint = next(j for j in spec.joints if j.book[support].var == var)
-        m = joint.book[support]
-        ends = sorted(((joint.lower - m.offset) * m.sign, (joint.upper - m.offset) * m.sign))
-        lo[k], hi[k] = ends
-    return lo, hi
-
-
 @dataclass(frozen=True)
 class ArmIKResult:
     """Outcome of one arm IK solve; angles in rad, lengths in m."""
@@ -161,7 +149,7 @@ class ArmIKResult:
     requested: np.ndarray
     achieved: np.ndarray
     iterations: int
-    limit_violations: list
+    limit_violations: list[LimitViolation]
 
     @property
     def error_m(self) -> float:
@@ -181,11 +169,11 @@ def solve_arm_ik(angles: BookAngles, hand: str, delta: object, spec: Spec, model
     arm, d = _arm(hand), _delta(delta)
     one = angles.row(0)
     if not (math.isfinite(tol) and tol > 0):
-        raise InputError(f"tol: expected a positive length [m], got {tol!r}")
+        raise InputError(f"expected a positive length [m], got {tol!r}", "tol")
     q0 = np.array([one.th[0, arm.th_upper], one.th[0, arm.th_lower], one.phi[0, arm.phi]])
     start = _hands(one, arm, q0, spec, model)[0]
     target = start + d
-    lo, hi = arm_limits(spec, hand, one.support)
+    lo, hi = book_bounds(spec, one.support, arm.names)
     iterations = 0
     if single_step:
         q = q0 + book_step(one, hand, d, spec)
@@ -197,7 +185,7 @@ def solve_arm_ik(angles: BookAngles, hand: str, delta: object, spec: Spec, model
     achieved = _hands(one, arm, q, spec, model)[0] - start
     servo = book_to_servo(final, spec)[0]
     arm_joints = {j.name for j in spec.joints if j.book[one.support].var in arm.names}
-    violations = [v for v in limit_violations(servo, spec) if v["joint"] in arm_joints]
+    violations = [v for v in limit_violations(servo, spec) if v.joint in arm_joints]
     return ArmIKResult(hand, model, "single-step" if single_step else "iterated", one, final, q - q0, d, achieved,
                        iterations, violations)
 

@@ -1,7 +1,9 @@
-"""``op2motion bench``: speed figures measured in one run (design.md section 6).
+"""``op2motion bench``: speed figures measured in one run, each next to a check that the timed work is right.
 
 40 000 full-body evaluations (every body point plus the lumped CoM) per kinematic model, poses drawn from the
-book's PSO box; the best of ``repeat`` runs is reported, so that one run gives comparable ratios.
+book's PSO box; the best of ``repeat`` runs is reported, so that one run gives comparable ratios. Each figure comes
+with a correctness figure of the same computation (e.g. the largest distance between the D-H model's joint centres
+and pinocchio's), so a fast but wrong evaluator cannot pass unnoticed.
 """
 
 from __future__ import annotations
@@ -11,17 +13,17 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .balance import com_lumped
+from . import book
 from .joints import BookAngles, book_to_servo
 from .kinematics import forward
 from .model.dynamics import dynamics_for
-from .physics import validate_servo
-from .posture.cost import PostureProblem
+from .physics import DEFAULT_SECONDS, validate_servo
+from .posture.cost import PostureProblem, evaluate_cost
 from .posture.pso import PSOSettings, run_pso
 from .spec import Spec
 
 BENCH_POSES = 40_000
-
+CHECK_POSES = 200   # poses compared against pinocchio one by one
 
 
 def _best_ms(fn: Callable[[], Any], repeat: int) -> float:
@@ -34,22 +36,38 @@ def _best_ms(fn: Callable[[], Any], repeat: int) -> float:
     return best * 1000.0
 
 
+def _dh_vs_pinocchio_m(spec: Spec, poses: BookAngles) -> float:
+    """Largest joint-centre distance [m] between the batched D-H model and pinocchio over the first poses."""
+    dyn = dynamics_for(spec)
+    n = min(CHECK_POSES, poses.n)
+    pts = forward(BookAngles(poses.th[:n], poses.phi[:n], poses.psi[:n], poses.support), spec, "dh")
+    servo = book_to_servo(BookAngles(poses.th[:n], poses.phi[:n], poses.psi[:n], poses.support), spec)
+    worst = 0.0
+    for i in range(n):
+        ref = dyn.joint_centres(servo[i], poses.support)
+        for name in spec.joint_names:
+            worst = max(worst, float(np.linalg.norm(pts.point(name)[i] - ref[name])))
+    return worst
+
+
 def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0) -> dict[str, Any]:
-    """Time batched forward kinematics + CoM for ``n`` poses with each model; figures in milliseconds."""
+    """Time batched forward kinematics + CoM for ``n`` poses with each model, one physics validation and one PSO
+    solve; figures in milliseconds (scaled to 40 000 poses), with their correctness checks."""
     rng = np.random.default_rng(seed)
     poses_dh = BookAngles.random(n, rng, "left", psi=True)
     poses_pb = BookAngles(poses_dh.th, poses_dh.phi, np.zeros_like(poses_dh.psi), "left")
-    full = lambda poses, model: com_lumped(forward(poses, spec, model), spec)  # noqa: E731
     scale = BENCH_POSES / n
-    pb_ms = _best_ms(lambda: full(poses_pb, "pb"), repeat) * scale
-    dh_ms = _best_ms(lambda: full(poses_dh, "dh"), repeat) * scale
+    pb_ms = _best_ms(lambda: forward(poses_pb, spec, "pb").com, repeat) * scale
+    dh_ms = _best_ms(lambda: forward(poses_dh, spec, "dh").com, repeat) * scale
     dyn = dynamics_for(spec)
     servo = book_to_servo(poses_dh, spec)
     pin_ms = _best_ms(lambda: dyn.com_loop(servo), 1) * scale
     stand = book_to_servo(BookAngles.standing("left"), spec)[0]
-    validate_ms = _best_ms(lambda: validate_servo(stand, "double", spec, 3.0), 1)
-    problem = PostureProblem("left", "left", (0.10, 0.05, 0.07), 0.7)  # optimize's default problem
-    pso_ms = _best_ms(lambda: run_pso(problem, spec, PSOSettings()), 3)
+    verdict = {}
+    validate_ms = _best_ms(lambda: verdict.update(v=validate_servo(stand, "double", spec, DEFAULT_SECONDS)), 1)
+    problem = PostureProblem.from_scenario(book.DEFAULT_PROBLEM)
+    pso = {}
+    pso_ms = _best_ms(lambda: pso.update(r=run_pso(problem, spec, PSOSettings())), 3)
     return {
         "poses": n,
         "repeat": repeat,
@@ -57,7 +75,12 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0) 
         "fk_dh_40k_ms": round(dh_ms, 2),
         "pinocchio_com_40k_ms": round(pin_ms, 1),
         "validate_ms": round(validate_ms, 1),
+        "validate_seconds": DEFAULT_SECONDS,
         "pso_solve_ms": round(pso_ms, 1),
-        "book_matlab_pb_40k_ms": 780.0,
-        "book_matlab_dh_40k_ms": 3350.0,
+        "book_matlab_pb_40k_ms": book.MATLAB_40K_MS["pb"],
+        "book_matlab_dh_40k_ms": book.MATLAB_40K_MS["dh"],
+        "check_dh_vs_pinocchio_m": _dh_vs_pinocchio_m(spec, poses_dh),
+        "check_standing_stands": bool(verdict["v"].stable),
+        "check_pso_hand_error_m": float(evaluate_cost(BookAngles.from_vector(pso["r"].x), problem,
+                                                      spec).hand_error[0]),
     }

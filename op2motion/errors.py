@@ -1,35 +1,99 @@
 """The one error hierarchy of op2motion.
 
-Every error a user can cause derives from :class:`Op2MotionError`. The CLI prints ``str(error)`` as one line
-on stderr and exits with ``error.exit_code``: 2 for bad input, 1 for a check that ran and failed.
+Every error a user can cause derives from :class:`Op2MotionError`. An error names the *parameter* it is about
+(``param``, a library name such as ``seconds`` or ``br``) separately from its message, so that the command line
+can show the flag the user typed (``--seconds``) while library users see the parameter name. Errors carry their
+data as attributes (e.g. :class:`Unreachable` has ``residual_m`` and ``tolerance_m``). The CLI prints one line on
+stderr and exits with ``error.exit_code``: 2 for bad input, 1 for a check that ran and failed.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any, Callable
+
 
 class Op2MotionError(Exception):
-    """Base class of every op2motion error (bad input: exit code 2)."""
+    """Base class of every op2motion error (bad input: exit code 2).
+
+    Args:
+        message: what was expected and what came, without the parameter name.
+        param: the library parameter the error is about (``None`` when it is about no single parameter).
+    """
 
     exit_code: int = 2
 
+    def __init__(self, message: str, param: str | None = None):
+        super().__init__(message)
+        self.message, self.param = message, param
+
+    def render(self, name_of: Callable[[str], str] = lambda p: p) -> str:
+        """One line: ``<name>: <message>``, the parameter shown through ``name_of`` (the CLI maps it to a flag)."""
+        return f"{name_of(self.param)}: {self.message}" if self.param else self.message
+
+    def __str__(self) -> str:
+        return self.render()
+
 
 class SpecError(Op2MotionError):
-    """The robot spec file is missing, malformed or inconsistent."""
+    """The robot spec file is missing, unreadable, malformed or physically inconsistent."""
 
 
 class InputError(Op2MotionError):
-    """A command-line value, angle vector or pose is malformed (wrong count, NaN, unknown name, ...)."""
+    """A value, angle vector, name or path given by the user is malformed or out of range."""
 
 
 class PoseFileError(Op2MotionError):
-    """A pose file cannot be read: bad JSON, unknown schema version, unknown joints, angles out of limits."""
+    """A pose file cannot be read: bad JSON, unknown schema version, unknown joints, angles out of range."""
 
 
 class ModelError(Op2MotionError):
     """A kinematic model was asked for something it cannot represent (e.g. psi != 0 in the projection model)."""
 
 
+class OutputError(InputError):
+    """An output path cannot be written (a directory, a read-only folder, an empty name, held by another run)."""
+
+
 class CheckFailed(Op2MotionError):
     """A check ran and its verdict is negative (unstable pose, unreachable target): exit code 1."""
 
     exit_code = 1
+
+
+class Unreachable(CheckFailed):
+    """A target was not reached: the best residual [m] exceeds the tolerance [m]."""
+
+    def __init__(self, message: str, residual_m: float, tolerance_m: float):
+        super().__init__(message)
+        self.residual_m, self.tolerance_m = residual_m, tolerance_m
+
+
+@dataclass(frozen=True)
+class LimitViolation:
+    """One joint of one pose outside a range: its value and the range [deg] (degrees: it is shown to people)."""
+
+    joint: str
+    value_deg: float
+    lower_deg: float
+    upper_deg: float
+    kind: str = "mechanical"
+
+    def describe(self) -> str:
+        """``l_knee = -135.0° is outside its mechanical range [-130°, 6°]``."""
+        return (f"{self.joint} = {self.value_deg:.1f}° is outside its {self.kind} range "
+                f"[{self.lower_deg:g}°, {self.upper_deg:g}°]")
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready dict."""
+        return {"joint": self.joint, "value_deg": self.value_deg, "lower_deg": self.lower_deg,
+                "upper_deg": self.upper_deg, "kind": self.kind}
+
+
+class LimitError(InputError):
+    """Angles outside a joint range; ``violations`` lists every offending joint."""
+
+    def __init__(self, where: str, violations: list[LimitViolation]):
+        super().__init__(f"{violations[0].describe()}" + (f" (and {len(violations) - 1} more)"
+                                                           if len(violations) > 1 else ""), where or None)
+        self.violations = violations

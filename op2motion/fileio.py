@@ -1,26 +1,76 @@
-"""Atomic file writing: a temp file in the target directory, flushed, then renamed over the target.
+"""Reading input files with clear errors, and atomic file writing.
 
-A failed or killed run therefore leaves either the old file or the new one, never a half-written file.
+Reading: a missing file, a directory, an unreadable file or text that is not UTF-8 is bad input, reported in one
+line naming the file. Writing: a temp file in the target directory, flushed and synced, then renamed over the
+target, so that a failed or killed run leaves either the old file or the new one, never a half-written file.
+The temp file is created with mode 0666 and the process umask applied by the kernel (an existing target keeps its
+own mode); the umask itself is never changed.
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
+import secrets
 from pathlib import Path
+from typing import Type
 
-from .errors import InputError
+from .errors import InputError, Op2MotionError, OutputError
 
 
-def _mode_for(target: Path) -> int:
-    """An existing file's mode, else 0666 less the process umask (what ``open`` would give)."""
+def read_bytes(path: str | Path, what: str, error: Type[Op2MotionError] = InputError) -> bytes:
+    """The bytes of ``path``; errors (``error`` class) say what file was expected and why it cannot be read."""
+    p = Path(path)
     try:
-        return target.stat().st_mode & 0o7777
-    except OSError:
-        umask = os.umask(0)
-        os.umask(umask)
-        return 0o666 & ~umask
+        return p.read_bytes()
+    except FileNotFoundError:
+        raise error(f"no such {what}", str(p)) from None
+    except IsADirectoryError:
+        raise error(f"expected a {what}, got a directory", str(p)) from None
+    except OSError as exc:
+        raise error(f"cannot read {what}: {exc.strerror or exc}", str(p)) from None
+
+
+def read_text(path: str | Path, what: str, error: Type[Op2MotionError] = InputError) -> str:
+    """The UTF-8 text of ``path`` (see :func:`read_bytes`); bytes that are not UTF-8 are bad input."""
+    data = read_bytes(path, what, error)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise error(f"expected a UTF-8 text {what}, got undecodable bytes at offset {exc.start}", str(path)) from None
+
+
+def check_output_path(path: str | Path, param: str = "output") -> Path:
+    """Check that ``path`` can be written as a file (before any work is done): not empty, not a directory, its
+    folder (created if missing) writable. Raises :class:`OutputError`; creates nothing but missing folders."""
+    text = str(path)
+    if not text.strip():
+        raise OutputError("expected a file path, got an empty string", param)
+    target = Path(text)
+    if target.is_dir() or text.endswith(os.sep):
+        raise OutputError(f"expected a file path, got a directory: {text}", param)
+    folder = target.parent
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        raise OutputError(f"cannot write {text}: {existing} is not a directory", param)
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise OutputError(f"cannot write {text}: {existing} is not writable", param)
+    if target.exists() and not os.access(target, os.W_OK):
+        raise OutputError(f"cannot write {text}: the file is read-only", param)
+    return target
+
+
+def _temp_beside(target: Path) -> tuple[int, Path]:
+    """Create a new temp file beside ``target`` (mode 0666 less the umask) and return (fd, path)."""
+    for _ in range(100):
+        tmp = target.with_name(f".{target.name}.{secrets.token_hex(6)}.tmp")
+        try:
+            return os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666), tmp
+        except FileExistsError:
+            continue
+    raise OutputError("cannot create a temporary file", str(target))  # pragma: no cover
 
 
 def write_atomic(path: str | Path, data: bytes | str) -> Path:
@@ -29,18 +79,84 @@ def write_atomic(path: str | Path, data: bytes | str) -> Path:
     payload = data.encode("utf-8") if isinstance(data, str) else data
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+        fd, tmp = _temp_beside(target)
     except OSError as exc:
-        raise InputError(f"{target}: cannot write: {exc.strerror}") from None
+        raise OutputError(f"cannot write: {exc.strerror or exc}", str(target)) from None
     try:
         with os.fdopen(fd, "wb") as handle:
             handle.write(payload)
             handle.flush()
             os.fsync(handle.fileno())
-        os.chmod(tmp, _mode_for(target))  # mkstemp makes 0600 files; give the usual permissions
+        with contextlib.suppress(FileNotFoundError):
+            os.chmod(tmp, target.stat().st_mode & 0o7777)  # an existing file keeps its mode
         os.replace(tmp, target)
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise OutputError(f"cannot write: {exc.strerror or exc}", str(target)) from None
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
     return target
+
+
+class OutputSet:
+    """The output files of one command, checked before any work and written together at the end.
+
+    Each path is checked when the set is made (:func:`check_output_path`); :meth:`put` stages a file's content in
+    memory; :meth:`commit` writes every staged file to a temp file beside its target, then renames them all into
+    place while holding an exclusive lock on each target folder, so two runs writing the same outputs never mix
+    their files: one run's set replaces the other's whole. A command that fails before :meth:`commit` writes
+    nothing.
+    """
+
+    def __init__(self, paths: dict[str, str | Path]):
+        self.paths = {key: check_output_path(path, key) for key, path in paths.items()}
+        seen: dict[Path, str] = {}
+        for key, path in self.paths.items():
+            resolved = path.resolve()
+            if resolved in seen:
+                raise OutputError(f"the same file as {seen[resolved]}: {path}", key)
+            seen[resolved] = key
+        self.staged: dict[str, bytes] = {}
+
+    def put(self, key: str, data: bytes | str) -> None:
+        """Stage the content of output ``key``."""
+        self.staged[key] = data.encode("utf-8") if isinstance(data, str) else data
+
+    def commit(self) -> dict[str, Path]:
+        """Write every staged output (see the class docstring); returns ``{key: path}`` of the written files."""
+        import fcntl
+
+        targets = {key: self.paths[key] for key in self.staged}
+        folders = sorted({p.parent.resolve() for p in targets.values()}, key=str)
+        temps: list[tuple[Path, Path]] = []
+        locks: list[int] = []
+        try:
+            for folder in folders:
+                folder.mkdir(parents=True, exist_ok=True)
+                fd = os.open(folder, os.O_RDONLY)
+                locks.append(fd)
+                fcntl.flock(fd, fcntl.LOCK_EX)
+            for key, target in targets.items():
+                fd, tmp = _temp_beside(target)
+                temps.append((tmp, target))
+                with os.fdopen(fd, "wb") as handle:
+                    handle.write(self.staged[key])
+                    handle.flush()
+                    os.fsync(handle.fileno())
+                with contextlib.suppress(FileNotFoundError):
+                    os.chmod(tmp, target.stat().st_mode & 0o7777)
+            for tmp, target in temps:
+                os.replace(tmp, target)
+            temps.clear()
+        except OSError as exc:
+            raise OutputError(f"cannot write: {exc.strerror or exc}", getattr(exc, "filename", None)) from None
+        finally:
+            for tmp, _ in temps:
+                with contextlib.suppress(OSError):
+                    os.unlink(tmp)
+            for fd in locks:
+                os.close(fd)  # closing releases the lock
+        return targets

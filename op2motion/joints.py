@@ -15,38 +15,33 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from .errors import InputError
+from . import book
+from .errors import InputError, LimitViolation
 from .spec import BOOK_VARS, SUPPORTS, Spec
 
 N_TH, N_PHI, N_PSI = 11, 6, 3
-#: The book's standing pose (code 2.4) [deg]: arms hanging straight, legs straight, head up.
-STANDING_TH_DEG = (90.0, 0.0, 0.0, 180.0, 0.0, 0.0, 180.0, 0.0, 180.0, 0.0, 0.0)
-STANDING_PHI_DEG = (0.0, 0.0, 180.0, 0.0, 180.0, 180.0)
-STANDING_PSI_DEG = (0.0, 0.0, 0.0)
-#: The book's PSO search box (code 2.10, pso_posture_opt.m) [deg], in the vector order [th(11), phi(6), psi(3)].
-BOOK_PSO_LOWER_DEG = (30, 0, -90, 90, -90, -30, 90, 0, 90, 0, -40, -30, -30, 150, -30, 180, 90, -30, -30, -20)
-BOOK_PSO_UPPER_DEG = (90, 60, 0, 270, 0, 30, 270, 90, 270, 90, 40, 30, 30, 210, 30, 270, 180, 30, 30, 20)
+LIMIT_SLACK_RAD = 1e-9   # angles this close outside a limit count as on it (rounding of degrees in files)
 
 
 def check_support(support: str) -> str:
     """Return ``support`` if it is ``left`` or ``right``, else raise :class:`InputError`."""
     if support not in SUPPORTS:
-        raise InputError(f"support: expected 'left' or 'right', got {support!r}")
+        raise InputError(f"expected 'left' or 'right', got {support!r}", "support")
     return support
 
 
 def _angles(name: str, values: object, n: int) -> np.ndarray:
     try:
         arr = np.array(values, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected {n} numbers, got {values!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"expected {n} numbers, got {values!r}", name) from None
     if arr.ndim == 1:
         arr = arr[None, :]
     if arr.ndim != 2 or arr.shape[1] != n:
         got = arr.shape[-1] if arr.ndim else 0
-        raise InputError(f"{name}: expected {n} angles, got {got}")
+        raise InputError(f"expected {n} angles, got {got}", name)
     if not np.all(np.isfinite(arr)):
-        raise InputError(f"{name}: expected finite angles, got NaN or infinity")
+        raise InputError("expected finite angles, got NaN or infinity", name)
     return arr
 
 
@@ -66,7 +61,7 @@ class BookAngles:
         psi_a = np.zeros((th_a.shape[0], N_PSI)) if psi is None else _angles("psi", psi, N_PSI)
         n = {th_a.shape[0], phi_a.shape[0], psi_a.shape[0]}
         if len(n) != 1:
-            raise InputError(f"th, phi, psi: expected the same number of poses, got {sorted(n)}")
+            raise InputError(f"expected the same number of poses in th, phi and psi, got {sorted(n)}")
         return cls(th_a, phi_a, psi_a, check_support(support))
 
     @classmethod
@@ -80,20 +75,20 @@ class BookAngles:
     def standing(cls, support: str = "left", n: int = 1) -> "BookAngles":
         """The book's standing pose, repeated ``n`` times."""
         rep = lambda v: np.radians(np.tile(np.array(v, dtype=float), (n, 1)))  # noqa: E731
-        return cls.make(rep(STANDING_TH_DEG), rep(STANDING_PHI_DEG), rep(STANDING_PSI_DEG), support)
+        return cls.make(rep(book.STANDING_TH_DEG), rep(book.STANDING_PHI_DEG), rep(book.STANDING_PSI_DEG), support)
 
     @classmethod
     def from_vector(cls, x: np.ndarray, support: str = "left") -> "BookAngles":
         """From the PSO vector layout (N,20) = [th(11), phi(6), psi(3)] [rad] (book code 2.11)."""
         x = np.atleast_2d(np.asarray(x, dtype=float))
         if x.shape[1] != N_TH + N_PHI + N_PSI:
-            raise InputError(f"book vector: expected 20 values per pose, got {x.shape[1]}")
+            raise InputError(f"expected 20 values per pose, got {x.shape[1]}", "book vector")
         return cls(x[:, :N_TH], x[:, N_TH:N_TH + N_PHI], x[:, N_TH + N_PHI:], check_support(support))
 
     @classmethod
     def random(cls, n: int, rng: np.random.Generator, support: str = "left", psi: bool = True) -> "BookAngles":
         """``n`` poses drawn uniformly from the book's PSO box (psi = 0 unless ``psi``)."""
-        lo, hi = np.radians(BOOK_PSO_LOWER_DEG), np.radians(BOOK_PSO_UPPER_DEG)
+        lo, hi = np.radians(book.PSO_LOWER_DEG), np.radians(book.PSO_UPPER_DEG)
         x = lo + (hi - lo) * rng.random((n, lo.size))
         if not psi:
             x[:, N_TH + N_PHI:] = 0.0
@@ -142,21 +137,22 @@ def servo_to_book(servo: np.ndarray, support: str, spec: Spec) -> BookAngles:
 def servo_from_mapping(values: Mapping[str, object], spec: Spec, degrees: bool = True) -> np.ndarray:
     """A (20,) servo vector [rad] from ``{joint name: angle}``; every joint exactly once."""
     if not isinstance(values, Mapping):
-        raise InputError(f"servo angles: expected an object {{joint: angle}}, got {type(values).__name__}")
+        raise InputError(f"expected an object {{joint: angle}}, got {type(values).__name__}", "servo angles")
     names = spec.joint_names
-    unknown = sorted(set(values) - set(names))
+    unknown = sorted(str(k) for k in set(values) - set(names))
     if unknown:
-        raise InputError(f"servo angles: unknown joint {unknown[0]!r}; expected the official names ({names[0]}, ...)")
+        raise InputError(f"unknown joint {unknown[0]!r}; expected the official names ({names[0]}, ...)",
+                         "servo angles")
     missing = [n for n in names if n not in values]
     if missing:
-        raise InputError(f"servo angles: expected all 20 joints, missing {', '.join(missing)}")
+        raise InputError(f"expected all 20 joints, missing {', '.join(missing)}", "servo angles")
     out = np.array([_scalar(values[n], n) for n in names])
     return np.radians(out) if degrees else out
 
 
 def _scalar(value: object, name: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise InputError(f"{name}: expected a finite number, got {value!r}")
+        raise InputError(f"expected a finite number, got {value!r}", name)
     return float(value)
 
 
@@ -167,7 +163,7 @@ def servo_to_ticks(servo: np.ndarray, spec: Spec) -> np.ndarray:
     bad = (ticks < s.min_tick) | (ticks > s.max_tick)
     if np.any(bad):
         i = int(np.argwhere(bad.reshape(-1))[0][0]) % len(spec.joints)
-        raise InputError(f"{spec.joints[i].name}: angle outside the servo range ±180°")
+        raise InputError("angle outside the servo range ±180°", spec.joints[i].name)
     return ticks
 
 
@@ -176,14 +172,25 @@ def ticks_to_servo(ticks: np.ndarray, spec: Spec) -> np.ndarray:
     return (np.asarray(ticks, dtype=float) - spec.servo.center_tick) * spec.servo.rad_per_tick
 
 
-def limit_violations(servo: Sequence[float], spec: Spec) -> list[dict[str, float | str]]:
-    """Joints of one pose outside their cable-safe limits: ``[{joint, deg, lower_deg, upper_deg}]``."""
-    out: list[dict[str, float | str]] = []
+def limit_violations(servo: Sequence[float], spec: Spec) -> list[LimitViolation]:
+    """Joints of one pose (servo angles (20,) [rad]) outside their limits."""
+    out: list[LimitViolation] = []
     for joint, q in zip(spec.joints, np.asarray(servo, dtype=float).reshape(-1)):
-        if not joint.lower - 1e-9 <= q <= joint.upper + 1e-9:
-            out.append({"joint": joint.name, "deg": round(math.degrees(q), 4),
-                        "lower_deg": round(math.degrees(joint.lower), 4), "upper_deg": round(math.degrees(joint.upper), 4)})
+        if not joint.lower - LIMIT_SLACK_RAD <= q <= joint.upper + LIMIT_SLACK_RAD:
+            out.append(LimitViolation(joint.name, round(math.degrees(q), 4), round(math.degrees(joint.lower), 4),
+                                      round(math.degrees(joint.upper), 4), "cable-safe"))
     return out
+
+
+def book_bounds(spec: Spec, support: str, variables: Sequence[str] = BOOK_VARS) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds [rad] (lower, upper) of book ``variables`` that keep every servo inside its limits, seen from
+    ``support`` (each book variable drives exactly one servo: ``servo = sign * var + offset``)."""
+    lo, hi = np.empty(len(variables)), np.empty(len(variables))
+    for k, var in enumerate(variables):
+        joint = next(j for j in spec.joints if j.book[support].var == var)
+        m = joint.book[support]
+        lo[k], hi[k] = sorted(((joint.lower - m.offset) * m.sign, (joint.upper - m.offset) * m.sign))
+    return lo, hi
 
 
 def servo_dict(servo_row: Sequence[float], spec: Spec, degrees: bool = True) -> dict[str, float]:

@@ -20,15 +20,14 @@ import os
 import sys
 import tempfile
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 from typing import Any, Callable, Iterator
 
 import numpy as np
 
 from .errors import InputError
-from .fileio import write_atomic
-from .model.urdf import build_urdf
-from .spec import Spec
+from .model.urdf import build_urdf, foot_link, sole_link
+from .pose import check_pose_support
+from .spec import SUPPORTS, Spec, feet_of
 
 GRAVITY_M_S2 = 9.81
 TIME_STEP_S = 1.0 / 240.0
@@ -43,14 +42,11 @@ COM_DROP_LIMIT = 0.25           # losing this fraction of the CoM height is a fa
 SLIP_LIMIT_M = 0.02             # a support foot sliding this far is not standing
 TORQUE_MARGIN = 0.98            # steady torque above this fraction of stall means the servo is saturated
 STEADY_WINDOW_S = 0.5           # torques are averaged over the last half second
-FOOT_LINKS = ("l_ank_roll_link", "r_ank_roll_link")
-SOLE_LINKS = {"left": ("left_sole_link",), "right": ("right_sole_link",),
-              "double": ("left_sole_link", "right_sole_link")}
 
 
 @dataclass(frozen=True)
 class Validation:
-    """Verdict and measurements of one physics run (design.md §4 ``validate`` keys)."""
+    """Verdict and measurements of one physics run."""
 
     stable: bool
     max_tilt_deg: float
@@ -64,16 +60,19 @@ class Validation:
     ground_contacts: list = field(default_factory=list)
     reason: str = ""
     seconds: float = 0.0
+    snapshot_png: bytes | None = field(default=None, repr=False, compare=False)
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready dict."""
-        return asdict(self)
+        out = asdict(self)
+        del out["snapshot_png"]
+        return out
 
 
 @contextlib.contextmanager
 def quiet_c_output() -> Iterator[None]:
     """Silence C-level writes to stdout and stderr (PyBullet prints a banner on import and on connect), so that
-    ``--json`` output stays clean and errors stay one line."""
+    JSON output stays clean and errors stay one line."""
     sys.stdout.flush()
     sys.stderr.flush()
     saved = [os.dup(1), os.dup(2)]
@@ -128,7 +127,8 @@ class Sim:
             self.link_index[info[12].decode()] = i
             self.joint_index[info[1].decode()] = i
         self.link_name = {i: n for n, i in self.link_index.items()}
-        for foot in FOOT_LINKS:
+        self.foot_links = tuple(foot_link(spec, side) for side in SUPPORTS)
+        for foot in self.foot_links:
             c.changeDynamics(self.robot, self.link_index[foot], lateralFriction=GROUND_FRICTION)
         self.servo_joints = [self.joint_index[n] for n in spec.joint_names]
 
@@ -173,13 +173,14 @@ class Sim:
     def place(self, support: str) -> None:
         """Support sole(s) flat on the ground (first sole at the origin), lowest sole just touching."""
         c = self.client
-        first = SOLE_LINKS[support][0]
+        soles = [sole_link(side) for side in feet_of(support)]
+        first = soles[0]
         base = self.base_link_frame()
         sole = self.link_frame(first)
         inv_base = c.invertTransform(*base)
         sole_in_base = c.multiplyTransforms(inv_base[0], inv_base[1], sole[0], sole[1])
         self.set_base_link_frame(*c.invertTransform(*sole_in_base))
-        lowest = min(self.link_frame(s)[0][2] for s in SOLE_LINKS[support])
+        lowest = min(self.link_frame(s)[0][2] for s in soles)
         pos, orn = self.base_link_frame()
         self.set_base_link_frame((pos[0], pos[1], pos[2] - lowest + PLACEMENT_CLEARANCE_M), orn)
 
@@ -219,8 +220,8 @@ class Sim:
         """Torques the motors applied in the last step [N·m], ID order."""
         return np.array([st[3] for st in self.client.getJointStates(self.robot, self.servo_joints)])
 
-    def snapshot(self, path: str | Path, width: int = 640, height: int = 480) -> Path:
-        """A PNG of the scene from the front left (TinyRenderer: works headless)."""
+    def snapshot(self, width: int = 640, height: int = 480) -> bytes:
+        """PNG bytes of the scene from the front left (TinyRenderer: works headless)."""
         import io
 
         import matplotlib
@@ -237,7 +238,7 @@ class Sim:
         rgb = np.reshape(np.asarray(img[2], dtype=np.uint8), (height, width, 4))[:, :, :3]
         buf = io.BytesIO()
         mpimg.imsave(buf, rgb, format="png")
-        return write_atomic(path, buf.getvalue())
+        return buf.getvalue()
 
 
 def _tilt_deg(q0: tuple, q1: tuple, client: Any) -> float:
@@ -247,21 +248,21 @@ def _tilt_deg(q0: tuple, q1: tuple, client: Any) -> float:
     return math.degrees(math.acos(float(np.clip(np.dot(z0, z1), -1.0, 1.0))))
 
 
-MAX_SECONDS = 60.0
+MIN_SECONDS, MAX_SECONDS = 0.1, 60.0
+DEFAULT_SECONDS = 3.0
 
 
 def steps_for(seconds: float) -> int:
     """Simulation steps in ``seconds`` (0.1 to 60 s, else :class:`InputError`)."""
-    if not (math.isfinite(seconds) and 0.1 <= seconds <= MAX_SECONDS):
-        raise InputError(f"--seconds: expected 0.1 to {MAX_SECONDS:g} s, got {seconds!r}")
+    if not (math.isfinite(seconds) and MIN_SECONDS <= seconds <= MAX_SECONDS):
+        raise InputError(f"expected {MIN_SECONDS:g} to {MAX_SECONDS:g} s, got {seconds!r}", "seconds")
     return int(round(seconds / TIME_STEP_S))
 
 
-def validate_servo(servo: np.ndarray, support: str, spec: Spec, seconds: float = 3.0,
-                   snapshot: str | Path | None = None, on_step: Callable[[], Any] | None = None) -> Validation:
+def validate_servo(servo: np.ndarray, support: str, spec: Spec, seconds: float = DEFAULT_SECONDS,
+                   snapshot: bool = False, on_step: Callable[[], Any] | None = None) -> Validation:
     """Simulate a pose held by the servos for ``seconds`` and judge whether it stands (see module docstring)."""
-    if support not in SOLE_LINKS:
-        raise InputError(f"support: expected left, right or double, got {support!r}")
+    check_pose_support(support)
     steps = steps_for(seconds)
     servo = np.asarray(servo, dtype=float)
     with Sim(spec) as sim:
@@ -269,7 +270,7 @@ def validate_servo(servo: np.ndarray, support: str, spec: Spec, seconds: float =
         sim.set_joints(servo)
         sim.place(support)
         sim.hold(servo)
-        sole_names = SOLE_LINKS[support]
+        sole_names = [sole_link(side) for side in feet_of(support)]
         start_soles = {s: np.asarray(sim.link_frame(s)[0]) for s in sole_names}
         start_orn = sim.base_link_frame()[1]
         com0 = sim.com()
@@ -288,7 +289,7 @@ def validate_servo(servo: np.ndarray, support: str, spec: Spec, seconds: float =
                 slip = max(slip, max(float(np.hypot(*(np.asarray(sim.link_frame(s)[0]) - p)[:2]))
                                      for s, p in start_soles.items()))
                 collisions |= sim.self_collision_pairs()
-                grounded |= sim.ground_links() - set(FOOT_LINKS)
+                grounded |= sim.ground_links() - set(sim.foot_links)
             tau = sim.torques()
             peak = max(peak, float(np.max(np.abs(tau))))
             if k >= steps - window:
@@ -307,12 +308,12 @@ def validate_servo(servo: np.ndarray, support: str, spec: Spec, seconds: float =
             reason = f"centre of mass fell from {com0[2]:.3f} m to {com_end[2]:.3f} m"
         elif slip > SLIP_LIMIT_M:
             reason = f"support foot slid {slip * 1000:.0f} mm"
-        if snapshot is not None:
-            sim.snapshot(snapshot)
+        png = sim.snapshot() if snapshot else None
         max_torque = float(steady[worst])
         return Validation(stable=not reason, max_tilt_deg=round(tilt, 3), com_drift_m=round(drift, 5),
                           feet_slip_m=round(slip, 5), self_collisions=sorted(list(p) for p in collisions),
                           max_torque_nm=round(max_torque, 4),
                           torque_ok=max_torque < TORQUE_MARGIN * spec.servo.stall_torque_nm,
                           peak_torque_nm=round(peak, 4), worst_joint=spec.joint_names[worst],
-                          ground_contacts=sorted(grounded), reason=reason or "stands", seconds=seconds)
+                          ground_contacts=sorted(grounded), reason=reason or "stands", seconds=seconds,
+                          snapshot_png=png)

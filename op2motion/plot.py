@@ -8,13 +8,11 @@ br-shrunk support rectangle (dashed) and an optional target (star).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
 from .balance import support_polygon
-from .fileio import write_atomic
 from .kinematics.points import BodyPoints
 from .spec import Spec
 
@@ -78,14 +76,29 @@ def _draw(ax, xyz: dict[str, np.ndarray], fig: PoseFigure, spec: Spec, h: int | 
              markeredgecolor="black", linestyle="none")
 
 
-def plot_poses(figures: Sequence[PoseFigure], spec: Spec, path: str | Path, title: str | None = None) -> Path:
-    """Draw each pose as a row of front, side, top and 3D views and write a PNG atomically."""
-    import io
-
+def _pyplot():
+    """matplotlib's pyplot on the Agg backend (no display needed)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _png(fig) -> bytes:  # type: ignore[no-untyped-def]
+    """The figure as PNG bytes; the figure is closed."""
+    import io
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=90)
+    _pyplot().close(fig)
+    return buf.getvalue()
+
+
+def render_poses(figures: Sequence[PoseFigure], spec: Spec, title: str | None = None) -> bytes:
+    """Each pose as a row of front, side, top and 3D views; returns the PNG bytes."""
+    plt = _pyplot()
 
     rows = len(figures)
     fig = plt.figure(figsize=(16, 4.2 * rows))
@@ -118,21 +131,12 @@ def plot_poses(figures: Sequence[PoseFigure], spec: Spec, path: str | Path, titl
     fig.text(0.01, 0.005, "blue: left limbs, red: right limbs, shaded: support foot; green square: CoM, "
              "dashed green: support rectangle (br); star: target; grey dashed: initial pose", fontsize=8)
     fig.tight_layout(rect=(0, 0.02, 1, 0.97 if title else 1))
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=90)
-    plt.close(fig)
-    return write_atomic(path, buf.getvalue())
+    return _png(fig)
 
 
-def plot_cost_curve(history: Sequence[float], path: str | Path, title: str = "PSO cost") -> Path:
-    """Best cost after each PSO iteration (book fig. 2.43), log scale, as a PNG."""
-    import io
-
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+def render_cost_curve(history: Sequence[float], title: str = "PSO cost") -> bytes:
+    """Best cost after each PSO iteration (book fig. 2.43), log scale; returns the PNG bytes."""
+    plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 4))
     ax.semilogy(np.arange(1, len(history) + 1), np.maximum(np.asarray(history, dtype=float), 1e-9), color="tab:blue")
     ax.set_xlabel("iteration")
@@ -140,7 +144,4 @@ def plot_cost_curve(history: Sequence[float], path: str | Path, title: str = "PS
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=90)
-    plt.close(fig)
-    return write_atomic(path, buf.getvalue())
+    return _png(fig)

@@ -26,6 +26,22 @@ except ModuleNotFoundError:  # pragma: no cover - Python 3.10
 
 SCHEMA = "op2motion.spec/1"
 SUPPORTS = ("left", "right")
+POSE_SUPPORTS = ("left", "right", "double")
+
+
+def swing_of(support: str) -> str:
+    """The swing side of a single-support pose (``left`` -> ``right`` and back)."""
+    return "right" if support == "left" else "left"
+
+
+def stance_of(support: str) -> str:
+    """The foot the world frame is rooted on: the support foot, the left one for ``double`` support."""
+    return "right" if support == "right" else "left"
+
+
+def feet_of(support: str) -> tuple[str, ...]:
+    """The feet that carry the robot: both for ``double`` support."""
+    return SUPPORTS if support == "double" else (stance_of(support),)
 BOOK_VARS = tuple([f"th{i}" for i in range(1, 12)] + [f"phi{i}" for i in range(1, 7)] + [f"psi{i}" for i in range(1, 4)])
 
 
@@ -86,6 +102,19 @@ class Foot:
     back: float
     inner: float
     outer: float
+
+    def extents(self, side: str, br: float = 1.0) -> tuple[float, float, float, float]:
+        """(front, back, left, right) half-extents [m] of the ``side`` sole about its centre, shrunk by ``br``.
+
+        The outer edge is on the left of the left foot and on the right of the right foot (book fig. 2.30).
+        """
+        left, right = (self.outer, self.inner) if side == "left" else (self.inner, self.outer)
+        return br * self.front, br * self.back, br * left, br * right
+
+    def corners(self, side: str) -> tuple[tuple[float, float], ...]:
+        """Sole corners (forward, left) [m] about the sole centre: front-left, front-right, back-right, back-left."""
+        front, back, left, right = self.extents(side)
+        return ((front, left), (front, -right), (-back, -right), (-back, left))
 
 
 @dataclass(frozen=True)
@@ -185,6 +214,10 @@ class Spec:
             if j.name == name:
                 return j
         raise SpecError(f"{self.path}: no joint named {name!r}")
+
+    def collisions_of(self, link: str, shape: str | None = None) -> tuple[Collision, ...]:
+        """The collision shapes fixed to ``link`` (of one ``shape`` kind if given)."""
+        return tuple(c for c in self.collisions if c.link == link and (shape is None or c.shape == shape))
 
     @property
     def lumped_total_mass(self) -> float:

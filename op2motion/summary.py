@@ -1,58 +1,81 @@
-"""Evaluate one pose for people and for ``--json``: body points, CoM, hands, swing foot, margin, servo angles."""
+"""One pose evaluated for people and JSON: body points, CoM, hands, swing foot, stability margin, servo angles."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Sequence
 
-from .balance import COM_MODEL_LUMPED, com_lumped, stability_margin
-from .errors import InputError
+import numpy as np
+
+from .balance import COM_MODEL_LUMPED, check_br, stability_margin
+from .errors import InputError, LimitViolation
 from .joints import BookAngles, book_to_servo, limit_violations, servo_dict, servo_to_ticks
 from .kinematics import BodyPoints, forward
 from .spec import Spec
 
 
+def _vec(v: np.ndarray) -> list[float]:
+    return [float(x) for x in v]
+
+
+@dataclass(frozen=True)
+class PoseReport:
+    """Forward kinematics and balance of one pose on one model; lengths [m] in the world frame (support sole
+    centre, X forward, Y left, Z up; moved to ``sp`` and turned by ``gamma`` when given)."""
+
+    model: str
+    support: str
+    points: BodyPoints
+    com: np.ndarray
+    br: float
+    stability_margin_m: float
+    servo: np.ndarray
+    book: BookAngles
+    ticks: dict[str, int] | None
+    limit_violations: list[LimitViolation]
+
+    @property
+    def swing_foot_min_z(self) -> float:
+        """Height of the swing foot's lowest corner [m]."""
+        return float(self.points.swing_foot_min_z[0])
+
+    def as_dict(self, spec: Spec) -> dict[str, Any]:
+        """JSON-ready dict (the ``fk --json`` keys)."""
+        return {
+            "model": self.model, "support": self.support, "points": self.points.as_dict(0), "com": _vec(self.com),
+            "com_model": COM_MODEL_LUMPED, "left_hand": _vec(self.points.point("left_hand")[0]),
+            "right_hand": _vec(self.points.point("right_hand")[0]),
+            "swing_foot_corners": [_vec(c) for c in self.points.swing_foot_corners[0]],
+            "swing_foot_min_z": self.swing_foot_min_z, "br": self.br, "stability_margin_m": self.stability_margin_m,
+            "servo_deg": servo_dict(self.servo, spec), "book_deg": self.book.degrees(), "ticks": self.ticks,
+            "limit_violations": [v.as_dict() for v in self.limit_violations],
+        }
+
+    def human(self) -> str:
+        """A short multi-line text summary."""
+        fmt = lambda v: "(" + ", ".join(f"{x:+.4f}" for x in v) + ")"  # noqa: E731
+        lines = [
+            f"model {self.model.upper()}, {self.support} support",
+            f"centre of mass   {fmt(self.com)} m  [lumped, the book's masses]",
+            f"stability margin {self.stability_margin_m * 1000:+.1f} mm (br {self.br}; positive = inside)",
+            f"left hand        {fmt(self.points.point('left_hand')[0])} m",
+            f"right hand       {fmt(self.points.point('right_hand')[0])} m",
+            f"swing foot lowest corner z {self.swing_foot_min_z * 1000:+.2f} mm",
+        ]
+        lines += [f"warning: {v.describe()}" for v in self.limit_violations]
+        return "\n".join(lines)
+
+
 def evaluate(angles: BookAngles, spec: Spec, model: str = "dh", br: float = 1.0,
-             sp: Sequence[float] = (0.0, 0.0, 0.0), gamma: float = 0.0) -> tuple[BodyPoints, dict[str, Any]]:
-    """Forward kinematics and balance of the first pose of ``angles``; returns the points and a JSON-ready dict."""
+             sp: Sequence[float] = (0.0, 0.0, 0.0), gamma: float = 0.0) -> PoseReport:
+    """Forward kinematics and balance of the first pose of ``angles``."""
     one = angles.row(0)
     points = forward(one, spec, model, sp, gamma)
-    com = com_lumped(points, spec)[0]
-    margin = float(stability_margin(com[None, :2], spec, one.support, br, (sp[0], sp[1]), gamma)[0])
+    com = points.com[:, 0].copy()
+    margin = float(stability_margin(com[None, :2], spec, one.support, check_br(br), (sp[0], sp[1]), gamma)[0])
     servo = book_to_servo(one, spec)[0]
-    result: dict[str, Any] = {
-        "model": model,
-        "support": one.support,
-        "points": points.as_dict(0),
-        "com": [float(v) for v in com],
-        "com_model": COM_MODEL_LUMPED,
-        "left_hand": [float(v) for v in points.point("left_hand")[0]],
-        "right_hand": [float(v) for v in points.point("right_hand")[0]],
-        "swing_foot_corners": [[float(v) for v in c] for c in points.swing_foot_corners[0]],
-        "swing_foot_min_z": float(points.swing_foot_min_z[0]),
-        "br": br,
-        "stability_margin_m": margin,
-        "servo_deg": servo_dict(servo, spec),
-        "book_deg": one.degrees(),
-        "limit_violations": limit_violations(servo, spec),
-    }
     try:
-        result["ticks"] = {str(j.id): int(t) for j, t in zip(spec.joints, servo_to_ticks(servo, spec))}
-    except InputError:  # an angle beyond ±180° has no tick; limit_violations already names it
-        result["ticks"] = None
-    return points, result
-
-
-def human(result: dict[str, Any]) -> str:
-    """A short multi-line text summary of :func:`evaluate`'s result."""
-    fmt = lambda v: "(" + ", ".join(f"{x:+.4f}" for x in v) + ")"  # noqa: E731
-    lines = [
-        f"model {result['model'].upper()}, {result['support']} support",
-        f"centre of mass   {fmt(result['com'])} m  [{result['com_model']}]",
-        f"stability margin {result['stability_margin_m'] * 1000:+.1f} mm (br {result['br']}; positive = inside)",
-        f"left hand        {fmt(result['left_hand'])} m",
-        f"right hand       {fmt(result['right_hand'])} m",
-        f"swing foot lowest corner z {result['swing_foot_min_z'] * 1000:+.2f} mm",
-    ]
-    for v in result["limit_violations"]:
-        lines.append(f"warning: {v['joint']} = {v['deg']:.1f}° outside its limits [{v['lower_deg']}, {v['upper_deg']}]°")
-    return "\n".join(lines)
+        ticks: dict[str, int] | None = {str(j.id): int(t) for j, t in zip(spec.joints, servo_to_ticks(servo, spec))}
+    except InputError:  # an angle beyond ±180° has no tick; limit_violations names it
+        ticks = None
+    return PoseReport(model, one.support, points, com, br, margin, servo, one, ticks, limit_violations(servo, spec))

@@ -8,8 +8,10 @@ import math
 import numpy as np
 import pytest
 
+from op2motion.book import ARM_RUNS
+
 from op2motion.arm_ik import ARMS, _hands, _with_arm, book_step, pb_hand_jacobian, solve_arm_ik
-from op2motion.cli import main
+from helpers import run_cli
 from op2motion.errors import ModelError
 from op2motion.joints import BookAngles
 
@@ -19,25 +21,12 @@ TOL_M = 1e-4             # the iterated mode's target: 0.1 mm
 FD_STEP = 1e-6           # rad
 FD_TOL = 1e-8            # m/rad: central differences of a smooth map at this step
 
-LEFT_TH = [90, 0, 0, 180, 0, 0, 200, 100, 180, 0, 0]
-LEFT_PHI = [0, 0, 180, 0, 200, 180]
-RIGHT_TH = [90, 0, 0, 180, 0, 0, 180, 0, 200, 100, 0]
-RIGHT_PHI = [0, 0, 180, 0, 180, 160]
-# (hand, delta [m], book deltas [deg], book eep_dif [m]) from the book's change_posture_pb runs.
-BOOK_RUNS = [
-    ("left", (0.02, 0, 0), (17.87, -21.16, 0.00), (0.02, -0.01, 0.00)),
-    ("left", (-0.02, 0, 0), (-17.87, 21.16, 0.00), (-0.02, 0.00, 0.00)),
-    ("left", (0, 0.02, 0), (0.00, 0.00, 10.09), (-0.01, 0.02, -0.00)),
-    ("left", (0, -0.02, 0), (0.00, 0.00, -10.09), (0.01, -0.02, 0.00)),
-    ("left", (0, 0, 0.02), (10.32, -1.30, 0.00), (-0.00, 0.00, 0.02)),
-    ("left", (0, 0, -0.02), (-10.32, 1.30, 0.00), (-0.00, -0.01, -0.02)),
-    ("right", (0.03, 0.03, 0.03), (42.29, -33.68, 15.13), (0.03, 0.03, 0.04)),
-]
+BOOK_RUNS = [(r.hand, r.delta_m, r.deltas_deg, r.eep_dif_m) for r in ARM_RUNS]
 
 
 def book_pose(hand: str) -> BookAngles:
-    th, phi = (LEFT_TH, LEFT_PHI) if hand == "left" else (RIGHT_TH, RIGHT_PHI)
-    return BookAngles.from_deg(th, phi, [0, 0, 0], "left")
+    run = next(r for r in ARM_RUNS if r.hand == hand)
+    return BookAngles.from_deg(run.th_deg, run.phi_deg, [0, 0, 0], "left")
 
 
 @pytest.mark.parametrize("hand, delta, deg, eep", BOOK_RUNS)
@@ -113,15 +102,10 @@ def test_straight_arm_is_a_clear_singular_error(spec):
         book_step(BookAngles.standing("left"), "left", (0.01, 0, 0), spec)
 
 
-def _cli(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
-
 
 def test_cli_keys_and_exit_codes(capsys, tmp_path):
-    pose = ["--th", *map(str, LEFT_TH), "--phi", *map(str, LEFT_PHI)]
-    code, out, err = _cli(capsys, "arm-ik", "--hand", "left", "--delta", "0.02", "0", "0", *pose, "--single-step",
+    pose = ["--th", *map(str, ARM_RUNS[0].th_deg), "--phi", *map(str, ARM_RUNS[0].phi_deg)]
+    code, out, err = run_cli(capsys, "arm-ik", "--hand", "left", "--delta", "0.02", "0", "0", *pose, "--single-step",
                           "--json")
     doc = json.loads(out)
     assert code == 0 and err == ""
@@ -130,21 +114,21 @@ def test_cli_keys_and_exit_codes(capsys, tmp_path):
     assert doc["th"][6] == pytest.approx(217.87, abs=BOOK_DEG) and len(doc["phi"]) == 6
     assert doc["error_m"] == pytest.approx(np.linalg.norm(np.subtract(doc["achieved_delta"], [0.02, 0, 0])))
     png = tmp_path / "ik.png"
-    code, out, _ = _cli(capsys, "arm-ik", "--hand", "left", "--delta", "0", "0", "0.02", *pose, "--plot", str(png))
+    code, out, _ = run_cli(capsys, "arm-ik", "--hand", "left", "--delta", "0", "0", "0.02", *pose, "--plot", str(png))
     assert code == 0 and png.read_bytes()[:4] == b"\x89PNG"
     # Unreachable: result printed, one line on stderr, exit 1.
-    code, out, err = _cli(capsys, "arm-ik", "--hand", "left", "--delta", "-0.02", "0", "0", *pose, "--model", "dh")
+    code, out, err = run_cli(capsys, "arm-ik", "--hand", "left", "--delta", "-0.02", "0", "0", *pose, "--model", "dh")
     assert code == 1 and "not reached" in err and err.count("\n") == 1 and "error" in out
     # A step that would bend the elbow past its limit is refused unless allowed.
-    code, _, err = _cli(capsys, "arm-ik", "--hand", "left", "--delta", "-0.08", "0", "-0.05", *pose, "--single-step")
+    code, _, err = run_cli(capsys, "arm-ik", "--hand", "left", "--delta", "-0.08", "0", "-0.05", *pose, "--single-step")
     assert code == 1 and "refused" in err
-    code, _, _ = _cli(capsys, "arm-ik", "--hand", "left", "--delta", "-0.08", "0", "-0.05", *pose, "--single-step",
+    code, _, _ = run_cli(capsys, "arm-ik", "--hand", "left", "--delta", "-0.08", "0", "-0.05", *pose, "--single-step",
                       "--allow-limits")
     assert code == 0
     # Singular and malformed input: exit 2.
-    code, _, err = _cli(capsys, "arm-ik", "--hand", "left", "--delta", "0.01", "0", "0", "--th", "90", "0", "0",
+    code, _, err = run_cli(capsys, "arm-ik", "--hand", "left", "--delta", "0.01", "0", "0", "--th", "90", "0", "0",
                         "180", "0", "0", "180", "0", "180", "0", "0", "--phi", "0", "0", "180", "0", "180", "180",
                         "--single-step")
     assert code == 2 and "singular" in err
-    code, _, err = _cli(capsys, "arm-ik", "--hand", "left", "--delta", "nan", "0", "0", *pose)
+    code, _, err = run_cli(capsys, "arm-ik", "--hand", "left", "--delta", "nan", "0", "0", *pose)
     assert code == 2 and "finite" in err

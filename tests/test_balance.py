@@ -21,7 +21,7 @@ def test_com_weights_total_the_lumped_masses(spec):
 
 def test_standing_com_is_between_the_feet_at_mid_height(spec):
     pts = forward(BookAngles.standing("left"), spec, "dh")
-    com = com_lumped(pts, spec)[0]
+    com = com_lumped(pts)[0]
     assert com[1] == pytest.approx(-0.037, abs=EXACT_M)      # mid-plane of the feet
     assert 0.20 < com[2] < 0.25                               # about at the hips, as on the real robot
     assert 0.0 < com[0] < 0.01                                # the torso sits 5 mm ahead of the hips

@@ -1,30 +1,24 @@
-"""The command line: design.md §4 keys, exit codes 0/2, one-line errors, nothing written on bad input."""
+"""The command line: the documented JSON keys, exit codes 0/2, one-line errors, nothing written on bad input."""
 
 from __future__ import annotations
 
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
-from op2motion.cli import main
+from helpers import pose_path, run_cli
+from op2motion import book
 
-STANDING_POSE = str(Path(__file__).parents[1] / "poses" / "standing.json")
-STAND_TH = "90 0 0 180 0 0 180 0 180 0 0".split()
-STAND_PHI = "0 0 180 0 180 180".split()
-CODE_2_6 = ["--th", *"80 10 0 210 -10 -5 170 10 200 20 0".split(), "--phi", *"-10 5 170 10 200 170".split()]
-
-
-def run(capsys, *argv: str) -> tuple[int, str, str]:
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
+STANDING_POSE = pose_path("standing")
+STAND_TH = [f"{v:g}" for v in book.STANDING_TH_DEG]
+STAND_PHI = [f"{v:g}" for v in book.STANDING_PHI_DEG]
+CODE_2_6 = ["--th", *map(str, book.CODE_2_6_TH_DEG), "--phi", *map(str, book.CODE_2_6_PHI_DEG)]
 
 
 def test_fk_json_has_the_contract_keys(capsys):
-    code, out, err = run(capsys, "fk", "--model", "dh", "--support", "left", *CODE_2_6, "--psi", "10", "-5", "0",
+    code, out, err = run_cli(capsys, "fk", "--model", "dh", "--support", "left", *CODE_2_6, "--psi", "10", "-5", "0",
                          "--json")
     assert code == 0 and err == ""
     doc = json.loads(out)
@@ -36,15 +30,15 @@ def test_fk_json_has_the_contract_keys(capsys):
 
 
 def test_fk_human_output_and_pb_model(capsys):
-    code, out, _ = run(capsys, "fk", "--model", "pb", *CODE_2_6)
+    code, out, _ = run_cli(capsys, "fk", "--model", "pb", *CODE_2_6)
     assert code == 0 and "centre of mass" in out and "stability margin" in out
 
 
 def test_convert_round_trip(capsys):
-    code, out, _ = run(capsys, "convert", "--th", *STAND_TH, "--phi", *STAND_PHI, "--support", "right", "--json")
+    code, out, _ = run_cli(capsys, "convert", "--th", *STAND_TH, "--phi", *STAND_PHI, "--support", "right", "--json")
     doc = json.loads(out)
     assert code == 0 and doc["ticks"]["4"] == 2560 and doc["servo_deg"]["l_el"] == pytest.approx(90.0)
-    code, out, _ = run(capsys, "convert", "--servo-deg", json.dumps(doc["servo_deg"]), "--support", "right", "--json")
+    code, out, _ = run_cli(capsys, "convert", "--servo-deg", json.dumps(doc["servo_deg"]), "--support", "right", "--json")
     back = json.loads(out)
     assert code == 0 and back["th"] == pytest.approx([float(v) for v in STAND_TH], abs=1e-9)
     assert back["phi"] == pytest.approx([float(v) for v in STAND_PHI], abs=1e-9)
@@ -52,7 +46,7 @@ def test_convert_round_trip(capsys):
 
 def test_plot_writes_a_png(capsys, tmp_path):
     png = tmp_path / "standing.png"
-    code, out, _ = run(capsys, "plot", "--model", "both", "-o", str(png), "--target", "0.1", "0.05", "0.07")
+    code, out, _ = run_cli(capsys, "plot", "--model", "both", "-o", str(png), "--target", "0.1", "0.05", "0.07")
     assert code == 0 and "wrote" in out
     data = png.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000
@@ -63,7 +57,7 @@ def test_plot_writes_a_png(capsys, tmp_path):
     (["fk", "--th", "nan", *STAND_TH[1:], "--phi", *STAND_PHI], "finite"),
     (["fk", "--support", "up"], "invalid choice"),
     (["fk", "--pose", "/no/such/pose.json"], "no such pose file"),
-    (["fk", "--model", "pb", *CODE_2_6, "--psi", "5", "0", "0"], "--model dh"),
+    (["fk", "--model", "pb", *CODE_2_6, "--psi", "5", "0", "0"], "--model: the projection model assumes psi = 0"),
     (["fk", "--br", "0", "--th", *STAND_TH, "--phi", *STAND_PHI], "br"),
     (["convert", "--servo-deg", '{"l_knee": 0}'], "missing"),
     (["plot", "/no/such/pose.json", "-o", "OUT"], "no such pose file"),
@@ -73,7 +67,7 @@ def test_plot_writes_a_png(capsys, tmp_path):
 ])
 def test_bad_input_is_one_line_exit_2_and_writes_nothing(capsys, tmp_path, monkeypatch, argv, needle):
     monkeypatch.chdir(tmp_path)
-    code, out, err = run(capsys, *argv)
+    code, out, err = run_cli(capsys, *argv)
     assert code == 2 and out == ""
     assert err.count("\n") == 1 and needle in err and "Traceback" not in err
     assert list(tmp_path.iterdir()) == []
@@ -82,7 +76,7 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(capsys, tmp_path, monke
 def test_malformed_spec_file_is_exit_2(capsys, tmp_path):
     bad = tmp_path / "op2.toml"
     bad.write_text('schema = "op2motion.spec/1"\nname = 3\n', encoding="utf-8")
-    code, _, err = run(capsys, "--spec", str(bad), "fk")
+    code, _, err = run_cli(capsys, "--spec", str(bad), "fk")
     assert code == 2 and str(bad) in err and "name" in err
 
 
@@ -98,10 +92,10 @@ def test_urdf_command(capsys, tmp_path):
     import xml.etree.ElementTree as ET
 
     out_file = tmp_path / "op2.urdf"
-    code, out, _ = run(capsys, "urdf", "-o", str(out_file))
+    code, out, _ = run_cli(capsys, "urdf", "-o", str(out_file))
     assert code == 0 and "20 joints" in out
     assert ET.parse(out_file).getroot().get("name") == "robotis_op2"
-    code, out, _ = run(capsys, "urdf")
+    code, out, _ = run_cli(capsys, "urdf")
     assert code == 0 and out.startswith("<?xml")
 
 
@@ -110,7 +104,7 @@ def test_validate_command(capsys, tmp_path):
 
     poses = os.path.join(os.path.dirname(__file__), "..", "poses")
     png = tmp_path / "snap.png"
-    code, out, err = run(capsys, "validate", os.path.join(poses, "walkready.json"), "--seconds", "1",
+    code, out, err = run_cli(capsys, "validate", os.path.join(poses, "walkready.json"), "--seconds", "1",
                          "--gui-png", str(png), "--json")
     doc = json.loads(out)
     assert code == 0 and err == ""
@@ -125,7 +119,7 @@ def test_validate_command(capsys, tmp_path):
     del stand["book_deg"]
     falling = tmp_path / "lean_back.json"
     falling.write_text(json.dumps(stand), encoding="utf-8")
-    code, out, err = run(capsys, "validate", str(falling), "--seconds", "2")
+    code, out, err = run_cli(capsys, "validate", str(falling), "--seconds", "2")
     assert code == 1 and "does not stand" in err and err.count("\n") == 1 and "NOT STABLE" in out
-    code, out, err = run(capsys, "validate", str(tmp_path / "none.json"))
+    code, out, err = run_cli(capsys, "validate", str(tmp_path / "none.json"))
     assert code == 2 and out == "" and err.count("\n") == 1

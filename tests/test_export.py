@@ -14,15 +14,15 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from conftest import DATA, page_last_step_ticks
-from op2motion.cli import main
+from helpers import DATA, page_last_step_ticks, run_cli
 from op2motion.errors import InputError, PoseFileError
 from op2motion.export.action import (FILE_SIZE, PAGE_SIZE, checksum_ok, list_pages, page_to_pose, requested_page,
-                                     reset_file, reset_page, write_poses)
-from op2motion.export.library import read_pose
+                                     reset_file, reset_page, encode_poses)
+from op2motion.export.posefile import read_pose
 from op2motion.export.tables import csv_table, webots_motion
 from op2motion.joints import servo_to_ticks
-from op2motion.posture.library_build import axis, build_library, grid_jobs
+from op2motion.library.build import BuildSettings, build_library
+from op2motion.library.grid import axis, grid_jobs
 from op2motion.posture.pso import PSOSettings
 from op2motion.spec import default_spec
 
@@ -50,22 +50,17 @@ def test_reset_pages_match_the_action_editor(stock_action_bytes):
     assert len(reset_file()) == FILE_SIZE and reset_file()[:PAGE_SIZE] == stock_action_bytes[:PAGE_SIZE]
 
 
-def _cli(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
-
 
 def test_reexport_is_byte_identical_and_pages_round_trip(capsys, spec, stock_action_bytes, tmp_path):
     same = tmp_path / "same.bin"
-    assert _cli(capsys, "export", "--format", "action", "--base", STOCK, "-o", str(same))[0] == 0
+    assert run_cli(capsys, "export", "--format", "action", "--base", STOCK, "-o", str(same))[0] == 0
     assert same.read_bytes() == stock_action_bytes
     # Turn page 9 into a pose, write it and two library poses from page 200 on: read back the same ticks.
     pose_file = tmp_path / "walkready.json"
-    assert _cli(capsys, "import-action", STOCK, "--page", "9", "--out", str(pose_file))[0] == 0
+    assert run_cli(capsys, "import-action", STOCK, "--page", "9", "--out", str(pose_file))[0] == 0
     files = [str(pose_file), os.path.join(POSES, "book_2_44.json"), os.path.join(POSES, "standing.json")]
     out = tmp_path / "out.bin"
-    code, _, _ = _cli(capsys, "export", "--format", "action", *files, "--base", STOCK, "--page", "200",
+    code, _, _ = run_cli(capsys, "export", "--format", "action", *files, "--base", STOCK, "--page", "200",
                       "--time", "1.5", "-o", str(out))
     data = out.read_bytes()
     assert code == 0 and len(data) == FILE_SIZE
@@ -83,15 +78,14 @@ def test_reexport_is_byte_identical_and_pages_round_trip(capsys, spec, stock_act
 def test_invalid_pages_of_the_base_are_kept(spec, stock_action_bytes, tmp_path):
     base = bytearray(stock_action_bytes)
     base[30 * PAGE_SIZE + 5] ^= 0xFF                      # break page 30's checksum
-    out = write_poses([read_pose(os.path.join(POSES, "standing.json"), spec)], spec, tmp_path / "o.bin", 100,
-                      base=bytes(base))
-    assert out.read_bytes()[30 * PAGE_SIZE:31 * PAGE_SIZE] == bytes(base[30 * PAGE_SIZE:31 * PAGE_SIZE])
+    out = encode_poses([read_pose(os.path.join(POSES, "standing.json"), spec)], spec, 100, base=bytes(base))
+    assert out[30 * PAGE_SIZE:31 * PAGE_SIZE] == bytes(base[30 * PAGE_SIZE:31 * PAGE_SIZE])
     with pytest.raises(InputError, match="checksum"):
         requested_page(bytes(base), 30, spec, "base")
 
 
 @pytest.mark.parametrize("argv, needle", [
-    (["import-action", "/no/such.bin"], "cannot read"),
+    (["import-action", "/no/such.bin"], "no such action file"),
     (["import-action", STOCK, "--page", "300"], "--page"),
     (["import-action", STOCK, "--page", "0"], "--page"),
     (["import-action", STOCK, "--page", "7"], "no steps"),
@@ -101,14 +95,14 @@ def test_invalid_pages_of_the_base_are_kept(spec, stock_action_bytes, tmp_path):
 ])
 def test_bad_action_input(capsys, tmp_path, monkeypatch, argv, needle):
     monkeypatch.chdir(tmp_path)
-    code, out, err = _cli(capsys, *argv)
+    code, out, err = run_cli(capsys, *argv)
     assert code == 2 and needle in err and out == "" and os.listdir(tmp_path) == []
 
 
 def test_truncated_file_is_a_clear_error(capsys, tmp_path, stock_action_bytes):
     short = tmp_path / "short.bin"
     short.write_bytes(stock_action_bytes[:-1])
-    code, _, err = _cli(capsys, "import-action", str(short))
+    code, _, err = run_cli(capsys, "import-action", str(short))
     assert code == 2 and "truncated" in err
 
 
@@ -145,16 +139,16 @@ def test_webots_and_csv(spec):
 
 def test_library_build_and_resume(spec, tmp_path):
     jobs = grid_jobs(["left"], ["left", "right"], [0.7], axis(0.09, 0.11, 2, "x"), [0.03], [0.07])
-    settings = PSOSettings(iterations=120)
+    settings = BuildSettings(PSOSettings(iterations=120), restarts=0)
     first = build_library(jobs, spec, tmp_path, settings, workers=2)
-    assert first["targets"] == 4 and first["solved"] + first["failed"] == 4 and first["skipped"] == 0
+    assert first.targets == 4 and first.solved + first.failed == 4 and first.skipped == 0
     rows = json.loads((tmp_path / "index.json").read_text(encoding="utf-8"))
     assert len(rows) == 4 and (tmp_path / "index.csv").read_text(encoding="utf-8").startswith("name,hand,support")
     for row in rows:
         if row["reached"]:
             assert read_pose(tmp_path / row["file"], spec).name == row["name"]
     again = build_library(jobs, spec, tmp_path, settings, workers=2)
-    assert again["skipped"] == 4 and again["seconds"] < 1.0
+    assert again.skipped == 4 and again.seconds < 1.0
 
 
 def test_killed_library_build_leaves_no_half_written_file(tmp_path):

@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import page_last_step_ticks
+from helpers import page_last_step_ticks
 from op2motion.balance import com_lumped, stability_margin
 from op2motion.errors import InputError
 from op2motion.joints import (BookAngles, book_to_servo, servo_dict, servo_from_mapping, servo_to_book,
@@ -107,7 +107,7 @@ def test_init_page_is_a_balanced_double_support_stance(spec, stock_action_bytes)
     servo = ticks_to_servo(page_last_step_ticks(stock_action_bytes, 1), spec)
     book = servo_to_book(servo, "left", spec)
     pts = forward(book, spec, "dh")
-    com = com_lumped(pts, spec)[0]
+    com = com_lumped(pts)[0]
     # The CoM lies between the feet (double support): on neither foot alone, but inside both feet's hull.
     assert stability_margin(com[None, :2], spec, "left")[0] < 0
     assert -0.074 < com[1] < 0.0 and -0.052 < com[0] < 0.052

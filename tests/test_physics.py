@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from op2motion.errors import InputError
-from op2motion.export.library import read_pose
+from op2motion.export.posefile import read_pose
 from op2motion.joints import BookAngles, book_to_servo
 from op2motion.model.urdf import FRAME_LINK_MASS_KG, link_inertial
 from op2motion.physics import PLACEMENT_CLEARANCE_M, Sim, load_robot, quiet_c_output, validate_servo

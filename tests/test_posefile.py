@@ -7,8 +7,9 @@ import json
 import numpy as np
 import pytest
 
-from op2motion.errors import PoseFileError
-from op2motion.export.library import Pose, read_pose, write_pose
+from op2motion.errors import LimitError, PoseFileError
+from op2motion.export.posefile import read_pose, write_pose
+from op2motion.pose import Pose
 from op2motion.joints import BookAngles
 
 
@@ -46,7 +47,7 @@ def test_minimal_file_with_servo_only_is_valid(spec, tmp_path):
     (lambda d: d.update(schema="op2motion.pose/2"), "schema"),
     (lambda d: d["servo_deg"].pop("l_knee"), "missing l_knee"),
     (lambda d: d["servo_deg"].update(l_wrist=0), "unknown joint"),
-    (lambda d: d["servo_deg"].update(l_knee=-170.0), "outside its limits"),
+    (lambda d: d["servo_deg"].update(l_knee=-170.0), "l_knee = -170.0° is outside its"),
     (lambda d: d["servo_deg"].update(l_knee="bent"), "finite number"),
     (lambda d: d.update(support="both"), "support"),
     (lambda d: d["book_deg"]["th"].__setitem__(0, 70.0), "disagrees"),
@@ -68,7 +69,7 @@ def test_failed_write_keeps_the_existing_file(spec, tmp_path):
     path = write_pose(_pose(spec), tmp_path / "keep.json", spec)
     before = path.read_bytes()
     bad = Pose("bad", "left", np.full(20, 3.0))  # far outside the limits
-    with pytest.raises(PoseFileError):
+    with pytest.raises(LimitError, match="outside its"):
         write_pose(bad, path, spec)
     assert path.read_bytes() == before
     assert [p.name for p in tmp_path.iterdir()] == ["keep.json"]  # no temp file left behind

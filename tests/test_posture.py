@@ -9,9 +9,11 @@ import os
 import numpy as np
 import pytest
 
+from op2motion.book import DEFAULT_PROBLEM, SCENARIOS
+
 from op2motion.balance import penalty_stability, stability_margin
-from op2motion.cli import main
-from op2motion.export.library import read_pose
+from helpers import run_cli
+from op2motion.export.posefile import read_pose
 from op2motion.joints import BookAngles
 from op2motion.kinematics import forward
 from op2motion.physics import validate_servo
@@ -23,14 +25,11 @@ POSES = os.path.join(os.path.dirname(__file__), "..", "poses")
 PSO_REACH_M = 5e-3
 REFINED_REACH_M = 1e-3
 # The book's scenarios (figs. 2.44-2.47): support, hand, target [m], br, committed pose.
-BOOK = [("left", "left", (0.1, 0.05, 0.07), 1.0, "book_2_44"),
-        ("left", "left", (0.1, -0.05, 0.07), 0.7, "book_2_45"),
-        ("right", "left", (0.1, 0.05, 0.07), 1.0, "book_2_46"),
-        ("right", "right", (0.1, -0.05, 0.07), 0.4, "book_2_47")]
+BOOK = [(s.support, s.hand, s.target, s.br, s.pose) for s in SCENARIOS]
 
 
 def test_cost_agrees_with_the_book_penalties(spec, rng):
-    problem = PostureProblem("left", "left", (0.1, 0.05, 0.07), 0.7)
+    problem = PostureProblem.from_scenario(DEFAULT_PROBLEM)
     book = BookAngles.random(500, rng, "left")
     terms = evaluate_cost(book, problem, spec)
     pts = forward(book, spec)
@@ -82,7 +81,7 @@ def test_seeded_runs_are_identical_and_pyswarms_leaks_nothing(spec, tmp_path, mo
     root.addHandler(handler)
     before = (list(root.handlers), root.level)
     try:
-        problem = PostureProblem("left", "left", (0.1, 0.05, 0.07), 0.7)
+        problem = PostureProblem.from_scenario(DEFAULT_PROBLEM)
         a = run_pso(problem, spec, PSOSettings(iterations=15, seed=7))
         b = run_pso(problem, spec, PSOSettings(iterations=15, seed=7))
         c = run_pso(problem, spec, PSOSettings(iterations=15, seed=8))
@@ -94,15 +93,10 @@ def test_seeded_runs_are_identical_and_pyswarms_leaks_nothing(spec, tmp_path, mo
         root.removeHandler(handler)
 
 
-def _cli(capsys, *argv):
-    code = main(list(argv))
-    out, err = capsys.readouterr()
-    return code, out, err
-
 
 def test_optimize_default_writes_pose_and_figures(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    code, out, err = _cli(capsys, "optimize", "--json")
+    code, out, err = run_cli(capsys, "optimize", "--json")
     doc = json.loads(out)
     assert code == 0 and err == ""
     for key in ("pose", "cost", "hand_error_m", "com", "stability_margin_m", "swing_foot_min_z", "iterations",
@@ -116,7 +110,7 @@ def test_optimize_default_writes_pose_and_figures(capsys, tmp_path, monkeypatch)
 
 def test_unreachable_target_writes_nothing(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    code, out, err = _cli(capsys, "optimize", "--target", "0.5", "0", "0.07", "--restarts", "0", "--iters", "60")
+    code, out, err = run_cli(capsys, "optimize", "--target", "0.5", "0", "0.07", "--restarts", "0", "--iters", "60")
     assert code == 1 and "unreachable" in err and "nothing written" in err and err.count("\n") == 1
     assert "residual" in out
     assert not (tmp_path / "poses").exists()
@@ -129,5 +123,5 @@ def test_unreachable_target_writes_nothing(capsys, tmp_path, monkeypatch):
 ])
 def test_optimize_bad_input(capsys, tmp_path, monkeypatch, argv, needle):
     monkeypatch.chdir(tmp_path)
-    code, out, err = _cli(capsys, *argv)
+    code, out, err = run_cli(capsys, *argv)
     assert code == 2 and needle in err and out == "" and os.listdir(tmp_path) == []

@@ -4,48 +4,80 @@ from __future__ import annotations
 
 import argparse
 import json
+from typing import Any
 
-
-from ..cli import emit
 from ..errors import InputError
+from ..export.action import NUM_PAGES
+from ..export.tables import MAX_TIME_S
 from ..spec import Spec
+from .common import add_command, emit, number, pose_name, whole
+
+PAGE = whole(1, NUM_PAGES - 1)
+
+
+def register(sub: Any) -> None:
+    """Add export and import-action."""
+    p = add_command(sub, "export", cmd_export, "pose files -> ROBOTIS action file, Webots motion or CSV")
+    p.add_argument("poses", nargs="*", metavar="POSE", help="pose files, in order")
+    p.add_argument("--format", choices=("action", "webots", "csv"), required=True, help="output format")
+    p.add_argument("--base", metavar="FILE", help="action file to start from (default: reset pages)")
+    p.add_argument("--page", type=PAGE, default=1, help="first page to write (action format, default 1)")
+    p.add_argument("--time", type=number(0.0, MAX_TIME_S, "s", open_low=True), default=1.0,
+                   help="seconds per pose (default 1.0)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT", help="file to write (atomically)")
+
+    p = add_command(sub, "import-action", cmd_import_action,
+                    "list the pages of a ROBOTIS action file, or turn one into a pose")
+    p.add_argument("file", metavar="FILE", help="motion_4096.bin")
+    p.add_argument("--page", type=PAGE, help="page to turn into a pose (its last step)")
+    p.add_argument("--out", metavar="POSE", help="write that pose file (with --page)")
+    p.add_argument("--name", type=pose_name, help="pose name (default: the page name)")
 
 
 def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
-    from ..export.action import read_action, write_poses
-    from ..export.library import read_pose
-    from ..export.tables import write_table
+    """``op2motion export``."""
+    from ..export.action import encode_poses, read_action
+    from ..export.posefile import read_pose
+    from ..export.tables import csv_table, webots_motion
+    from ..fileio import OutputSet
 
+    outputs = OutputSet({"output": args.output})
     poses = [read_pose(p, spec) for p in args.poses]
     if args.format == "action":
         base = read_action(args.base, spec) if args.base else None
-        out = write_poses(poses, spec, args.output, args.page, args.time, base)
-        text = (f"wrote {out}: {len(poses)} pose(s) in pages {args.page}..{args.page + len(poses) - 1}"
-                if poses else f"wrote {out}: the base, unchanged")
+        outputs.put("output", encode_poses(poses, spec, args.page, args.time, base))
+        text = (f"{len(poses)} pose(s) in pages {args.page}..{args.page + len(poses) - 1}" if poses
+                else "the base, unchanged")
     else:
         if not poses:
-            raise InputError(f"export --format {args.format}: expected at least one pose file")
-        out = write_table(args.format, poses, spec, args.output, args.time)
-        text = f"wrote {out}: {len(poses)} pose(s)"
-    emit(args, {"path": str(out), "format": args.format, "poses": [p.name for p in poses]}, text)
+            raise InputError(f"expected at least one pose file for the {args.format} format", "poses")
+        render = webots_motion if args.format == "webots" else csv_table
+        outputs.put("output", render(poses, spec, args.time))
+        text = f"{len(poses)} pose(s)"
+    out = outputs.commit()["output"]
+    emit(args, {"path": str(out), "format": args.format, "poses": [p.name for p in poses]}, f"wrote {out}: {text}")
     return 0
 
 
 def cmd_import_action(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion import-action``."""
     from ..export.action import list_pages, page_to_pose, read_action, requested_page
-    from ..export.library import pose_to_json, write_pose
+    from ..export.posefile import pose_to_json
+    from ..fileio import OutputSet
 
+    if args.out and args.page is None:
+        raise InputError("expected --page N with --out")
+    outputs = OutputSet({"out": args.out} if args.out else {})
     data = read_action(args.file, spec)
     if args.page is not None:
-        pose = page_to_pose(requested_page(data, args.page, spec, args.file), spec, args.name)
+        pose = page_to_pose(requested_page(data, args.page, spec, args.file), spec, args.name).checked(spec, "page")
+        text = pose_to_json(pose, spec)
         if args.out:
-            write_pose(pose, args.out, spec)
-        doc = json.loads(pose_to_json(pose, spec))
-        emit(args, {"page": args.page, "pose": doc, "path": args.out},
-              f"page {args.page} -> pose {pose.name!r}" + (f", wrote {args.out}" if args.out else ""))
+            outputs.put("out", text)
+            outputs.commit()
+        emit(args, {"page": args.page, "pose": json.loads(text), "path": args.out},
+             f"page {args.page} -> pose {pose.name!r}" + (f", wrote {args.out}" if args.out else ""))
         return 0
-    if args.out:
-        raise InputError("--out needs --page N")
     pages = list_pages(data, spec, args.file)
     result = {"pages": [{"index": p.index, "name": p.name, "repeat": p.repeat, "next": p.next,
                          "steps": [{"ticks": {str(k): v for k, v in s.ticks.items()}, "pause": s.pause, "time": s.time}

@@ -5,45 +5,91 @@ from __future__ import annotations
 import argparse
 import json
 import math
-from pathlib import Path
+from typing import Any
 
-import numpy as np
-
-from ..cli import angles_from, emit, vec3
 from ..errors import InputError
 from ..spec import Spec
+from .common import (BOUNDARY_RATIO, DELTA_M, HEADING_DEG, POSITION_M, TARGET_M, add_command, angles_from,
+                     book_args, emit, number, vec3)
+
+TOL_MM = number(0.0, 100.0, "mm", open_low=True)
+
+
+def register(sub: Any) -> None:
+    """Add fk, convert, plot and arm-ik."""
+    p = add_command(sub, "fk", cmd_fk, "full-body forward kinematics and balance of one pose")
+    p.add_argument("--model", choices=("dh", "pb"), default="dh", help="D-H (default) or projection model")
+    book_args(p)
+    p.add_argument("--br", type=BOUNDARY_RATIO, default=1.0,
+                   help="boundary ratio of the support rectangle (default 1.0)")
+    p.add_argument("--sp", type=POSITION_M, nargs=3, metavar=("X", "Y", "Z"),
+                   help="support sole centre [m] (default 0 0 0)")
+    p.add_argument("--gamma", type=HEADING_DEG, default=0.0, metavar="DEG", help="heading of the support foot [deg]")
+
+    p = add_command(sub, "convert", cmd_convert, "book variables <-> servo angles <-> Dynamixel ticks")
+    book_args(p)
+    p.add_argument("--servo-deg", metavar="JSON",
+                   help="servo angles {joint: deg} as JSON text, a JSON file, or a pose file")
+
+    p = add_command(sub, "plot", cmd_plot, "stick figure of a pose (front, side, top, 3D) as a PNG")
+    p.add_argument("pose_positional", nargs="?", metavar="POSE", help="pose file (default: the standing pose)")
+    book_args(p, pose_flag=False)
+    p.add_argument("--model", choices=("dh", "pb", "both"), default="dh",
+                   help="kinematic model(s) to draw (both: one row each)")
+    p.add_argument("--br", type=BOUNDARY_RATIO, default=1.0, help="boundary ratio of the drawn support rectangle")
+    p.add_argument("--target", type=TARGET_M, nargs=3, metavar=("X", "Y", "Z"), help="mark a target [m]")
+    p.add_argument("-o", "--output", required=True, metavar="PNG", help="where to write the PNG")
+
+    p = add_command(sub, "arm-ik", cmd_arm_ik, "move one hand by a displacement with the Taylor-linearised arm IK")
+    p.add_argument("--hand", choices=("left", "right"), required=True, help="which hand to move")
+    p.add_argument("--delta", type=DELTA_M, nargs=3, required=True, metavar=("DX", "DY", "DZ"),
+                   help="hand displacement in the world frame [m]")
+    book_args(p)
+    p.add_argument("--single-step", action="store_true", help="the book's single Taylor step (code 2.15/2.17)")
+    p.add_argument("--model", choices=("pb", "dh"), default="pb",
+                   help="model to iterate on: pb (book, default) or dh (true geometry, for the real robot)")
+    p.add_argument("--tol-mm", type=TOL_MM, default=0.1, help="iterated mode: target tolerance [mm] (default 0.1)")
+    p.add_argument("--allow-limits", action="store_true", help="accept a result outside the servo limits")
+    p.add_argument("--plot", metavar="PNG", help="draw the initial and the changed pose")
 
 
 def cmd_fk(args: argparse.Namespace, spec: Spec) -> int:
-    from ..summary import evaluate, human
+    """``op2motion fk``."""
+    from ..summary import evaluate
 
-    angles, _ = angles_from(args, spec)
-    sp = vec3(args.sp, "--sp") or (0.0, 0.0, 0.0)
-    _, result = evaluate(angles, spec, args.model, args.br, sp, math.radians(args.gamma))
-    emit(args, result, human(result))
+    angles, _, _ = angles_from(args, spec)
+    sp = vec3(args.sp, "sp") or (0.0, 0.0, 0.0)
+    report = evaluate(angles, spec, args.model, args.br, sp, math.radians(args.gamma))
+    emit(args, report.as_dict(spec), report.human())
     return 0
 
 
+def _servo_mapping(text: str) -> dict:
+    """``--servo-deg``: JSON text, a JSON file of {joint: deg}, or a pose file (its ``servo_deg``)."""
+    from ..fileio import read_text
+
+    if not text.lstrip().startswith("{"):
+        text = read_text(text, "JSON file", InputError)
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"not valid JSON: {exc.msg}", "servo_deg") from None
+    if isinstance(doc, dict) and "servo_deg" in doc and "schema" in doc:   # a pose file
+        doc = doc["servo_deg"]
+    return doc
+
+
 def cmd_convert(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion convert``."""
     from ..joints import book_to_servo, servo_from_mapping, servo_to_book, servo_to_ticks
 
     if args.servo_deg is not None:
-        if args.th is not None or args.phi is not None:
-            raise InputError("give either --servo-deg or --th/--phi, not both")
-        text = args.servo_deg
-        if not text.lstrip().startswith("{"):
-            try:
-                text = Path(text).read_text(encoding="utf-8")
-            except OSError as exc:
-                raise InputError(f"--servo-deg: expected a JSON object or a file holding one: {exc.strerror}") from None
-        try:
-            mapping = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise InputError(f"--servo-deg: not valid JSON: {exc.msg}") from None
-        servo = servo_from_mapping(mapping, spec)
+        if args.th is not None or args.phi is not None or args.pose:
+            raise InputError("give either --servo-deg, --pose or --th/--phi, not several")
+        servo = servo_from_mapping(_servo_mapping(args.servo_deg), spec)
         angles = servo_to_book(servo, args.support, spec)
     else:
-        angles, _ = angles_from(args, spec)
+        angles, _, _ = angles_from(args, spec)
         servo = book_to_servo(angles, spec)[0]
     ticks = servo_to_ticks(servo, spec)
     names = spec.joint_names
@@ -63,40 +109,42 @@ def cmd_convert(args: argparse.Namespace, spec: Spec) -> int:
 
 
 def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
-    from ..plot import PoseFigure, plot_poses
-    from ..summary import evaluate, human
+    """``op2motion plot``."""
+    from ..fileio import OutputSet
+    from ..plot import PoseFigure, render_poses
+    from ..summary import evaluate
 
-    angles, name = angles_from(args, spec, "pose_positional")
-    target = vec3(args.target, "--target")
+    outputs = OutputSet({"output": args.output})
+    angles, name, _ = angles_from(args, spec, args.pose_positional, default_standing=True)
+    target = vec3(args.target, "target")
     models = ("dh", "pb") if args.model == "both" else (args.model,)
-    figures, results = [], []
-    for model in models:
-        points, result = evaluate(angles, spec, model, args.br)
-        figures.append(PoseFigure(points, np.array(result["com"]), f"{name} ({model.upper()})", args.br, target))
-        results.append(result)
-    out = plot_poses(figures, spec, args.output, title=f"{spec.name}: {name}, {angles.support} support")
-    summary = {"png": str(out), "models": {r["model"]: {k: r[k] for k in ("com", "stability_margin_m", "left_hand",
-                                                                          "right_hand", "swing_foot_min_z")}
-                                           for r in results}}
-    emit(args, summary, "\n\n".join(human(r) for r in results) + f"\n\nwrote {out}")
+    reports = [evaluate(angles, spec, model, args.br) for model in models]
+    figures = [PoseFigure(r.points, r.com, f"{name} ({r.model.upper()})", args.br, target) for r in reports]
+    outputs.put("output", render_poses(figures, spec, title=f"{spec.name}: {name}, {angles.support} support"))
+    out = outputs.commit()["output"]
+    summary = {"png": str(out), "models": {r.model: {k: r.as_dict(spec)[k] for k in (
+        "com", "stability_margin_m", "left_hand", "right_hand", "swing_foot_min_z")} for r in reports}}
+    emit(args, summary, "\n\n".join(r.human() for r in reports) + f"\n\nwrote {out}")
     return 0
 
 
 def cmd_arm_ik(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion arm-ik``."""
     from ..arm_ik import ARMS, solve_arm_ik
-    from ..errors import CheckFailed
+    from ..errors import CheckFailed, Unreachable
+    from ..fileio import OutputSet
     from ..joints import book_to_servo, servo_dict
     from ..kinematics import forward
-    from ..plot import PoseFigure, plot_poses
+    from ..plot import PoseFigure, render_poses
 
-    angles, name = angles_from(args, spec)
-    delta = vec3(args.delta, "--delta")
-    if not (math.isfinite(args.tol_mm) and args.tol_mm > 0):
-        raise InputError(f"--tol-mm: expected a positive number, got {args.tol_mm}")
-    res = solve_arm_ik(angles, args.hand, delta, spec, args.model, args.single_step, args.tol_mm / 1000.0,
+    outputs = OutputSet({"plot": args.plot} if args.plot else {})
+    angles, name, _ = angles_from(args, spec)
+    delta = vec3(args.delta, "delta")
+    tol = args.tol_mm / 1000.0
+    res = solve_arm_ik(angles, args.hand, delta, spec, args.model, args.single_step, tol,
                        enforce_limits=not args.allow_limits)
     arm = ARMS[args.hand]
-    converged = res.mode == "single-step" or res.error_m <= args.tol_mm / 1000.0
+    converged = res.mode == "single-step" or res.error_m <= tol
     result = {
         "hand": args.hand, "model": res.model, "mode": res.mode, "iterations": res.iterations,
         "joint_deltas_deg": {n: float(math.degrees(v)) for n, v in zip(arm.names, res.deltas)},
@@ -105,26 +153,28 @@ def cmd_arm_ik(args: argparse.Namespace, spec: Spec) -> int:
         "achieved_delta": [float(v) for v in res.achieved],
         "error_m": res.error_m, "converged": converged,
         "servo_deg": servo_dict(book_to_servo(res.angles, spec)[0], spec),
-        "limit_violations": res.limit_violations,
+        "limit_violations": [v.as_dict() for v in res.limit_violations],
     }
-    if args.plot:
-        after = forward(res.angles, spec, res.model)
-        before = forward(res.initial, spec, res.model)
-        target = before.point(arm.hand)[0] + res.requested
-        fig = PoseFigure(after, after.com[:, 0], f"{name} + arm IK ({res.model.upper()})", target=target, ghost=before)
-        result["png"] = str(plot_poses([fig], spec, args.plot, title=f"{args.hand} hand moved by "
-                                       f"{', '.join(f'{v * 1000:+.0f}' for v in res.requested)} mm"))
     deltas = ", ".join(f"d{n} = {math.degrees(v):+.2f}°" for n, v in zip(arm.names, res.deltas))
     text = (f"{res.mode} on the {res.model.upper()} model, {res.iterations} iteration(s): {deltas}\n"
             f"hand moved {', '.join(f'{v * 1000:+.2f}' for v in res.achieved)} mm "
             f"(asked {', '.join(f'{v * 1000:+.2f}' for v in res.requested)} mm), error {res.error_m * 1000:.3f} mm")
-    emit(args, result, text)
+    failure: CheckFailed | None = None
     if res.limit_violations and not args.allow_limits:
-        v = res.limit_violations[0]
-        raise CheckFailed(f"refused: {v['joint']} would be at {v['deg']:.1f}° outside [{v['lower_deg']}, "
-                          f"{v['upper_deg']}]°; pass --allow-limits to accept")
-    if not converged:
-        raise CheckFailed(f"target not reached: best residual {res.error_m * 1000:.3f} mm "
-                          f"(tolerance {args.tol_mm} mm); it lies outside what this arm can reach on the "
-                          f"{res.model.upper()} model")
+        failure = CheckFailed(f"refused: {res.limit_violations[0].describe()}; pass --allow-limits to accept")
+    elif not converged:
+        failure = Unreachable(f"target not reached: best residual {res.error_m * 1000:.3f} mm (tolerance "
+                              f"{args.tol_mm} mm); it lies outside what this arm can reach on the "
+                              f"{res.model.upper()} model", res.error_m, tol)
+    if args.plot and failure is None:
+        after, before = forward(res.angles, spec, res.model), forward(res.initial, spec, res.model)
+        target = before.point(arm.hand)[0] + res.requested
+        fig = PoseFigure(after, after.com[:, 0], f"{name} + arm IK ({res.model.upper()})", target=target,
+                         ghost=before)
+        outputs.put("plot", render_poses([fig], spec, title=f"{args.hand} hand moved by "
+                                         f"{', '.join(f'{v * 1000:+.0f}' for v in res.requested)} mm"))
+        result["png"] = str(outputs.commit()["plot"])
+    emit(args, result, text)
+    if failure is not None:
+        raise failure
     return 0

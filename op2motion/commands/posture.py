@@ -1,4 +1,4 @@
-"""CLI commands of the posture optimiser: optimize, library build."""
+"""CLI command of the posture optimiser: optimize."""
 
 from __future__ import annotations
 
@@ -8,103 +8,99 @@ import sys
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from ..cli import emit, vec3
-from ..errors import InputError
+from .. import book
+from ..physics import DEFAULT_SECONDS, MAX_SECONDS, MIN_SECONDS
+from ..posture.pso import MAX_ITERATIONS, MAX_PARTICLES, MAX_SEED, PSOSettings
 from ..spec import Spec
+from ..workflow import DEFAULT_RESTARTS, MAX_RESTARTS
+from .common import (BOUNDARY_RATIO, TARGET_M, add_command, emit, number, pose_name, progress_enabled, vec3,
+                     whole)
+
+SECONDS = number(MIN_SECONDS, MAX_SECONDS, "s")
+
+
+def solver_args(p: argparse.ArgumentParser) -> None:
+    """The PSO, restart and validation options shared by ``optimize`` and ``library build``."""
+    d = PSOSettings()
+    p.add_argument("--particles", type=whole(2, MAX_PARTICLES), default=d.particles,
+                   help=f"swarm size (default {d.particles})")
+    p.add_argument("--iters", type=whole(1, MAX_ITERATIONS), default=d.iterations,
+                   help=f"PSO iterations (default {d.iterations})")
+    p.add_argument("--seed", type=whole(0, MAX_SEED), default=d.seed, help="random seed of the first attempt (default 0)")
+    p.add_argument("--restarts", type=whole(0, MAX_RESTARTS), default=DEFAULT_RESTARTS,
+                   help=f"extra solves with the next seeds when one fails (default {DEFAULT_RESTARTS})")
+    p.add_argument("--validate", action="store_true",
+                   help="check each reached pose in physics; a pose that falls counts as failed and is not written")
+    p.add_argument("--seconds", type=SECONDS, default=DEFAULT_SECONDS,
+                   help=f"simulated time of --validate [s] (default {DEFAULT_SECONDS:g})")
+
+
+def register(sub: Any) -> None:
+    """Add optimize."""
+    d = book.DEFAULT_PROBLEM
+    p = add_command(sub, "optimize", cmd_optimize,
+                    "PSO posture: reach a target with one hand while the CoM stays over the support foot")
+    p.add_argument("--support", choices=("left", "right"), default=d.support, help=f"support foot (default {d.support})")
+    p.add_argument("--hand", choices=("left", "right"), default=d.hand, help=f"reaching hand (default {d.hand})")
+    p.add_argument("--target", type=TARGET_M, nargs=3, default=d.target, metavar=("X", "Y", "Z"),
+                   help="target in the support-foot frame [m] (default %s)" % " ".join(f"{v:g}" for v in d.target))
+    p.add_argument("--br", type=BOUNDARY_RATIO, default=d.br,
+                   help=f"boundary ratio of the support rectangle (default {d.br})")
+    p.add_argument("--model", choices=("dh", "pb"), default="dh", help="kinematic model of the PSO (default dh)")
+    solver_args(p)
+    p.add_argument("--no-refine", action="store_true", help="skip the local refinement (hand within 5 mm)")
+    p.add_argument("--name", type=pose_name, help="pose name (default from hand, support, target and br)")
+    p.add_argument("--out", metavar="FILE", help="pose file (default poses/NAME.json)")
+    p.add_argument("--plot", metavar="PNG", help="pose figure (default beside the pose file)")
 
 
 def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion optimize``: solve, optionally validate, then write pose, figure and cost curve together."""
     from tqdm import tqdm
 
     from ..errors import CheckFailed
-    from ..export.library import pose_to_json, write_pose
-    from ..plot import PoseFigure, plot_cost_curve, plot_poses
+    from ..export.posefile import pose_to_json
+    from ..fileio import OutputSet
     from ..posture.cost import PostureProblem
-    from ..posture.pso import PSOSettings
-    from ..posture.solve import optimize_posture
+    from ..workflow import render_figures, solve
 
-    target = vec3(args.target, "--target")
+    target = vec3(args.target, "target")
     problem = PostureProblem(args.support, args.hand, target, args.br, args.model).validated()
     settings = PSOSettings(args.particles, args.iters, seed=args.seed).validated()
     name = args.name or problem.name
     out = Path(args.out) if args.out else Path("poses") / f"{name}.json"
     png = Path(args.plot) if args.plot else out.with_suffix(".png")
-    cost_png = out.with_name(out.stem + "_cost.png")
-    interactive = sys.stderr.isatty() and not args.json
-    validations: dict[int, Any] = {}
-
-    def physics_check(res: Any) -> tuple[bool, str]:
-        from ..physics import validate_servo
-
-        v = validate_servo(res.pose(name, spec).servo, args.support, spec, args.seconds)
-        validations[res.settings.seed] = v
-        return v.stable, f"does not stand in physics ({v.reason})"
-
-    with tqdm(total=settings.iterations * (1 + args.restarts), desc="PSO", unit="it", disable=not interactive,
-              leave=False) as bar:
-        res = optimize_posture(problem, spec, settings, not args.no_refine,
-                               on_iteration=lambda best: (bar.update(), bar.set_postfix(cost=f"{best:.4f}")),
-                               restarts=args.restarts, check=physics_check if args.validate else None)
-    command = "op2motion optimize " + " ".join(sys.argv[2:]) if len(sys.argv) > 1 else "op2motion optimize"
-    pose = res.pose(name, spec, {"command": command})
-    m = res.metrics
-    result: dict[str, Any] = {
-        "pose": json.loads(pose_to_json(pose, spec)), "reached": res.reached, "message": res.message,
-        "cost": m["cost"], "hand_error_m": m["hand_error_m"], "com": m["com"],
-        "stability_margin_m": m["stability_margin_m"], "com_full": m["com_full"],
-        "stability_margin_full_m": m["stability_margin_full_m"], "swing_foot_min_z": m["swing_foot_min_z"],
-        "iterations": int(len(res.pso.history)), "attempts": m["attempts"], "refinement": res.method,
-        "seconds": round(res.seconds, 3),
-    }
+    outputs = OutputSet({"out": out, "plot": png, "cost curve": out.with_name(out.stem + "_cost.png")})
+    with tqdm(total=settings.iterations * (1 + args.restarts), desc="PSO", unit="it", leave=False,
+              disable=not progress_enabled(args)) as bar:
+        outcome = solve(problem, spec, settings, restarts=args.restarts, refine=not args.no_refine,
+                        validate=args.validate, seconds=args.seconds,
+                        on_iteration=lambda best: (bar.update(), bar.set_postfix(cost=f"{best:.4f}")))
+    command = "op2motion " + " ".join(sys.argv[1:]) if len(sys.argv) > 1 else "op2motion optimize"
+    pose = outcome.pose(name, spec, {"command": command})
+    r = outcome.result
+    result: dict[str, Any] = {"pose": json.loads(pose_to_json(pose, spec)), **outcome.as_dict()}
     lines = [f"{args.hand} hand to ({', '.join(f'{v:.3f}' for v in target)}) m on the {args.support} foot, "
-             f"br {args.br}: {res.message}",
-             f"  CoM ({m['com'][0]:+.3f}, {m['com'][1]:+.3f}, {m['com'][2]:.3f}) m [lumped], stability margin "
-             f"{m['stability_margin_m'] * 1000:.1f} mm (full-inertia CoM: {m['stability_margin_full_m'] * 1000:.1f} mm)"
-             f", swing foot {m['swing_foot_min_z'] * 1000:.1f} mm above the floor, torso tilt {m['torso_tilt_deg']:.0f}°",
-             f"  PSO {settings.particles} particles x {settings.iterations} iterations (seed {res.settings.seed}, "
-             f"attempt {m['attempts']}), refinement: {res.method}, {res.seconds:.2f} s"]
-    if res.settings.seed in validations:
-        v = validations[res.settings.seed]
-        result["validation"] = v.as_dict()
+             f"br {args.br}: {r.message}",
+             f"  CoM ({r.com_lumped[0]:+.3f}, {r.com_lumped[1]:+.3f}, {r.com_lumped[2]:.3f}) m [lumped], stability "
+             f"margin {r.margin_lumped_m * 1000:.1f} mm (full-inertia CoM: {r.margin_full_m * 1000:.1f} mm), swing "
+             f"foot {r.swing_foot_min_z * 1000:.1f} mm above the floor, torso tilt "
+             f"{result['torso_tilt_deg']:.0f}°",
+             f"  PSO {settings.particles} particles x {settings.iterations} iterations (seed {r.settings.seed}, "
+             f"attempt {r.attempts}), refinement: {r.method}, {r.seconds:.2f} s"]
+    v = outcome.validation
+    if v is not None:
         lines.append(f"  physics ({args.seconds:g} s): {'STABLE' if v.stable else 'NOT STABLE'} ({v.reason}), "
                      f"tilt {v.max_tilt_deg:.1f}°, torque {v.max_torque_nm:.2f} N·m at {v.worst_joint}")
-    if not res.reached:
+    if not outcome.ok:
         emit(args, result, "\n".join(lines))
-        raise CheckFailed(f"{res.message}; nothing written")
-    write_pose(pose, out, spec)
-    fig = PoseFigure(forward_points(res, spec), np.array(m["com"]), name, args.br, target)
-    plot_poses([fig], spec, png, title=f"{name}: {res.message}")
-    plot_cost_curve(res.pso.history, cost_png, f"PSO cost, {name}")
-    result["files"] = {"pose": str(out), "png": str(png), "cost_png": str(cost_png)}
-    lines.append(f"  wrote {out}, {png}, {cost_png}")
+        raise CheckFailed(f"{r.message}; nothing written")
+    figure, cost_curve = render_figures(outcome, name, spec)
+    outputs.put("out", pose_to_json(pose, spec))
+    outputs.put("plot", figure)
+    outputs.put("cost curve", cost_curve)
+    files = outputs.commit()
+    result["files"] = {"pose": str(files["out"]), "png": str(files["plot"]), "cost_png": str(files["cost curve"])}
+    lines.append(f"  wrote {files['out']}, {files['plot']}, {files['cost curve']}")
     emit(args, result, "\n".join(lines))
-    return 0
-
-
-def forward_points(res: Any, spec: Spec) -> Any:
-    """D-H body points of a posture result (for its figure)."""
-    from ..kinematics import forward
-
-    return forward(res.angles, spec, "dh")
-
-
-def cmd_library_build(args: argparse.Namespace, spec: Spec) -> int:
-    from tqdm import tqdm
-
-    from ..posture.library_build import axis, build_library, grid_jobs
-    from ..posture.pso import PSOSettings
-
-    jobs = grid_jobs(args.hands, args.supports, args.br, axis(*args.x, "--x"), axis(*args.y, "--y"),
-                     axis(*args.z, "--z"))
-    settings = PSOSettings(args.particles, args.iters, seed=args.seed).validated()
-    if args.workers < 0:
-        raise InputError(f"--workers: expected 0 (all cores) or more, got {args.workers}")
-    with tqdm(total=len(jobs), desc="library", unit="pose", disable=not sys.stderr.isatty() or args.json) as bar:
-        summary = build_library(jobs, spec, args.out, settings, args.workers, args.validate, args.spec,
-                                on_done=lambda row: bar.update())
-    text = (f"{summary['targets']} targets: {summary['solved']} reached, {summary['failed']} not, "
-            f"{summary['skipped']} already done; {summary['seconds']:.1f} s; index {summary['index']}")
-    emit(args, summary, text)
     return 0

@@ -8,20 +8,22 @@ the Webots motor names of the spec.
 
 from __future__ import annotations
 
+import csv
+import io
 import math
-from pathlib import Path
 from typing import Sequence
 
 from ..errors import InputError
-from ..fileio import write_atomic
 from ..joints import servo_to_ticks
+from ..pose import Pose
 from ..spec import Spec
-from .library import Pose
+
+MAX_TIME_S = 3600.0   # one pose per hour is the slowest sequence a table holds
 
 
 def _check_time(seconds: float) -> None:
-    if not (math.isfinite(seconds) and seconds > 0):
-        raise InputError(f"--time: expected a positive number of seconds, got {seconds}")
+    if not (math.isfinite(seconds) and 0 < seconds <= MAX_TIME_S):
+        raise InputError(f"expected a number of seconds in (0, {MAX_TIME_S:g}], got {seconds}", "time")
 
 
 def _stamp(t: float) -> str:
@@ -34,8 +36,7 @@ def webots_motion(poses: Sequence[Pose], spec: Spec, seconds: float = 1.0) -> st
     _check_time(seconds)
     lines = ["#WEBOTS_MOTION,V1.0," + ",".join(j.webots for j in spec.joints)]
     for k, pose in enumerate(poses):
-        name = pose.name.replace(",", "_")
-        lines.append(f"{_stamp(k * seconds)},{name}," + ",".join(f"{q:.6f}" for q in pose.servo))
+        lines.append(f"{_stamp(k * seconds)},{pose.name}," + ",".join(f"{q:.6f}" for q in pose.servo))
     return "\n".join(lines) + "\n"
 
 
@@ -43,16 +44,11 @@ def csv_table(poses: Sequence[Pose], spec: Spec, seconds: float = 1.0) -> str:
     """CSV: one row per pose with its time, support, servo angles [deg] and goal ticks by joint name."""
     _check_time(seconds)
     names = spec.joint_names
-    head = ["name", "time_s", "support"] + [f"{n}_deg" for n in names] + [f"{n}_tick" for n in names]
-    rows = [",".join(head)]
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(["name", "time_s", "support"] + [f"{n}_deg" for n in names] + [f"{n}_tick" for n in names])
     for k, pose in enumerate(poses):
         ticks = servo_to_ticks(pose.servo, spec)
-        rows.append(",".join([pose.name.replace(",", "_"), f"{k * seconds:.3f}", pose.support]
-                             + [f"{math.degrees(q):.4f}" for q in pose.servo] + [str(int(t)) for t in ticks]))
-    return "\n".join(rows) + "\n"
-
-
-def write_table(kind: str, poses: Sequence[Pose], spec: Spec, out: str | Path, seconds: float = 1.0) -> Path:
-    """Write a ``webots`` or ``csv`` export atomically."""
-    text = webots_motion(poses, spec, seconds) if kind == "webots" else csv_table(poses, spec, seconds)
-    return write_atomic(out, text)
+        writer.writerow([pose.name, f"{k * seconds:.3f}", pose.support] + [f"{math.degrees(q):.4f}" for q in pose.servo]
+                        + [str(int(t)) for t in ticks])
+    return buf.getvalue()

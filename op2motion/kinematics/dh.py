@@ -21,12 +21,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..joints import BookAngles
-from ..spec import BOOK_VARS, Spec
+from ..spec import BOOK_VARS, Spec, swing_of
 from ..trig import sincos
 from .batch import run_chunked
 from .com import slab_com
 from .frames import Frame
-from .points import ROW, BodyPoints, foot_corner_offsets, new_slab
+from .points import ROW, BodyPoints, fill_support_foot, new_slab
 
 MATRIX_BELOW = 64  # batches smaller than this (a PSO swarm) use the 4x4 matrix evaluator
 _HALF_PI = math.pi / 2
@@ -118,14 +118,13 @@ def _points(spec: Spec, support: str) -> tuple[tuple[str, str, tuple[float, floa
     o = (0.0, 0.0, 0.0)
     rows = [(f"{s}_ankle", "0", o), (f"{s}_knee", "2", o), (f"{s}_hip", "3", o), (f"{s}_hip_yaw", "5", o),
             (f"{w}_hip_yaw", "6", o), (f"{w}_hip", "7", o), (f"{w}_knee", "9", o), (f"{w}_ankle", "10", o),
-            (f"{'right' if support == 'left' else 'left'}_sole", "12", o),
+            (f"{swing_of(support)}_sole", "12", o),
             ("neck", "21", o), ("head_pan", "21", (0.0, 0.0, g.head_pan_height)), ("head_tilt", "22", o),
             ("head_top", "23", o), ("l_sho_pitch", "13", o), ("l_sho_roll", "14", o), ("l_el", "15", o),
             ("left_hand", "16", o), ("r_sho_pitch", "17", o), ("r_sho_roll", "18", o), ("r_el", "19", o),
             ("right_hand", "20", o)]
-    swing_side = "right" if support == "left" else "left"
-    rows += [(f"{swing_side}_foot_{i}", "12", (0.0, dy, dx))        # frame 12: y left, z forward
-             for i, (dx, dy) in enumerate(foot_corner_offsets(spec.foot, swing_side))]
+    rows += [(f"{swing_of(support)}_foot_{i}", "12", (0.0, dy, dx))        # frame 12: y left, z forward
+             for i, (dx, dy) in enumerate(spec.foot.corners(swing_of(support)))]
     return tuple(rows)
 
 
@@ -134,13 +133,6 @@ def _shifted(c: np.ndarray, s: np.ndarray, sign: float, offset: float) -> tuple[
     quarter = round(offset / _HALF_PI) % 4
     s = s if sign > 0 else -s
     return ((c, s), (-s, c), (-c, -s), (s, -c))[quarter]
-
-
-def _fill_fixed(out: np.ndarray, spec: Spec, support: str) -> None:
-    """Rows that do not depend on the angles: the support sole and its corners."""
-    out[ROW[f"{support}_sole"]] = 0.0
-    for i, (dx, dy) in enumerate(foot_corner_offsets(spec.foot, support)):
-        out[ROW[f"{support}_foot_{i}"]] = np.array([dx, dy, 0.0])[:, None]
 
 
 def _columns(q: np.ndarray, out: np.ndarray, spec: Spec, support: str) -> None:
@@ -160,7 +152,7 @@ def _columns(q: np.ndarray, out: np.ndarray, spec: Spec, support: str) -> None:
         out[ROW[row]] = frames[frame].point(local)
     np.add(frames["5"].p, frames["6"].p, out=out[ROW["pelvis"]])
     out[ROW["pelvis"]] *= 0.5
-    _fill_fixed(out, spec, support)
+    fill_support_foot(out, spec.foot, support)
 
 
 @dataclass(frozen=True)
@@ -252,7 +244,7 @@ def _matrices(q: np.ndarray, out: np.ndarray, spec: Spec, support: str) -> None:
     out[offset_rows] = np.einsum("fmij,fj->fim", rot, offsets) + frames[offset_frames, :, :3, 3].transpose(0, 2, 1)
     five, six = plan.slots["5"], plan.slots["6"]
     out[ROW["pelvis"]] = 0.5 * (frames[five, :, :3, 3] + frames[six, :, :3, 3]).T
-    _fill_fixed(out, spec, support)
+    fill_support_foot(out, spec.foot, support)
 
 
 def _point_layout(spec: Spec, support: str) -> tuple:

@@ -9,12 +9,11 @@ foot, for N poses, in the world frame (support-foot sole centre, X forward, Y le
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Iterable
+from typing import Iterable
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from ..spec import Foot
+from ..spec import Foot, swing_of
 
 #: Unique point rows, in storage order.
 ROWS: tuple[str, ...] = (
@@ -68,7 +67,7 @@ class BodyPoints:
     @property
     def swing(self) -> str:
         """The swing side (``left`` or ``right``)."""
-        return "right" if self.support == "left" else "left"
+        return swing_of(self.support)
 
     def point(self, name: str) -> np.ndarray:
         """Point ``name`` for every pose, (N, 3) [m]."""
@@ -107,15 +106,10 @@ class BodyPoints:
         """Pose ``i`` as ``{point name: [x, y, z]}`` [m]."""
         return {name: [float(v) for v in self.data[row_of(name), :, i]] for name in POINT_NAMES}
 
-    def select(self, i: int) -> "BodyPoints":
-        """Pose ``i`` as a batch of one."""
-        return BodyPoints(self.data[:, :, i:i + 1], self.com[:, i:i + 1], self.support, self.model)
 
-
-def foot_corner_offsets(foot: "Foot", side: str) -> tuple[tuple[float, float], ...]:
-    """Sole corners (forward, left) [m] about the sole centre: front-left, front-right, back-right, back-left.
-
-    The outer edge is on the left of the left foot and on the right of the right foot (book fig. 2.30).
-    """
-    left_w, right_w = (foot.outer, foot.inner) if side == "left" else (foot.inner, foot.outer)
-    return ((foot.front, left_w), (foot.front, -right_w), (-foot.back, -right_w), (-foot.back, left_w))
+def fill_support_foot(out: np.ndarray, foot: "Foot", support: str) -> None:
+    """Rows of a (rows, 3, N) slab that do not depend on the angles: the support sole (the world origin) and its
+    corners on the floor."""
+    out[ROW[f"{support}_sole"]] = 0.0
+    for i, (dx, dy) in enumerate(foot.corners(support)):
+        out[ROW[f"{support}_foot_{i}"]] = np.array([dx, dy, 0.0])[:, None]

@@ -27,11 +27,11 @@ import numpy as np
 
 from ..errors import ModelError
 from ..joints import BookAngles
-from ..spec import Spec
+from ..spec import Spec, swing_of
 from ..trig import sincos
 from .batch import run_chunked
 from .com import slab_com
-from .points import ROW, BodyPoints, foot_corner_offsets, new_slab
+from .points import ROW, BodyPoints, fill_support_foot, new_slab
 
 PSI_TOLERANCE_RAD = 1e-12  # psi must be zero for this model
 
@@ -39,7 +39,7 @@ PSI_TOLERANCE_RAD = 1e-12  # psi must be zero for this model
 def forward_pb(angles: BookAngles, spec: Spec) -> BodyPoints:
     """Body points of N poses in the support-foot frame; raises :class:`ModelError` when psi != 0."""
     if np.any(np.abs(angles.psi) > PSI_TOLERANCE_RAD):
-        raise ModelError("the projection model assumes psi = 0 (no transverse rotation); use --model dh")
+        raise ModelError("the projection model assumes psi = 0 (no transverse rotation); choose dh", "model")
     out = new_slab(angles.n)
     left = angles.support == "left"
     com = np.empty((3, angles.n))
@@ -110,7 +110,8 @@ def _chunk(th: np.ndarray, phi: np.ndarray, out: np.ndarray, spec: Spec, left: b
     head = _Link(arm_t[4], trig_f[1])
 
     s, w = ("l", "r") if left else ("r", "l")
-    support_side, swing_side = ("left", "right") if left else ("right", "left")
+    support_side = "left" if left else "right"
+    swing_side = swing_of(support_side)
     row = lambda name: out[ROW[name]]  # noqa: E731
     ankle = row(f"{s}_ankle")
     ankle[0], ankle[1], ankle[2] = 0.0, 0.0, g.ankle_to_sole
@@ -128,7 +129,6 @@ def _chunk(th: np.ndarray, phi: np.ndarray, out: np.ndarray, spec: Spec, left: b
     sknee = thigh.add(swing_hip, g.thigh, row(f"{w}_knee"))
     sankle = shin.add(sknee, g.calf, row(f"{w}_ankle"))
     ssole = foot.add(sankle, g.ankle_to_sole, row(f"{swing_side}_sole"))
-    row(f"{support_side}_sole")[:] = 0.0
 
     centre = 0.5 * (hip + swing_hip)
     torso.add(centre, g.hip_yaw_to_roll, row("pelvis"))
@@ -154,9 +154,8 @@ def _chunk(th: np.ndarray, phi: np.ndarray, out: np.ndarray, spec: Spec, left: b
         elbow = upper.add(root, g.upper_arm, row(f"{side}_el"))
         lower.add(elbow, g.lower_arm, row(hand))
 
-    for i, (dx, dy) in enumerate(foot_corner_offsets(spec.foot, support_side)):
-        out[ROW[f"{support_side}_foot_{i}"]] = np.array([dx, dy, 0.0])[:, None]
-    for i, (dx, dy) in enumerate(foot_corner_offsets(spec.foot, swing_side)):
+    fill_support_foot(out, spec.foot, support_side)
+    for i, (dx, dy) in enumerate(spec.foot.corners(swing_side)):
         corner = out[ROW[f"{swing_side}_foot_{i}"]]
         corner[0] = ssole[0] + dx * foot.fx
         corner[1] = ssole[1] + dy

@@ -13,10 +13,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..spec import Spec
-from .urdf import build_urdf
-
-COM_MODEL_FULL = "full inertia (Webots per-link masses, CoMs and tensors; pinocchio)"
+from ..spec import SUPPORTS, Spec, feet_of, stance_of
+from .urdf import build_urdf, frame_link, frame_points, sole_link
 
 
 @dataclass(frozen=True)
@@ -46,7 +44,7 @@ class Dynamics:
         self.q_index = np.array([self.model.joints[self.model.getJointId(n)].idx_q for n in spec.joint_names])
         self.v_index = np.array([self.model.joints[self.model.getJointId(n)].idx_v for n in spec.joint_names])
         self.joint_ids = [self.model.getJointId(n) for n in spec.joint_names]
-        self.sole_ids = {side: self.model.getFrameId(f"{side}_sole_link") for side in ("left", "right")}
+        self.sole_ids = {side: self.model.getFrameId(sole_link(side)) for side in SUPPORTS}
 
     @property
     def total_mass(self) -> float:
@@ -57,7 +55,7 @@ class Dynamics:
         """Pinocchio configuration: free flyer at identity, joints from servo angles (20,) [rad] in ID order."""
         servo = np.asarray(servo, dtype=float).reshape(-1)
         if servo.size != len(self.spec.joints) or not np.all(np.isfinite(servo)):
-            raise InputError(f"servo angles: expected {len(self.spec.joints)} finite values, got {servo.size}")
+            raise InputError(f"expected {len(self.spec.joints)} finite values, got {servo.size}", "servo angles")
         q = self.pin.neutral(self.model)
         q[self.q_index] = servo
         return q
@@ -71,33 +69,30 @@ class Dynamics:
 
     def _sole_frame(self, q: np.ndarray, support: str) -> Any:
         self.pin.framesForwardKinematics(self.model, self.data, q)
-        return self.data.oMf[self.sole_ids["right" if support == "right" else "left"]]
+        return self.data.oMf[self.sole_ids[stance_of(support)]]
 
     def joint_centres(self, servo: np.ndarray, support: str) -> dict[str, np.ndarray]:
         """Joint origins and named frames [m] in the support sole frame."""
         q = self.configuration(servo)
         inv = self._sole_frame(q, support).inverse()
         out = {n: (inv * self.data.oMi[i]).translation.copy() for n, i in zip(self.spec.joint_names, self.joint_ids)}
-        for frame in self.model.frames:
-            if frame.name.endswith("_link") and frame.name[:-5] in ("left_hand", "right_hand", "left_sole",
-                                                                    "right_sole", "head_top", "camera"):
-                out[frame.name[:-5]] = (inv * self.data.oMf[self.model.getFrameId(frame.name)]).translation.copy()
+        for name in frame_points(self.spec):
+            out[name] = (inv * self.data.oMf[self.model.getFrameId(frame_link(name))]).translation.copy()
         return out
 
     def frame_jacobian(self, servo: np.ndarray, frame: str, support: str) -> np.ndarray:
         """Jacobian (6, 20) of a named frame (e.g. ``left_hand``) w.r.t. the servo angles, with the support sole
         fixed and level: rows are linear [m/rad] then angular [rad/rad] velocity in the support sole frame."""
         pin = self.pin
-        q = self.level_configuration(servo, "right" if support == "right" else "left")
+        q = self.level_configuration(servo, support)
         pin.computeJointJacobians(self.model, self.data, q)
         pin.framesForwardKinematics(self.model, self.data, q)
-        fid = self.model.getFrameId(f"{frame}_link")
+        fid = self.model.getFrameId(frame_link(frame))
         if fid >= len(self.model.frames):
-            raise InputError(f"frame: unknown frame {frame!r}")
+            raise InputError(f"unknown frame {frame!r}", "frame")
         world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
         jac = pin.getFrameJacobian(self.model, self.data, fid, world)
-        sole = pin.getFrameJacobian(self.model, self.data, self.sole_ids["right" if support == "right" else "left"],
-                                    world)
+        sole = pin.getFrameJacobian(self.model, self.data, self.sole_ids[stance_of(support)], world)
         # Hold the sole still: the free-flyer velocity is whatever cancels the sole's motion (J_sole v = 0).
         base = -np.linalg.solve(sole[:, :6], sole[:, 6:])
         return (jac[:, 6:] + jac[:, :6] @ base)[:, self.v_index - 6]
@@ -116,14 +111,13 @@ class Dynamics:
         torques the servos must supply.
         """
         pin = self.pin
-        q = self.level_configuration(servo, "right" if support == "right" else "left")
+        q = self.level_configuration(servo, support)
         zero = np.zeros(self.model.nv)
         gravity = pin.rnea(self.model, self.data, q, zero, zero)
         pin.computeJointJacobians(self.model, self.data, q)
         pin.framesForwardKinematics(self.model, self.data, q)
-        sides = ("left", "right") if support == "double" else ("right",) if support == "right" else ("left",)
         jac = np.vstack([pin.getFrameJacobian(self.model, self.data, self.sole_ids[s], pin.ReferenceFrame.LOCAL)
-                         for s in sides])
+                         for s in feet_of(support)])
         wrench = np.linalg.lstsq(jac[:, :6].T, gravity[:6], rcond=None)[0]
         torques = (gravity - jac.T @ wrench)[self.v_index]
         worst = int(np.argmax(np.abs(torques)))

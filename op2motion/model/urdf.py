@@ -52,12 +52,26 @@ def link_inertial(item: Inertial) -> LinkInertial:
     return LinkInertial(item.mass, com, rot @ tensor_w @ rot.T)
 
 
+def frame_link(name: str) -> str:
+    """The URDF link of a named frame (``left_sole`` -> ``left_sole_link``)."""
+    return f"{name}_link"
+
+
+def sole_link(side: str) -> str:
+    """The URDF link at the centre of the ``left`` or ``right`` sole."""
+    return frame_link(f"{side}_sole")
+
+
+def foot_link(spec: Spec, side: str) -> str:
+    """The URDF link that carries the ``left`` or ``right`` foot (the ankle-roll joint's child)."""
+    return spec.joint(f"{side[0]}_ank_roll").child
+
+
 def frame_points(spec: Spec) -> dict[str, tuple[str, tuple[float, float, float]]]:
     """Named frames: ``{frame name: (parent link, xyz [m])}`` for the spec's points and both soles."""
     frames = {name: (p.link, p.xyz) for name, p in spec.points.items()}
-    drop = -spec.foot.sole_below_ankle
-    frames["left_sole"] = ("l_ank_roll_link", (0.0, 0.0, drop))
-    frames["right_sole"] = ("r_ank_roll_link", (0.0, 0.0, drop))
+    for side in ("left", "right"):
+        frames[f"{side}_sole"] = (foot_link(spec, side), (0.0, 0.0, -spec.foot.sole_below_ankle))
     return frames
 
 
@@ -115,9 +129,9 @@ def build_urdf(spec: Spec) -> str:
                    f'velocity="{_f(velocity)}"/>\n  </joint>\n')
     frame_inertial = _inertial_xml(LinkInertial(FRAME_LINK_MASS_KG, np.zeros(3), np.eye(3) * FRAME_LINK_INERTIA))
     for name, (parent, xyz) in frame_points(spec).items():
-        out.append(f"  <link name={quoteattr(name + '_link')}>\n{frame_inertial}  </link>\n"
+        out.append(f"  <link name={quoteattr(frame_link(name))}>\n{frame_inertial}  </link>\n"
                    f"  <joint name={quoteattr(name + '_joint')} type=\"fixed\">\n"
-                   f"    <parent link={quoteattr(parent)}/>\n    <child link={quoteattr(name + '_link')}/>\n"
+                   f"    <parent link={quoteattr(parent)}/>\n    <child link={quoteattr(frame_link(name))}/>\n"
                    f'    <origin xyz="{_vec(xyz)}" rpy="0 0 0"/>\n  </joint>\n')
     out.append("</robot>\n")
     return "".join(out)

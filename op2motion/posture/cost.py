@@ -9,7 +9,8 @@ The book's terms are a step penalty of 100 when the swing foot's lowest corner i
 leaves the br-shrunk support rectangle, plus the hand's distance to the target [m]. The extra terms are small
 tie-breakers (a centimetre of margin or 30° of torso tilt weigh about as much as 0.2-0.5 mm of reach), so that
 among poses that reach the target the more stable, more upright one wins; and a screening penalty for obvious
-self-collisions (a hand or elbow inside the torso, the swing foot over the support foot, knees crossing).
+self-collisions (:class:`Screen`: a hand or elbow inside the torso, the swing foot over the support foot, knees
+crossing), sized from the spec's collision shapes.
 """
 
 from __future__ import annotations
@@ -18,20 +19,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..balance import FLOOR_TOLERANCE_M, PENALTY, support_extents
+from .. import book
+from ..balance import FLOOR_TOLERANCE_M, PENALTY, check_br, rectangle_margin
 from ..errors import InputError
-from ..joints import BookAngles
-from ..kinematics import BodyPoints, forward
+from ..joints import BookAngles, check_support
+from ..kinematics import MODELS, BodyPoints, forward
 from ..kinematics.points import ROW, row_of
-from ..spec import Spec
+from ..spec import Spec, swing_of
 
 W_VIOLATION = 10.0     # cost per metre by which a violated constraint is violated, on top of the book's 100
 W_MARGIN = 0.02        # cost per metre of stability margin below MARGIN_CAP
 MARGIN_CAP_M = 0.02    # margins beyond this earn nothing more
 W_UPRIGHT = 0.002      # cost per rad² of torso tilt from vertical
-TORSO_HALF_M = (0.045, 0.055, 0.06)  # half extents (x, y, z) of the torso keep-out box for hands and elbows
-KNEE_GAP_M = 0.045     # knees closer than this cross each other
-FEET_GAP_M = 0.02      # swing foot this close above the support foot's area is a clash
+TARGET_LIMIT_M = 1.0   # a target farther than this from the support foot is not a target for a 45 cm robot
 
 
 @dataclass(frozen=True)
@@ -42,21 +42,26 @@ class PostureProblem:
     support: str
     hand: str
     target: tuple[float, float, float]
-    br: float = 0.7
+    br: float = book.DEFAULT_PROBLEM.br
     model: str = "dh"
+
+    @classmethod
+    def from_scenario(cls, scenario: book.Scenario, model: str = "dh") -> "PostureProblem":
+        """The problem of one of the book's scenarios (or the default problem)."""
+        return cls(scenario.support, scenario.hand, scenario.target, scenario.br, model)
 
     def validated(self) -> "PostureProblem":
         """Check the fields; raise :class:`InputError` on bad values."""
-        if self.support not in ("left", "right"):
-            raise InputError(f"support: expected 'left' or 'right', got {self.support!r}")
+        check_support(self.support)
         if self.hand not in ("left", "right"):
-            raise InputError(f"hand: expected 'left' or 'right', got {self.hand!r}")
+            raise InputError(f"expected 'left' or 'right', got {self.hand!r}", "hand")
         if len(self.target) != 3 or not all(np.isfinite(self.target)):
-            raise InputError(f"target: expected 3 finite numbers [m], got {list(self.target)}")
-        if not (np.isfinite(self.br) and 0.0 < self.br <= 1.0):
-            raise InputError(f"br: expected a boundary ratio in (0, 1], got {self.br!r}")
-        if self.model not in ("dh", "pb"):
-            raise InputError(f"model: expected 'dh' or 'pb', got {self.model!r}")
+            raise InputError(f"expected 3 finite numbers [m], got {list(self.target)}", "target")
+        if max(abs(v) for v in self.target) > TARGET_LIMIT_M:
+            raise InputError(f"expected coordinates within ±{TARGET_LIMIT_M:g} m, got {list(self.target)}", "target")
+        check_br(self.br)
+        if self.model not in MODELS:
+            raise InputError(f"expected 'dh' or 'pb', got {self.model!r}", "model")
         return self
 
     @property
@@ -74,7 +79,8 @@ class PostureProblem:
 
 @dataclass(frozen=True)
 class CostTerms:
-    """Per-pose cost and its parts, each (N,)."""
+    """Per-pose cost and its parts, each (N,): total and book cost, hand error [m], stability margin [m], lowest
+    swing-foot corner [m], torso tilt [rad], self-collision penalty."""
 
     total: np.ndarray
     book: np.ndarray
@@ -85,42 +91,69 @@ class CostTerms:
     collision: np.ndarray
 
 
+@dataclass(frozen=True)
+class Screen:
+    """Sizes of the self-collision screen [m], from the spec's collision shapes: the torso box (centre and half
+    extents in the torso frame) grown by the forearm radius, the shin width (knees closer than this cross) and
+    the foot box thickness (a swing sole lower than this over the support foot clashes with it)."""
+
+    torso_centre: np.ndarray
+    torso_half: np.ndarray
+    knee_gap: float
+    foot_thickness: float
+
+    @classmethod
+    def of(cls, spec: Spec) -> "Screen":
+        """The screen of ``spec`` (its first box on the torso, knee and foot links, cylinder on the forearm)."""
+        def shape(joint: str | None, kind: str):  # the collision shape of a joint's child link (or the root)
+            link = spec.root_link if joint is None else spec.joint(joint).child
+            found = spec.collisions_of(link, kind)
+            if not found:
+                raise InputError(f"the spec has no {kind} collision shape on {link}, which the screen needs", "spec")
+            return found[0]
+
+        torso, forearm = shape(None, "box"), shape("l_el", "cylinder")
+        return cls(np.asarray(torso.origin_xyz), np.asarray(torso.size) / 2 + forearm.size[0],
+                   shape("l_knee", "box").size[1], shape("l_ank_roll", "box").size[2])
+
+
 _ARM_ROWS = [row_of(n) for n in ("left_hand", "right_hand", "l_el", "r_el")]
 _ROWS = {n: row_of(n) for n in ("neck", "pelvis", "l_sho_pitch", "r_sho_pitch", "l_knee", "r_knee")}
 
 
-def _torso_axes(data: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Torso frame per pose from a (rows, 3, N) slab: axes (3 [x, y, z], 3, N) and the unnormalised up vector."""
-    up = data[_ROWS["neck"]] - data[_ROWS["pelvis"]]
-    z = up / np.sqrt(np.einsum("in,in->n", up, up))
+def torso_axes(data: np.ndarray, spec: Spec) -> np.ndarray:
+    """The torso (``body_link``) frame's axes per pose, (3 [x, y, z], 3, N), from a (rows, 3, N) slab: y from the
+    shoulder-pitch axes, x and z from the pelvis point, which lies at (hip_x, 0, -torso) in that frame."""
     y = data[_ROWS["l_sho_pitch"]] - data[_ROWS["r_sho_pitch"]]
-    y = y - np.einsum("in,in->n", y, z) * z
-    y /= np.sqrt(np.einsum("in,in->n", y, y))
-    x = np.stack([y[1] * z[2] - y[2] * z[1], y[2] * z[0] - y[0] * z[2], y[0] * z[1] - y[1] * z[0]])
-    return np.stack([x, y, z]), up
+    y = y / np.sqrt(np.einsum("in,in->n", y, y))
+    u = data[_ROWS["pelvis"]] - data[_ROWS["neck"]]
+    u = u / np.sqrt(np.einsum("in,in->n", u, u))
+    g = spec.geometry
+    a, b = np.array([g.hip_x, -g.torso]) / np.hypot(g.hip_x, g.torso)   # u = a x + b z
+    w = np.cross(y, u, axis=0)                                          # = a (y × x) + b (y × z) = -a z + b x
+    return np.stack([b * w + a * u, y, b * u - a * w])
 
 
-def torso_tilt(points: BodyPoints) -> np.ndarray:
-    """Angle [rad] between the pelvis->neck line and the vertical, (N,)."""
-    up = points.data[_ROWS["neck"]] - points.data[_ROWS["pelvis"]]
-    return np.arccos(np.clip(up[2] / np.sqrt(np.einsum("in,in->n", up, up)), -1.0, 1.0))
+def torso_tilt(points: BodyPoints, spec: Spec) -> np.ndarray:
+    """Angle [rad] between the torso's z axis and the vertical, (N,)."""
+    return np.arccos(np.clip(torso_axes(points.data, spec)[2, 2], -1.0, 1.0))
 
 
-def self_collision_penalty(points: BodyPoints) -> np.ndarray:
+def self_collision_penalty(points: BodyPoints, spec: Spec, screen: Screen | None = None) -> np.ndarray:
     """Screening for obvious self-collisions: 100 per pose with a hand or elbow inside the torso, the swing foot
     over the support foot, or the knees crossing; (N,)."""
+    screen = screen or Screen.of(spec)
     data = points.data
-    axes, _ = _torso_axes(data)
-    centre = 0.5 * (data[_ROWS["neck"]] + data[_ROWS["pelvis"]])
-    local = np.einsum("pjn,kjn->pkn", data[_ARM_ROWS] - centre, axes)          # (4 points, 3, N)
-    bad = np.any(np.all(np.abs(local) < np.asarray(TORSO_HALF_M)[None, :, None], axis=1), axis=0)
+    axes = torso_axes(data, spec)
+    local = np.einsum("pjn,kjn->pkn", data[_ARM_ROWS] - data[_ROWS["neck"]], axes) - screen.torso_centre[None, :, None]
+    bad = np.any(np.all(np.abs(local) < screen.torso_half[None, :, None], axis=1), axis=0)
     knees = data[_ROWS["l_knee"]] - data[_ROWS["r_knee"]]
-    bad |= np.einsum("in,in->n", knees, knees) < KNEE_GAP_M ** 2
+    bad |= np.einsum("in,in->n", knees, knees) < screen.knee_gap ** 2
     swing = points.swing_foot_corners
     support = points.foot_corners(points.support)
     lo, hi = support[:, :, :2].min(axis=1), support[:, :, :2].max(axis=1)
     inside = np.all((swing[:, :, :2] > lo[:, None, :]) & (swing[:, :, :2] < hi[:, None, :]), axis=2)
-    bad |= np.any(inside & (swing[:, :, 2] < FEET_GAP_M), axis=1)
+    bad |= np.any(inside & (swing[:, :, 2] < screen.foot_thickness), axis=1)
     return np.where(bad, PENALTY, 0.0)
 
 
@@ -129,11 +162,12 @@ class CostModel:
 
     def __init__(self, problem: PostureProblem, spec: Spec):
         self.problem, self.spec = problem.validated(), spec
-        self.extents = np.array(support_extents(spec, problem.support, problem.br))  # front, back, left, right
+        self.extents = spec.foot.extents(problem.support, problem.br)
         self.target = np.asarray(problem.target, dtype=float)[:, None]
         self.hand_row = row_of(problem.hand_point)
-        self.swing_rows = slice(ROW[f"{'right' if problem.support == 'left' else 'left'}_foot_0"],
-                                ROW[f"{'right' if problem.support == 'left' else 'left'}_foot_0"] + 4)
+        first = ROW[f"{swing_of(problem.support)}_foot_0"]
+        self.swing_rows = slice(first, first + 4)
+        self.screen = Screen.of(spec)
 
     def __call__(self, angles: BookAngles) -> CostTerms:
         """All cost terms for a batch of poses (book variables, support = the problem's)."""
@@ -142,22 +176,17 @@ class CostModel:
         hand = data[self.hand_row] - self.target
         hand_error = np.sqrt(np.einsum("in,in->n", hand, hand))
         swing_min_z = data[self.swing_rows, 2].min(axis=0)
-        front, back, left, right = self.extents
-        dx, dy = points.com[0], points.com[1]
-        inside = np.minimum(np.minimum(front - dx, dx + back), np.minimum(left - dy, dy + right))
-        outside = np.hypot(np.maximum(np.maximum(dx - front, -back - dx), 0.0),
-                           np.maximum(np.maximum(dy - left, -right - dy), 0.0))
-        margin = np.where(inside >= 0.0, inside, -outside)  # balance.stability_margin, support frame (sp 0, gamma 0)
+        margin = rectangle_margin(points.com[0], points.com[1], self.extents)  # world = support frame
         # The book's penalties (code 2.8, 2.9): PenaltyStability is 100 exactly where the margin is negative.
         below = swing_min_z < -FLOOR_TOLERANCE_M
-        book = np.where(below, PENALTY, 0.0) + np.where(margin < 0.0, PENALTY, 0.0) + hand_error
+        book_cost = np.where(below, PENALTY, 0.0) + np.where(margin < 0.0, PENALTY, 0.0) + hand_error
         # Beyond the book: a slope inside the penalised region leads a swarm that starts there out of it.
         slope = W_VIOLATION * (np.where(below, -swing_min_z, 0.0) + np.maximum(-margin, 0.0))
-        tilt = torso_tilt(points)
-        collision = self_collision_penalty(points)
-        total = (book + slope + W_MARGIN * (MARGIN_CAP_M - np.minimum(margin, MARGIN_CAP_M))
+        tilt = torso_tilt(points, self.spec)
+        collision = self_collision_penalty(points, self.spec, self.screen)
+        total = (book_cost + slope + W_MARGIN * (MARGIN_CAP_M - np.minimum(margin, MARGIN_CAP_M))
                  + W_UPRIGHT * tilt * tilt + collision)
-        return CostTerms(total, book, hand_error, margin, swing_min_z, tilt, collision)
+        return CostTerms(total, book_cost, hand_error, margin, swing_min_z, tilt, collision)
 
 
 def evaluate_cost(angles: BookAngles, problem: PostureProblem, spec: Spec) -> CostTerms:

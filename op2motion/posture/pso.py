@@ -24,33 +24,41 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
+from .. import book
 from ..errors import InputError
-from ..joints import BOOK_PSO_LOWER_DEG, BOOK_PSO_UPPER_DEG, N_PHI, N_TH, BookAngles
+from ..joints import N_PHI, N_TH, BookAngles, book_bounds
 from ..spec import BOOK_VARS, Spec
 from .cost import CostModel, PostureProblem
+
+MAX_PARTICLES = 10_000
+MAX_ITERATIONS = 100_000
+MAX_SEED = 2**32 - 1     # NumPy's legacy seeding takes 32-bit seeds
 
 
 @dataclass(frozen=True)
 class PSOSettings:
     """PSO parameters (book code 2.10 defaults)."""
 
-    particles: int = 50
-    iterations: int = 200
-    w: float = 0.8
-    c1: float = 2.0
-    c2: float = 2.0
+    particles: int = book.PSO_PARTICLES
+    iterations: int = book.PSO_ITERATIONS
+    w: float = book.PSO_W
+    c1: float = book.PSO_C1
+    c2: float = book.PSO_C2
     velocity_fraction: float = 0.2
     seed: int = 0
 
     def validated(self) -> "PSOSettings":
-        """Check the values; raise :class:`InputError` on bad ones."""
-        if not (2 <= self.particles <= 10_000 and 1 <= self.iterations <= 100_000):
-            raise InputError(f"particles/iterations: expected 2..10000 and 1..100000, got {self.particles}, "
-                             f"{self.iterations}")
-        if not all(math.isfinite(v) and v >= 0 for v in (self.w, self.c1, self.c2)):
-            raise InputError("w, c1, c2: expected finite non-negative numbers")
+        """Check the values; raise :class:`InputError` naming the parameter on bad ones."""
+        for name, value, lo, hi in (("particles", self.particles, 2, MAX_PARTICLES),
+                                    ("iterations", self.iterations, 1, MAX_ITERATIONS),
+                                    ("seed", self.seed, 0, MAX_SEED)):
+            if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
+                raise InputError(f"expected a whole number from {lo} to {hi}, got {value!r}", name)
+        for name, value in (("w", self.w), ("c1", self.c1), ("c2", self.c2)):
+            if not (math.isfinite(value) and value >= 0):
+                raise InputError(f"expected a finite non-negative number, got {value!r}", name)
         if not 0.0 < self.velocity_fraction <= 1.0:
-            raise InputError(f"velocity_fraction: expected (0, 1], got {self.velocity_fraction}")
+            raise InputError(f"expected (0, 1], got {self.velocity_fraction}", "velocity_fraction")
         return self
 
 
@@ -99,15 +107,12 @@ def contained_pyswarms() -> Iterator[None]:
 
 def variable_bounds(problem: PostureProblem, spec: Spec) -> tuple[np.ndarray, np.ndarray]:
     """Search box [rad] for the 20 book variables: the book's box (code 2.10) within the servo limits."""
-    lo, hi = np.radians(BOOK_PSO_LOWER_DEG).astype(float), np.radians(BOOK_PSO_UPPER_DEG).astype(float)
-    for joint in spec.joints:
-        m = joint.book[problem.support]
-        k = BOOK_VARS.index(m.var)
-        a, b = sorted(((joint.lower - m.offset) * m.sign, (joint.upper - m.offset) * m.sign))
-        lo[k], hi[k] = max(lo[k], a), min(hi[k], b)
+    servo_lo, servo_hi = book_bounds(spec, problem.support)
+    lo = np.maximum(np.radians(book.PSO_LOWER_DEG), servo_lo)
+    hi = np.minimum(np.radians(book.PSO_UPPER_DEG), servo_hi)
     if np.any(lo >= hi):
         k = int(np.argmax(lo >= hi))
-        raise InputError(f"{BOOK_VARS[k]}: the book's range and the servo limits do not overlap")
+        raise InputError("the book's range and the servo limits do not overlap", BOOK_VARS[k])
     return lo, hi
 
 

@@ -10,7 +10,7 @@ forward call for all 2 x 20 perturbations).
 from __future__ import annotations
 
 import contextlib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.optimize import minimize
@@ -43,8 +43,7 @@ def feasible(terms: CostTerms, i: int = 0) -> bool:
 
 def refine(x0: np.ndarray, problem: PostureProblem, spec: Spec, bounds: tuple[np.ndarray, np.ndarray]) -> Refinement:
     """Refine a PSO result on the D-H model (see the module docstring)."""
-    dh_problem = PostureProblem(problem.support, problem.hand, problem.target, problem.br, "dh")
-    model = CostModel(dh_problem, spec)
+    model = CostModel(replace(problem, model="dh"), spec)
     lo, hi = bounds
     start = BookAngles.from_vector(np.clip(x0, lo, hi), problem.support)
     best = Refinement(start.vector()[0], "pso", model(start))

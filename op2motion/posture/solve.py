@@ -1,29 +1,38 @@
-"""One posture solve: PSO, refinement, verdict and the pose (the library function behind ``op2motion optimize``)."""
+"""One posture solve: PSO, refinement, verdict, with restarts on the next seeds (library function behind
+``op2motion optimize`` and ``library build``, through :mod:`op2motion.workflow`)."""
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from typing import Any, Callable
 
 import numpy as np
 
-from ..balance import COM_MODEL_LUMPED, stability_margin
-from ..export.library import Pose
+from ..balance import COM_MODEL_FULL, COM_MODEL_LUMPED, stability_margin
 from ..joints import BookAngles, book_to_servo
 from ..kinematics import forward
-from ..model.dynamics import COM_MODEL_FULL, dynamics_for
+from ..model.dynamics import dynamics_for
+from ..pose import Pose
 from ..spec import Spec
-from .cost import CostTerms, PostureProblem
+from .cost import CostModel, CostTerms, PostureProblem
 from .pso import PSOResult, PSOSettings, run_pso, variable_bounds
 from .refine import REFINE_TOL_M, feasible, refine
 
 PSO_TOL_M = 5e-3   # without refinement a hand within 5 mm counts as reaching
 
 
+def _vec(v: np.ndarray) -> list[float]:
+    return [float(x) for x in v]
+
+
 @dataclass(frozen=True)
 class PostureResult:
-    """Outcome of :func:`optimize_posture`. ``terms`` are evaluated on the D-H model (true geometry)."""
+    """Outcome of :func:`optimize_posture`; every length [m] in the support-foot frame, on the D-H model.
+
+    ``com_lumped``/``margin_lumped_m`` use the book's lumped masses, ``com_full``/``margin_full_m`` the spec's
+    per-link inertials; both margins are to the br-shrunk support rectangle.
+    """
 
     problem: PostureProblem
     settings: PSOSettings
@@ -34,21 +43,57 @@ class PostureResult:
     seconds: float
     reached: bool
     message: str
-    metrics: dict = field(default_factory=dict)
+    tolerance_m: float
+    com_lumped: np.ndarray
+    margin_lumped_m: float
+    com_full: np.ndarray
+    margin_full_m: float
+    left_hand: np.ndarray
+    right_hand: np.ndarray
+    attempts: int = 1
+
+    @property
+    def hand_error_m(self) -> float:
+        """Distance of the reaching hand from the target [m]."""
+        return float(self.terms.hand_error[0])
+
+    @property
+    def swing_foot_min_z(self) -> float:
+        """Height of the swing foot's lowest corner above the floor [m]."""
+        return float(self.terms.swing_min_z[0])
+
+    @property
+    def cost(self) -> float:
+        """Final cost (book eq. 2.87 and the tie-breakers)."""
+        return float(self.terms.total[0])
+
+    def as_dict(self) -> dict[str, Any]:
+        """The metrics, JSON-ready (also the ``metrics`` of the pose file)."""
+        return {
+            "target": list(self.problem.target), "hand_error_m": self.hand_error_m, "br": self.problem.br,
+            "com": _vec(self.com_lumped), "com_model": COM_MODEL_LUMPED, "stability_margin_m": self.margin_lumped_m,
+            "com_full": _vec(self.com_full), "com_full_model": COM_MODEL_FULL,
+            "stability_margin_full_m": self.margin_full_m,
+            "left_hand": _vec(self.left_hand), "right_hand": _vec(self.right_hand),
+            "swing_foot_min_z": self.swing_foot_min_z, "torso_tilt_deg": float(np.degrees(self.terms.tilt[0])),
+            "cost": self.cost, "pso_cost": self.pso.cost, "attempts": self.attempts,
+        }
 
     def pose(self, name: str, spec: Spec, provenance: dict[str, Any] | None = None) -> Pose:
-        """The solution as a pose (support = the problem's support foot)."""
+        """The solution as a pose (support = the problem's support foot), metrics and provenance filled in."""
         p = self.problem
-        prov = {"target_m": list(p.target), "hand": p.hand, "br": p.br, "model": p.model, "seed": self.settings.seed,
-                "particles": self.settings.particles, "iterations": self.settings.iterations, "refinement": self.method,
-                **(provenance or {})}
-        return Pose.from_book(name, self.angles, spec, metrics=self.metrics, provenance=prov)
+        prov = {"target_m": list(p.target), "hand": p.hand, "support": p.support, "br": p.br, "model": p.model,
+                "seed": self.settings.seed, "particles": self.settings.particles,
+                "iterations": self.settings.iterations, "refinement": self.method, **(provenance or {})}
+        return Pose.from_book(name, self.angles, spec, metrics=self.as_dict(), provenance=prov)
+
+
+Check = Callable[[PostureResult], tuple[bool, str]]
 
 
 def optimize_posture(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSettings(),
                      refine_result: bool = True, on_iteration: Callable[[float], Any] | None = None,
-                     restarts: int = 0, check: Callable[[PostureResult], tuple[bool, str]] | None = None
-                     ) -> PostureResult:
+                     restarts: int = 0, check: Check | None = None) -> PostureResult:
     """Find a balanced whole-body pose that puts ``problem.hand`` on ``problem.target``.
 
     A swarm can settle on the edge of the stability region where refinement stalls, or on a pose the model calls
@@ -72,50 +117,41 @@ def optimize_posture(problem: PostureProblem, spec: Spec, settings: PSOSettings 
         candidate = attempt(settings.seed + k)
         if _rank(candidate) > _rank(best):
             best = candidate
-    return replace(best, seconds=time.perf_counter() - t0, metrics={**best.metrics, "attempts": k + 1})
+    return replace(best, seconds=time.perf_counter() - t0, attempts=k + 1)
 
 
 def _rank(result: PostureResult) -> tuple[bool, bool, float]:
     """Order of preference among attempts: reached, then feasible, then the smaller hand residual."""
-    return result.reached, feasible(result.terms), -float(result.terms.hand_error[0])
+    return result.reached, feasible(result.terms), -result.hand_error_m
+
+
+def _verdict(terms: CostTerms, tol: float) -> tuple[bool, str]:
+    error_mm = terms.hand_error[0] * 1000
+    if terms.hand_error[0] <= tol and feasible(terms):
+        return True, f"reached: hand {error_mm:.2f} mm from the target"
+    if not feasible(terms):
+        why = ("the CoM leaves the support rectangle" if terms.margin[0] < 0 else
+               "the swing foot goes below the floor" if terms.swing_min_z[0] < 0 else "the pose collides with itself")
+        return False, f"infeasible: {why} (best hand residual {error_mm:.1f} mm)"
+    return False, f"unreachable: best hand residual {error_mm:.1f} mm (tolerance {tol * 1000:.0f} mm)"
 
 
 def _solve_once(problem: PostureProblem, spec: Spec, settings: PSOSettings, refine_result: bool,
                 on_iteration: Callable[[float], Any] | None) -> PostureResult:
     t0 = time.perf_counter()
     pso = run_pso(problem, spec, settings, on_iteration)
-    bounds = variable_bounds(problem, spec)
     if refine_result:
-        ref = refine(pso.x, problem, spec, bounds)
+        ref = refine(pso.x, problem, spec, variable_bounds(problem, spec))
         x, method, terms, tol = ref.x, ref.method, ref.terms, REFINE_TOL_M
     else:
-        from .cost import CostModel
-
         x, method, tol = pso.x, "none", PSO_TOL_M
-        terms = CostModel(PostureProblem(problem.support, problem.hand, problem.target, problem.br, "dh"), spec)(
-            BookAngles.from_vector(x, problem.support))
+        terms = CostModel(replace(problem, model="dh"), spec)(BookAngles.from_vector(x, problem.support))
     angles = BookAngles.from_vector(x, problem.support)
-    reached = bool(terms.hand_error[0] <= tol and feasible(terms))
-    if reached:
-        message = f"reached: hand {terms.hand_error[0] * 1000:.2f} mm from the target"
-    elif not feasible(terms):
-        why = ("the CoM leaves the support rectangle" if terms.margin[0] < 0 else
-               "the swing foot goes below the floor" if terms.swing_min_z[0] < 0 else "the pose collides with itself")
-        message = f"infeasible: {why} (best hand residual {terms.hand_error[0] * 1000:.1f} mm)"
-    else:
-        message = f"unreachable: best hand residual {terms.hand_error[0] * 1000:.1f} mm (tolerance {tol * 1000:.0f} mm)"
+    reached, message = _verdict(terms, tol)
     points = forward(angles, spec, "dh")
     full = dynamics_for(spec).com(book_to_servo(angles, spec)[0], problem.support)
-    metrics = {
-        "com_full": [float(v) for v in full], "com_full_model": COM_MODEL_FULL,
-        "stability_margin_full_m": float(stability_margin(full[None, :2], spec, problem.support, problem.br)[0]),
-        "com": [float(v) for v in points.com[:, 0]], "com_model": COM_MODEL_LUMPED,
-        "left_hand": [float(v) for v in points.point("left_hand")[0]],
-        "right_hand": [float(v) for v in points.point("right_hand")[0]],
-        "target": list(problem.target), "hand_error_m": float(terms.hand_error[0]),
-        "stability_margin_m": float(terms.margin[0]), "br": problem.br,
-        "swing_foot_min_z": float(terms.swing_min_z[0]), "torso_tilt_deg": float(np.degrees(terms.tilt[0])),
-        "cost": float(terms.total[0]), "pso_cost": pso.cost,
-    }
-    return PostureResult(problem, settings, angles, terms, pso, method, time.perf_counter() - t0, reached, message,
-                         metrics)
+    return PostureResult(
+        problem, settings, angles, terms, pso, method, time.perf_counter() - t0, reached, message, tol,
+        com_lumped=points.com[:, 0].copy(), margin_lumped_m=float(terms.margin[0]), com_full=full,
+        margin_full_m=float(stability_margin(full[None, :2], spec, problem.support, problem.br)[0]),
+        left_hand=points.point("left_hand")[0].copy(), right_hand=points.point("right_hand")[0].copy())

@@ -1,0 +1,155 @@
+"""Helpers shared by the command modules: the parser class, output, and the arguments several commands take.
+
+Every command module has ``register(subparsers)``, which adds its subparser(s) with :func:`add_command`; the
+handler it names is called with the parsed arguments and the spec, and returns the exit code.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from typing import Any, Callable, Sequence
+
+from ..errors import InputError
+from ..spec import Spec
+
+Handler = Callable[[argparse.Namespace, Spec], int]
+#: Library parameter names whose flag is spelled differently.
+FLAG_ALIASES = {"iterations": "iters", "output": "output"}
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse that reports usage errors as one-line :class:`InputError` instead of exiting."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise InputError(f"{self.prog}: {message}")
+
+    def flag_of(self, param: str) -> str:
+        """The flag of this (sub)command that sets library parameter ``param`` (the parameter name if none)."""
+        dest = FLAG_ALIASES.get(param, param)
+        for action in self._actions:
+            if action.dest == dest and action.option_strings:
+                return max(action.option_strings, key=len)
+            if action.dest == dest and not action.option_strings:
+                return (action.metavar if isinstance(action.metavar, str) else dest).upper()
+        return param
+
+
+def add_command(sub: Any, name: str, handler: Handler, help_: str, description: str | None = None) -> Parser:
+    """A subcommand with ``--json`` whose parsed arguments call ``handler``."""
+    p = sub.add_parser(name, help=help_, description=description or help_)
+    p.add_argument("--json", action="store_true", help="print the result as JSON on stdout (nothing else there)")
+    p.set_defaults(func=handler, parser=p)
+    return p
+
+
+def emit(args: argparse.Namespace, result: dict[str, Any], text: str) -> None:
+    """Print ``result`` as JSON with ``--json``, else ``text`` for people."""
+    if args.json:
+        json.dump(result, sys.stdout, indent=2, allow_nan=False)
+        sys.stdout.write("\n")
+    elif text:
+        print(text)
+
+
+def progress_enabled(args: argparse.Namespace) -> bool:
+    """Progress bars go to stderr when it is a terminal and the output is not JSON."""
+    return sys.stderr.isatty() and not getattr(args, "json", False)
+
+
+def book_args(p: argparse.ArgumentParser, pose_flag: bool = True) -> None:
+    """``--support``, ``--th``, ``--phi``, ``--psi`` (and ``--pose FILE``)."""
+    p.add_argument("--support", choices=("left", "right"), default="left", help="support foot (default left)")
+    p.add_argument("--th", type=BOOK_ANGLE_DEG, nargs="+", metavar="DEG", help="11 sagittal angles th1..th11 [deg]")
+    p.add_argument("--phi", type=BOOK_ANGLE_DEG, nargs="+", metavar="DEG", help="6 coronal angles phi1..phi6 [deg]")
+    p.add_argument("--psi", type=BOOK_ANGLE_DEG, nargs="+", metavar="DEG",
+                   help="3 transverse angles psi1..psi3 [deg] (default 0)")
+    if pose_flag:
+        p.add_argument("--pose", metavar="FILE", help="a pose file instead of --th/--phi")
+
+
+def angles_from(args: argparse.Namespace, spec: Spec, pose_path: str | None = None, default_standing: bool = False):
+    """Book angles and a name from a pose file, or ``--th``/``--phi``[/``--psi``] ``--support``, or (when
+    ``default_standing``) the book's standing pose. Returns ``(BookAngles, name, Pose | None)``."""
+    from ..export.posefile import read_pose
+    from ..joints import BookAngles
+
+    pose_path = pose_path if pose_path is not None else getattr(args, "pose", None)
+    if pose_path:
+        if args.th is not None or args.phi is not None:
+            raise InputError("give either a pose file or --th/--phi, not both")
+        pose = read_pose(pose_path, spec)
+        return pose.book(spec), pose.name, pose
+    if args.th is None and args.phi is None:
+        if default_standing:
+            return BookAngles.standing(args.support), "standing", None
+        raise InputError("expected --th (11 angles) and --phi (6 angles) in degrees, or --pose FILE")
+    if args.th is None or args.phi is None:
+        raise InputError("expected both --th (11 angles) and --phi (6 angles)")
+    return BookAngles.from_deg(args.th, args.phi, args.psi, args.support), "pose", None
+
+
+def vec3(values: Sequence[float] | None, name: str) -> tuple[float, float, float] | None:
+    """Three finite numbers, or ``None`` when not given."""
+    if values is None:
+        return None
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
+        raise InputError(f"expected 3 finite numbers, got {list(values)}", name)
+    return (float(values[0]), float(values[1]), float(values[2]))
+
+
+def _parse_float(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+
+
+def number(lo: float, hi: float, unit: str = "", open_low: bool = False) -> Callable[[str], float]:
+    """An argparse type: a finite number in [lo, hi] (or (lo, hi] with ``open_low``); the range is in the message."""
+    span = f"{'(' if open_low else '['}{lo:g}, {hi:g}]{' ' + unit if unit else ''}"
+
+    def parse(text: str) -> float:
+        value = _parse_float(text)
+        if not (math.isfinite(value) and (lo < value if open_low else lo <= value) and value <= hi):
+            raise argparse.ArgumentTypeError(f"expected a finite number in {span}, got {text}")
+        return value
+
+    parse.__name__ = "number"
+    return parse
+
+
+def whole(lo: int, hi: int) -> Callable[[str], int]:
+    """An argparse type: a whole number in [lo, hi]; the range is in the message."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number from {lo} to {hi}, got {text!r}") from None
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"expected a whole number from {lo} to {hi}, got {value}")
+        return value
+
+    parse.__name__ = "whole number"
+    return parse
+
+
+def pose_name(text: str) -> str:
+    """An argparse type: a pose name (see :func:`op2motion.pose.check_pose_name`)."""
+    from ..pose import NAME_RULE, check_pose_name
+
+    try:
+        return check_pose_name(text)
+    except InputError:
+        raise argparse.ArgumentTypeError(f"expected a pose name ({NAME_RULE}), got {text!r}") from None
+
+
+#: Ranges of the numbers users type, shared by every command (angles [deg], lengths [m]).
+BOOK_ANGLE_DEG = number(-360.0, 360.0, "deg")
+HEADING_DEG = number(-360.0, 360.0, "deg")
+POSITION_M = number(-10.0, 10.0, "m")
+TARGET_M = number(-1.0, 1.0, "m")
+DELTA_M = number(-0.5, 0.5, "m")
+BOUNDARY_RATIO = number(0.0, 1.0, open_low=True)

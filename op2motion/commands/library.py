@@ -1,0 +1,65 @@
+"""CLI command of the pose library: library build."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from .. import book
+from ..library.build import MAX_WORKERS
+from ..library.grid import MAX_AXIS
+from ..spec import Spec
+from .common import BOUNDARY_RATIO, Parser, add_command, emit, number, progress_enabled, whole
+from .posture import solver_args
+
+AXIS_VALUE = number(-1e6, 1e6)   # START, STOP and COUNT of a grid axis; the library checks the real ranges
+
+
+def register(sub: Any) -> None:
+    """Add ``library`` and its subcommand ``build``."""
+    lib = sub.add_parser("library", help="the pose library: build a grid of reach poses",
+                         description="the pose library: build a grid of reach poses")
+    lib_sub = lib.add_subparsers(dest="subcommand", metavar="SUBCOMMAND", required=True, parser_class=Parser,
+                                 title="subcommands")
+    p = add_command(lib_sub, "build", cmd_library_build,
+                    "optimise a grid of reach targets in worker processes (resumable)",
+                    "Solve every combination of hands x supports x boundary ratios x target points with the "
+                    "posture optimiser, in worker processes. Reached poses go to --out as pose files, every "
+                    "target (reached or not, with its reason) to index.json and index.csv. Run it again to "
+                    "resume: targets already in the index are skipped. Ctrl-C stops it within seconds with a "
+                    "complete index.")
+    p.add_argument("--hands", nargs="+", choices=("left", "right"), default=["left", "right"],
+                   help="reaching hands (default both)")
+    p.add_argument("--supports", nargs="+", choices=("left", "right"), default=["left", "right"],
+                   help="support feet (default both)")
+    p.add_argument("--br", type=BOUNDARY_RATIO, nargs="+", default=[book.DEFAULT_PROBLEM.br],
+                   help=f"boundary ratios (default {book.DEFAULT_PROBLEM.br})")
+    for axis, default in (("x", (0.06, 0.14, 3)), ("y", (-0.06, 0.06, 3)), ("z", (0.05, 0.15, 3))):
+        p.add_argument(f"--{axis}", type=AXIS_VALUE, nargs=3, default=default, metavar=("START", "STOP", "N"),
+                       help=f"N target {axis} values from START to STOP [m], N <= {MAX_AXIS} "
+                            f"(default {' '.join(f'{v:g}' for v in default)})")
+    p.add_argument("--out", default="poses/library", help="library folder (default poses/library)")
+    p.add_argument("--workers", type=whole(0, MAX_WORKERS), default=0,
+                   help=f"worker processes, 0 = one per core (default 0, at most {MAX_WORKERS})")
+    solver_args(p)
+
+
+def cmd_library_build(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion library build``."""
+    from tqdm import tqdm
+
+    from ..library.build import BuildSettings, build_library, check_workers
+    from ..library.grid import axis, grid_jobs
+    from ..posture.pso import PSOSettings
+
+    check_workers(args.workers)
+    jobs = grid_jobs(args.hands, args.supports, args.br, axis(*args.x, "x"), axis(*args.y, "y"), axis(*args.z, "z"))
+    settings = BuildSettings(PSOSettings(args.particles, args.iters, seed=args.seed).validated(), args.restarts,
+                             args.validate, args.seconds)
+    with tqdm(total=len(jobs), desc="library", unit="pose", disable=not progress_enabled(args)) as bar:
+        summary = build_library(jobs, spec, args.out, settings, args.workers, args.spec,
+                                on_done=lambda row: bar.update())
+    text = (f"{summary.targets} targets: {summary.solved} reached, {summary.failed} not, {summary.skipped} already "
+            f"done; {summary.seconds:.1f} s; index {summary.index}")
+    emit(args, summary.as_dict(), text)
+    return 0

@@ -1,0 +1,1 @@
+"""The pose library: a grid of reach targets solved in worker processes, with a resumable index."""

@@ -1,0 +1,180 @@
+"""``op2motion library build``: solve a grid of reach targets in worker processes, resumably.
+
+Each target runs the posture workflow (:func:`op2motion.workflow.solve`: the same retries and validation as
+``optimize``) in a worker process; the parent is the only writer: it writes each reached pose file (atomically),
+then the index (:mod:`.index`). A build run again skips the targets its index holds.
+
+Process hygiene: workers ignore SIGINT (the parent handles Ctrl-C: it cancels the pending targets, ends the
+workers, writes a complete index and raises :class:`KeyboardInterrupt`), and end when their parent dies however
+it dies (Linux ``PR_SET_PDEATHSIG``, and a watchdog thread that polls the parent's pid elsewhere).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import multiprocessing
+import os
+import signal
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Iterator, Sequence
+
+from ..errors import InputError, Op2MotionError
+from ..export.posefile import pose_to_json
+from ..fileio import write_atomic
+from ..physics import DEFAULT_SECONDS
+from ..posture.pso import PSOSettings
+from ..spec import Spec, load_spec
+from ..workflow import DEFAULT_RESTARTS, solve
+from .grid import Job
+from .index import IndexRow, load_index, write_index
+
+MAX_WORKERS = 64
+WATCHDOG_PERIOD_S = 0.5
+_PR_SET_PDEATHSIG = 1   # linux/prctl.h
+
+
+@dataclass(frozen=True)
+class BuildSettings:
+    """How each target is solved: PSO settings, restarts, physics validation and its simulated time [s]."""
+
+    pso: PSOSettings = PSOSettings()
+    restarts: int = DEFAULT_RESTARTS
+    validate: bool = False
+    seconds: float = DEFAULT_SECONDS
+
+
+@dataclass(frozen=True)
+class BuildSummary:
+    """What a build did: targets in the grid, reached (and written), not reached, skipped (already done)."""
+
+    targets: int
+    solved: int
+    failed: int
+    skipped: int
+    seconds: float
+    index: str
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready dict."""
+        return dict(self.__dict__)
+
+
+def check_workers(workers: int) -> int:
+    """Worker count: 0 means one per core; at most :data:`MAX_WORKERS`."""
+    if isinstance(workers, bool) or not isinstance(workers, int) or not 0 <= workers <= MAX_WORKERS:
+        raise InputError(f"expected 0 (one per core) to {MAX_WORKERS}, got {workers!r}", "workers")
+    return workers or max(1, os.cpu_count() or 1)
+
+
+def _watch_parent(parent: int) -> None:
+    while True:
+        if os.getppid() != parent:
+            os._exit(1)
+        time.sleep(WATCHDOG_PERIOD_S)
+
+
+def _worker_init(parent: int) -> None:
+    """In each worker: ignore Ctrl-C (the parent decides) and die with the parent."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    with contextlib.suppress(OSError, AttributeError):
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+    if os.getppid() != parent:   # the parent died before the death signal was armed
+        os._exit(1)
+    threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
+
+
+def _row(job: Job, reached: bool, message: str, **extra: Any) -> IndexRow:
+    x, y, z = job.target
+    return IndexRow(job.name, job.hand, job.support, job.br, x, y, z, reached, message=message, **extra)
+
+
+def _solve_job(task: tuple[Job, str | None, str, BuildSettings]) -> tuple[IndexRow, str | None]:
+    """Worker: solve one target; returns its index row and, when reached, the pose file text."""
+    job, spec_path, sha, settings = task
+    t0 = time.perf_counter()
+    try:
+        spec = load_spec(spec_path)
+        if spec.sha256 != sha:
+            return _row(job, False, "error: the spec file changed during the build"), None
+        out = solve(job.problem, spec, settings.pso, restarts=settings.restarts, validate=settings.validate,
+                    seconds=settings.seconds)
+    except Op2MotionError as exc:
+        return _row(job, False, f"error: {exc}"), None
+    r, v = out.result, out.validation
+    seconds = round(time.perf_counter() - t0, 3)
+    row = _row(job, out.ok, out.message, validated=v is not None, stable=None if v is None else v.stable,
+               hand_error_m=round(r.hand_error_m, 6), stability_margin_m=round(r.margin_lumped_m, 6),
+               stability_margin_full_m=round(r.margin_full_m, 6), seed=r.settings.seed, attempts=r.attempts,
+               seconds=seconds, file=f"{job.name}.json" if out.ok else "")
+    if not out.ok:
+        return row, None
+    pose = out.pose(job.name, spec, {"command": "op2motion library build", "seconds": seconds})
+    return row, pose_to_json(pose, spec)
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM ends a build like Ctrl-C does (complete index, no orphans); only in the main thread."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum: int, frame: Any) -> None:
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def build_library(jobs: Sequence[Job], spec: Spec, out_dir: str | Path, settings: BuildSettings = BuildSettings(),
+                  workers: int = 0, spec_path: str | None = None,
+                  on_done: Callable[[IndexRow], Any] | None = None) -> BuildSummary:
+    """Solve every job not already in ``out_dir``'s index (see the module docstring); returns the summary.
+
+    Raises :class:`KeyboardInterrupt` after a complete index is written when interrupted (Ctrl-C, SIGTERM).
+    """
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"expected a folder, got a file: {out}", "out")
+    workers = check_workers(workers)
+    settings.pso.validated()
+    out.mkdir(parents=True, exist_ok=True)
+    rows = load_index(out, spec)
+    todo = [j for j in jobs if j.name not in rows]
+    t0 = time.perf_counter()
+    try:
+        with _sigterm_as_interrupt():
+            if todo:
+                _run(todo, spec, spec_path, settings, min(workers, len(todo)), out, rows, on_done)
+    finally:
+        write_index(out, rows)
+    wanted = [rows[j.name] for j in jobs if j.name in rows]
+    solved = sum(1 for r in wanted if r.reached)
+    return BuildSummary(len(jobs), solved, len(wanted) - solved, len(jobs) - len(todo),
+                        round(time.perf_counter() - t0, 2), str(out / "index.json"))
+
+
+def _run(todo: Sequence[Job], spec: Spec, spec_path: str | None, settings: BuildSettings, workers: int, out: Path,
+         rows: dict[str, IndexRow], on_done: Callable[[IndexRow], Any] | None) -> None:
+    ctx = multiprocessing.get_context("spawn")  # fresh interpreters: no inherited threads or pyswarms state
+    pool = ctx.Pool(workers, initializer=_worker_init, initargs=(os.getpid(),))
+    try:
+        tasks = [(job, spec_path, spec.sha256, settings) for job in todo]
+        for row, pose_text in pool.imap_unordered(_solve_job, tasks):
+            if pose_text is not None:
+                write_atomic(out / row.file, pose_text)
+            rows[row.name] = row
+            write_index(out, rows)
+            if on_done is not None:
+                on_done(row)
+        pool.close()
+    finally:
+        pool.terminate()   # on Ctrl-C: pending targets cancelled, workers ended at once
+        pool.join()

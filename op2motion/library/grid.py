@@ -1,0 +1,71 @@
+"""The grid of a library build: hands x supports x boundary ratios x target points, checked before any work.
+
+Sizes are capped before anything is allocated (:data:`MAX_AXIS`, :data:`MAX_TARGETS`), and two targets that
+would get the same pose name (closer than 1 mm, or boundary ratios within 1 %) make the grid bad input rather than
+overwrite each other.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from ..posture.cost import PostureProblem
+
+MAX_AXIS = 1000          # values per grid axis
+MAX_TARGETS = 10_000     # targets per build (about 1 s each on one core)
+
+
+@dataclass(frozen=True)
+class Job:
+    """One grid point."""
+
+    hand: str
+    support: str
+    br: float
+    target: tuple[float, float, float]
+
+    @property
+    def problem(self) -> PostureProblem:
+        """The posture problem of this grid point."""
+        return PostureProblem(self.support, self.hand, self.target, self.br)
+
+    @property
+    def name(self) -> str:
+        """Pose name of this grid point, e.g. ``reach-ll-100-50-70-br70``."""
+        return self.problem.name
+
+
+def axis(start: float, stop: float, count: float, name: str) -> list[float]:
+    """``count`` evenly spaced values from ``start`` to ``stop`` [m] (1 <= count <= :data:`MAX_AXIS`)."""
+    if not (math.isfinite(start) and math.isfinite(stop)):
+        raise InputError(f"expected finite START and STOP, got {start} {stop}", name)
+    if not (math.isfinite(count) and float(count).is_integer() and 1 <= count <= MAX_AXIS):
+        raise InputError(f"expected a whole COUNT from 1 to {MAX_AXIS}, got {count}", name)
+    return [float(v) for v in np.linspace(start, stop, int(count))]
+
+
+def grid_jobs(hands: Sequence[str], supports: Sequence[str], brs: Sequence[float], xs: Sequence[float],
+              ys: Sequence[float], zs: Sequence[float]) -> list[Job]:
+    """All combinations, each checked; raises :class:`InputError` for too many targets or colliding names."""
+    total = len(hands) * len(supports) * len(brs) * len(xs) * len(ys) * len(zs)
+    if total > MAX_TARGETS:
+        raise InputError(f"the grid has {total} targets, more than the cap of {MAX_TARGETS}", "grid")
+    if total == 0:
+        raise InputError("the grid is empty", "grid")
+    jobs = [Job(h, s, float(b), (float(x), float(y), float(z)))
+            for h, s, b, x, y, z in itertools.product(dict.fromkeys(hands), dict.fromkeys(supports), brs, xs, ys, zs)]
+    names: dict[str, Job] = {}
+    for job in jobs:
+        job.problem.validated()
+        other = names.setdefault(job.name, job)
+        if other is not job:
+            raise InputError(f"targets {list(other.target)} (br {other.br}) and {list(job.target)} (br {job.br}) "
+                             f"get the same pose name {job.name!r}: space targets at least 1 mm and boundary "
+                             "ratios at least 0.01 apart", "grid")
+    return jobs

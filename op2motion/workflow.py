@@ -1,0 +1,88 @@
+"""The posture workflow: solve -> (validate in physics) -> write, shared by ``optimize`` and ``library build``.
+
+One function decides what a solve is: PSO + refinement on the D-H model, retried on the next seeds (``restarts``)
+when a seed does not reach the target or, with ``validate``, when the reached pose does not stand in physics; so
+both commands retry the same way, simulate for the same time, and never write a pose that falls when validation
+was asked for. :class:`Outcome` is the typed result; :func:`render_figures` draws the pose and the cost curve.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from .physics import DEFAULT_SECONDS, Validation, validate_servo
+from .pose import Pose
+from .posture.cost import PostureProblem
+from .posture.pso import PSOSettings
+from .posture.solve import PostureResult, optimize_posture
+from .spec import Spec
+
+DEFAULT_RESTARTS = 2     # extra solves with the next seeds when one fails
+MAX_RESTARTS = 100
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """A solve and, when asked for, the physics validation of its pose. ``ok`` is true when the target was reached
+    (and, with validation, the pose stands); ``message`` says why not otherwise."""
+
+    result: PostureResult
+    validation: Validation | None
+
+    @property
+    def ok(self) -> bool:
+        """Reached, feasible and (when validated) standing."""
+        return self.result.reached
+
+    @property
+    def message(self) -> str:
+        """The verdict in words."""
+        return self.result.message
+
+    def pose(self, name: str, spec: Spec, provenance: dict[str, Any] | None = None) -> Pose:
+        """The solved pose, with the validation verdict in its metrics when there is one."""
+        pose = self.result.pose(name, spec, provenance)
+        if self.validation is None:
+            return pose
+        metrics = {**pose.metrics, "validated": True, "stable": self.validation.stable,
+                   "validation_reason": self.validation.reason}
+        return Pose(pose.name, pose.support, pose.servo, metrics, pose.provenance)
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready: the metrics, the verdict and the validation."""
+        r = self.result
+        out = {"reached": r.reached, "message": r.message, **r.as_dict(), "iterations": int(len(r.pso.history)),
+               "refinement": r.method, "seconds": round(r.seconds, 3), "seed": r.settings.seed}
+        if self.validation is not None:
+            out["validation"] = self.validation.as_dict()
+        return out
+
+
+def solve(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSettings(), *,
+          restarts: int = DEFAULT_RESTARTS, refine: bool = True, validate: bool = False,
+          seconds: float = DEFAULT_SECONDS, on_iteration: Callable[[float], Any] | None = None) -> Outcome:
+    """Solve ``problem`` (see the module docstring); ``seconds`` [s] is the simulated time of each validation."""
+    validations: dict[int, Validation] = {}
+
+    def physics_check(res: PostureResult) -> tuple[bool, str]:
+        v = validate_servo(res.pose("candidate", spec).servo, problem.support, spec, seconds)
+        validations[res.settings.seed] = v
+        return v.stable, f"does not stand in physics ({v.reason})"
+
+    res = optimize_posture(problem, spec, settings, refine, on_iteration, restarts,
+                           physics_check if validate else None)
+    return Outcome(res, validations.get(res.settings.seed))
+
+
+def render_figures(outcome: Outcome, name: str, spec: Spec) -> tuple[bytes, bytes]:
+    """PNG bytes of the pose figure (front, side, top, 3D with target, CoM and support rectangle) and of the PSO
+    cost curve of one outcome."""
+    from .kinematics import forward
+    from .plot import PoseFigure, render_cost_curve, render_poses
+
+    r = outcome.result
+    points = forward(r.angles, spec, "dh")
+    figure = PoseFigure(points, r.com_lumped, name, r.problem.br, r.problem.target)
+    return (render_poses([figure], spec, title=f"{name}: {r.message}"),
+            render_cost_curve(r.pso.history, f"PSO cost, {name}"))

@@ -1,0 +1,36 @@
+"""Helpers shared by the tests: paths of the committed data and one way to run the CLI in-process."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from op2motion.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+POSES = ROOT / "poses"
+DATA = Path(__file__).parent / "data"
+STOCK = DATA / "motion_4096.bin"
+SEED = 20261121
+
+
+def pose_path(name: str) -> str:
+    """Path of a committed pose file."""
+    return str(POSES / f"{name}.json")
+
+
+def run_cli(capsys, *argv: str) -> tuple[int, str, str]:
+    """Run ``op2motion ARGV`` in-process; returns (exit code, stdout, stderr)."""
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def page_last_step_ticks(data: bytes, page: int) -> np.ndarray:
+    """Goal ticks of joints 1..20 in the last used step of a page (layout: ROBOTIS framework Action.h)."""
+    base = page * 512
+    steps = data[base + 20]  # stepnum
+    step = base + 64 + 64 * (steps - 1)
+    words = np.frombuffer(data[step:step + 62], dtype="<u2")
+    return words[1:21].astype(int)

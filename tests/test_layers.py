@@ -1,0 +1,102 @@
+"""The package's structure: imports run one way, from higher layers to lower ones, with no circle.
+
+The graph is drawn from every ``import`` in the source (module level and inside functions), so lazy imports count.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parents[1] / "op2motion"
+#: Layers, lowest first. A module may import modules of lower layers and of its own package; never higher ones.
+LAYERS = [
+    {"errors", "version"},
+    {"book", "trig", "tablereader", "fileio"},
+    {"spec"},
+    {"joints"},
+    {"pose", "kinematics", "model"},
+    {"balance", "servo", "arm_ik"},
+    {"summary", "posture", "physics", "export", "plot", "motion"},
+    {"workflow", "gait"},
+    {"bench", "library"},
+    {"commands"},
+    {"cli"},
+    {"__main__", "__init__"},
+]
+
+
+def _module_name(path: Path) -> str:
+    rel = path.relative_to(PACKAGE).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__" and len(parts) > 1:
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def _imports(path: Path) -> set[str]:
+    """op2motion modules imported by one file (relative imports resolved), as dotted names below the package."""
+    name = _module_name(path)
+    package = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package[:len(package) - (node.level - 1)] if node.level > 1 else package
+                target = base + (node.module.split(".") if node.module else [])
+                for alias in node.names:   # `from . import x` may name a module
+                    candidate = ".".join(target + [alias.name])
+                    found.add(candidate if _exists(candidate) else ".".join(target))
+            elif node.module and node.module.startswith("op2motion"):
+                found.add(node.module.removeprefix("op2motion").lstrip("."))
+        elif isinstance(node, ast.Import):
+            found |= {a.name.removeprefix("op2motion").lstrip(".") for a in node.names if a.name.startswith("op2motion")}
+    return {f for f in found if f and f != name}
+
+
+def _exists(dotted: str) -> bool:
+    base = PACKAGE.joinpath(*dotted.split("."))
+    return base.with_suffix(".py").is_file() or (base / "__init__.py").is_file()
+
+
+def _layer(module: str) -> int:
+    top = module.split(".")[0]
+    for i, names in enumerate(LAYERS):
+        if top in names:
+            return i
+    raise AssertionError(f"module {module} is in no layer: add it to LAYERS")
+
+
+GRAPH = {_module_name(p): _imports(p) for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+@pytest.mark.parametrize("module", sorted(GRAPH))
+def test_imports_run_downwards(module):
+    for target in GRAPH[module]:
+        same_package = target.split(".")[0] == module.split(".")[0]
+        assert same_package or _layer(target) < _layer(module), f"{module} imports {target} (a higher layer)"
+
+
+def test_no_circles():
+    state: dict[str, int] = {}
+
+    def visit(node: str, path: list[str]) -> None:
+        state[node] = 1
+        for nxt in GRAPH.get(node, ()):
+            if state.get(nxt) == 1:
+                raise AssertionError("import circle: " + " -> ".join(path + [nxt]))
+            if nxt not in state:
+                visit(nxt, path + [nxt])
+        state[node] = 2
+
+    for module in GRAPH:
+        if module not in state:
+            visit(module, [module])
+
+
+def test_the_optimiser_depends_on_no_file_format_nor_physics():
+    for module, targets in GRAPH.items():
+        if module.startswith("posture"):
+            assert not {t for t in targets if t.startswith(("export", "physics", "workflow", "library"))}, module
