@@ -38,7 +38,8 @@ def test_convert_round_trip(capsys):
     code, out, _ = run_cli(capsys, "convert", "--th", *STAND_TH, "--phi", *STAND_PHI, "--support", "right", "--json")
     doc = json.loads(out)
     assert code == 0 and doc["ticks"]["4"] == 2560 and doc["servo_deg"]["l_el"] == pytest.approx(90.0)
-    code, out, _ = run_cli(capsys, "convert", "--servo-deg", json.dumps(doc["servo_deg"]), "--support", "right", "--json")
+    code, out, _ = run_cli(capsys, "convert", "--servo-deg", json.dumps(doc["servo_deg"]), "--support", "right",
+                           "--json")
     back = json.loads(out)
     assert code == 0 and back["th"] == pytest.approx([float(v) for v in STAND_TH], abs=1e-9)
     assert back["phi"] == pytest.approx([float(v) for v in STAND_PHI], abs=1e-9)

@@ -52,7 +52,8 @@ def _imports(path: Path) -> set[str]:
             elif node.module and node.module.startswith("op2motion"):
                 found.add(node.module.removeprefix("op2motion").lstrip("."))
         elif isinstance(node, ast.Import):
-            found |= {a.name.removeprefix("op2motion").lstrip(".") for a in node.names if a.name.startswith("op2motion")}
+            found |= {a.name.removeprefix("op2motion").lstrip(".") for a in node.names
+                      if a.name.startswith("op2motion")}
     return {f for f in found if f and f != name}
 
 

@@ -44,7 +44,7 @@ def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
     outputs = OutputSet({"output": args.output})
     poses = [read_pose(p, spec) for p in args.poses]
     if args.format == "action":
-        base = read_action(args.base, spec) if args.base else None
+        base = read_action(args.base) if args.base else None
         outputs.put("output", encode_poses(poses, spec, args.page, args.time, base))
         text = (f"{len(poses)} pose(s) in pages {args.page}..{args.page + len(poses) - 1}" if poses
                 else "the base, unchanged")
@@ -68,7 +68,7 @@ def cmd_import_action(args: argparse.Namespace, spec: Spec) -> int:
     if args.out and args.page is None:
         raise InputError("expected --page N with --out")
     outputs = OutputSet({"out": args.out} if args.out else {})
-    data = read_action(args.file, spec)
+    data = read_action(args.file)
     if args.page is not None:
         pose = page_to_pose(requested_page(data, args.page, spec, args.file), spec, args.name).checked(spec, "page")
         text = pose_to_json(pose, spec)

@@ -64,7 +64,8 @@ def cmd_validate(args: argparse.Namespace, spec: Spec) -> int:
     result = {**v.as_dict(), "pose": pose.name, "support": pose.support,
               "static_torque_nm": {n: float(x) for n, x in zip(spec.joint_names, static.torques)},
               "static_worst_joint": static.worst_joint, "static_worst_ratio": round(static.worst_ratio, 4),
-              "com_full": [float(x) for x in dyn.com(pose.servo, pose.stance)], "com_lumped": [float(x) for x in lumped]}
+              "com_full": [float(x) for x in dyn.com(pose.servo, pose.stance)],
+              "com_lumped": [float(x) for x in lumped]}
     if args.gui_png and v.snapshot_png is not None:
         outputs.put("gui_png", v.snapshot_png)
         result["png"] = str(outputs.commit()["gui_png"])

@@ -26,7 +26,8 @@ def solver_args(p: argparse.ArgumentParser) -> None:
                    help=f"swarm size (default {d.particles})")
     p.add_argument("--iters", type=whole(1, MAX_ITERATIONS), default=d.iterations,
                    help=f"PSO iterations (default {d.iterations})")
-    p.add_argument("--seed", type=whole(0, MAX_SEED), default=d.seed, help="random seed of the first attempt (default 0)")
+    p.add_argument("--seed", type=whole(0, MAX_SEED), default=d.seed,
+                   help="random seed of the first attempt (default 0)")
     p.add_argument("--restarts", type=whole(0, MAX_RESTARTS), default=DEFAULT_RESTARTS,
                    help=f"extra solves with the next seeds when one fails (default {DEFAULT_RESTARTS})")
     p.add_argument("--validate", action="store_true",
@@ -40,7 +41,8 @@ def register(sub: Any) -> None:
     d = book.DEFAULT_PROBLEM
     p = add_command(sub, "optimize", cmd_optimize,
                     "PSO posture: reach a target with one hand while the CoM stays over the support foot")
-    p.add_argument("--support", choices=("left", "right"), default=d.support, help=f"support foot (default {d.support})")
+    p.add_argument("--support", choices=("left", "right"), default=d.support,
+                   help=f"support foot (default {d.support})")
     p.add_argument("--hand", choices=("left", "right"), default=d.hand, help=f"reaching hand (default {d.hand})")
     p.add_argument("--target", type=TARGET_M, nargs=3, default=d.target, metavar=("X", "Y", "Z"),
                    help="target in the support-foot frame [m] (default %s)" % " ".join(f"{v:g}" for v in d.target))

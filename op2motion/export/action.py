@@ -4,7 +4,8 @@ Layout (ROBOTIS DARwIn-OP framework v1.6.0, ``Framework/include/Action.h`` and
 ``Framework/src/motion/modules/Action.cpp``; Action Editor ``Linux/project/action_editor/cmd_process.cpp``): 256
 pages of 512 bytes; a page is a 64-byte header and 7 steps of 64 bytes. A step holds 31 little-endian uint16 goal
 positions indexed by Dynamixel ID (0 and 21-30 unused; bit 0x4000 marks a joint not specified in the step), then
-``pause`` and ``time`` (8 ms units at the default page speed 32). A page is valid when its 512 bytes sum to 0xFF modulo 256.
+``pause`` and ``time`` (8 ms units at the default page speed 32). A page is valid when its 512 bytes sum to 0xFF
+modulo 256.
 
 Writing fills the named pages and keeps every other page byte-for-byte, valid or not. The default base is a file
 of reset pages exactly as the Action Editor makes them (the stock file's empty pages).
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Sequence
 
 import numpy as np
@@ -121,7 +123,7 @@ def decode_page(data: bytes, index: int, spec: Spec) -> Page:
                 tuple(steps))
 
 
-def read_action(path: str | Path, spec: Spec) -> bytes:
+def read_action(path: str | Path) -> bytes:
     """Read and size-check an action file."""
     data = read_bytes(path, "action file")
     check_file(data, str(path))
