@@ -20,7 +20,7 @@ from .version import __version__
 #: Public name -> (module, attribute).
 _API = {
     "Op2MotionError": ("errors", "Op2MotionError"),
-    "load_spec": ("spec", "load_spec"),
+    "load_spec": ("specfile", "load_spec"),
     "BookAngles": ("joints", "BookAngles"),
     "book_to_servo": ("joints", "book_to_servo"),
     "servo_to_book": ("joints", "servo_to_book"),

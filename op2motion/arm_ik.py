@@ -173,7 +173,7 @@ def solve_arm_ik(angles: BookAngles, hand: str, delta: object, spec: Spec, model
     q0 = np.array([one.th[0, arm.th_upper], one.th[0, arm.th_lower], one.phi[0, arm.phi]])
     start = _hands(one, arm, q0, spec, model)[0]
     target = start + d
-    lo, hi = book_bounds(spec, one.support, arm.names)
+    lo, hi = book_bounds(spec, one.support, arm.names, "cable-safe")
     iterations = 0
     if single_step:
         q = q0 + book_step(one, hand, d, spec)
@@ -185,7 +185,7 @@ def solve_arm_ik(angles: BookAngles, hand: str, delta: object, spec: Spec, model
     achieved = _hands(one, arm, q, spec, model)[0] - start
     servo = book_to_servo(final, spec)[0]
     arm_joints = {j.name for j in spec.joints if j.book[one.support].var in arm.names}
-    violations = [v for v in limit_violations(servo, spec) if v.joint in arm_joints]
+    violations = [v for v in limit_violations(servo, spec, "cable-safe") if v.joint in arm_joints]
     return ArmIKResult(hand, model, "single-step" if single_step else "iterated", one, final, q - q0, d, achieved,
                        iterations, violations)
 

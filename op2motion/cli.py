@@ -14,7 +14,7 @@ from typing import Sequence
 
 from .version import __version__
 from .errors import Op2MotionError
-from .spec import load_spec
+from .specfile import load_spec
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -17,7 +17,7 @@ import numpy as np
 
 from . import book
 from .errors import InputError, LimitViolation
-from .spec import BOOK_VARS, SUPPORTS, Spec
+from .spec import BOOK_VARS, SUPPORTS, Joint, Spec
 
 N_TH, N_PHI, N_PSI = 11, 6, 3
 LIMIT_SLACK_RAD = 1e-9   # angles this close outside a limit count as on it (rounding of degrees in files)
@@ -172,24 +172,35 @@ def ticks_to_servo(ticks: np.ndarray, spec: Spec) -> np.ndarray:
     return (np.asarray(ticks, dtype=float) - spec.servo.center_tick) * spec.servo.rad_per_tick
 
 
-def limit_violations(servo: Sequence[float], spec: Spec) -> list[LimitViolation]:
-    """Joints of one pose (servo angles (20,) [rad]) outside their limits."""
+LIMIT_KINDS = ("mechanical", "cable-safe")
+
+
+def joint_range(joint: Joint, kind: str) -> tuple[float, float]:
+    """The ``mechanical`` (hard) or ``cable-safe`` (advice) range of a joint [rad]."""
+    return joint.mechanical if kind == "mechanical" else joint.safe
+
+
+def limit_violations(servo: Sequence[float], spec: Spec, kind: str = "mechanical") -> list[LimitViolation]:
+    """Joints of one pose (servo angles (20,) [rad]) outside their ``kind`` range (see :data:`LIMIT_KINDS`)."""
     out: list[LimitViolation] = []
     for joint, q in zip(spec.joints, np.asarray(servo, dtype=float).reshape(-1)):
-        if not joint.lower - LIMIT_SLACK_RAD <= q <= joint.upper + LIMIT_SLACK_RAD:
-            out.append(LimitViolation(joint.name, round(math.degrees(q), 4), round(math.degrees(joint.lower), 4),
-                                      round(math.degrees(joint.upper), 4), "cable-safe"))
+        lower, upper = joint_range(joint, kind)
+        if not lower - LIMIT_SLACK_RAD <= q <= upper + LIMIT_SLACK_RAD:
+            out.append(LimitViolation(joint.name, round(math.degrees(q), 4), round(math.degrees(lower), 4),
+                                      round(math.degrees(upper), 4), kind))
     return out
 
 
-def book_bounds(spec: Spec, support: str, variables: Sequence[str] = BOOK_VARS) -> tuple[np.ndarray, np.ndarray]:
-    """Bounds [rad] (lower, upper) of book ``variables`` that keep every servo inside its limits, seen from
-    ``support`` (each book variable drives exactly one servo: ``servo = sign * var + offset``)."""
+def book_bounds(spec: Spec, support: str, variables: Sequence[str] = BOOK_VARS,
+                kind: str = "cable-safe") -> tuple[np.ndarray, np.ndarray]:
+    """Bounds [rad] (lower, upper) of book ``variables`` that keep every servo inside its ``kind`` range, seen
+    from ``support`` (each book variable drives exactly one servo: ``servo = sign * var + offset``)."""
     lo, hi = np.empty(len(variables)), np.empty(len(variables))
     for k, var in enumerate(variables):
         joint = next(j for j in spec.joints if j.book[support].var == var)
         m = joint.book[support]
-        lo[k], hi[k] = sorted(((joint.lower - m.offset) * m.sign, (joint.upper - m.offset) * m.sign))
+        lower, upper = joint_range(joint, kind)
+        lo[k], hi[k] = sorted(((lower - m.offset) * m.sign, (upper - m.offset) * m.sign))
     return lo, hi
 
 

@@ -78,4 +78,5 @@ def evaluate(angles: BookAngles, spec: Spec, model: str = "dh", br: float = 1.0,
         ticks: dict[str, int] | None = {str(j.id): int(t) for j, t in zip(spec.joints, servo_to_ticks(servo, spec))}
     except InputError:  # an angle beyond ±180° has no tick; limit_violations names it
         ticks = None
-    return PoseReport(model, one.support, points, com, br, margin, servo, one, ticks, limit_violations(servo, spec))
+    violations = limit_violations(servo, spec, "mechanical") + limit_violations(servo, spec, "cable-safe")
+    return PoseReport(model, one.support, points, com, br, margin, servo, one, ticks, violations)

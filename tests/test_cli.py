@@ -62,7 +62,7 @@ def test_plot_writes_a_png(capsys, tmp_path):
     (["fk", "--br", "0", "--th", *STAND_TH, "--phi", *STAND_PHI], "br"),
     (["convert", "--servo-deg", '{"l_knee": 0}'], "missing"),
     (["plot", "/no/such/pose.json", "-o", "OUT"], "no such pose file"),
-    (["--spec", "/no/spec.toml", "fk"], "cannot read spec"),
+    (["--spec", "/no/spec.toml", "fk"], "no such spec file"),
     (["frobnicate"], "invalid choice"),
     (["validate", STANDING_POSE, "--seconds", "nan"], "--seconds"),
 ])
@@ -76,7 +76,7 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(capsys, tmp_path, monke
 
 def test_malformed_spec_file_is_exit_2(capsys, tmp_path):
     bad = tmp_path / "op2.toml"
-    bad.write_text('schema = "op2motion.spec/1"\nname = 3\n', encoding="utf-8")
+    bad.write_text('schema = "op2motion.spec/2"\nname = 3\n', encoding="utf-8")
     code, _, err = run_cli(capsys, "--spec", str(bad), "fk")
     assert code == 2 and str(bad) in err and "name" in err
 

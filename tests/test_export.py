@@ -24,7 +24,7 @@ from op2motion.joints import servo_to_ticks
 from op2motion.library.build import BuildSettings, build_library
 from op2motion.library.grid import axis, grid_jobs
 from op2motion.posture.pso import PSOSettings
-from op2motion.spec import default_spec
+from op2motion.specfile import default_spec
 
 POSES = os.path.join(os.path.dirname(__file__), "..", "poses")
 STOCK = str(DATA / "motion_4096.bin")

@@ -15,7 +15,7 @@ from op2motion.errors import InputError
 from op2motion.joints import (BookAngles, book_to_servo, servo_dict, servo_from_mapping, servo_to_book,
                               servo_to_ticks, ticks_to_servo)
 from op2motion.kinematics import forward
-from op2motion.spec import default_spec
+from op2motion.specfile import default_spec
 
 EXACT_RAD = 1e-12            # book -> servo -> book is a linear map and its inverse
 HALF_TICK_RAD = math.pi / 4096

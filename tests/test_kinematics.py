@@ -15,7 +15,7 @@ from op2motion.errors import InputError, ModelError
 from op2motion.book import STANDING_PHI_DEG, STANDING_TH_DEG
 from op2motion.joints import BookAngles, book_to_servo, servo_to_book
 from op2motion.kinematics import POINT_NAMES, forward
-from op2motion.spec import default_spec
+from op2motion.specfile import default_spec
 
 EXACT_M = 1e-9          # D-H vs the official description: the same rigid geometry, rounding only
 LENGTH_M = 1e-9         # link lengths preserved by the D-H chain

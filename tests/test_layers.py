@@ -16,7 +16,7 @@ LAYERS = [
     {"errors", "version"},
     {"book", "trig", "tablereader", "fileio"},
     {"spec"},
-    {"joints"},
+    {"joints", "specfile"},
     {"pose", "kinematics", "model"},
     {"balance", "servo", "arm_ik"},
     {"summary", "posture", "physics", "export", "plot", "motion"},

@@ -29,7 +29,8 @@ def test_urdf_has_the_official_joints_and_an_inertial_everywhere(spec):
         assert [float(v) for v in el.find("axis").get("xyz").split()] == pytest.approx(joint.axis)
         lim = el.find("limit")
         assert float(lim.get("effort")) == 2.5 and float(lim.get("velocity")) == 5.76
-        assert float(lim.get("lower")) == pytest.approx(joint.lower) and float(lim.get("upper")) == pytest.approx(joint.upper)
+        assert float(lim.get("lower")) == pytest.approx(joint.mechanical[0])
+        assert float(lim.get("upper")) == pytest.approx(joint.mechanical[1])
     assert root.find("link").get("name") == "body_link"
     assert all(link.find("inertial") is not None for link in root.iter("link"))
     frames = {link.get("name") for link in root.iter("link")}

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from op2motion.errors import SpecError
-from op2motion.spec import load_spec, parse_spec
+from op2motion.specfile import load_spec, parse_spec
 
 SPEC_TEXT = (Path(__file__).parents[1] / "specs" / "op2.toml").read_text(encoding="utf-8")
 LENGTH_TOL_M = 1e-12
@@ -49,11 +49,26 @@ def _mutate(pattern: str, repl: str, count: int = 1) -> str:
     (_mutate(r"^front_m = 0.052", "front_m = 0.052\nheel_m = 0.01"), "foot.heel_m"),
     (_mutate(r"^front_m = 0.052", 'front_m = "long"'), "foot.front_m"),
     (_mutate(r"^back_m = 0.052", "back_m = -0.052"), "foot.back_m"),
-    (_mutate(r"^limit_deg = \[-75.0, 135.0\]", "limit_deg = [135.0, -75.0]"), "limit_deg"),
+    (_mutate(r"^back_m = 0.052", "back_m = nan"), "foot.back_m"),
+    (_mutate(r"^front_m = 0.052", "front_m = inf"), "foot.front_m"),
+    (_mutate(r"^cable_safe_deg = \[-75.0, 135.0\]", "cable_safe_deg = [135.0, -75.0]"), "cable_safe_deg"),
+    (_mutate(r"^cable_safe_deg = \[-75.0, 135.0\]", "cable_safe_deg = [-75.0, 160.0]"), "inside the mechanical"),
+    (_mutate(r"^mechanical_deg = \[-91.0, 150.0\]", "mechanical_deg = [-91.0, 200.0]"), "servo's ±180°"),
     (_mutate(r'book.left = \{ var = "th9"', 'book.left = { var = "th7"'), "book.left"),
-    (_mutate(r'^schema = "op2motion.spec/1"', 'schema = "op2motion.spec/9"'), "schema"),
+    (_mutate(r'^schema = "op2motion.spec/2"', 'schema = "op2motion.spec/9"'), "schema"),
     (_mutate(r"^origin_xyz_m = \[0.0, 0.0, -0.093\]    # THIGH", "origin_xyz_m = [0.0, 0.0, 0.093]    # THIGH"),
      "r_knee origin must mirror l_knee"),
+    (_mutate(r"^supply_voltage_v = 12.0", "supply_voltage_v = 13.0"), "servo.supply_voltage_v"),
+    # Physical sense: inertia tensors, masses, references that exist.
+    (_mutate(r"^inertia = \[5.3316e-03", "inertia = [-5.3316e-03"), "positive definite"),
+    (_mutate(r"^inertia = \[1.1352e-04, 9.3370e-05, 4.6296e-05, 2.3992e-07",
+             "inertia = [1.1352e-04, 9.3370e-05, 4.6296e-04, 2.3992e-07"), "triangle inequality"),
+    (_mutate(r"^mass_kg = 0.975599", "mass_kg = -0.975599"), "mass_kg"),
+    (_mutate(r'^link = "l_knee_link"', 'link = "l_shin_link"'), "'l_shin_link' does not exist"),
+    (_mutate(r'^link = "head_tilt_link"', 'link = "hat_link"'), "points.head_top"),
+    (_mutate(r'^parent = "l_knee_link"', 'parent = "l_calf_link"'), "parent link 'l_calf_link' does not exist"),
+    (_mutate(r'^from = "head_tilt"', 'from = "eyebrow"'), "body point 'eyebrow' does not exist"),
+    (_mutate(r'^id = 20', 'id = 21'), "joint.id"),
 ])
 def test_malformed_spec_names_file_and_key(text, key):
     with pytest.raises(SpecError) as err:
@@ -62,10 +77,40 @@ def test_malformed_spec_names_file_and_key(text, key):
     assert message.startswith("bad/op2.toml: ") and key in message and "\n" not in message
 
 
-def test_missing_and_garbled_files_are_spec_errors(tmp_path):
-    with pytest.raises(SpecError, match="cannot read spec"):
+def test_missing_garbled_and_binary_files_are_spec_errors(tmp_path):
+    with pytest.raises(SpecError, match="no such spec file"):
         load_spec(tmp_path / "none.toml")
+    with pytest.raises(SpecError, match="got a directory"):
+        load_spec(tmp_path)
     bad = tmp_path / "garbled.toml"
     bad.write_text("schema = [", encoding="utf-8")
     with pytest.raises(SpecError, match="not valid TOML"):
         load_spec(bad)
+    binary = tmp_path / "random.toml"
+    binary.write_bytes(bytes(range(256)) * 4)
+    with pytest.raises(SpecError, match="UTF-8"):
+        load_spec(binary)
+    latin = tmp_path / "latin.toml"
+    latin.write_bytes(SPEC_TEXT.replace("ROBOTIS OP2", "ROBOTIS OP2 \u00e9").encode("latin-1"))
+    with pytest.raises(SpecError, match="UTF-8"):
+        load_spec(latin)
+
+
+def test_mechanical_ranges_hold_every_goal_of_the_stock_file(spec, stock_action_bytes):
+    """The stock pages ran on real robots: every goal lies inside the mechanical range (hard), while 7 joints go
+    beyond the cable-safe range (advice), so the cable-safe range must never be used as a hard limit."""
+    import numpy as np
+
+    from op2motion.export.action import list_pages
+    from op2motion.joints import limit_violations, ticks_to_servo
+
+    beyond_safe = set()
+    for page in list_pages(stock_action_bytes, spec):
+        for step in page.steps:
+            servo = np.zeros(20)
+            given = np.array([step.ticks[j.id] is not None for j in spec.joints])
+            servo[given] = ticks_to_servo(np.array([step.ticks[j.id] for j in spec.joints if step.ticks[j.id]
+                                                    is not None]), spec)
+            assert limit_violations(servo, spec, "mechanical") == [], (page.index, page.name)
+            beyond_safe |= {v.joint for v in limit_violations(servo, spec, "cable-safe")}
+    assert len(beyond_safe) == 7 and {"l_knee", "r_knee", "l_el"} <= beyond_safe

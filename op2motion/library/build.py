@@ -27,7 +27,8 @@ from ..export.posefile import pose_to_json
 from ..fileio import write_atomic
 from ..physics import DEFAULT_SECONDS
 from ..posture.pso import PSOSettings
-from ..spec import Spec, load_spec
+from ..spec import Spec
+from ..specfile import load_spec
 from ..workflow import DEFAULT_RESTARTS, solve
 from .grid import Job
 from .index import IndexRow, load_index, write_index

@@ -125,7 +125,7 @@ def build_urdf(spec: Spec) -> str:
                    f"    <parent link={quoteattr(j.parent)}/>\n    <child link={quoteattr(j.child)}/>\n"
                    f'    <origin xyz="{_vec(j.origin_xyz)}" rpy="{_vec(j.origin_rpy)}"/>\n'
                    f'    <axis xyz="{_vec(j.axis)}"/>\n'
-                   f'    <limit lower="{_f(j.lower)}" upper="{_f(j.upper)}" effort="{_f(effort)}" '
+                   f'    <limit lower="{_f(j.mechanical[0])}" upper="{_f(j.mechanical[1])}" effort="{_f(effort)}" '
                    f'velocity="{_f(velocity)}"/>\n  </joint>\n')
     frame_inertial = _inertial_xml(LinkInertial(FRAME_LINK_MASS_KG, np.zeros(3), np.eye(3) * FRAME_LINK_INERTIA))
     for name, (parent, xyz) in frame_points(spec).items():

@@ -1,0 +1,294 @@
+"""Read and check a spec file (``specs/op2.toml``) into a :class:`op2motion.spec.Spec`.
+
+Everything that is not a sound description of a robot is a :class:`SpecError` naming the file and the key, before
+any model is built from it: a file that is not UTF-8 TOML, a missing or unknown key, a wrong type, a number that is
+not finite; a non-positive length, mass or size; an inertia tensor that is not positive definite or breaks the
+triangle inequality of its principal moments; a joint range whose lower end is not below its upper end, a
+cable-safe range outside the mechanical one, a mechanical range beyond the servo's; a link, joint or body point
+that is referenced but does not exist, a joint tree that is not a tree; a book variable mapped twice; left/right
+asymmetry where the kinematic models assume symmetry.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import math
+from importlib import resources
+from pathlib import Path
+from typing import Mapping
+
+import numpy as np
+
+from .errors import SpecError
+from .fileio import read_text
+from .spec import (BOOK_VARS, COLLISION_SIZES, SCHEMA, SUPPORTS, BookMap, Collision, Foot, Geometry, Inertial, Joint,
+                   LumpedMass, PointSpec, Rating, Servo, Spec)
+from .tablereader import TableReader
+
+try:  # Python >= 3.11
+    import tomllib
+except ModuleNotFoundError:  # pragma: no cover - Python 3.10
+    import tomli as tomllib  # type: ignore[no-redef]
+
+#: Body points the kinematic models make besides the joints and the spec's named points.
+DERIVED_POINTS = ("pelvis", "neck", "left_sole", "right_sole")
+INERTIA_REL_TOL = 1e-9   # relative slack of the positive-definite and triangle-inequality checks
+
+
+def _servo(r: TableReader) -> Servo:
+    ratings = []
+    for rr in r.array("rating"):
+        ratings.append(Rating(rr.number("voltage_v", positive=True), rr.number("stall_torque_nm", positive=True),
+                              rr.number("no_load_speed_rad_s", positive=True)))
+        rr.done()
+    s = Servo(r.get("model", str), r.get("ticks_per_rev", int), r.get("center_tick", int), r.get("min_tick", int),
+              r.get("max_tick", int), r.number("framework_deg_per_tick", positive=True), r.get("invalid_bit", int),
+              r.get("torque_off_bit", int), tuple(ratings), r.number("supply_voltage_v", positive=True),
+              r.get("p_gain_default", int), r.number("duty_per_p_rad", positive=True),
+              r.number("max_duty", positive=True), r.number("armature_kg_m2", nonnegative=True),
+              r.number("friction_nm", nonnegative=True), r.number("viscous_nm_s_rad", nonnegative=True),
+              r.number("backlash_rad", nonnegative=True))
+    r.done()
+    if not (0 <= s.min_tick < s.center_tick < s.max_tick < s.ticks_per_rev):
+        raise SpecError("expected 0 <= min_tick < center_tick < max_tick < ticks_per_rev", f"{r.path}: servo")
+    if not s.ratings or s.supply_voltage_v not in [x.voltage_v for x in s.ratings]:
+        raise SpecError(f"expected one of the rated voltages {[x.voltage_v for x in s.ratings]}, got "
+                        f"{s.supply_voltage_v}", f"{r.path}: servo.supply_voltage_v")
+    if not 1 <= s.p_gain_default <= 254:
+        raise SpecError(f"expected an MX-28 P gain 1..254, got {s.p_gain_default}", f"{r.path}: servo.p_gain_default")
+    if s.max_duty > 1.0:
+        raise SpecError(f"expected a duty cycle in (0, 1], got {s.max_duty}", f"{r.path}: servo.max_duty")
+    return s
+
+
+def _foot(r: TableReader) -> Foot:
+    f = Foot(r.number("sole_below_ankle_m", positive=True), r.number("front_m", positive=True),
+             r.number("back_m", positive=True), r.number("inner_m", positive=True), r.number("outer_m", positive=True))
+    r.done()
+    return f
+
+
+def _range(r: TableReader, key: str, name: str) -> tuple[float, float]:
+    lower, upper = r.vector(key, 2)
+    if not lower < upper:
+        raise SpecError(f"({name}): expected lower < upper, got [{lower}, {upper}]", f"{r.path}: {r.where}.{key}")
+    return math.radians(lower), math.radians(upper)
+
+
+def _joint(r: TableReader) -> Joint:
+    name = r.get("name", str)
+    safe, mech = _range(r, "cable_safe_deg", name), _range(r, "mechanical_deg", name)
+    if not (mech[0] <= safe[0] and safe[1] <= mech[1]):
+        raise SpecError(f"({name}): expected the cable-safe range inside the mechanical range",
+                        f"{r.path}: {r.where}.cable_safe_deg")
+    if max(abs(mech[0]), abs(mech[1])) > math.pi + 1e-12:
+        raise SpecError(f"({name}): expected a range within the servo's ±180°", f"{r.path}: {r.where}.mechanical_deg")
+    axis = r.vector("axis")
+    if abs(math.sqrt(sum(a * a for a in axis)) - 1.0) > 1e-9:
+        raise SpecError(f"({name}): expected a unit vector, got {list(axis)}", f"{r.path}: {r.where}.axis")
+    books = r.sub("book")
+    book: dict[str, BookMap] = {}
+    for support in SUPPORTS:
+        b = books.sub(support)
+        var, sign = b.get("var", str), b.get("sign", int)
+        if var not in BOOK_VARS:
+            raise SpecError(f"expected one of th1..th11, phi1..phi6, psi1..psi3, got {var!r}", f"{r.path}: {b.where}.var")
+        if sign not in (-1, 1):
+            raise SpecError(f"expected 1 or -1, got {sign!r}", f"{r.path}: {b.where}.sign")
+        book[support] = BookMap(var, sign, math.radians(b.number("offset_deg")))
+        b.done()
+    books.done()
+    joint = Joint(name, r.get("id", int), r.get("framework", str), r.get("webots", str), r.get("parent", str),
+                  r.get("child", str), r.vector("origin_xyz_m"),  # type: ignore[arg-type]
+                  tuple(math.radians(v) for v in r.vector("origin_rpy_deg")), axis,  # type: ignore[arg-type]
+                  safe, mech, book)
+    r.done()
+    return joint
+
+
+def _check_joints(path: str, root: str, joints: list[Joint]) -> None:
+    """IDs 1..N once, unique names, a tree of links rooted at ``root``, each book variable mapped once."""
+    names = [j.name for j in joints]
+    if len(set(names)) != len(names):
+        raise SpecError("duplicate joint names", f"{path}: joint")
+    ids = sorted(j.id for j in joints)
+    if ids != list(range(1, len(joints) + 1)):
+        raise SpecError(f"expected the Dynamixel IDs 1..{len(joints)} once each, got {ids}", f"{path}: joint.id")
+    children = [j.child for j in joints]
+    if len(set(children)) != len(children) or root in children:
+        raise SpecError("expected every child link once, and never the root link", f"{path}: joint.child")
+    parent_of = {j.child: j.parent for j in joints}
+    for j in joints:
+        if j.parent != root and j.parent not in parent_of:
+            raise SpecError(f"({j.name}): parent link {j.parent!r} does not exist", f"{path}: joint.parent")
+        link, seen = j.child, set()
+        while link != root:            # every chain ends at the root: no loops
+            if link in seen:
+                raise SpecError(f"({j.name}): the links form a loop", f"{path}: joint.parent")
+            seen.add(link)
+            link = parent_of[link]
+    for support in SUPPORTS:
+        used = sorted(j.book[support].var for j in joints)
+        if used != sorted(BOOK_VARS):
+            raise SpecError(f"expected each book variable exactly once, got {used}", f"{path}: joint.book.{support}")
+
+
+def _check_inertia(path: str, where: str, inertia: tuple[float, ...]) -> None:
+    """Symmetric positive definite with principal moments that satisfy the triangle inequality."""
+    ixx, iyy, izz, ixy, ixz, iyz = inertia
+    moments = np.linalg.eigvalsh(np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]))
+    scale = max(float(np.max(np.abs(moments))), 1e-300)
+    if moments[0] <= INERTIA_REL_TOL * scale:
+        raise SpecError(f"expected a positive definite inertia tensor, got principal moments {moments.tolist()}",
+                        f"{path}: {where}.inertia")
+    if moments[2] > moments[0] + moments[1] + INERTIA_REL_TOL * scale:
+        raise SpecError(f"principal moments {moments.tolist()} break the triangle inequality (no rigid body has them)",
+                        f"{path}: {where}.inertia")
+
+
+def _geometry(path: str, joints: Mapping[str, Joint], points: Mapping[str, PointSpec], foot: Foot) -> Geometry:
+    """Derive the model lengths from the official joint table, checking the structure the models assume."""
+
+    def origin(name: str) -> tuple[float, float, float]:
+        if name not in joints:
+            raise SpecError(f"joint {name!r} is required by the kinematic models", path)
+        return joints[name].origin_xyz
+
+    def need(cond: bool, what: str) -> None:
+        if not cond:
+            raise SpecError(f"joint table: {what} (the kinematic models assume it)", path)
+
+    for name, joint in joints.items():
+        if name.startswith("l_") and "r_" + name[2:] in joints:
+            mirror = joints["r_" + name[2:]]
+            (x, y, z), (rr, pp, yy) = joint.origin_xyz, joint.origin_rpy
+            need(mirror.origin_xyz == (x, -y, z) and mirror.origin_rpy == (-rr, pp, -yy),
+                 f"{mirror.name} origin must mirror {name}'s (x, -y, z; -roll, pitch, -yaw)")
+    for side, sgn in (("l", 1.0), ("r", -1.0)):
+        for joint in ("hip_pitch", "ank_roll"):
+            need(origin(f"{side}_{joint}") == (0.0, 0.0, 0.0), f"{side}_{joint} origin must be at its parent's origin")
+        hx, hy, hz = origin(f"{side}_hip_yaw")
+        need(abs(hy - sgn * origin("l_hip_yaw")[1]) < 1e-12, "hip yaw origins must be left/right symmetric")
+        for joint in ("hip_roll", "knee", "ank_pitch"):
+            ox, oy, _ = origin(f"{side}_{joint}")
+            need(ox == 0.0 and oy == 0.0, f"{side}_{joint} origin must lie straight below its parent")
+        sx, sy, sz = origin(f"{side}_sho_pitch")
+        need(sx == 0.0 and sz == 0.0 and abs(sy - sgn * origin("l_sho_pitch")[1]) < 1e-12,
+             "shoulder pitch origins must lie on the torso's y axis, symmetric")
+    hx, hy, hz = origin("l_hip_yaw")
+    rx, ry, rz = origin("l_sho_roll")
+    ex, ey, ez = origin("l_el")
+    pan, tilt = origin("head_pan"), origin("head_tilt")
+    need(ey == 0.0 and rx == 0.0, "shoulder roll and elbow offsets must lie in the arm's plane")
+    need(pan[:2] == (0.0, 0.0) and tilt[:2] == (0.0, 0.0), "head joints must lie on the torso's z axis")
+    hand = points["left_hand"].xyz
+    need(hand[0] == 0.0 and hand[1] == 0.0 and hand[2] < 0, "the hand must lie on the forearm axis (-z of l_el_link)")
+    lengths = dict(
+        ankle_to_sole=foot.sole_below_ankle, calf=-origin("l_ank_pitch")[2], thigh=-origin("l_knee")[2],
+        hip_yaw_to_roll=-origin("l_hip_roll")[2], hip_half_width=hy, hip_x=hx, torso=-hz,
+        shoulder_half_width=origin("l_sho_pitch")[1], shoulder_roll_lateral=ry, shoulder_roll_drop=-rz,
+        elbow_forward=ex, upper_arm=-ez, lower_arm=-hand[2], head_pan_height=pan[2],
+        head_tilt_height=pan[2] + tilt[2], head_length=math.dist((0.0, 0.0, 0.0), points["head_top"].xyz))
+    for key, value in lengths.items():
+        if key not in ("hip_x", "elbow_forward", "shoulder_roll_lateral", "shoulder_roll_drop") and value <= 0:
+            raise SpecError(f"derived length {key} = {value} m must be positive", path)
+    return Geometry(**lengths)
+
+
+def _masses(top: TableReader) -> tuple[list[LumpedMass], list[Inertial], list[Collision]]:
+    masses = []
+    for r in top.array("lumped_mass"):
+        fraction = r.number("fraction")
+        if not 0.0 <= fraction <= 1.0:
+            raise SpecError(f"expected 0..1, got {fraction}", f"{r.path}: {r.where}.fraction")
+        masses.append(LumpedMass(r.get("name", str), r.number("mass_kg", positive=True), r.get("from", str),
+                                 r.get("to", str), fraction))
+        r.done()
+    inertials = []
+    for r in top.array("inertial"):
+        inertia = r.vector("inertia", 6)
+        _check_inertia(r.path, r.where, inertia)
+        inertials.append(Inertial(r.get("link", str), r.get("webots", str), r.number("mass_kg", positive=True),
+                                  r.vector("com_m"), inertia,  # type: ignore[arg-type]
+                                  r.vector("webots_frame_xyz_m"),  # type: ignore[arg-type]
+                                  tuple(math.radians(v) for v in r.vector("webots_frame_rpy_deg"))))  # type: ignore[arg-type]
+        r.done()
+    collisions = []
+    for r in top.array("collision"):
+        shape = r.get("shape", str)
+        if shape not in COLLISION_SIZES:
+            raise SpecError(f"expected box, cylinder or sphere, got {shape!r}", f"{r.path}: {r.where}.shape")
+        size = r.vector("size_m", COLLISION_SIZES[shape])
+        if min(size) <= 0:
+            raise SpecError(f"expected positive sizes, got {list(size)}", f"{r.path}: {r.where}.size_m")
+        collisions.append(Collision(r.get("link", str), shape, size, r.vector("origin_xyz_m"),  # type: ignore[arg-type]
+                                    tuple(math.radians(v) for v in r.vector("origin_rpy_deg"))))  # type: ignore[arg-type]
+        r.done()
+    return masses, inertials, collisions
+
+
+def parse_spec(text: str, path: str = "<spec>") -> Spec:
+    """Check TOML text and return its :class:`Spec`; ``path`` names the file in error messages."""
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SpecError(f"not valid TOML: {exc}", path) from None
+    top = TableReader(path, "", raw)
+    if top.get("schema", str) != SCHEMA:
+        raise SpecError(f"expected {SCHEMA!r}, got {raw['schema']!r}", f"{path}: schema")
+    name, root = top.get("name", str), top.get("root_link", str)
+    servo, foot = _servo(top.sub("servo")), _foot(top.sub("foot"))
+    points_reader = top.sub("points")
+    points: dict[str, PointSpec] = {}
+    for key in list(points_reader.table):
+        pr = points_reader.sub(key)
+        points[key] = PointSpec(pr.get("link", str), pr.vector("xyz_m"))  # type: ignore[arg-type]
+        pr.done()
+    points_reader.done()
+    for required in ("left_hand", "right_hand", "head_top"):
+        if required not in points:
+            raise SpecError(f"missing key 'points.{required}'", path)
+    joints = [_joint(r) for r in top.array("joint")]
+    _check_joints(path, root, joints)
+    joints.sort(key=lambda j: j.id)
+    masses, inertials, collisions = _masses(top)
+    top.done()
+    links = {root} | {j.child for j in joints}
+    named = [(p.link, f"points.{k}") for k, p in points.items()] + [(i.link, "inertial") for i in inertials] + \
+            [(c.link, "collision") for c in collisions]
+    for link, where in named:
+        if link not in links:
+            raise SpecError(f"link {link!r} does not exist (expected one of the joint tree's links)", f"{path}: {where}")
+    body_points = set(DERIVED_POINTS) | set(points) | {j.name for j in joints}
+    for m in masses:
+        for end in (m.start, m.end):
+            if end not in body_points:
+                raise SpecError(f"({m.name}): body point {end!r} does not exist", f"{path}: lumped_mass")
+    geometry = _geometry(path, {j.name: j for j in joints}, points, foot)
+    return Spec(name, root, servo, foot, points, tuple(joints), tuple(masses), tuple(inertials), tuple(collisions),
+                geometry, path, hashlib.sha256(text.encode("utf-8")).hexdigest())
+
+
+def load_spec(path: str | Path | None = None) -> Spec:
+    """Load a spec file; ``None`` loads the OP2 spec shipped with op2motion (cached)."""
+    if path is None:
+        return default_spec()
+    return parse_spec(read_text(path, "spec file", SpecError), str(path))
+
+
+def _shipped_spec_text() -> str:
+    """``specs/op2.toml``: installed as package data ``op2motion.specs``, or beside the package in a source tree."""
+    source_tree = Path(__file__).resolve().parents[1] / "specs" / "op2.toml"
+    if source_tree.is_file():
+        return source_tree.read_text(encoding="utf-8")
+    try:
+        return resources.files("op2motion.specs").joinpath("op2.toml").read_text(encoding="utf-8")
+    except (ModuleNotFoundError, OSError) as exc:
+        raise SpecError(f"the shipped spec is missing from this installation ({exc})", "specs/op2.toml") from None
+
+
+@functools.lru_cache(maxsize=1)
+def default_spec() -> Spec:
+    """The shipped OP2 spec (``specs/op2.toml``), loaded once."""
+    return parse_spec(_shipped_spec_text(), "specs/op2.toml")
