@@ -173,3 +173,74 @@ def test_killed_library_build_leaves_no_half_written_file(tmp_path):
     assert not list((tmp_path / "lib").glob(".*.tmp"))
     with pytest.raises(PoseFileError):
         read_pose(tmp_path / "lib" / "missing.json", spec)
+
+
+def _descendants(pid: int) -> set[int]:
+    """Every live descendant of ``pid`` (Linux /proc)."""
+    children: dict[int, list[int]] = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                stat = open(f"/proc/{entry}/stat", encoding="utf-8").read()
+            except OSError:
+                continue
+            ppid = int(stat.rsplit(")", 1)[1].split()[1])
+            children.setdefault(ppid, []).append(int(entry))
+    found, todo = set(), [pid]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            found.add(child)
+            todo.append(child)
+    return found
+
+
+def _cpu_seconds(pid: int) -> float:
+    """User + system CPU time a process has used [s] (0 if it is gone)."""
+    try:
+        fields = open(f"/proc/{pid}/stat", encoding="utf-8").read().rsplit(")", 1)[1].split()
+    except OSError:
+        return 0.0
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = open(f"/proc/{pid}/stat", encoding="utf-8").read().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+ORPHAN_GRACE_S = 10.0
+WORKER_BUSY_S = 2.0     # CPU time after which a worker is surely solving, not starting up
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="needs Linux /proc to list processes")
+def test_sigkill_of_the_parent_leaves_no_worker_and_the_rerun_completes(tmp_path):
+    cmd = [sys.executable, "-m", "op2motion", "library", "build", "--x", "0.06", "0.14", "4", "--y", "0", "0.04",
+           "2", "--z", "0.07", "0.07", "1", "--hands", "left", "--supports", "left", "--workers", "2",
+           "--restarts", "0", "--out", str(tmp_path / "lib")]
+    # Solves long enough (about a minute each) that a worker outlives the grace period unless it dies with its parent.
+    proc = subprocess.Popen(cmd + ["--iters", "100000"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    deadline = time.time() + 60
+    busy: list[int] = []
+    while time.time() < deadline and len(busy) < 2:         # both workers deep in a solve
+        busy = [p for p in _descendants(proc.pid) if _cpu_seconds(p) > WORKER_BUSY_S]
+        time.sleep(0.1)
+    assert len(busy) == 2
+    workers = _descendants(proc.pid)                         # the workers and multiprocessing's resource tracker
+    os.kill(proc.pid, signal.SIGKILL)                        # the parent only, as `kill -9 PID` does
+    proc.wait()
+    deadline = time.time() + ORPHAN_GRACE_S
+    while time.time() < deadline and any(_alive(p) for p in workers):
+        time.sleep(0.1)
+    survivors = [p for p in workers if _alive(p)]
+    for p in survivors:                                      # do not leave them behind if the test fails
+        os.kill(p, signal.SIGKILL)
+    assert survivors == []
+    resumed = subprocess.run(cmd + ["--iters", "60", "--json"], capture_output=True, text=True, timeout=300)
+    summary = json.loads(resumed.stdout)
+    assert resumed.returncode == 0 and summary["targets"] == 8 and summary["solved"] + summary["failed"] == 8
+    rows = json.loads((tmp_path / "lib" / "index.json").read_text(encoding="utf-8"))
+    assert len(rows) == 8 and all(r["hand"] == "left" and r["support"] == "left" for r in rows)

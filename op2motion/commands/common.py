@@ -136,6 +136,13 @@ def whole(lo: int, hi: int) -> Callable[[str], int]:
     return parse
 
 
+def output_path(text: str) -> str:
+    """An argparse type: a path to write; an empty string is refused before any work."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a file path, got an empty string")
+    return text
+
+
 def pose_name(text: str) -> str:
     """An argparse type: a pose name (see :func:`op2motion.pose.check_pose_name`)."""
     from ..pose import NAME_RULE, check_pose_name

@@ -10,7 +10,7 @@ from ..errors import InputError
 from ..export.action import NUM_PAGES
 from ..export.tables import MAX_TIME_S
 from ..spec import Spec
-from .common import add_command, emit, number, pose_name, whole
+from .common import add_command, emit, number, output_path, pose_name, whole
 
 PAGE = whole(1, NUM_PAGES - 1)
 
@@ -24,13 +24,13 @@ def register(sub: Any) -> None:
     p.add_argument("--page", type=PAGE, default=1, help="first page to write (action format, default 1)")
     p.add_argument("--time", type=number(0.0, MAX_TIME_S, "s", open_low=True), default=1.0,
                    help="seconds per pose (default 1.0)")
-    p.add_argument("-o", "--output", required=True, metavar="OUT", help="file to write (atomically)")
+    p.add_argument("-o", "--output", type=output_path, required=True, metavar="OUT", help="file to write (atomically)")
 
     p = add_command(sub, "import-action", cmd_import_action,
                     "list the pages of a ROBOTIS action file, or turn one into a pose")
     p.add_argument("file", metavar="FILE", help="motion_4096.bin")
     p.add_argument("--page", type=PAGE, help="page to turn into a pose (its last step)")
-    p.add_argument("--out", metavar="POSE", help="write that pose file (with --page)")
+    p.add_argument("--out", type=output_path, metavar="POSE", help="write that pose file (with --page)")
     p.add_argument("--name", type=pose_name, help="pose name (default: the page name)")
 
 

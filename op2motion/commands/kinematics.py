@@ -9,8 +9,20 @@ from typing import Any
 
 from ..errors import InputError
 from ..spec import Spec
-from .common import (BOUNDARY_RATIO, DELTA_M, HEADING_DEG, POSITION_M, TARGET_M, add_command, angles_from,
-                     book_args, emit, number, vec3)
+from .common import (
+    BOUNDARY_RATIO,
+    DELTA_M,
+    HEADING_DEG,
+    POSITION_M,
+    TARGET_M,
+    add_command,
+    angles_from,
+    book_args,
+    emit,
+    number,
+    output_path,
+    vec3,
+)
 
 TOL_MM = number(0.0, 100.0, "mm", open_low=True)
 
@@ -38,7 +50,7 @@ def register(sub: Any) -> None:
                    help="kinematic model(s) to draw (both: one row each)")
     p.add_argument("--br", type=BOUNDARY_RATIO, default=1.0, help="boundary ratio of the drawn support rectangle")
     p.add_argument("--target", type=TARGET_M, nargs=3, metavar=("X", "Y", "Z"), help="mark a target [m]")
-    p.add_argument("-o", "--output", required=True, metavar="PNG", help="where to write the PNG")
+    p.add_argument("-o", "--output", type=output_path, required=True, metavar="PNG", help="where to write the PNG")
 
     p = add_command(sub, "arm-ik", cmd_arm_ik, "move one hand by a displacement with the Taylor-linearised arm IK")
     p.add_argument("--hand", choices=("left", "right"), required=True, help="which hand to move")
@@ -50,7 +62,7 @@ def register(sub: Any) -> None:
                    help="model to iterate on: pb (book, default) or dh (true geometry, for the real robot)")
     p.add_argument("--tol-mm", type=TOL_MM, default=0.1, help="iterated mode: target tolerance [mm] (default 0.1)")
     p.add_argument("--allow-limits", action="store_true", help="accept a result outside the servo limits")
-    p.add_argument("--plot", metavar="PNG", help="draw the initial and the changed pose")
+    p.add_argument("--plot", type=output_path, metavar="PNG", help="draw the initial and the changed pose")
 
 
 def cmd_fk(args: argparse.Namespace, spec: Spec) -> int:
@@ -68,7 +80,7 @@ def _servo_mapping(text: str) -> dict:
     """``--servo-deg``: JSON text, a JSON file of {joint: deg}, or a pose file (its ``servo_deg``)."""
     from ..fileio import read_text
 
-    if not text.lstrip().startswith("{"):
+    if not text.lstrip().startswith(("{", "[")):
         text = read_text(text, "JSON file", InputError)
     try:
         doc = json.loads(text)

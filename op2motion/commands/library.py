@@ -9,7 +9,7 @@ from .. import book
 from ..library.build import MAX_WORKERS
 from ..library.grid import MAX_AXIS
 from ..spec import Spec
-from .common import BOUNDARY_RATIO, Parser, add_command, emit, number, progress_enabled, whole
+from .common import BOUNDARY_RATIO, Parser, add_command, emit, number, output_path, progress_enabled, whole
 from .posture import solver_args
 
 AXIS_VALUE = number(-1e6, 1e6)   # START, STOP and COUNT of a grid axis; the library checks the real ranges
@@ -38,7 +38,7 @@ def register(sub: Any) -> None:
         p.add_argument(f"--{axis}", type=AXIS_VALUE, nargs=3, default=default, metavar=("START", "STOP", "N"),
                        help=f"N target {axis} values from START to STOP [m], N <= {MAX_AXIS} "
                             f"(default {' '.join(f'{v:g}' for v in default)})")
-    p.add_argument("--out", default="poses/library", help="library folder (default poses/library)")
+    p.add_argument("--out", type=output_path, default="poses/library", help="library folder (default poses/library)")
     p.add_argument("--workers", type=whole(0, MAX_WORKERS), default=0,
                    help=f"worker processes, 0 = one per core (default 0, at most {MAX_WORKERS})")
     solver_args(p)

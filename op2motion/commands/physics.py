@@ -8,19 +8,19 @@ from typing import Any
 
 from ..physics import DEFAULT_SECONDS, MAX_SECONDS, MIN_SECONDS
 from ..spec import Spec
-from .common import add_command, emit, number, progress_enabled
+from .common import add_command, emit, number, output_path, progress_enabled
 
 
 def register(sub: Any) -> None:
     """Add urdf and validate."""
     p = add_command(sub, "urdf", cmd_urdf, "the URDF generated from the spec (stdout, or -o FILE)")
-    p.add_argument("-o", "--output", metavar="FILE", help="write the URDF here (atomically)")
+    p.add_argument("-o", "--output", type=output_path, metavar="FILE", help="write the URDF here (atomically)")
 
     p = add_command(sub, "validate", cmd_validate, "physics check: does a pose stand?")
     p.add_argument("pose", metavar="POSE", help="pose file (schema op2motion.pose/1)")
     p.add_argument("--seconds", type=number(MIN_SECONDS, MAX_SECONDS, "s"), default=DEFAULT_SECONDS,
                    help=f"simulated time [s] (default {DEFAULT_SECONDS:g})")
-    p.add_argument("--gui-png", metavar="PNG", help="snapshot of the final state (TinyRenderer)")
+    p.add_argument("--gui-png", type=output_path, metavar="PNG", help="snapshot of the final state (TinyRenderer)")
 
 
 def cmd_urdf(args: argparse.Namespace, spec: Spec) -> int:

@@ -13,8 +13,18 @@ from ..physics import DEFAULT_SECONDS, MAX_SECONDS, MIN_SECONDS
 from ..posture.pso import MAX_ITERATIONS, MAX_PARTICLES, MAX_SEED, PSOSettings
 from ..spec import Spec
 from ..workflow import DEFAULT_RESTARTS, MAX_RESTARTS
-from .common import (BOUNDARY_RATIO, TARGET_M, add_command, emit, number, pose_name, progress_enabled, vec3,
-                     whole)
+from .common import (
+    BOUNDARY_RATIO,
+    TARGET_M,
+    add_command,
+    emit,
+    number,
+    output_path,
+    pose_name,
+    progress_enabled,
+    vec3,
+    whole,
+)
 
 SECONDS = number(MIN_SECONDS, MAX_SECONDS, "s")
 
@@ -52,8 +62,8 @@ def register(sub: Any) -> None:
     solver_args(p)
     p.add_argument("--no-refine", action="store_true", help="skip the local refinement (hand within 5 mm)")
     p.add_argument("--name", type=pose_name, help="pose name (default from hand, support, target and br)")
-    p.add_argument("--out", metavar="FILE", help="pose file (default poses/NAME.json)")
-    p.add_argument("--plot", metavar="PNG", help="pose figure (default beside the pose file)")
+    p.add_argument("--out", type=output_path, metavar="FILE", help="pose file (default poses/NAME.json)")
+    p.add_argument("--plot", type=output_path, metavar="PNG", help="pose figure (default beside the pose file)")
 
 
 def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
