@@ -13,7 +13,7 @@ import sys
 from typing import Sequence
 
 from .version import __version__
-from .errors import Op2MotionError
+from .errors import Interrupted, Op2MotionError
 from .specfile import load_spec
 
 
@@ -41,7 +41,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(args.func(args, spec))
     except Op2MotionError as exc:
         name_of = parser.flag_of if parser is not None else (lambda p: p)  # type: ignore[attr-defined]
-        print(f"op2motion: error: {exc.render(name_of)}", file=sys.stderr)
+        kind = "interrupted" if isinstance(exc, Interrupted) else "error"
+        print(f"op2motion: {kind}: {exc.render(name_of)}", file=sys.stderr)
         return exc.exit_code
     except KeyboardInterrupt:
         print("op2motion: interrupted", file=sys.stderr)

@@ -61,6 +61,12 @@ class CheckFailed(Op2MotionError):
     exit_code = 1
 
 
+class Interrupted(Op2MotionError):
+    """The user interrupted a run (Ctrl-C, SIGTERM) after it put its files in order: exit code 130."""
+
+    exit_code = 130
+
+
 class Unreachable(CheckFailed):
     """A target was not reached: the best residual [m] exceeds the tolerance [m]."""
 

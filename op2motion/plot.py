@@ -1,14 +1,18 @@
-"""PNG figures: whole-body stick figures in front, side, top and 3D views (book figs. 2.31/2.32, 2.44-2.47).
+"""PNG figures: whole-body stick figures (front, side, top, 3D; book figs. 2.31/2.32, 2.44-2.47) and PSO cost curves.
 
-Left limbs are blue and right limbs red, as in the book, so the support and swing legs always differ in colour;
-the support foot is shaded. Each figure shows the centre of mass (square, with its ground projection), the
-br-shrunk support rectangle (dashed) and an optional target (star).
+A pose figure has a title block (the pose, its support, the key numbers and the physics verdict, coloured), one row
+per kinematic model, and one legend for the whole figure. Left limbs are blue and right limbs red, as in the book,
+so the support and swing legs always differ; the support foot is shaded. Both centres of mass are drawn with
+their ground projections: the book's lumped CoM (green square) and the full-inertia CoM (purple diamond) that
+physics acts on, against the br-shrunk support rectangle (dashed green). Every render returns the PNG bytes and a
+report of what was drawn (for ``--json`` and tests).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Sequence
+import io
+from dataclasses import dataclass, field
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -17,6 +21,8 @@ from .kinematics.points import BodyPoints
 from .spec import Spec
 
 LEFT_COLOUR, RIGHT_COLOUR, BODY_COLOUR = "tab:blue", "tab:red", "black"
+LUMPED_COLOUR, FULL_COLOUR, TARGET_COLOUR = "green", "tab:purple", "gold"
+OK_COLOUR, BAD_COLOUR, UNKNOWN_COLOUR = "#1b7a1b", "#b3261e", "#555555"
 _CHAINS = (
     (("left_sole", "l_ank_roll", "l_knee", "l_hip_pitch", "l_hip_yaw"), LEFT_COLOUR),
     (("right_sole", "r_ank_roll", "r_knee", "r_hip_pitch", "r_hip_yaw"), RIGHT_COLOUR),
@@ -27,20 +33,54 @@ _CHAINS = (
     (("l_sho_pitch", "neck", "r_sho_pitch"), BODY_COLOUR),
 )
 # (title, horizontal axis index, vertical axis index, axis labels)
-_VIEWS = (("front", 1, 2, ("Y left [m]", "Z [m]")), ("side", 0, 2, ("X forward [m]", "Z [m]")),
-          ("top", 0, 1, ("X forward [m]", "Y left [m]")))
+_VIEWS = (("front (looking along -X)", 1, 2, ("Y left [m]", "Z up [m]")),
+          ("side (looking along +Y)", 0, 2, ("X forward [m]", "Z up [m]")),
+          ("top (looking down)", 0, 1, ("X forward [m]", "Y left [m]")))
+DPI = 90
+ROW_HEIGHT_IN = 5.2   # height of one row of views [in]
 
 
 @dataclass(frozen=True)
 class PoseFigure:
-    """One pose to draw: its body points (pose 0 is drawn), CoM [m], label, and what to mark."""
+    """One row of a pose figure: body points (pose 0 is drawn), both CoMs [m], what to mark, and a note."""
 
     points: BodyPoints
-    com: np.ndarray
     label: str
+    com_lumped: np.ndarray
+    com_full: np.ndarray | None = None
     br: float = 1.0
     target: Sequence[float] | None = None
-    ghost: BodyPoints | None = None  # an earlier pose drawn in grey (e.g. before an arm IK step)
+    ghost: BodyPoints | None = None   # an earlier pose drawn in grey (e.g. before an arm IK step)
+    note: str = ""
+
+
+@dataclass(frozen=True)
+class TitleBlock:
+    """The text above a pose figure: a title, key numbers, and the physics verdict (``ok`` None: not checked)."""
+
+    title: str
+    lines: Sequence[str] = ()
+    verdict: str = "not checked in physics"
+    ok: bool | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+def _pyplot():
+    """matplotlib's pyplot on the Agg backend (no display needed)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _png(fig) -> bytes:  # type: ignore[no-untyped-def]
+    """The figure as PNG bytes; the figure is closed."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=DPI)
+    _pyplot().close(fig)
+    return buf.getvalue()
 
 
 def _draw(ax, xyz: dict[str, np.ndarray], fig: PoseFigure, spec: Spec, h: int | None, v: int | None) -> None:
@@ -60,88 +100,125 @@ def _draw(ax, xyz: dict[str, np.ndarray], fig: PoseFigure, spec: Spec, h: int | 
         corners = fig.points.foot_corners(side)[0]
         ring = np.vstack([corners, corners[:1]])
         line(ring, color=colour, linewidth=1.5)
-        if side == fig.points.support and h is not None and (h, v) == (0, 1):
+        if side == fig.points.support and (h, v) == (0, 1):
             ax.fill(ring[:, 0], ring[:, 1], color=colour, alpha=0.15)
     sp = fig.points.point(f"{fig.points.support}_sole")[0]
     poly = support_polygon(spec, fig.points.support, fig.br, (sp[0], sp[1]))
     ring = np.vstack([poly, poly[:1]])
-    ring3 = np.column_stack([ring, np.full(len(ring), sp[2])])
-    line(ring3, color="green", linestyle="--", linewidth=1)
-    com = np.asarray(fig.com, dtype=float)
-    drop = np.array([com, [com[0], com[1], sp[2]]])
-    line(drop, color="green", linestyle=":", linewidth=1)
-    line(com[None, :], color="green", marker="s", markersize=7, linestyle="none")
+    line(np.column_stack([ring, np.full(len(ring), sp[2])]), color=LUMPED_COLOUR, linestyle="--", linewidth=1)
+    for com, colour, marker in ((fig.com_lumped, LUMPED_COLOUR, "s"), (fig.com_full, FULL_COLOUR, "D")):
+        if com is None:
+            continue
+        com = np.asarray(com, dtype=float)
+        line(np.array([com, [com[0], com[1], sp[2]]]), color=colour, linestyle=":", linewidth=1)
+        line(com[None, :], color=colour, marker=marker, markersize=7, linestyle="none")
+        line(np.array([[com[0], com[1], sp[2]]]), color=colour, marker="x", markersize=7, linestyle="none")
     if fig.target is not None:
-        line(np.asarray(fig.target, dtype=float)[None, :], color="gold", marker="*", markersize=14,
+        line(np.asarray(fig.target, dtype=float)[None, :], color=TARGET_COLOUR, marker="*", markersize=14,
              markeredgecolor="black", linestyle="none")
 
 
-def _pyplot():
-    """matplotlib's pyplot on the Agg backend (no display needed)."""
-    import matplotlib
+def _legend_handles(figures: Sequence[PoseFigure]) -> list:
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    handles = [Line2D([], [], color=LEFT_COLOUR, lw=2, marker="o", ms=3, label="left limbs"),
+               Line2D([], [], color=RIGHT_COLOUR, lw=2, marker="o", ms=3, label="right limbs"),
+               Line2D([], [], color=BODY_COLOUR, lw=2, label="torso, pelvis, head"),
+               Patch(color="grey", alpha=0.3, label="support foot"),
+               Line2D([], [], color=LUMPED_COLOUR, ls="--", label="support rectangle (shrunk by br)"),
+               Line2D([], [], color=LUMPED_COLOUR, marker="s", ls="none", label="CoM, lumped (book masses)")]
+    if any(f.com_full is not None for f in figures):
+        handles.append(Line2D([], [], color=FULL_COLOUR, marker="D", ls="none", label="CoM, full inertia (physics)"))
+    handles.append(Line2D([], [], color="grey", marker="x", ls="none", label="CoM ground projection"))
+    if any(f.target is not None for f in figures):
+        handles.append(Line2D([], [], color=TARGET_COLOUR, marker="*", ms=12, mec="black", ls="none", label="target"))
+    if any(f.ghost is not None for f in figures):
+        handles.append(Line2D([], [], color="grey", ls="--", label="initial pose"))
+    return handles
 
-    return plt
 
-
-def _png(fig) -> bytes:  # type: ignore[no-untyped-def]
-    """The figure as PNG bytes; the figure is closed."""
-    import io
-
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=90)
-    _pyplot().close(fig)
-    return buf.getvalue()
-
-
-def render_poses(figures: Sequence[PoseFigure], spec: Spec, title: str | None = None) -> bytes:
-    """Each pose as a row of front, side, top and 3D views; returns the PNG bytes."""
+def render_poses(figures: Sequence[PoseFigure], spec: Spec, block: TitleBlock) -> tuple[bytes, dict[str, Any]]:
+    """Each pose as a row of front, side, top and 3D views under a title block; returns (PNG bytes, report)."""
     plt = _pyplot()
-
     rows = len(figures)
-    fig = plt.figure(figsize=(16, 4.2 * rows))
+    header = 0.75 + 0.2 * len(block.lines) + 0.35        # title, number lines, panel titles [in]
+    footer = 1.25                                         # axis labels and the legend [in]
+    height = ROW_HEIGHT_IN * rows + header + footer
+    fig = plt.figure(figsize=(19, height))
+    grid = fig.add_gridspec(rows, 4, width_ratios=(1, 1, 1, 1.45), left=0.045, right=0.99, top=1 - header / height,
+                            bottom=footer / height, wspace=0.28, hspace=0.35)
     for r, pf in enumerate(figures):
         xyz = {name: np.array(val) for name, val in pf.points.as_dict(0).items()}
         for c, (view, h, v, labels) in enumerate(_VIEWS):
-            ax = fig.add_subplot(rows, 4, r * 4 + c + 1)
+            ax = fig.add_subplot(grid[r, c])
             _draw(ax, xyz, pf, spec, h, v)
             ax.set_aspect("equal", adjustable="datalim")
             ax.set_xlabel(labels[0])
             ax.set_ylabel(labels[1])
             ax.grid(True, alpha=0.3)
-            ax.set_title(f"{pf.label}: {view}")
-        ax3 = fig.add_subplot(rows, 4, r * 4 + 4, projection="3d")
+            ax.set_title(f"{pf.label}: {view}" if c == 0 and rows > 1 else view, fontsize=10)
+        ax3 = fig.add_subplot(grid[r, 3], projection="3d")
         _draw(ax3, xyz, pf, spec, None, None)
-        allpts = np.array(list(xyz.values()))
-        centre = (allpts.max(0) + allpts.min(0)) / 2
-        half = (allpts.max(0) - allpts.min(0)).max() / 2 + 0.02
-        ax3.set_xlim(centre[0] - half, centre[0] + half)
-        ax3.set_ylim(centre[1] - half, centre[1] + half)
-        ax3.set_zlim(max(0.0, centre[2] - half) if centre[2] - half > -0.05 else centre[2] - half, centre[2] + half)
+        pts = np.array(list(xyz.values()))
+        centre, half = (pts.max(0) + pts.min(0)) / 2, (pts.max(0) - pts.min(0)).max() / 2 + 0.02
+        for setter, k in ((ax3.set_xlim, 0), (ax3.set_ylim, 1), (ax3.set_zlim, 2)):
+            setter(centre[k] - half, centre[k] + half)
         ax3.set_box_aspect((1, 1, 1))
-        ax3.view_init(elev=20, azim=-135)
-        ax3.set_xlabel("X [m]")
-        ax3.set_ylabel("Y [m]")
-        ax3.set_zlabel("Z [m]")
-        ax3.set_title(f"{pf.label}: 3D")
-    if title:
-        fig.suptitle(title)
-    fig.text(0.01, 0.005, "blue: left limbs, red: right limbs, shaded: support foot; green square: CoM, "
-             "dashed green: support rectangle (br); star: target; grey dashed: initial pose", fontsize=8)
-    fig.tight_layout(rect=(0, 0.02, 1, 0.97 if title else 1))
-    return _png(fig)
+        ax3.view_init(elev=18, azim=-135)
+        ticks = np.round(np.linspace(-half, half, 3) + 0.0, 2)
+        ax3.set_xticks(np.round(centre[0] + ticks, 2))
+        ax3.set_yticks(np.round(centre[1] + ticks, 2))
+        ax3.set_zticks(np.round(centre[2] + ticks, 2))
+        ax3.tick_params(labelsize=8)
+        ax3.set_xlabel("X forward [m]", labelpad=6)
+        ax3.set_ylabel("Y left [m]", labelpad=6)
+        ax3.zaxis.set_rotate_label(False)
+        ax3.set_zlabel("Z up [m]", labelpad=8, rotation=90)
+        ax3.set_title("3D" + (f" — {pf.note}" if pf.note else ""), fontsize=10)
+    colour = UNKNOWN_COLOUR if block.ok is None else OK_COLOUR if block.ok else BAD_COLOUR
+    top = 1 - 0.2 / height
+    fig.text(0.045, top, block.title, fontsize=15, weight="bold", va="top")
+    fig.text(0.99, top, block.verdict, fontsize=13, weight="bold", color=colour, va="top", ha="right")
+    fig.text(0.045, top - 0.5 / height, "\n".join(block.lines), fontsize=10, va="top", family="monospace")
+    handles = _legend_handles(figures)
+    fig.legend(handles=handles, loc="lower center", ncol=min(len(handles), 6), fontsize=9, frameon=False,
+               bbox_to_anchor=(0.5, 0.02 / height))
+    report = {"title": block.title, "verdict": block.verdict, "stable": block.ok, "lines": list(block.lines),
+              "legend": [h.get_label() for h in handles],
+              "rows": [{"model": f.label, "note": f.note, "com_lumped": [float(x) for x in f.com_lumped],
+                        "com_full": None if f.com_full is None else [float(x) for x in f.com_full],
+                        "target": None if f.target is None else [float(x) for x in f.target],
+                        "initial_pose": f.ghost is not None} for f in figures], **block.extra}
+    return _png(fig), report
 
 
-def render_cost_curve(history: Sequence[float], title: str = "PSO cost") -> bytes:
-    """Best cost after each PSO iteration (book fig. 2.43), log scale; returns the PNG bytes."""
+def render_cost_curve(attempts: Sequence[Sequence[float]], hand_errors: Sequence[Sequence[float]],
+                      threshold_m: float, title: str, chosen: int) -> bytes:
+    """The PSO's best cost after each iteration for every attempt (book fig. 2.43), log scale, with the hand
+    error of the best particle and the reach threshold; ``chosen`` marks the attempt that was kept."""
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(7, 4))
-    ax.semilogy(np.arange(1, len(history) + 1), np.maximum(np.asarray(history, dtype=float), 1e-9), color="tab:blue")
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(13, 4.6))
+    for k, (history, errors) in enumerate(zip(attempts, hand_errors)):
+        it = np.arange(1, len(history) + 1)
+        style = dict(lw=2.2 if k == chosen else 1.2, alpha=1.0 if k == chosen else 0.6)
+        label = f"attempt {k + 1}" + (" (kept)" if k == chosen else "")
+        ax.semilogy(it, np.maximum(np.asarray(history, dtype=float), 1e-9), label=label, **style)
+        ax2.semilogy(np.arange(1, len(errors) + 1), np.maximum(np.asarray(errors, dtype=float) * 1000, 1e-6),
+                     label=label, **style)
+    ax.axhline(100, color="grey", ls=":", lw=1)
+    ax.text(1, 100, " a penalty (100) is active above this line", va="bottom", fontsize=8, color="grey")
     ax.set_xlabel("iteration")
     ax.set_ylabel("best cost (log)")
-    ax.set_title(title)
-    ax.grid(True, which="both", alpha=0.3)
+    ax.set_title("cost = 100·[swing foot below floor] + 100·[CoM outside rectangle] + |hand − target| [m]\n"
+                 "+ 10·violation [m] + small tie-breakers (margin, torso tilt, self-collision)", fontsize=9)
+    ax2.axhline(threshold_m * 1000, color=BAD_COLOUR, ls="--", lw=1.2, label=f"reach threshold {threshold_m * 1000:g} mm")
+    ax2.set_xlabel("iteration")
+    ax2.set_ylabel("hand distance to target of the best particle [mm] (log)")
+    ax2.set_title("hand error (the refinement then brings it within 1 mm)", fontsize=9)
+    for a in (ax, ax2):
+        a.grid(True, which="both", alpha=0.3)
+        a.legend(fontsize=8)
+    fig.suptitle(title)
     fig.tight_layout()
     return _png(fig)

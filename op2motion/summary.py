@@ -7,7 +7,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .balance import COM_MODEL_LUMPED, check_br, stability_margin
+from .balance import check_br, stability_margin
 from .errors import InputError, LimitViolation
 from .joints import BookAngles, book_to_servo, limit_violations, servo_dict, servo_to_ticks
 from .kinematics import BodyPoints, forward
@@ -29,6 +29,8 @@ class PoseReport:
     com: np.ndarray
     br: float
     stability_margin_m: float
+    com_full: np.ndarray
+    stability_margin_full_m: float
     servo: np.ndarray
     book: BookAngles
     ticks: dict[str, int] | None
@@ -43,7 +45,8 @@ class PoseReport:
         """JSON-ready dict (the ``fk --json`` keys)."""
         return {
             "model": self.model, "support": self.support, "points": self.points.as_dict(0), "com": _vec(self.com),
-            "com_model": COM_MODEL_LUMPED, "left_hand": _vec(self.points.point("left_hand")[0]),
+            "com_model": "book", "com_full": _vec(self.com_full), "stability_margin_full_m": self.stability_margin_full_m,
+            "left_hand": _vec(self.points.point("left_hand")[0]),
             "right_hand": _vec(self.points.point("right_hand")[0]),
             "swing_foot_corners": [_vec(c) for c in self.points.swing_foot_corners[0]],
             "swing_foot_min_z": self.swing_foot_min_z, "br": self.br, "stability_margin_m": self.stability_margin_m,
@@ -57,7 +60,9 @@ class PoseReport:
         lines = [
             f"model {self.model.upper()}, {self.support} support",
             f"centre of mass   {fmt(self.com)} m  [lumped, the book's masses]",
-            f"stability margin {self.stability_margin_m * 1000:+.1f} mm (br {self.br}; positive = inside)",
+            f"                 {fmt(self.com_full)} m  [full inertia, the spec's link inertials]",
+            f"stability margin {self.stability_margin_m * 1000:+.1f} mm lumped, {self.stability_margin_full_m * 1000:+.1f} "
+            f"mm full inertia (br {self.br}; positive = inside)",
             f"left hand        {fmt(self.points.point('left_hand')[0])} m",
             f"right hand       {fmt(self.points.point('right_hand')[0])} m",
             f"swing foot lowest corner z {self.swing_foot_min_z * 1000:+.2f} mm",
@@ -69,14 +74,21 @@ class PoseReport:
 def evaluate(angles: BookAngles, spec: Spec, model: str = "dh", br: float = 1.0,
              sp: Sequence[float] = (0.0, 0.0, 0.0), gamma: float = 0.0) -> PoseReport:
     """Forward kinematics and balance of the first pose of ``angles``."""
+    from .model.dynamics import dynamics_for
+
     one = angles.row(0)
     points = forward(one, spec, model, sp, gamma)
     com = points.com[:, 0].copy()
     margin = float(stability_margin(com[None, :2], spec, one.support, check_br(br), (sp[0], sp[1]), gamma)[0])
     servo = book_to_servo(one, spec)[0]
+    full = dynamics_for(spec).com(servo, one.support)
+    if gamma != 0.0 or any(v != 0.0 for v in sp):  # the same placement as the points
+        c, s = np.cos(gamma), np.sin(gamma)
+        full = np.array([c * full[0] - s * full[1], s * full[0] + c * full[1], full[2]]) + np.asarray(sp, float)
+    margin_full = float(stability_margin(full[None, :2], spec, one.support, br, (sp[0], sp[1]), gamma)[0])
     try:
         ticks: dict[str, int] | None = {str(j.id): int(t) for j, t in zip(spec.joints, servo_to_ticks(servo, spec))}
     except InputError:  # an angle beyond ±180° has no tick; limit_violations names it
         ticks = None
     violations = limit_violations(servo, spec, "mechanical") + limit_violations(servo, spec, "cable-safe")
-    return PoseReport(model, one.support, points, com, br, margin, servo, one, ticks, violations)
+    return PoseReport(model, one.support, points, com, br, margin, full, margin_full, servo, one, ticks, violations)

@@ -3,7 +3,7 @@
 One function decides what a solve is: PSO + refinement on the D-H model, retried on the next seeds (``restarts``)
 when a seed does not reach the target or, with ``validate``, when the reached pose does not stand in physics; so
 both commands retry the same way, simulate for the same time, and never write a pose that falls when validation
-was asked for. :class:`Outcome` is the typed result; :func:`render_figures` draws the pose and the cost curve.
+was asked for. :class:`Outcome` is the typed result (its figures: :mod:`op2motion.figures`).
 """
 
 from __future__ import annotations
@@ -49,6 +49,14 @@ class Outcome:
                    "validation_reason": self.validation.reason}
         return Pose(pose.name, pose.support, pose.servo, metrics, pose.provenance)
 
+    def warnings(self) -> list[str]:
+        """What a user should know before trusting an unvalidated pose."""
+        r = self.result
+        if self.validation is None and r.reached and r.margin_full_m < 0:
+            return [f"the full-inertia CoM is {-r.margin_full_m * 1000:.1f} mm outside the support rectangle (br "
+                    f"{r.problem.br:g}): the pose is likely to fall; check it with --validate"]
+        return []
+
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready: the metrics, the verdict and the validation."""
         r = self.result
@@ -74,15 +82,3 @@ def solve(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSettin
                            physics_check if validate else None)
     return Outcome(res, validations.get(res.settings.seed))
 
-
-def render_figures(outcome: Outcome, name: str, spec: Spec) -> tuple[bytes, bytes]:
-    """PNG bytes of the pose figure (front, side, top, 3D with target, CoM and support rectangle) and of the PSO
-    cost curve of one outcome."""
-    from .kinematics import forward
-    from .plot import PoseFigure, render_cost_curve, render_poses
-
-    r = outcome.result
-    points = forward(r.angles, spec, "dh")
-    figure = PoseFigure(points, r.com_lumped, name, r.problem.br, r.problem.target)
-    return (render_poses([figure], spec, title=f"{name}: {r.message}"),
-            render_cost_curve(r.pso.history, f"PSO cost, {name}"))

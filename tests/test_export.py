@@ -244,3 +244,36 @@ def test_sigkill_of_the_parent_leaves_no_worker_and_the_rerun_completes(tmp_path
     assert resumed.returncode == 0 and summary["targets"] == 8 and summary["solved"] + summary["failed"] == 8
     rows = json.loads((tmp_path / "lib" / "index.json").read_text(encoding="utf-8"))
     assert len(rows) == 8 and all(r["hand"] == "left" and r["support"] == "left" for r in rows)
+
+
+INTERRUPT_EXIT_S = 3.0
+
+
+def test_ctrl_c_stops_a_build_fast_with_a_complete_index_and_it_resumes(tmp_path, spec):
+    cmd = [sys.executable, "-m", "op2motion", "library", "build", "--x", "0.06", "0.14", "5", "--y", "0", "0.04",
+           "2", "--z", "0.07", "0.07", "1", "--hands", "left", "--supports", "left", "--workers", "2",
+           "--iters", "150", "--out", str(tmp_path / "lib")]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 90
+    while time.time() < deadline and len(list((tmp_path / "lib").glob("reach-*.json"))) < 2:
+        time.sleep(0.02)
+    workers = _descendants(proc.pid)
+    proc.send_signal(signal.SIGINT)
+    t0 = time.time()
+    _, err = proc.communicate(timeout=30)
+    assert time.time() - t0 < INTERRUPT_EXIT_S and proc.returncode == 130
+    assert err.count("\n") == 1 and "to resume" in err and "Traceback" not in err
+    deadline = time.time() + INTERRUPT_EXIT_S       # the workers (and multiprocessing's tracker) are gone too
+    while time.time() < deadline and any(_alive(p) for p in workers):
+        time.sleep(0.05)
+    assert not [p for p in workers if _alive(p)]
+    files = sorted(p.name for p in (tmp_path / "lib").glob("reach-*.json"))
+    rows = json.loads((tmp_path / "lib" / "index.json").read_text(encoding="utf-8"))
+    assert sorted(r["file"] for r in rows if r["file"]) == files and len(files) < 10
+    resumed = subprocess.run(cmd + ["--json"], capture_output=True, text=True, timeout=300)
+    assert resumed.returncode == 0 and json.loads(resumed.stdout)["targets"] == 10
+    rows = json.loads((tmp_path / "lib" / "index.json").read_text(encoding="utf-8"))
+    assert len(rows) == 10
+    for row in rows:
+        assert row["hand"] == "left" and row["support"] == "left" and row["br"] == 0.7
+        assert row["x"] is not None and row["y"] is not None and row["z"] == 0.07

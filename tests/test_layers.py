@@ -21,7 +21,7 @@ LAYERS = [
     {"balance", "servo", "arm_ik"},
     {"summary", "posture", "physics", "export", "plot", "motion"},
     {"workflow", "gait"},
-    {"bench", "library"},
+    {"bench", "library", "figures"},
     {"commands"},
     {"cli"},
     {"__main__", "__init__"},

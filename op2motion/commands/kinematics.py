@@ -8,6 +8,7 @@ import math
 from typing import Any
 
 from ..errors import InputError
+from ..physics import DEFAULT_SECONDS, MAX_SECONDS, MIN_SECONDS
 from ..spec import Spec
 from .common import (
     BOUNDARY_RATIO,
@@ -25,6 +26,7 @@ from .common import (
 )
 
 TOL_MM = number(0.0, 100.0, "mm", open_low=True)
+SECONDS = number(MIN_SECONDS, MAX_SECONDS, "s")
 
 
 def register(sub: Any) -> None:
@@ -51,6 +53,9 @@ def register(sub: Any) -> None:
     p.add_argument("--br", type=BOUNDARY_RATIO, default=1.0, help="boundary ratio of the drawn support rectangle")
     p.add_argument("--target", type=TARGET_M, nargs=3, metavar=("X", "Y", "Z"), help="mark a target [m]")
     p.add_argument("-o", "--output", type=output_path, required=True, metavar="PNG", help="where to write the PNG")
+    p.add_argument("--validate", action="store_true", help="check the pose in physics and show the verdict")
+    p.add_argument("--seconds", type=SECONDS, default=DEFAULT_SECONDS,
+                   help=f"simulated time of --validate [s] (default {DEFAULT_SECONDS:g})")
 
     p = add_command(sub, "arm-ik", cmd_arm_ik, "move one hand by a displacement with the Taylor-linearised arm IK")
     p.add_argument("--hand", choices=("left", "right"), required=True, help="which hand to move")
@@ -121,22 +126,33 @@ def cmd_convert(args: argparse.Namespace, spec: Spec) -> int:
 
 
 def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
-    """``op2motion plot``."""
+    """``op2motion plot``: the figure, with the physics verdict when asked (or recorded in the pose file)."""
+    from ..figures import PB_PSI_NOTE, pose_figure
     from ..fileio import OutputSet
-    from ..plot import PoseFigure, render_poses
-    from ..summary import evaluate
+    from ..joints import book_to_servo
 
     outputs = OutputSet({"output": args.output})
-    angles, name, _ = angles_from(args, spec, args.pose_positional, default_standing=True)
+    angles, name, pose = angles_from(args, spec, args.pose_positional, default_standing=True)
     target = vec3(args.target, "target")
     models = ("dh", "pb") if args.model == "both" else (args.model,)
-    reports = [evaluate(angles, spec, model, args.br) for model in models]
-    figures = [PoseFigure(r.points, r.com, f"{name} ({r.model.upper()})", args.br, target) for r in reports]
-    outputs.put("output", render_poses(figures, spec, title=f"{spec.name}: {name}, {angles.support} support"))
+    support = pose.support if pose is not None else angles.support
+    validation = None
+    if args.validate:
+        from ..physics import validate_servo
+
+        servo = pose.servo if pose is not None else book_to_servo(angles, spec)[0]
+        validation = validate_servo(servo, support, spec, args.seconds)
+    png, drawn, reports = pose_figure(name, angles, spec, models, args.br, target, validation,
+                                      None if pose is None else pose.metrics)
+    outputs.put("output", png)
     out = outputs.commit()["output"]
-    summary = {"png": str(out), "models": {r.model: {k: r.as_dict(spec)[k] for k in (
-        "com", "stability_margin_m", "left_hand", "right_hand", "swing_foot_min_z")} for r in reports}}
-    emit(args, summary, "\n\n".join(r.human() for r in reports) + f"\n\nwrote {out}")
+    summary = {"png": str(out), "support": support, "drawn": drawn,
+               "models": {r.model: {k: r.as_dict(spec)[k] for k in (
+                   "com", "stability_margin_m", "com_full", "stability_margin_full_m", "left_hand", "right_hand",
+                   "swing_foot_min_z")} for r in reports}}
+    notes = [f"note: {PB_PSI_NOTE}"] if any(row["note"] for row in drawn["rows"]) else []
+    emit(args, summary, "\n\n".join(r.human() for r in reports) + "\n" + "\n".join(notes)
+         + f"\n{drawn['verdict']}\nwrote {out}")
     return 0
 
 
@@ -146,8 +162,8 @@ def cmd_arm_ik(args: argparse.Namespace, spec: Spec) -> int:
     from ..errors import CheckFailed, Unreachable
     from ..fileio import OutputSet
     from ..joints import book_to_servo, servo_dict
-    from ..kinematics import forward
-    from ..plot import PoseFigure, render_poses
+    from ..summary import evaluate
+    from ..figures import pose_figure
 
     outputs = OutputSet({"plot": args.plot} if args.plot else {})
     angles, name, _ = angles_from(args, spec)
@@ -179,12 +195,13 @@ def cmd_arm_ik(args: argparse.Namespace, spec: Spec) -> int:
                               f"{args.tol_mm} mm); it lies outside what this arm can reach on the "
                               f"{res.model.upper()} model", res.error_m, tol)
     if args.plot and failure is None:
-        after, before = forward(res.angles, spec, res.model), forward(res.initial, spec, res.model)
-        target = before.point(arm.hand)[0] + res.requested
-        fig = PoseFigure(after, after.com[:, 0], f"{name} + arm IK ({res.model.upper()})", target=target,
-                         ghost=before)
-        outputs.put("plot", render_poses([fig], spec, title=f"{args.hand} hand moved by "
-                                         f"{', '.join(f'{v * 1000:+.0f}' for v in res.requested)} mm"))
+        start = evaluate(res.initial, spec, res.model)
+        target = start.points.point(arm.hand)[0] + res.requested
+        lines = [f"{args.hand} hand moved by ({', '.join(f'{v * 1000:+.1f}' for v in res.requested)}) mm with "
+                 f"{res.mode} arm IK: {deltas}; error {res.error_m * 1000:.3f} mm"]
+        png, _, _ = pose_figure(f"{name} + arm IK", res.angles, spec, (res.model,), target=target, lines=lines,
+                                ghost=res.initial)
+        outputs.put("plot", png)
         result["png"] = str(outputs.commit()["plot"])
     emit(args, result, text)
     if failure is not None:

@@ -74,7 +74,8 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     from ..export.posefile import pose_to_json
     from ..fileio import OutputSet
     from ..posture.cost import PostureProblem
-    from ..workflow import render_figures, solve
+    from ..figures import outcome_figures
+    from ..workflow import solve
 
     target = vec3(args.target, "target")
     problem = PostureProblem(args.support, args.hand, target, args.br, args.model).validated()
@@ -104,15 +105,21 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     if v is not None:
         lines.append(f"  physics ({args.seconds:g} s): {'STABLE' if v.stable else 'NOT STABLE'} ({v.reason}), "
                      f"tilt {v.max_tilt_deg:.1f}°, torque {v.max_torque_nm:.2f} N·m at {v.worst_joint}")
+    warnings = outcome.warnings()
+    result["warnings"] = warnings
+    lines += [f"  warning: {w}" for w in warnings]
     if not outcome.ok:
         emit(args, result, "\n".join(lines))
         raise CheckFailed(f"{r.message}; nothing written")
-    figure, cost_curve = render_figures(outcome, name, spec)
+    figure, cost_curve, drawn = outcome_figures(outcome, name, spec)
     outputs.put("out", pose_to_json(pose, spec))
     outputs.put("plot", figure)
     outputs.put("cost curve", cost_curve)
     files = outputs.commit()
     result["files"] = {"pose": str(files["out"]), "png": str(files["plot"]), "cost_png": str(files["cost curve"])}
+    result["figure"] = drawn
     lines.append(f"  wrote {files['out']}, {files['plot']}, {files['cost curve']}")
     emit(args, result, "\n".join(lines))
+    if warnings and args.json:   # people see them in the text; JSON readers on stdout, and a line on stderr
+        print(f"op2motion: warning: {warnings[0]}", file=sys.stderr)
     return 0

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
-from ..errors import InputError, Op2MotionError
+from ..errors import InputError, Interrupted, Op2MotionError
 from ..export.posefile import pose_to_json
 from ..fileio import write_atomic
 from ..physics import DEFAULT_SECONDS
@@ -31,7 +31,7 @@ from ..spec import Spec
 from ..specfile import load_spec
 from ..workflow import DEFAULT_RESTARTS, solve
 from .grid import Job
-from .index import IndexRow, load_index, write_index
+from .index import INDEX_JSON, IndexRow, load_index, reconcile, write_index
 
 MAX_WORKERS = 64
 WATCHDOG_PERIOD_S = 0.5
@@ -139,7 +139,8 @@ def build_library(jobs: Sequence[Job], spec: Spec, out_dir: str | Path, settings
                   on_done: Callable[[IndexRow], Any] | None = None) -> BuildSummary:
     """Solve every job not already in ``out_dir``'s index (see the module docstring); returns the summary.
 
-    Raises :class:`KeyboardInterrupt` after a complete index is written when interrupted (Ctrl-C, SIGTERM).
+    Raises :class:`Interrupted` (exit code 130) when interrupted (Ctrl-C, SIGTERM), after the workers are ended
+    and a complete index is written.
     """
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
@@ -150,12 +151,19 @@ def build_library(jobs: Sequence[Job], spec: Spec, out_dir: str | Path, settings
     rows = load_index(out, spec)
     todo = [j for j in jobs if j.name not in rows]
     t0 = time.perf_counter()
+    interrupted = False
     try:
         with _sigterm_as_interrupt():
             if todo:
                 _run(todo, spec, spec_path, settings, min(workers, len(todo)), out, rows, on_done)
-    finally:
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:   # every exit path: the index describes exactly the pose files present
+        rows = reconcile(out, rows, spec)
         write_index(out, rows)
+    if interrupted:
+        raise Interrupted(f"library build stopped: {out / INDEX_JSON} lists the {len(rows)} target(s) done; run the "
+                          "same command again to resume")
     wanted = [rows[j.name] for j in jobs if j.name in rows]
     solved = sum(1 for r in wanted if r.reached)
     return BuildSummary(len(jobs), solved, len(wanted) - solved, len(jobs) - len(todo),
@@ -165,7 +173,13 @@ def build_library(jobs: Sequence[Job], spec: Spec, out_dir: str | Path, settings
 def _run(todo: Sequence[Job], spec: Spec, spec_path: str | None, settings: BuildSettings, workers: int, out: Path,
          rows: dict[str, IndexRow], on_done: Callable[[IndexRow], Any] | None) -> None:
     ctx = multiprocessing.get_context("spawn")  # fresh interpreters: no inherited threads or pyswarms state
-    pool = ctx.Pool(workers, initializer=_worker_init, initargs=(os.getpid(),))
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None  # workers inherit Ctrl-C ignored
+    try:
+        pool = ctx.Pool(workers, initializer=_worker_init, initargs=(os.getpid(),))
+    finally:
+        if main:
+            signal.signal(signal.SIGINT, previous)
     try:
         tasks = [(job, spec_path, spec.sha256, settings) for job in todo]
         for row, pose_text in pool.imap_unordered(_solve_job, tasks):

@@ -87,9 +87,21 @@ def _row_from_pose(path: Path, spec: Spec) -> IndexRow | None:
         return None
 
 
+def reconcile(out_dir: Path, rows: dict[str, IndexRow], spec: Spec) -> dict[str, IndexRow]:
+    """``rows`` made to describe the pose files present: rows whose file is gone are dropped, files without a row
+    get one rebuilt from their provenance."""
+    rows = {name: row for name, row in rows.items() if not row.file or (out_dir / row.file).is_file()}
+    for path in sorted(out_dir.glob(POSE_GLOB)):
+        if path.stem not in rows or rows[path.stem].file != path.name:
+            row = _row_from_pose(path, spec)
+            if row is not None:
+                rows[row.name] = row
+    return rows
+
+
 def load_index(out_dir: Path, spec: Spec) -> dict[str, IndexRow]:
-    """The rows of an existing library folder: its index, completed from pose files the index lacks; rows whose
-    pose file is gone are dropped. Leftover temp files of interrupted writes are removed."""
+    """The rows of an existing library folder: its index, reconciled with the pose files present (see
+    :func:`reconcile`). Leftover temp files of interrupted writes are removed."""
     for stale in out_dir.glob(".*.tmp"):  # temp files of writes that a kill interrupted (never renamed into place)
         stale.unlink(missing_ok=True)
     rows: dict[str, IndexRow] = {}
@@ -101,10 +113,4 @@ def load_index(out_dir: Path, spec: Spec) -> dict[str, IndexRow]:
                 rows[row.name] = row
         except (json.JSONDecodeError, UnicodeDecodeError, TypeError, ValueError) as exc:
             raise InputError(f"not a library index ({exc}); move it away to rebuild", str(index)) from None
-    rows = {name: row for name, row in rows.items() if not row.file or (out_dir / row.file).is_file()}
-    for path in sorted(out_dir.glob(POSE_GLOB)):
-        if path.stem not in rows or rows[path.stem].file != path.name:
-            row = _row_from_pose(path, spec)
-            if row is not None:
-                rows[row.name] = row
-    return rows
+    return reconcile(out_dir, rows, spec)

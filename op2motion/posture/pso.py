@@ -64,11 +64,13 @@ class PSOSettings:
 
 @dataclass(frozen=True)
 class PSOResult:
-    """Best vector [rad] (book layout, 20 values), its cost, and the best cost after each iteration."""
+    """Best vector [rad] (book layout, 20 values), its cost, the best cost after each iteration and the hand error
+    [m] of the best particle so far after each iteration."""
 
     x: np.ndarray
     cost: float
     history: np.ndarray
+    hand_error_history: np.ndarray
 
 
 @contextlib.contextmanager
@@ -125,16 +127,19 @@ def run_pso(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSett
     dims = N_TH + N_PHI if problem.model == "pb" else full  # the projection model has psi = 0
     lo, hi = lo[:dims], hi[:dims]
     v_max = settings.velocity_fraction * (hi - lo)
-    best = [math.inf]
+    best, best_hand, hand_history = [math.inf], [math.inf], []
     cost_model = CostModel(problem, spec)
 
     def objective(swarm: np.ndarray) -> np.ndarray:
         x = swarm if dims == full else np.hstack([swarm, np.zeros((swarm.shape[0], full - dims))])
-        cost = cost_model(BookAngles(x[:, :N_TH], x[:, N_TH:N_TH + N_PHI], x[:, N_TH + N_PHI:], problem.support)).total
-        best[0] = min(best[0], float(cost.min()))
+        terms = cost_model(BookAngles(x[:, :N_TH], x[:, N_TH:N_TH + N_PHI], x[:, N_TH + N_PHI:], problem.support))
+        i = int(np.argmin(terms.total))
+        if terms.total[i] < best[0]:
+            best[0], best_hand[0] = float(terms.total[i]), float(terms.hand_error[i])
+        hand_history.append(best_hand[0])
         if on_iteration is not None:
             on_iteration(best[0])
-        return cost
+        return terms.total
 
     state = np.random.get_state()
     np.random.seed(settings.seed)  # pyswarms draws from NumPy's global generator
@@ -151,4 +156,4 @@ def run_pso(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSett
         np.random.set_state(state)
     x = np.zeros(full)
     x[:dims] = pos
-    return PSOResult(x, float(cost), np.asarray(optimizer.cost_history, dtype=float))
+    return PSOResult(x, float(cost), np.asarray(optimizer.cost_history, dtype=float), np.asarray(hand_history))

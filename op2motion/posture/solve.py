@@ -51,6 +51,12 @@ class PostureResult:
     left_hand: np.ndarray
     right_hand: np.ndarray
     attempts: int = 1
+    attempt_pso: tuple[PSOResult, ...] = ()
+
+    @property
+    def chosen_attempt(self) -> int:
+        """Index (from 0) of the kept attempt among :attr:`attempt_pso`."""
+        return next((k for k, p in enumerate(self.attempt_pso) if p is self.pso), len(self.attempt_pso) - 1)
 
     @property
     def hand_error_m(self) -> float:
@@ -111,13 +117,15 @@ def optimize_posture(problem: PostureProblem, spec: Spec, settings: PSOSettings 
         return res
 
     best = attempt(settings.seed)
+    tried = [best.pso]
     k = 0
     while not best.reached and k < restarts:
         k += 1
         candidate = attempt(settings.seed + k)
+        tried.append(candidate.pso)
         if _rank(candidate) > _rank(best):
             best = candidate
-    return replace(best, seconds=time.perf_counter() - t0, attempts=k + 1)
+    return replace(best, seconds=time.perf_counter() - t0, attempts=k + 1, attempt_pso=tuple(tried))
 
 
 def _rank(result: PostureResult) -> tuple[bool, bool, float]:

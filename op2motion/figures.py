@@ -1,0 +1,82 @@
+"""The figures users see, assembled from reports, physics verdicts and solves (the drawing is :mod:`.plot`).
+
+``pose_figure`` draws one pose on one or both kinematic models with its title block: the pose and support, both
+centres of mass with their margins, the hand and swing-foot numbers, and the physics verdict (run now, or recorded
+in the pose file's metrics, or "not checked"). ``outcome_figures`` draws what ``optimize`` writes: the pose and the
+cost curves of every attempt.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from .joints import BookAngles
+from .kinematics import forward
+from .physics import Validation
+from .plot import PoseFigure, TitleBlock, render_cost_curve, render_poses
+from .spec import Spec
+from .summary import PoseReport, evaluate
+from .workflow import Outcome
+
+PB_PSI_NOTE = "projection model drawn with psi = 0 (it has no transverse rotation)"
+
+
+def verdict_of(validation: Validation | None, metrics: Mapping[str, Any] | None = None) -> tuple[str, bool | None]:
+    """The verdict line and its sense: from a validation run now, else from a pose file's recorded metrics."""
+    if validation is not None:
+        return (f"STANDS in physics ({validation.seconds:g} s)" if validation.stable
+                else f"FALLS in physics: {validation.reason}"), validation.stable
+    if metrics and metrics.get("validated"):
+        stable = bool(metrics.get("stable"))
+        why = metrics.get("validation_reason", "")
+        return (("STANDS in physics (recorded)" if stable else f"FALLS in physics (recorded): {why}"), stable)
+    return "not checked in physics (use --validate)", None
+
+
+def _numbers(report: PoseReport) -> list[str]:
+    mm = lambda v: f"{v * 1000:+6.1f} mm"  # noqa: E731
+    com, full = report.com, report.com_full
+    return [f"CoM lumped (book)  ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m   margin {mm(report.stability_margin_m)}",
+            f"CoM full inertia   ({full[0]:+.3f}, {full[1]:+.3f}, {full[2]:.3f}) m   margin "
+            f"{mm(report.stability_margin_full_m)}   (to the support rectangle shrunk by br {report.br:g})",
+            f"swing foot lowest corner {mm(report.swing_foot_min_z)}"]
+
+
+def pose_figure(name: str, angles: BookAngles, spec: Spec, models: Sequence[str] = ("dh",), br: float = 1.0,
+                target: Sequence[float] | None = None, validation: Validation | None = None,
+                metrics: Mapping[str, Any] | None = None, lines: Sequence[str] = (),
+                ghost: BookAngles | None = None) -> tuple[bytes, dict[str, Any], list[PoseReport]]:
+    """PNG bytes, a report of what was drawn, and the pose reports of one pose on ``models``."""
+    rows, reports = [], []
+    for model in models:
+        note, shown = "", angles
+        if model == "pb" and np.any(angles.psi != 0.0):
+            note, shown = PB_PSI_NOTE, replace(angles, psi=np.zeros_like(angles.psi))
+        report = evaluate(shown, spec, model, br)
+        reports.append(report)
+        label = {"dh": "D-H model", "pb": "projection model"}[model]
+        rows.append(PoseFigure(report.points, label, report.com, report.com_full, br, target,
+                               None if ghost is None else forward(ghost, spec, model), note))
+    verdict, ok = verdict_of(validation, metrics)
+    block = TitleBlock(f"{name}: {spec.name}, {angles.support} support", [*lines, *_numbers(reports[0])], verdict, ok,
+                       {"margin_lumped_m": reports[0].stability_margin_m,
+                        "margin_full_m": reports[0].stability_margin_full_m})
+    png, drawn = render_poses(rows, spec, block)
+    return png, drawn, reports
+
+
+def outcome_figures(outcome: Outcome, name: str, spec: Spec) -> tuple[bytes, bytes, dict[str, Any]]:
+    """PNG bytes of the pose figure and of the cost curves of an ``optimize`` outcome, and the pose report."""
+    r = outcome.result
+    p = r.problem
+    lines = [f"{p.hand} hand to ({', '.join(f'{v:.3f}' for v in p.target)}) m: {r.message}",
+             f"torso tilt {np.degrees(r.terms.tilt[0]):.0f}°, PSO seed {r.settings.seed} (attempt {r.attempts}), "
+             f"refinement {r.method}"]
+    png, drawn, _ = pose_figure(name, r.angles, spec, ("dh",), p.br, p.target, outcome.validation, lines=lines)
+    attempts = r.attempt_pso or (r.pso,)
+    cost = render_cost_curve([a.history for a in attempts], [a.hand_error_history for a in attempts], r.tolerance_m,
+                             f"PSO cost, {name} ({len(attempts)} attempt(s))", r.chosen_attempt)
+    return png, cost, drawn
