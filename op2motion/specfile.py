@@ -231,6 +231,10 @@ def _masses(top: TableReader) -> tuple[list[LumpedMass], list[Inertial], list[Co
 def parse_spec(text: str, path: str = "<spec>") -> Spec:
     """Check TOML text and return its :class:`Spec`; ``path`` names the file in error messages."""
     try:
+        encoded = text.encode("utf-8")
+    except UnicodeEncodeError as exc:
+        raise SpecError(f"not valid Unicode text (a lone surrogate at character {exc.start})", path) from None
+    try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SpecError(f"not valid TOML: {exc}", path) from None
@@ -267,7 +271,7 @@ def parse_spec(text: str, path: str = "<spec>") -> Spec:
                 raise SpecError(f"({m.name}): body point {end!r} does not exist", f"{path}: lumped_mass")
     geometry = _geometry(path, {j.name: j for j in joints}, points, foot)
     return Spec(name, root, servo, foot, points, tuple(joints), tuple(masses), tuple(inertials), tuple(collisions),
-                geometry, path, hashlib.sha256(text.encode("utf-8")).hexdigest())
+                geometry, path, hashlib.sha256(encoded).hexdigest())
 
 
 def load_spec(path: str | Path | None = None) -> Spec:
