@@ -25,7 +25,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"op2motion {__version__}")
     parser.add_argument("--spec", metavar="FILE", help="robot spec TOML (default: the shipped specs/op2.toml)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=common.Parser,
-                                title="commands")
+                                title="commands", help="run 'op2motion COMMAND --help' for its options")
     for module in (kinematics, posture, library, files, physics, bench):
         module.register(sub)
     return parser

@@ -148,6 +148,14 @@ CASES = [
     (["validate", WALKREADY, "--seconds", "1000"], "--seconds"),
     (["validate", WALKREADY, "--gui-png", f"{IN}/folder"], "directory"),
     (["validate", f"{IN}/beyond_stop.json"], "mechanical range"),
+    # outputs the OS refuses (/proc takes no new files, even from root)
+    (["plot", "-o", "/proc/op2motion/x.png"], "cannot write"),
+    (["arm-ik", "--hand", "left", "--delta", "0", "0", "0.01", "--plot", "/proc/x.png", *BOOK], "cannot write"),
+    (["optimize", "--iters", "100", "--out", "/proc/op2motion/x.json"], "cannot write"),
+    (["export", "--format", "csv", STAND, "-o", "/proc/x.csv"], "cannot write"),
+    (["import-action", str(STOCK), "--page", "9", "--out", "/proc/x.json"], "cannot write"),
+    (["validate", WALKREADY, "--seconds", "0.2", "--gui-png", "/proc/x.png"], "cannot write"),
+    (["urdf", "-o", "/proc/op2.urdf"], "cannot write"),
     # urdf, bench, the parser itself
     (["urdf", "-o", f"{IN}/folder"], "directory"),
     (["urdf", "-o", ""], "empty"),

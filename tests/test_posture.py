@@ -125,3 +125,24 @@ def test_optimize_bad_input(capsys, tmp_path, monkeypatch, argv, needle):
     monkeypatch.chdir(tmp_path)
     code, out, err = run_cli(capsys, *argv)
     assert code == 2 and needle in err and out == "" and os.listdir(tmp_path) == []
+
+
+def test_the_default_problems_figure_shows_both_coms_and_the_verdict(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code, out, _ = run_cli(capsys, "optimize", "--validate", "--json")
+    doc = json.loads(out)
+    assert code == 0
+    drawn = doc["figure"]
+    assert drawn["stable"] is True and drawn["verdict"].startswith("STANDS")
+    row = drawn["rows"][0]
+    assert row["com_lumped"] == pytest.approx(doc["com"]) and row["com_full"] == pytest.approx(doc["com_full"])
+    assert {"CoM, lumped (book masses)", "CoM, full inertia (physics)", "target"} <= set(drawn["legend"])
+    assert "initial pose" not in drawn["legend"]                      # nothing is listed that is not drawn
+    assert drawn["margin_full_m"] == pytest.approx(doc["stability_margin_full_m"], abs=1e-9)
+    # plot draws the written pose the same way; the verdict comes from physics when asked
+    code, out, _ = run_cli(capsys, "plot", doc["files"]["pose"], "--validate", "-o", "again.png", "--json")
+    again = json.loads(out)["drawn"]
+    assert code == 0 and again["stable"] is True and again["rows"][0]["com_full"] == pytest.approx(row["com_full"])
+    # without --validate, the verdict recorded in the pose file is shown
+    code, out, _ = run_cli(capsys, "plot", doc["files"]["pose"], "-o", "recorded.png", "--json")
+    assert json.loads(out)["drawn"]["verdict"] == "STANDS in physics (recorded)"

@@ -20,7 +20,7 @@ def register(sub: Any) -> None:
     lib = sub.add_parser("library", help="the pose library: build a grid of reach poses",
                          description="the pose library: build a grid of reach poses")
     lib_sub = lib.add_subparsers(dest="subcommand", metavar="SUBCOMMAND", required=True, parser_class=Parser,
-                                 title="subcommands")
+                                 title="subcommands", help="what to do with the library")
     p = add_command(lib_sub, "build", cmd_library_build,
                     "optimise a grid of reach targets in worker processes (resumable)",
                     "Solve every combination of hands x supports x boundary ratios x target points with the "

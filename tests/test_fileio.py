@@ -1,0 +1,92 @@
+"""Output files: checked before work, written together, never mixed between two runs, never half-written."""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+
+import pytest
+
+from op2motion.errors import OutputError
+from op2motion.fileio import OutputSet, check_output_path
+
+ROUNDS = 30
+SLOW_RENAME_S = 0.002
+
+
+def test_two_writers_of_the_same_outputs_never_mix_their_files(tmp_path, monkeypatch):
+    paths = {"pose": tmp_path / "p.json", "figure": tmp_path / "p.png", "curve": tmp_path / "p_cost.png"}
+    mixed = []
+    replace = os.replace
+
+    def slow_replace(a, b):     # a slow file system: renames take time, so interleaved renames would show
+        replace(a, b)
+        time.sleep(SLOW_RENAME_S)
+
+    monkeypatch.setattr("op2motion.fileio.os.replace", slow_replace)
+
+    def writer(tag: bytes) -> None:
+        for _ in range(ROUNDS):
+            outputs = OutputSet(paths)
+            for key in paths:
+                outputs.put(key, tag * 200_000)
+            outputs.commit()
+
+    done = threading.Event()
+
+    def reader() -> None:
+        import fcntl
+
+        while not done.is_set():
+            fd = os.open(tmp_path, os.O_RDONLY)
+            fcntl.flock(fd, fcntl.LOCK_SH)          # a reader that respects the lock sees whole sets only
+            try:
+                tags = {p.read_bytes()[:1] for p in paths.values() if p.exists()}
+            finally:
+                os.close(fd)
+            if len(tags) > 1:
+                mixed.append(tags)
+
+    writers = [threading.Thread(target=writer, args=(t,)) for t in (b"a", b"b")]
+    watcher = threading.Thread(target=reader)
+    for t in [*writers, watcher]:
+        t.start()
+    for t in writers:
+        t.join()
+    done.set()
+    watcher.join()
+    assert mixed == []
+    assert len({p.read_bytes()[:1] for p in paths.values()}) == 1
+    assert sorted(os.listdir(tmp_path)) == ["p.json", "p.png", "p_cost.png"]   # no temp file left
+
+
+def test_outputs_are_checked_before_any_work(tmp_path):
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "file").write_text("x", encoding="utf-8")
+    for bad, needle in ((tmp_path / "folder", "directory"), ("", "empty"), (tmp_path / "file" / "x.png", "not a dir")):
+        with pytest.raises(OutputError, match=needle):
+            check_output_path(bad, "output")
+    with pytest.raises(OutputError, match="the same file"):
+        OutputSet({"a": tmp_path / "x.json", "b": tmp_path / "." / "x.json"})
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
+def test_a_read_only_folder_is_refused_before_work(tmp_path):
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(0o500)
+    try:
+        with pytest.raises(OutputError, match="not writable"):
+            check_output_path(folder / "x.png", "output")
+    finally:
+        folder.chmod(0o700)
+
+
+def test_a_failed_commit_leaves_nothing(tmp_path):
+    outputs = OutputSet({"ok": tmp_path / "a.json", "bad": "/proc/op2motion-test/b.json"})
+    outputs.put("ok", "{}")
+    outputs.put("bad", "{}")
+    with pytest.raises(OutputError, match="cannot write"):
+        outputs.commit()
+    assert os.listdir(tmp_path) == []
