@@ -74,3 +74,11 @@ def test_usage_errors_name_flags_and_placeholders_not_internal_identifiers(capsy
     code, _, err = run_cli(capsys, *argv)
     assert code == 2 and err.count("\n") == 1
     assert not re.search(r"\b[a-z]+_[a-z_]+\b", err.split("error: ", 1)[1].replace("import-action", "")), err
+
+
+def test_the_python_api_example_runs(clone):
+    section = README.split("## Python API", 1)[1].split("\n## ", 1)[0]
+    code = re.findall(r"```python\n(.*?)```", section, re.S)[0]
+    done = subprocess.run([sys.executable, "-c", code], cwd=clone, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert "True stands" in done.stdout and "True reached" in done.stdout
