@@ -22,15 +22,27 @@ def _example_lines() -> list[str]:
     return [line for block in blocks for line in block.splitlines() if line.startswith("op2motion ")]
 
 
+SKIP_DIRS = {".git", ".venv", "__pycache__", ".pytest_cache", ".hypothesis", ".ruff_cache", "build", "dist"}
+
+
+def _repository_files() -> list[str]:
+    """The tracked files (git), or, in a copy without git (CI), every file outside build and cache folders."""
+    done = subprocess.run(["git", "ls-files", "-z"], cwd=ROOT, capture_output=True)
+    if done.returncode == 0 and done.stdout:
+        return [name.decode() for name in done.stdout.split(b"\0") if name]
+    return [str(p.relative_to(ROOT)) for p in ROOT.rglob("*") if p.is_file()
+            and not SKIP_DIRS & set(p.relative_to(ROOT).parts) and not any(part.endswith(".egg-info")
+                                                                           for part in p.parts)]
+
+
 @pytest.fixture(scope="module")
 def clone(tmp_path_factory):
-    """The tracked files of the repository, copied as a fresh clone would have them."""
+    """The repository's files copied as a fresh clone would have them."""
     dest = tmp_path_factory.mktemp("clone")
-    files = subprocess.run(["git", "ls-files", "-z"], cwd=ROOT, capture_output=True, check=True).stdout.split(b"\0")
-    for name in filter(None, files):
-        target = dest / name.decode()
+    for name in _repository_files():
+        target = dest / name
         target.parent.mkdir(parents=True, exist_ok=True)
-        target.write_bytes((ROOT / name.decode()).read_bytes())
+        target.write_bytes((ROOT / name).read_bytes())
     return dest
 
 
