@@ -32,7 +32,7 @@ _API = {
     "PSOSettings": ("posture.pso", "PSOSettings"),
     "optimize_posture": ("posture.solve", "optimize_posture"),
     "solve": ("workflow", "solve"),
-    "validate": ("physics", "validate_servo"),
+    "validate": ("physics", "validate"),
     "read_pose": ("export.posefile", "read_pose"),
     "write_pose": ("export.posefile", "write_pose"),
     "build_urdf": ("model.urdf", "build_urdf"),

@@ -37,6 +37,17 @@ def com_lumped(points: BodyPoints) -> np.ndarray:
     return points.com.T
 
 
+def support_extents(spec: Spec, support: str, br: float = 1.0,
+                    com_model: str = COM_MODEL_LUMPED) -> tuple[float, float, float, float]:
+    """The support rectangle (front, back, left, right) [m] about the sole centre, shrunk by ``br``, that goes with
+    a CoM model: the book's foot (table 2.7) for the book's lumped CoM, the real sole (the foot box) for the
+    full-inertia CoM."""
+    check_br(br)
+    if com_model == COM_MODEL_FULL:
+        return spec.sole_extents(support, br)
+    return spec.foot.extents(support, br)
+
+
 def rectangle_margin(dx: np.ndarray, dy: np.ndarray, extents: tuple[float, float, float, float]) -> np.ndarray:
     """Signed distance [m] from points (dx forward, dy left) [m] to the edge of the rectangle
     (front, back, left, right) about the origin: positive inside, the Euclidean distance outside; (N,)."""
@@ -64,10 +75,12 @@ def _local(xy: np.ndarray, sp: tuple[float, float], gamma: float) -> tuple[np.nd
 
 
 def stability_margin(com_xy: np.ndarray, spec: Spec, support: str, br: float = 1.0,
-                     sp: tuple[float, float] = (0.0, 0.0), gamma: float = 0.0) -> np.ndarray:
-    """Signed distance (N,) [m] from the CoM ground projection to the shrunk rectangle's edge, positive inside."""
+                     sp: tuple[float, float] = (0.0, 0.0), gamma: float = 0.0,
+                     com_model: str = COM_MODEL_LUMPED) -> np.ndarray:
+    """Signed distance (N,) [m] from the CoM ground projection to the edge of the rectangle that goes with
+    ``com_model`` (:func:`support_extents`), shrunk by ``br``; positive inside."""
     dx, dy = _local(com_xy, sp, gamma)
-    return rectangle_margin(dx, dy, spec.foot.extents(support, check_br(br)))
+    return rectangle_margin(dx, dy, support_extents(spec, support, br, com_model))
 
 
 def penalty_stability(com_xy: np.ndarray, spec: Spec, support: str, br: float = 1.0,
@@ -82,3 +95,39 @@ def penalty_stability(com_xy: np.ndarray, spec: Spec, support: str, br: float = 
 def penalty_swing_foot_height(swing_foot_min_z: np.ndarray, des_ht: float = 0.0) -> np.ndarray:
     """Book code 2.8 ``PenaltySwingFootHeight``: 100 where the lowest swing-foot corner is below ``des_ht`` [m]."""
     return np.where(np.asarray(swing_foot_min_z) < des_ht - FLOOR_TOLERANCE_M, PENALTY, 0.0)
+
+
+def convex_hull(points: np.ndarray) -> np.ndarray:
+    """Convex hull (m, 2) of points (n, 2) [m], counter-clockwise, without repeated or collinear points."""
+    pts = sorted({(float(x), float(y)) for x, y in np.asarray(points, dtype=float).reshape(-1, 2)})
+    if len(pts) < 3:
+        return np.asarray(pts, dtype=float).reshape(-1, 2)
+
+    def half(seq: list) -> list:
+        out: list = []
+        for p in seq:
+            while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
+                                     - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 1e-15:
+                out.pop()
+            out.append(p)
+        return out
+
+    lower, upper = half(pts), half(pts[::-1])
+    return np.asarray(lower[:-1] + upper[:-1], dtype=float)
+
+
+def polygon_margin(xy: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    """Signed distance (N,) [m] from points (N, 2) to the edge of a convex counter-clockwise polygon (m, 2):
+    positive inside, the Euclidean distance to the polygon outside."""
+    p = np.atleast_2d(np.asarray(xy, dtype=float))
+    a, b = polygon, np.roll(polygon, -1, axis=0)
+    edge = b - a                                                     # (m, 2)
+    length = np.hypot(edge[:, 0], edge[:, 1])
+    rel = p[:, None, :] - a[None, :, :]                              # (N, m, 2)
+    # distance to each edge's line, positive on the inner (left) side of a counter-clockwise polygon
+    signed = (edge[None, :, 0] * rel[:, :, 1] - edge[None, :, 1] * rel[:, :, 0]) / length[None, :]
+    inside = signed.min(axis=1)
+    t = np.clip(np.einsum("nmk,mk->nm", rel, edge) / (length ** 2)[None, :], 0.0, 1.0)
+    nearest = a[None, :, :] + t[:, :, None] * edge[None, :, :]
+    outside = np.hypot(*(p[:, None, :] - nearest).transpose(2, 0, 1)).min(axis=1)
+    return np.where(inside >= 0.0, inside, -outside)

@@ -17,7 +17,7 @@ from . import book
 from .joints import BookAngles, book_to_servo
 from .kinematics import forward
 from .model.dynamics import dynamics_for
-from .physics import DEFAULT_SECONDS, validate_servo
+from .physics import DEFAULT_SECONDS, validate
 from .posture.cost import PostureProblem, evaluate_cost
 from .posture.pso import PSOSettings, run_pso
 from .spec import Spec
@@ -64,7 +64,7 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0) 
     pin_ms = _best_ms(lambda: dyn.com_loop(servo), 1) * scale
     stand = book_to_servo(BookAngles.standing("left"), spec)[0]
     verdict = {}
-    validate_ms = _best_ms(lambda: verdict.update(v=validate_servo(stand, "double", spec, DEFAULT_SECONDS)), 1)
+    validate_ms = _best_ms(lambda: verdict.update(v=validate(stand, "double", spec, DEFAULT_SECONDS)), 1)
     problem = PostureProblem.from_scenario(book.DEFAULT_PROBLEM)
     pso = {}
     pso_ms = _best_ms(lambda: pso.update(r=run_pso(problem, spec, PSOSettings())), 3)

@@ -12,9 +12,9 @@ import os
 import sys
 from typing import Sequence
 
-from .version import __version__
 from .errors import Interrupted, Op2MotionError
 from .specfile import load_spec
+from .version import __version__
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -11,9 +11,12 @@ import math
 from dataclasses import dataclass
 from typing import Mapping
 
+import numpy as np
+
 from .errors import SpecError
 
 SCHEMA = "op2motion.spec/2"
+GRAVITY_M_S2 = 9.81          # standard gravity, for every model of the robot
 SUPPORTS = ("left", "right")
 POSE_SUPPORTS = ("left", "right", "double")
 
@@ -166,6 +169,15 @@ class LumpedMass:
     fraction: float
 
 
+def rpy_matrix(rpy: tuple[float, float, float]) -> np.ndarray:
+    """URDF fixed-axis roll-pitch-yaw [rad] to a rotation matrix (Rz(yaw) Ry(pitch) Rx(roll))."""
+    r, p, y = rpy
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
 @dataclass(frozen=True)
 class Inertial:
     """A per-link inertial (Webots data): CoM [m] and tensor about the CoM [kg·m²] in the Webots link frame."""
@@ -177,6 +189,18 @@ class Inertial:
     inertia: tuple[float, float, float, float, float, float]
     webots_frame_xyz: tuple[float, float, float]
     webots_frame_rpy: tuple[float, float, float]
+
+    @property
+    def link_com(self) -> np.ndarray:
+        """The centre of mass (3,) [m] in our link frame (the Webots frame moved and turned into it)."""
+        return rpy_matrix(self.webots_frame_rpy) @ np.asarray(self.com) + np.asarray(self.webots_frame_xyz)
+
+    @property
+    def link_tensor(self) -> np.ndarray:
+        """The inertia tensor about the centre of mass (3, 3) [kg·m²] in our link frame."""
+        rot = rpy_matrix(self.webots_frame_rpy)
+        ixx, iyy, izz, ixy, ixz, iyz = self.inertia
+        return rot @ np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]) @ rot.T
 
 
 @dataclass(frozen=True)
@@ -244,6 +268,21 @@ class Spec:
             if j.name == name:
                 return j
         raise SpecError(f"{self.path}: no joint named {name!r}")
+
+    def foot_box(self, side: str) -> Collision:
+        """The collision box of the ``left`` or ``right`` foot: the real sole is its underside."""
+        link = self.joint(f"{side[0]}_ank_roll").child
+        boxes = self.collisions_of(link, "box")
+        if not boxes or any(abs(a) > 1e-12 for a in boxes[0].origin_rpy):
+            raise SpecError(f"expected an unrotated box collision shape on {link} (the sole)", self.path)
+        return boxes[0]
+
+    def sole_extents(self, side: str, br: float = 1.0) -> tuple[float, float, float, float]:
+        """(front, back, left, right) half-extents [m] of the real sole (the foot box's underside) about the sole
+        centre below the ankle, shrunk by ``br``."""
+        box = self.foot_box(side)
+        (sx, sy, _), (ox, oy, _) = box.size, box.origin_xyz
+        return br * (ox + sx / 2), br * (sx / 2 - ox), br * (oy + sy / 2), br * (sy / 2 - oy)
 
     def collisions_of(self, link: str, shape: str | None = None) -> tuple[Collision, ...]:
         """The collision shapes fixed to ``link`` (of one ``shape`` kind if given)."""

@@ -22,8 +22,23 @@ import numpy as np
 
 from .errors import SpecError
 from .fileio import read_text
-from .spec import (BOOK_VARS, COLLISION_SIZES, SCHEMA, SUPPORTS, BookMap, Collision, Foot, Geometry, Inertial, Joint,
-                   LumpedMass, PointSpec, Rating, Servo, Spec)
+from .spec import (
+    BOOK_VARS,
+    COLLISION_SIZES,
+    SCHEMA,
+    SUPPORTS,
+    BookMap,
+    Collision,
+    Foot,
+    Geometry,
+    Inertial,
+    Joint,
+    LumpedMass,
+    PointSpec,
+    Rating,
+    Servo,
+    Spec,
+)
 from .tablereader import TableReader
 
 try:  # Python >= 3.11

@@ -7,9 +7,15 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .balance import check_br, stability_margin
+from .balance import COM_MODEL_FULL, check_br, stability_margin
 from .errors import InputError, LimitViolation
-from .joints import BookAngles, book_to_servo, limit_violations, servo_dict, servo_to_ticks
+from .joints import (
+    BookAngles,
+    book_to_servo,
+    limit_violations,
+    servo_dict,
+    servo_to_ticks,
+)
 from .kinematics import BodyPoints, forward
 from .spec import Spec
 
@@ -74,18 +80,14 @@ class PoseReport:
 def evaluate(angles: BookAngles, spec: Spec, model: str = "dh", br: float = 1.0,
              sp: Sequence[float] = (0.0, 0.0, 0.0), gamma: float = 0.0) -> PoseReport:
     """Forward kinematics and balance of the first pose of ``angles``."""
-    from .model.dynamics import dynamics_for
-
     one = angles.row(0)
     points = forward(one, spec, model, sp, gamma)
     com = points.com[:, 0].copy()
     margin = float(stability_margin(com[None, :2], spec, one.support, check_br(br), (sp[0], sp[1]), gamma)[0])
     servo = book_to_servo(one, spec)[0]
-    full = dynamics_for(spec).com(servo, one.support)
-    if gamma != 0.0 or any(v != 0.0 for v in sp):  # the same placement as the points
-        c, s = np.cos(gamma), np.sin(gamma)
-        full = np.array([c * full[0] - s * full[1], s * full[0] + c * full[1], full[2]]) + np.asarray(sp, float)
-    margin_full = float(stability_margin(full[None, :2], spec, one.support, br, (sp[0], sp[1]), gamma)[0])
+    full = forward(one, spec, "dh", sp, gamma, full_com=True).com_full[:, 0].copy()   # true geometry, any model
+    margin_full = float(stability_margin(full[None, :2], spec, one.support, br, (sp[0], sp[1]), gamma,
+                                         COM_MODEL_FULL)[0])
     try:
         ticks: dict[str, int] | None = {str(j.id): int(t) for j, t in zip(spec.joints, servo_to_ticks(servo, spec))}
     except InputError:  # an angle beyond ±180° has no tick; limit_violations names it

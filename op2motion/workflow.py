@@ -11,7 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from .physics import DEFAULT_SECONDS, Validation, validate_servo
+from . import physics
+from .physics import DEFAULT_SECONDS, Validation
 from .pose import Pose
 from .posture.cost import PostureProblem
 from .posture.pso import PSOSettings
@@ -69,14 +70,16 @@ class Outcome:
 
 def solve(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSettings(), *,
           restarts: int = DEFAULT_RESTARTS, refine: bool = True, validate: bool = False,
-          seconds: float = DEFAULT_SECONDS, on_iteration: Callable[[float], Any] | None = None) -> Outcome:
-    """Solve ``problem`` (see the module docstring); ``seconds`` [s] is the simulated time of each validation."""
+          seconds: float = DEFAULT_SECONDS, engine: str = "pybullet",
+          on_iteration: Callable[[float], Any] | None = None) -> Outcome:
+    """Solve ``problem`` (see the module docstring); ``seconds`` [s] is the simulated time of each validation on
+    ``engine``."""
     validations: dict[int, Validation] = {}
 
     def physics_check(res: PostureResult) -> tuple[bool, str]:
-        v = validate_servo(res.pose("candidate", spec).servo, problem.support, spec, seconds)
+        v = physics.validate(res.pose("candidate", spec).servo, problem.support, spec, seconds, engine)
         validations[res.settings.seed] = v
-        return v.stable, f"does not stand in physics ({v.reason})"
+        return v.stable, f"does not stand in physics ({', '.join(v.reasons)})"
 
     res = optimize_posture(problem, spec, settings, refine, on_iteration, restarts,
                            physics_check if validate else None)

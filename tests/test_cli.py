@@ -105,14 +105,20 @@ def test_validate_command(capsys, tmp_path):
 
     poses = os.path.join(os.path.dirname(__file__), "..", "poses")
     png = tmp_path / "snap.png"
-    code, out, err = run_cli(capsys, "validate", os.path.join(poses, "walkready.json"), "--seconds", "1",
-                         "--gui-png", str(png), "--json")
+    code, out, err = run_cli(capsys, "validate", os.path.join(poses, "walkready.json"), "--seconds", "2",
+                             "--gui-png", str(png), "--json")
     doc = json.loads(out)
     assert code == 0 and err == ""
-    for key in ("stable", "max_tilt_deg", "com_drift_m", "feet_slip_m", "self_collisions", "max_torque_nm",
-                "torque_ok"):
+    for key in ("stable", "reasons", "engine", "support_margin_m", "cop_xy", "max_tilt_deg", "settled_tilt_deg",
+                "com_drift_m", "feet_slip_m", "self_collisions", "max_torque_nm", "torque_ok", "torque_ratio",
+                "sag_deg", "servo", "time_step_s", "seconds", "pushes"):
         assert key in doc
-    assert doc["stable"] is True and png.read_bytes()[:4] == b"\x89PNG"
+    assert doc["stable"] is True and doc["reasons"] == [] and png.read_bytes()[:4] == b"\x89PNG"
+    assert doc["time_step_s"] == 0.001 and "P 32" in doc["servo"]
+    code, out, _ = run_cli(capsys, "validate", os.path.join(poses, "walkready.json"), "--seconds", "2",
+                           "--engine", "both", "--json")
+    both = json.loads(out)
+    assert code == 0 and both["agree"] is True and set(both["engines"]) == {"pybullet", "mujoco"}
     # A pose that falls: exit 1, one line on stderr, the measurements still on stdout.
     stand = json.load(open(os.path.join(poses, "standing.json"), encoding="utf-8"))
     stand["servo_deg"]["l_ank_pitch"], stand["servo_deg"]["r_ank_pitch"] = 35.0, -35.0
@@ -121,6 +127,6 @@ def test_validate_command(capsys, tmp_path):
     falling = tmp_path / "lean_back.json"
     falling.write_text(json.dumps(stand), encoding="utf-8")
     code, out, err = run_cli(capsys, "validate", str(falling), "--seconds", "2")
-    assert code == 1 and "does not stand" in err and err.count("\n") == 1 and "NOT STABLE" in out
+    assert code == 1 and "does not stand: tilt" in err and err.count("\n") == 1 and "NOT STABLE (tilt" in out
     code, out, err = run_cli(capsys, "validate", str(tmp_path / "none.json"))
     assert code == 2 and out == "" and err.count("\n") == 1

@@ -1,4 +1,5 @@
-"""PyBullet validation: real poses stand, falling poses fall, clashes are reported, the known traps are handled."""
+"""Physics checks: the calibrated servo model, one verdict with named reasons in two engines that agree, the stock
+pages standing and surviving pushes, a test pose for each failure mode, the placement rule, the engines' traps."""
 
 from __future__ import annotations
 
@@ -9,73 +10,172 @@ import tempfile
 import numpy as np
 import pytest
 
+from helpers import balanced, pose_path, servo_pose
 from op2motion.errors import InputError
 from op2motion.export.posefile import read_pose
-from op2motion.joints import BookAngles, book_to_servo
 from op2motion.model.urdf import FRAME_LINK_MASS_KG, link_inertial
-from op2motion.physics import PLACEMENT_CLEARANCE_M, Sim, load_robot, quiet_c_output, validate_servo
+from op2motion.physics import ENGINES, make_engine, validate
+from op2motion.physics.body import Body, placement
+from op2motion.physics.pybullet_engine import PyBulletEngine, load_robot, quiet_c_output
+from op2motion.servo import ServoModel, p_gain_of_slope
 
-POSES = os.path.join(os.path.dirname(__file__), "..", "poses")
-PYBULLET_POSE_M = 1e-6   # PyBullet hands poses through single-precision transforms
-
-
-@pytest.mark.parametrize("name", ["init", "walkready", "sit_down", "stand_up", "standing"])
-def test_stock_standing_pages_stand(spec, name):
-    pose = read_pose(os.path.join(POSES, f"{name}.json"), spec)
-    v = validate_servo(pose.servo, pose.support, spec, seconds=2.0)
-    assert v.stable, v.reason
-    assert v.max_tilt_deg < 5 and v.feet_slip_m < 0.005 and v.self_collisions == [] and v.torque_ok
-
-
-def _stand(spec) -> np.ndarray:
-    return book_to_servo(BookAngles.standing("left"), spec)[0]
+STOCK_STANDING = ["init", "walkready", "sit_down", "stand_up"]
+PUSH_N = 2.0
+PUSH_RUN_S = 3.0                # 1.5 s after the push
+ENGINE_MARGIN_M = 0.002         # the two engines' settled margins agree this well on standing poses
+KP_P32_NM_RAD = 0.158 * 32 * 2.5
+ARMS_FORWARD = dict(r_sho_pitch=-90, l_sho_pitch=90)
+FOLDED_SWING = dict(r_hip_roll=25, r_ank_roll=25, r_hip_pitch=-90, r_knee=140, r_ank_pitch=50)
 
 
-def test_leaning_back_at_the_ankles_falls(spec):
-    servo = _stand(spec)
-    names = spec.joint_names
-    servo[names.index("l_ank_pitch")] = math.radians(35)    # both shins tilt 35° backwards
-    servo[names.index("r_ank_pitch")] = math.radians(-35)
-    v = validate_servo(servo, "double", spec, seconds=2.0)
-    assert not v.stable and v.max_tilt_deg > 20
+# --- the servo model -------------------------------------------------------------------------------------------
+
+def test_servo_model_in_physical_units(spec):
+    model = ServoModel.of(spec)
+    assert model.kp == pytest.approx(np.full(20, KP_P32_NM_RAD))                    # 12.6 N·m/rad at P = 32, 12 V
+    assert model.kd_emf == pytest.approx(2.5 / 5.76) and model.torque_max == pytest.approx(0.9625 * 2.5)
+    assert model.available(np.array([0.0]))[0] == pytest.approx(model.torque_max)
+    assert model.available(np.array([0.9625 * 5.76]))[0] == pytest.approx(0.0, abs=1e-12)  # zero near no-load
+    half = model.available(np.array([0.5 * 0.9625 * 5.76]))[0]
+    assert half == pytest.approx(0.5 * model.torque_max)                            # linear in between
+    goal, q = np.zeros(20), np.full(20, -0.5)
+    assert model.active_torque(goal, q) == pytest.approx(np.full(20, model.torque_max))  # clipped
+    low = ServoModel.of(spec, voltage=11.1)
+    assert low.torque_max == pytest.approx(0.9625 * 2.3) and low.kp[0] == pytest.approx(0.158 * 32 * 2.3)
+    with pytest.raises(InputError, match="rated voltages"):
+        ServoModel.of(spec, voltage=13.0)
 
 
-def test_legs_tilted_sideways_fall(spec):
-    """A parallelogram: both legs lean 30° to the right, torso upright: the CoM leaves both feet."""
-    lean = 30
-    book = BookAngles.from_deg([90, 0, 0, 180, 0, 0, 180, 0, 180, 0, 0], [lean, -lean, 180 + lean, -lean, 180, 180],
-                               [0, 0, 0], "left")
-    v = validate_servo(book_to_servo(book, spec)[0], "double", spec, seconds=2.0)
-    assert not v.stable
+@pytest.mark.parametrize("slope, p", [(0x55, 32), (0x44, 64), (0x66, 16), (0x77, 8), (0x33, 128)])
+def test_compliance_byte_sets_the_p_gain(slope, p):
+    assert p_gain_of_slope(slope) == p
 
 
-def test_arm_through_the_torso_is_reported(spec):
-    servo = _stand(spec)
-    names = spec.joint_names
-    servo[names.index("l_sho_roll")] = math.radians(75)     # upper arm swung 30° inwards, through the chest
-    v = validate_servo(servo, "double", spec, seconds=0.5)
-    assert ["body_link", "l_sho_roll_link"] in v.self_collisions
+# --- real poses stand, in both engines, and survive pushes -----------------------------------------------------
+
+@pytest.mark.parametrize("name", STOCK_STANDING)
+def test_stock_standing_pages_stand_in_both_engines_and_survive_pushes(spec, name):
+    pose = read_pose(pose_path(name), spec)
+    verdicts = {e: validate(pose.servo, pose.support, spec, PUSH_RUN_S, e, push_n=PUSH_N) for e in ENGINES}
+    for engine, v in verdicts.items():
+        assert v.stable, (engine, v.reason)
+        assert [p.direction for p in v.pushes if p.stable] == ["forward", "backward", "left", "right"], engine
+        assert v.support_margin_m > 0.01 and v.max_tilt_deg < 10 and v.self_collisions == []
+        assert v.cop_xy is not None
+    assert abs(verdicts["pybullet"].support_margin_m - verdicts["mujoco"].support_margin_m) < ENGINE_MARGIN_M
 
 
 def test_same_input_same_verdict(spec):
-    servo = _stand(spec)
-    assert validate_servo(servo, "double", spec, 1.0) == validate_servo(servo, "double", spec, 1.0)
+    servo = servo_pose(spec)
+    for engine in ENGINES:
+        assert validate(servo, "double", spec, 2.0, engine) == validate(servo, "double", spec, 2.0, engine)
+
+
+# --- every failure mode has a pose that fails with exactly that reason -----------------------------------------
+
+def _one_leg(spec, **joints):
+    return balanced(spec, servo_pose(spec, "left", **{**ARMS_FORWARD, **joints}), "left", (0.0, 0.011))
+
+
+def test_a_balanced_one_leg_stance_stands_in_both_engines(spec):
+    servo = _one_leg(spec, **FOLDED_SWING)
+    for engine in ENGINES:
+        v = validate(servo, "left", spec, 3.0, engine)
+        assert v.stable, (engine, v.reason)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_swing_foot_on_the_floor_is_swing_foot_contact(spec, engine):
+    """The standing pose declared as single support: the swing foot carries weight, so it is not a one-leg pose."""
+    v = validate(servo_pose(spec), "left", spec, 3.0, engine)
+    assert v.reasons == ["swing_foot_contact"]
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_thigh_pressed_into_the_torso_is_self_collision(spec, engine):
+    v = validate(_one_leg(spec, r_hip_pitch=-105, r_hip_roll=10, r_ank_roll=10), "left", spec, 3.0, engine)
+    assert v.reasons == ["self_collision"]
+    assert ["body_link", "r_hip_pitch_link"] in v.self_collisions
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_one_leg_squat_beyond_stall_is_torque_saturation(spec, engine):
+    """A one-leg squat that needs 2.09 N·m at the knee: at 12 V (2.41 N·m available) it stands; on the OP2's 11.1 V
+    battery (2.21 N·m) it is beyond stall. Stiff servos (compliance 0x33, P = 128) keep the sag small, so the
+    saturation shows alone (at P = 32 the sag tips the squat over first)."""
+    squat = dict(l_knee=-100, l_hip_pitch=50, l_ank_pitch=-50, **FOLDED_SWING)
+    servo = balanced(spec, servo_pose(spec, "left", **{**ARMS_FORWARD, **squat}), "left", (-0.02, 0.011))
+    stiff = np.full(20, p_gain_of_slope(0x33))
+    assert validate(servo, "left", spec, 3.0, engine, p_gains=stiff).stable
+    v = validate(servo, "left", spec, 3.0, engine, p_gains=stiff, voltage=11.1)
+    assert v.reasons == ["torque_saturation"] and v.worst_joint == "l_knee" and not v.torque_ok
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_lean_past_the_edge_tilts(spec, engine):
+    v = validate(servo_pose(spec, l_ank_pitch=35, r_ank_pitch=-35), "double", spec, 3.0, engine)
+    assert v.reasons[0] == "tilt" and v.max_tilt_deg > 30 and "ground_contact" in v.reasons
+
+
+def test_arm_through_the_torso_is_reported(spec):
+    v = validate(servo_pose(spec, l_sho_roll=75), "double", spec, 2.0)   # upper arm swung 30° inwards
+    assert v.reasons[0] == "self_collision"
+    assert {"body_link"} < set(v.self_collisions[0]) and set(v.self_collisions[0]) & {"l_sho_roll_link", "l_el_link"}
 
 
 def test_bad_input(spec):
     with pytest.raises(InputError, match="support"):
-        validate_servo(_stand(spec), "both", spec)
+        validate(servo_pose(spec), "both", spec)
     with pytest.raises(InputError, match="seconds"):
-        validate_servo(_stand(spec), "left", spec, seconds=float("nan"))
+        validate(servo_pose(spec), "left", spec, seconds=float("nan"))
+    with pytest.raises(InputError, match="engine"):
+        validate(servo_pose(spec), "left", spec, engine="ode")
+    with pytest.raises(InputError, match="push"):
+        validate(servo_pose(spec), "left", spec, push_n=-1)
 
 
-# --- PyBullet traps -------------------------------------------------------------------------------------------
+# --- placement -------------------------------------------------------------------------------------------------
+
+FLOOR_M = 1e-9
+
+
+@pytest.mark.parametrize("splay", [-6.0, 6.0])
+def test_non_parallel_feet_start_on_the_floor_not_in_it(spec, splay):
+    """Double support with the feet rolled apart by ``splay`` degrees: the lower sole lies flat, the other touches
+    at its lowest corner, no corner below the floor."""
+    servo = servo_pose(spec, r_ank_roll=splay)
+    body = Body(spec)
+    pos, rot, flat, gap = placement(body, servo, "double")
+    state = body.state(pos, rot, servo)
+    lowest = min(c[:, 2].min() for c in state.corners.values())
+    assert lowest == pytest.approx(0.0, abs=FLOOR_M)                                      # touching, not below
+    assert np.ptp(state.corners[flat][:, 2]) < 1e-9                                        # the level sole
+    other = "left" if flat == "right" else "right"
+    assert state.corners[other][:, 2].min() == pytest.approx(0.0, abs=FLOOR_M)            # touches at a corner
+    assert state.corners[flat][:, 2].min() == pytest.approx(gap, abs=1e-9) and gap < 0.005
+    for engine in ENGINES:
+        v = validate(servo, "double", spec, 2.0, engine)
+        assert v.stable and v.start_gap_m == pytest.approx(gap, abs=1e-5), engine
+
+
+# --- engine traps and models ----------------------------------------------------------------------------------
+
+def test_mujoco_compiles_the_same_robot(spec):
+    engine = make_engine("mujoco", spec, ServoModel.of(spec))
+    assert engine.total_mass() == pytest.approx(sum(i.mass for i in spec.inertials), abs=1e-4)
+    m = engine.model
+    assert list(m.dof_armature[engine.dadr]) == pytest.approx([spec.servo.armature_kg_m2] * 20)
+    for name in spec.joint_names:
+        lower, upper = spec.joint(name).mechanical
+        assert list(m.jnt_range[m.joint(name).id]) == pytest.approx([lower, upper])
+
 
 def test_trap_inertia_is_taken_from_the_file_only_when_told(spec):
     expected = np.linalg.eigvalsh(link_inertial(next(i for i in spec.inertials if i.link == "l_knee_link")).tensor)
     for from_file in (True, False):
-        with Sim(spec, use_inertia_from_file=from_file) as sim:
-            diag = np.sort(sim.client.getDynamicsInfo(sim.robot, sim.link_index["l_knee_link"])[2])
+        engine = PyBulletEngine(spec, ServoModel.of(spec), 0.001, use_inertia_from_file=from_file)
+        diag = np.sort(engine.client.getDynamicsInfo(engine.robot, engine.link_index["l_knee_link"])[2])
+        engine.close()
         if from_file:
             assert diag == pytest.approx(expected, rel=1e-6)
         else:  # recomputed from the collision box: a different tensor
@@ -86,35 +186,34 @@ def test_trap_a_link_without_inertial_weighs_one_kilogram(spec):
     bare = ('<robot name="t"><link name="a"><inertial><mass value="0.5"/><inertia ixx="1e-3" iyy="1e-3" '
             'izz="1e-3" ixy="0" ixz="0" iyz="0"/></inertial></link><link name="b"/>'
             '<joint name="j" type="fixed"><parent link="a"/><child link="b"/></joint></robot>')
-    with Sim(spec) as sim:
-        other = load_robot(sim.client, bare, sim.pb.URDF_USE_INERTIA_FROM_FILE)
-        assert sim.client.getDynamicsInfo(other, 0)[0] == pytest.approx(1.0)   # PyBullet's default
-        masses = sim.masses()                                                  # ours: every link as specified
+    engine = PyBulletEngine(spec, ServoModel.of(spec), 0.001)
+    other = load_robot(engine.client, bare, engine.pb.URDF_USE_INERTIA_FROM_FILE)
+    assert engine.client.getDynamicsInfo(other, 0)[0] == pytest.approx(1.0)     # PyBullet's default
+    masses = engine.masses()                                                   # ours: every link as specified
+    engine.close()
     webots = {i.link: i.mass for i in spec.inertials}
     for link, mass in masses.items():
         assert mass == pytest.approx(webots.get(link, FRAME_LINK_MASS_KG))
-    assert sum(masses.values()) == pytest.approx(2.925, abs=0.001)
 
 
 def test_trap_loadurdf_needs_a_file_and_the_temp_file_is_removed(spec):
     before = set(os.listdir(tempfile.gettempdir()))
-    with Sim(spec) as sim:
-        assert sim.client.getNumJoints(sim.robot) == 20 + 6   # 20 servos + named frames
+    PyBulletEngine(spec, ServoModel.of(spec), 0.001).close()
     leftovers = {f for f in set(os.listdir(tempfile.gettempdir())) - before if f.endswith(".urdf")}
     assert leftovers == set()
 
 
-def test_trap_base_position_is_the_centre_of_mass(spec):
-    with Sim(spec) as sim:
-        sim.set_joints(_stand(spec))
-        sim.place("left")
-        com_pos = np.array(sim.client.getBasePositionAndOrientation(sim.robot)[0])
-        link_pos = np.array(sim.base_link_frame()[0])
-        inertial = next(i for i in spec.inertials if i.link == "body_link")
-        assert com_pos - link_pos == pytest.approx(inertial.com, abs=PYBULLET_POSE_M)  # upright: offset = its CoM
-        sole = np.array(sim.link_frame("left_sole_link")[0])
-        assert sole == pytest.approx([0.0, 0.0, PLACEMENT_CLEARANCE_M], abs=PYBULLET_POSE_M)
-        assert sim.link_frame("right_sole_link")[0][2] == pytest.approx(PLACEMENT_CLEARANCE_M, abs=PYBULLET_POSE_M)
+@pytest.mark.parametrize("engine_name", ENGINES)
+def test_trap_the_torso_frame_is_not_its_centre_of_mass(spec, engine_name):
+    """PyBullet reports the base's centre of mass; both engines must put and report the torso link frame."""
+    engine = make_engine(engine_name, spec, ServoModel.of(spec))
+    body = Body(spec)
+    servo = servo_pose(spec)
+    pos, rot, _, _ = placement(body, servo, "double")
+    engine.reset(pos, rot, servo)
+    got_pos, got_rot = engine.base()
+    engine.close()
+    assert got_pos == pytest.approx(pos, abs=1e-6) and got_rot == pytest.approx(rot, abs=1e-6)
 
 
 def test_pybullet_banner_is_silenced(capfd):
@@ -123,3 +222,14 @@ def test_pybullet_banner_is_silenced(capfd):
         os.write(2, b"noise")
     out, err = capfd.readouterr()
     assert "noise" not in out and "noise" not in err
+
+
+def test_servo_sag_matches_the_stiffness(spec):
+    """Standing double support: every loaded joint sags by about its static torque / Kp."""
+    pose = read_pose(pose_path("walkready"), spec)
+    v = validate(pose.servo, pose.support, spec, 3.0, "mujoco")
+    from op2motion.model.dynamics import dynamics_for
+
+    static = dynamics_for(spec).static_torques(pose.servo, "double").torques
+    knee = spec.joint_names.index("l_knee")
+    assert abs(v.sag_deg["l_knee"]) == pytest.approx(math.degrees(abs(static[knee]) / KP_P32_NM_RAD), rel=0.35)

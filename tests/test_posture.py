@@ -11,13 +11,14 @@ import pytest
 
 from op2motion.book import DEFAULT_PROBLEM, SCENARIOS
 
-from op2motion.balance import penalty_stability, stability_margin
+from op2motion.balance import COM_MODEL_LUMPED, penalty_stability, rectangle_margin, stability_margin
 from helpers import run_cli
 from op2motion.export.posefile import read_pose
-from op2motion.joints import BookAngles
+from op2motion.joints import BookAngles, book_to_servo
 from op2motion.kinematics import forward
-from op2motion.physics import validate_servo
-from op2motion.posture.cost import PostureProblem, evaluate_cost
+from op2motion.physics import ENGINES, validate
+from op2motion.posture.compliance import Compliance
+from op2motion.posture.cost import SAG_TILT_LIMIT_RAD, PostureProblem, evaluate_cost
 from op2motion.posture.pso import PSOSettings, run_pso, variable_bounds
 from op2motion.posture.solve import optimize_posture
 
@@ -28,8 +29,9 @@ REFINED_REACH_M = 1e-3
 BOOK = [(s.support, s.hand, s.target, s.br, s.pose) for s in SCENARIOS]
 
 
-def test_cost_agrees_with_the_book_penalties(spec, rng):
-    problem = PostureProblem.from_scenario(DEFAULT_PROBLEM)
+def test_book_cost_agrees_with_the_book_penalties(spec, rng):
+    """With the book's body (lumped masses, rigid joints) the cost is the book's eq. 2.87."""
+    problem = PostureProblem.from_scenario(DEFAULT_PROBLEM, com_model=COM_MODEL_LUMPED)
     book = BookAngles.random(500, rng, "left")
     terms = evaluate_cost(book, problem, spec)
     pts = forward(book, spec)
@@ -37,7 +39,7 @@ def test_cost_agrees_with_the_book_penalties(spec, rng):
     assert np.array_equal(terms.margin < 0, penalty_stability(com_xy, spec, "left", 0.7) > 0)
     assert np.allclose(terms.margin, stability_margin(com_xy, spec, "left", 0.7), atol=1e-15)
     hand = np.linalg.norm(pts.point("left_hand") - np.array(problem.target), axis=1)
-    assert np.allclose(terms.hand_error, hand, atol=1e-15)
+    assert np.allclose(terms.hand_error, hand, atol=1e-15) and np.all(terms.sag_tilt == 0)
     # Feasible poses always cost less than infeasible ones (the book's 100 dominates the tie-breakers).
     feasible = (terms.margin >= 0) & (terms.swing_min_z >= 0) & (terms.collision == 0)
     assert terms.total[feasible].max() < 100 <= terms.total[~feasible].min()
@@ -46,9 +48,49 @@ def test_cost_agrees_with_the_book_penalties(spec, rng):
         assert evaluate_cost(book.row(i), problem, spec).total[0] == pytest.approx(terms.total[i], abs=1e-12)
 
 
+def test_full_cost_balances_the_settled_full_inertia_com(spec, rng):
+    """The default body: full inertia on compliant servos; the margin is the settled CoM's to the real sole."""
+    problem = PostureProblem.from_scenario(DEFAULT_PROBLEM)
+    angles = BookAngles.random(300, rng, "left")
+    terms = evaluate_cost(angles, problem, spec)
+    pts = forward(angles, spec, full_com=True)
+    settled = Compliance(spec).settle(pts, pts.com_full)
+    xy = np.nan_to_num(settled.com_xy, posinf=1.0, neginf=-1.0)
+    assert np.allclose(terms.margin, rectangle_margin(xy[0], xy[1], spec.sole_extents("left", 0.7)), atol=1e-15)
+    assert np.allclose(terms.sag_tilt, settled.tilt)
+    unstable = (terms.margin < 0) | (terms.sag_tilt > SAG_TILT_LIMIT_RAD)
+    assert np.array_equal(unstable, terms.book - terms.hand_error - np.where(terms.swing_min_z < -1e-9, 100, 0) > 0)
+    # the settled x solves the equilibrium x_s = x + sum_j (W / Kp) (z - z_j) (x_s - x_j) of the pitch joints
+    model = Compliance(spec)
+    ok = settled.stable
+    rhs = pts.com_full[0].copy()
+    for name, kp in model.pitch["left"]:
+        joint = pts.point(name)
+        rhs += model.weight / kp * (pts.com_full[2] - joint[:, 2]) * (settled.com_xy[0] - joint[:, 0])
+    assert np.allclose(settled.com_xy[0][ok], rhs[ok], atol=1e-12)
+
+
+SETTLE_PREDICTION_M = 0.010   # the compliance model against MuJoCo's settled CoM on standing one-leg poses
+
+
+def test_compliance_predicts_where_physics_settles(spec):
+    problem = PostureProblem.from_scenario(DEFAULT_PROBLEM)
+    checked = 0
+    for seed in range(4):
+        pso = run_pso(problem, spec, PSOSettings(seed=seed, iterations=120))
+        angles = BookAngles.from_vector(pso.x, "left")
+        pts = forward(angles, spec, full_com=True)
+        predicted = Compliance(spec).settle(pts, pts.com_full).com_xy[:, 0]
+        v = validate(book_to_servo(angles, spec)[0], "left", spec, 3.0, "mujoco")
+        if v.stable:
+            assert np.hypot(*(predicted - v.com_settled[:2])) < SETTLE_PREDICTION_M, seed
+            checked += 1
+    assert checked >= 2
+
+
 @pytest.mark.parametrize("support, hand, target, br, name", BOOK)
-def test_book_scenarios_are_solved(spec, support, hand, target, br, name):
-    problem = PostureProblem(support, hand, target, br)
+def test_book_scenarios_are_solved_on_the_books_body(spec, support, hand, target, br, name):
+    problem = PostureProblem(support, hand, target, br, com_model=COM_MODEL_LUMPED)
     pso = run_pso(problem, spec, PSOSettings(seed=0))
     lo, hi = variable_bounds(problem, spec)
     assert np.all(pso.x >= lo - 1e-12) and np.all(pso.x <= hi + 1e-12)     # the box is respected
@@ -62,15 +104,18 @@ def test_book_scenarios_are_solved(spec, support, hand, target, br, name):
 
 
 @pytest.mark.parametrize("support, hand, target, br, name", BOOK)
-def test_committed_book_poses_reach_balance_and_stand(spec, support, hand, target, br, name):
+def test_committed_book_poses_reach_balance_on_the_full_body_and_stand(spec, support, hand, target, br, name):
+    """The committed scenario poses were solved on the full body and validated: they reach, their settled
+    full-inertia CoM is inside the br-shrunk sole, and they stand in both engines."""
     pose = read_pose(os.path.join(POSES, f"{name}.json"), spec)
-    assert pose.support == support
-    pts = forward(pose.book(spec), spec)
-    assert np.linalg.norm(pts.point(f"{hand}_hand")[0] - np.array(target)) <= REFINED_REACH_M + 1e-6
-    assert stability_margin(pts.com[:2].T, spec, support, br)[0] >= -1e-6
-    assert pts.swing_foot_min_z[0] >= 0
-    v = validate_servo(pose.servo, pose.support, spec, seconds=2.0)
-    assert v.stable, v.reason
+    assert pose.support == support and pose.provenance["com_model"] == "full"
+    problem = PostureProblem(support, hand, target, br)
+    terms = evaluate_cost(pose.book(spec), problem, spec)
+    assert terms.hand_error[0] <= REFINED_REACH_M + 1e-6
+    assert terms.margin[0] >= -1e-6 and terms.swing_min_z[0] >= 0 and terms.sag_tilt[0] <= SAG_TILT_LIMIT_RAD
+    for engine in ENGINES:
+        v = validate(pose.servo, pose.support, spec, 3.0, engine)
+        assert v.stable, (engine, v.reason)
 
 
 def test_seeded_runs_are_identical_and_pyswarms_leaks_nothing(spec, tmp_path, monkeypatch):

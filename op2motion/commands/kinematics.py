@@ -98,7 +98,12 @@ def _servo_mapping(text: str) -> dict:
 
 def cmd_convert(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion convert``."""
-    from ..joints import book_to_servo, servo_from_mapping, servo_to_book, servo_to_ticks
+    from ..joints import (
+        book_to_servo,
+        servo_from_mapping,
+        servo_to_book,
+        servo_to_ticks,
+    )
 
     if args.servo_deg is not None:
         if args.th is not None or args.phi is not None or args.pose:
@@ -138,10 +143,10 @@ def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
     support = pose.support if pose is not None else angles.support
     validation = None
     if args.validate:
-        from ..physics import validate_servo
+        from ..physics import validate
 
         servo = pose.servo if pose is not None else book_to_servo(angles, spec)[0]
-        validation = validate_servo(servo, support, spec, args.seconds)
+        validation = validate(servo, support, spec, args.seconds)
     png, drawn, reports = pose_figure(name, angles, spec, models, args.br, target, validation,
                                       None if pose is None else pose.metrics)
     outputs.put("output", png)
@@ -160,10 +165,10 @@ def cmd_arm_ik(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion arm-ik``."""
     from ..arm_ik import ARMS, solve_arm_ik
     from ..errors import CheckFailed, Unreachable
+    from ..figures import pose_figure
     from ..fileio import OutputSet
     from ..joints import book_to_servo, servo_dict
     from ..summary import evaluate
-    from ..figures import pose_figure
 
     outputs = OutputSet({"plot": args.plot} if args.plot else {})
     angles, name, _ = angles_from(args, spec)

@@ -9,8 +9,17 @@ from .. import book
 from ..library.build import MAX_WORKERS
 from ..library.grid import MAX_AXIS
 from ..spec import Spec
-from .common import BOUNDARY_RATIO, Parser, add_command, emit, number, output_path, progress_enabled, whole
-from .posture import solver_args
+from .common import (
+    BOUNDARY_RATIO,
+    Parser,
+    add_command,
+    emit,
+    number,
+    output_path,
+    progress_enabled,
+    whole,
+)
+from .posture import com_model_arg, solver_args
 
 AXIS_VALUE = number(-1e6, 1e6)   # START, STOP and COUNT of a grid axis; the library checks the real ranges
 
@@ -41,6 +50,7 @@ def register(sub: Any) -> None:
     p.add_argument("--out", type=output_path, default="poses/library", help="library folder (default poses/library)")
     p.add_argument("--workers", type=whole(0, MAX_WORKERS), default=0,
                    help=f"worker processes, 0 = one per core (default 0, at most {MAX_WORKERS})")
+    com_model_arg(p)
     solver_args(p)
 
 
@@ -53,9 +63,10 @@ def cmd_library_build(args: argparse.Namespace, spec: Spec) -> int:
     from ..posture.pso import PSOSettings
 
     check_workers(args.workers)
-    jobs = grid_jobs(args.hands, args.supports, args.br, axis(*args.x, "x"), axis(*args.y, "y"), axis(*args.z, "z"))
+    jobs = grid_jobs(args.hands, args.supports, args.br, axis(*args.x, "x"), axis(*args.y, "y"), axis(*args.z, "z"),
+                     args.com_model)
     settings = BuildSettings(PSOSettings(args.particles, args.iters, seed=args.seed).validated(), args.restarts,
-                             args.validate, args.seconds)
+                             args.validate, args.seconds, args.engine)
     with tqdm(total=len(jobs), desc="library", unit="pose", disable=not progress_enabled(args)) as bar:
         summary = build_library(jobs, spec, args.out, settings, args.workers, args.spec,
                                 on_done=lambda row: bar.update())

@@ -9,7 +9,8 @@ from pathlib import Path
 from typing import Any
 
 from .. import book
-from ..physics import DEFAULT_SECONDS, MAX_SECONDS, MIN_SECONDS
+from ..balance import COM_MODEL_FULL, COM_MODELS
+from ..physics import DEFAULT_SECONDS, ENGINES, MAX_SECONDS, MIN_SECONDS
 from ..posture.pso import MAX_ITERATIONS, MAX_PARTICLES, MAX_SEED, PSOSettings
 from ..spec import Spec
 from ..workflow import DEFAULT_RESTARTS, MAX_RESTARTS
@@ -29,6 +30,13 @@ from .common import (
 SECONDS = number(MIN_SECONDS, MAX_SECONDS, "s")
 
 
+def com_model_arg(p: argparse.ArgumentParser) -> None:
+    """``--com-model full|book``: the centre of mass the optimiser balances."""
+    p.add_argument("--com-model", choices=COM_MODELS, default=COM_MODEL_FULL,
+                   help="centre of mass to balance: full (the spec's link inertials, as physics has them; default) "
+                        "or book (the book's lumped masses, to reproduce its scenarios)")
+
+
 def solver_args(p: argparse.ArgumentParser) -> None:
     """The PSO, restart and validation options shared by ``optimize`` and ``library build``."""
     d = PSOSettings()
@@ -44,6 +52,8 @@ def solver_args(p: argparse.ArgumentParser) -> None:
                    help="check each reached pose in physics; a pose that falls counts as failed and is not written")
     p.add_argument("--seconds", type=SECONDS, default=DEFAULT_SECONDS,
                    help=f"simulated time of --validate [s] (default {DEFAULT_SECONDS:g})")
+    p.add_argument("--engine", choices=ENGINES, default="pybullet",
+                   help="physics engine of --validate (default pybullet)")
 
 
 def register(sub: Any) -> None:
@@ -59,6 +69,7 @@ def register(sub: Any) -> None:
     p.add_argument("--br", type=BOUNDARY_RATIO, default=d.br,
                    help=f"boundary ratio of the support rectangle (default {d.br})")
     p.add_argument("--model", choices=("dh", "pb"), default="dh", help="kinematic model of the PSO (default dh)")
+    com_model_arg(p)
     solver_args(p)
     p.add_argument("--no-refine", action="store_true", help="skip the local refinement (hand within 5 mm)")
     p.add_argument("--name", type=pose_name, help="pose name (default from hand, support, target and br)")
@@ -72,13 +83,13 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
 
     from ..errors import CheckFailed
     from ..export.posefile import pose_to_json
+    from ..figures import outcome_figures
     from ..fileio import OutputSet
     from ..posture.cost import PostureProblem
-    from ..figures import outcome_figures
     from ..workflow import solve
 
     target = vec3(args.target, "target")
-    problem = PostureProblem(args.support, args.hand, target, args.br, args.model).validated()
+    problem = PostureProblem(args.support, args.hand, target, args.br, args.model, args.com_model).validated()
     settings = PSOSettings(args.particles, args.iters, seed=args.seed).validated()
     name = args.name or problem.name
     out = Path(args.out) if args.out else Path("poses") / f"{name}.json"
@@ -87,7 +98,7 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     with tqdm(total=settings.iterations * (1 + args.restarts), desc="PSO", unit="it", leave=False,
               disable=not progress_enabled(args)) as bar:
         outcome = solve(problem, spec, settings, restarts=args.restarts, refine=not args.no_refine,
-                        validate=args.validate, seconds=args.seconds,
+                        validate=args.validate, seconds=args.seconds, engine=args.engine,
                         on_iteration=lambda best: (bar.update(), bar.set_postfix(cost=f"{best:.4f}")))
     command = "op2motion " + " ".join(sys.argv[1:]) if len(sys.argv) > 1 else "op2motion optimize"
     pose = outcome.pose(name, spec, {"command": command})
@@ -95,16 +106,15 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     result: dict[str, Any] = {"pose": json.loads(pose_to_json(pose, spec)), **outcome.as_dict()}
     lines = [f"{args.hand} hand to ({', '.join(f'{v:.3f}' for v in target)}) m on the {args.support} foot, "
              f"br {args.br}: {r.message}",
-             f"  CoM ({r.com_lumped[0]:+.3f}, {r.com_lumped[1]:+.3f}, {r.com_lumped[2]:.3f}) m [lumped], stability "
-             f"margin {r.margin_lumped_m * 1000:.1f} mm (full-inertia CoM: {r.margin_full_m * 1000:.1f} mm), swing "
-             f"foot {r.swing_foot_min_z * 1000:.1f} mm above the floor, torso tilt "
-             f"{result['torso_tilt_deg']:.0f}°",
+             f"  CoM full inertia ({r.com_full[0]:+.3f}, {r.com_full[1]:+.3f}, {r.com_full[2]:.3f}) m, margin "
+             f"{r.margin_full_m * 1000:.1f} mm to the sole shrunk by br; lumped (book) margin "
+             f"{r.margin_lumped_m * 1000:.1f} mm [balanced: {args.com_model}]; swing foot {r.swing_foot_min_z * 1000:.1f} mm above the floor, torso "
+             f"tilt {result['torso_tilt_deg']:.0f}°",
              f"  PSO {settings.particles} particles x {settings.iterations} iterations (seed {r.settings.seed}, "
              f"attempt {r.attempts}), refinement: {r.method}, {r.seconds:.2f} s"]
     v = outcome.validation
     if v is not None:
-        lines.append(f"  physics ({args.seconds:g} s): {'STABLE' if v.stable else 'NOT STABLE'} ({v.reason}), "
-                     f"tilt {v.max_tilt_deg:.1f}°, torque {v.max_torque_nm:.2f} N·m at {v.worst_joint}")
+        lines.append(f"  physics: {v.summary()}")
     warnings = outcome.warnings()
     result["warnings"] = warnings
     lines += [f"  warning: {w}" for w in warnings]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Iterable
 
-from ..errors import InputError
+from ..errors import InputError, ModelError
 from ..joints import BookAngles
 from ..spec import Spec
 from .dh import forward_dh
@@ -17,15 +17,17 @@ __all__ = ["MODELS", "POINT_NAMES", "BodyPoints", "forward", "forward_dh", "forw
 
 
 def forward(angles: BookAngles, spec: Spec, model: str = "dh", sp: Iterable[float] = (0.0, 0.0, 0.0),
-            gamma: float = 0.0) -> BodyPoints:
+            gamma: float = 0.0, full_com: bool = False) -> BodyPoints:
     """Body points of a batch of poses with ``model`` ("dh" or "pb"), support sole centre at ``sp`` [m],
-    heading ``gamma`` [rad] about Z (book fig. 2.17)."""
+    heading ``gamma`` [rad] about Z (book fig. 2.17); with ``full_com`` also the full-inertia CoM (D-H only)."""
     if model == "dh":
-        points = forward_dh(angles, spec)
+        points = forward_dh(angles, spec, full_com)
     elif model == "pb":
+        if full_com:
+            raise ModelError("the full-inertia CoM needs the link frames of the D-H model; choose dh", "model")
         points = forward_pb(angles, spec)
     else:
-        raise InputError(f"model: expected 'dh' or 'pb', got {model!r}")
+        raise InputError(f"expected 'dh' or 'pb', got {model!r}", "model")
     sp = tuple(sp)
     if gamma != 0.0 or any(v != 0.0 for v in sp):
         points = points.placed(sp, gamma)

@@ -20,112 +20,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..joints import BookAngles
-from ..spec import BOOK_VARS, Spec, swing_of
+from ..errors import SpecError
+from ..joints import BookAngles, book_to_servo
+from ..spec import Spec
 from ..trig import sincos
 from .batch import run_chunked
 from .com import slab_com
+from .dh_chain import W0, cached, chain, chain_points, matrix_plan, point_layout
 from .frames import Frame
 from .points import ROW, BodyPoints, fill_support_foot, new_slab
+from .tree import link_frames
 
 MATRIX_BELOW = 64  # batches smaller than this (a PSO swarm) use the 4x4 matrix evaluator
 _HALF_PI = math.pi / 2
-# World axes of frame 0 (book W with gamma = 0): x0 = +Y, y0 = +Z, z0 = +X.
-_W0 = ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
-# Book eq. 2.58: the additional transform that turns the hip-roll DH frame into the hip-yaw frame.
-_HIP = ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
-# Book T13_6/T17_6 (shoulders) and T21_6 (neck) rotations, for left and right support.
-_ARM_ROT = {True: ((0.0, 0.0, -1.0), (0.0, 1.0, 0.0), (1.0, 0.0, 0.0)),
-            False: ((0.0, 0.0, 1.0), (0.0, -1.0, 0.0), (1.0, 0.0, 0.0))}
-_NECK_ROT = {True: ((0.0, 1.0, 0.0), (-1.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
-             False: ((0.0, -1.0, 0.0), (1.0, 0.0, 0.0), (0.0, 0.0, 1.0))}
-_V = {name: i for i, name in enumerate(BOOK_VARS)}
-
-
-@dataclass(frozen=True)
-class Step:
-    """One frame of the chain: ``frame = parent · DH(sign·q[var] + offset, d, a, alpha) · Trans(trans) · Rot(rot)``;
-    a step without ``var`` is the fixed part alone (the book's additional transforms)."""
-
-    frame: str
-    parent: str
-    var: int | None = None
-    sign: float = 1.0
-    offset: float = 0.0
-    d: float = 0.0
-    a: float = 0.0
-    alpha: float = 0.0
-    trans: tuple[float, float, float] | None = None
-    rot: tuple[tuple[float, ...], ...] | None = None
-
-
-_CACHE: dict[tuple[str, str, str], object] = {}
-
-
-def _cached(kind: str, spec: Spec, support: str, build):  # type: ignore[no-untyped-def]
-    key = (kind, spec.sha256, support)
-    if key not in _CACHE:
-        _CACHE[key] = build(spec, support)
-    return _CACHE[key]
-
-
-def chain(spec: Spec, support: str) -> tuple[Step, ...]:
-    """The book's D-H chain with the real robot's lengths, rooted at the ``support`` ankle (frame "0")."""
-    return _cached("chain", spec, support, _build_chain)  # type: ignore[return-value]
-
-
-def _build_chain(spec: Spec, support: str) -> tuple[Step, ...]:
-    g = spec.geometry
-    left = support == "left"
-    sgn = 1.0 if left else -1.0
-    hw, sh, fwd, pi = g.hip_half_width, g.shoulder_half_width, -g.hip_x * sgn, math.pi
-    steps = [
-        Step("1", "0", _V["phi1"], 1, _HALF_PI, alpha=_HALF_PI),
-        Step("2", "1", _V["th1"], -1, _HALF_PI, a=g.calf),
-        Step("3", "2", _V["th2"], -1, a=g.thigh),
-        Step("4", "3", _V["th3"], -1, alpha=-_HALF_PI),
-        Step("5", "4", _V["phi2"], 1, a=g.hip_yaw_to_roll, rot=_HIP),
-        Step("6", "5", _V["psi1"], 1, 0.0 if left else pi, a=2.0 * hw),
-        Step("7", "6", _V["psi2"], 1, alpha=-sgn * _HALF_PI, trans=(0.0, sgn * g.hip_yaw_to_roll, 0.0)),
-        Step("8", "7", _V["phi3"], 1, -sgn * _HALF_PI, alpha=-_HALF_PI),
-        Step("9", "8", _V["th4"], -1, pi, a=g.thigh),
-        Step("10", "9", _V["th5"], -1, a=g.calf),
-        Step("11", "10", _V["th6"], -1, alpha=_HALF_PI),
-        Step("12", "11", _V["phi4"], 1, a=g.ankle_to_sole),
-        # Upper body hung from frame 6; the torso origin sits -hip_x forward of the hip-yaw axes.
-        Step("13", "6", trans=(-hw - sgn * sh, fwd, g.torso), rot=_ARM_ROT[left]),
-        Step("17", "6", trans=(-hw + sgn * sh, fwd, g.torso), rot=_ARM_ROT[left]),
-        Step("21", "6", trans=(-hw, fwd, g.torso), rot=_NECK_ROT[left]),
-        Step("22", "21", _V["psi3"], 1, d=g.head_tilt_height, alpha=_HALF_PI),
-        Step("23", "22", _V["th11"], -1, _HALF_PI, a=g.head_length),
-    ]
-    for first, pitch, roll, elbow, lateral in ((13, "th7", "phi5", "th8", 1.0), (17, "th9", "phi6", "th10", -1.0)):
-        f = str(first)
-        steps += [
-            Step(str(first + 1), f, _V[pitch], -1, d=lateral * g.shoulder_roll_lateral, a=g.shoulder_roll_drop,
-                 alpha=_HALF_PI),
-            Step(str(first + 2), str(first + 1), _V[roll], 1, -pi, a=g.upper_arm, alpha=-_HALF_PI,
-                 trans=(0.0, -g.elbow_forward, 0.0)),  # the real elbow offset, then the elbow axis
-            Step(str(first + 3), str(first + 2), _V[elbow], -1, a=g.lower_arm),
-        ]
-    return tuple(steps)
-
-
-def _points(spec: Spec, support: str) -> tuple[tuple[str, str, tuple[float, float, float]], ...]:
-    """(row, frame, point in that frame) of every body point the chain gives (pelvis and soles aside)."""
-    g = spec.geometry
-    s, w = ("l", "r") if support == "left" else ("r", "l")
-    o = (0.0, 0.0, 0.0)
-    rows = [(f"{s}_ankle", "0", o), (f"{s}_knee", "2", o), (f"{s}_hip", "3", o), (f"{s}_hip_yaw", "5", o),
-            (f"{w}_hip_yaw", "6", o), (f"{w}_hip", "7", o), (f"{w}_knee", "9", o), (f"{w}_ankle", "10", o),
-            (f"{swing_of(support)}_sole", "12", o),
-            ("neck", "21", o), ("head_pan", "21", (0.0, 0.0, g.head_pan_height)), ("head_tilt", "22", o),
-            ("head_top", "23", o), ("l_sho_pitch", "13", o), ("l_sho_roll", "14", o), ("l_el", "15", o),
-            ("left_hand", "16", o), ("r_sho_pitch", "17", o), ("r_sho_roll", "18", o), ("r_el", "19", o),
-            ("right_hand", "20", o)]
-    rows += [(f"{swing_of(support)}_foot_{i}", "12", (0.0, dy, dx))        # frame 12: y left, z forward
-             for i, (dx, dy) in enumerate(spec.foot.corners(swing_of(support)))]
-    return tuple(rows)
 
 
 def _shifted(c: np.ndarray, s: np.ndarray, sign: float, offset: float) -> tuple[np.ndarray, np.ndarray]:
@@ -135,11 +42,11 @@ def _shifted(c: np.ndarray, s: np.ndarray, sign: float, offset: float) -> tuple[
     return ((c, s), (-s, c), (-c, -s), (s, -c))[quarter]
 
 
-def _columns(q: np.ndarray, out: np.ndarray, spec: Spec, support: str) -> None:
-    """Column evaluator: q is (m, 20) [rad]; fills out (rows, 3, m)."""
+def _columns(q: np.ndarray, out: np.ndarray, spec: Spec, support: str, full_com: np.ndarray | None = None) -> None:
+    """Column evaluator: q is (m, 20) [rad]; fills out (rows, 3, m) and, if given, the full CoM (3, m)."""
     m = q.shape[0]
     sin_q, cos_q = sincos(np.ascontiguousarray(q.T))
-    frames = {"0": Frame.constant(_W0, (0.0, 0.0, spec.geometry.ankle_to_sole), m)}
+    frames = {"0": Frame.constant(W0, (0.0, 0.0, spec.geometry.ankle_to_sole), m)}
     for st in chain(spec, support):
         f = frames[st.parent]
         if st.var is not None:
@@ -148,86 +55,26 @@ def _columns(q: np.ndarray, out: np.ndarray, spec: Spec, support: str) -> None:
         if st.trans is not None or st.rot is not None:
             f = f.fixed(st.rot, st.trans or (0.0, 0.0, 0.0))
         frames[st.frame] = f
-    for row, frame, local in _points(spec, support):
+    for row, frame, local in chain_points(spec, support):
         out[ROW[row]] = frames[frame].point(local)
     np.add(frames["5"].p, frames["6"].p, out=out[ROW["pelvis"]])
     out[ROW["pelvis"]] *= 0.5
     fill_support_foot(out, spec.foot, support)
+    if full_com is not None:
+        plan = full_com_plan(spec, support)
+        full_com[:] = 0.0
+        for name, mass, weighted in zip(plan.frames, plan.masses, plan.weighted):   # sum of M_f (o_f + R_f c_f)
+            f = frames[name]
+            full_com += mass * f.p
+            for col, w in zip((f.x, f.y, f.z), weighted):
+                full_com += w * col
+        full_com /= plan.total
 
 
-@dataclass(frozen=True)
-class _MatrixPlan:
-    """Constants of the matrix evaluator for one spec and support foot. Frames are stored in level order (slot 0 is
-    frame "0"), so that each level of the tree, and the parents of each level, are contiguous slices."""
-
-    var: np.ndarray          # (J,) book-variable index of each joint step, in slot order
-    sign: np.ndarray         # (J, 1)
-    offset: np.ndarray       # (J, 1)
-    basis: np.ndarray        # (J, 3, 16): local matrix = [cos(delta), sin(delta), 1] @ basis
-    joint_slots: np.ndarray  # (J,) slot index - 1 of each joint step in the local array
-    fixed_slots: np.ndarray  # slot index - 1 of the fixed-only steps
-    fixed_local: np.ndarray  # (F, 4, 4) their constant transforms
-    root: np.ndarray         # (4, 4) frame 0
-    levels: tuple            # ((start, stop, parent start, parent stop), ...) slot ranges per level
-    slots: dict              # frame name -> slot
-
-
-def _matrix_plan(spec: Spec, support: str) -> _MatrixPlan:
-    return _cached("matrix", spec, support, _build_matrix_plan)  # type: ignore[return-value]
-
-
-def _build_matrix_plan(spec: Spec, support: str) -> _MatrixPlan:
-    steps = chain(spec, support)
-    by_frame = {st.frame: st for st in steps}
-    # Level order: each level lists children of the previous level's frames in that order, so ranges are contiguous.
-    order, previous, levels = [], ["0"], []
-    while len(order) < len(steps):
-        level = [st.frame for parent in previous for st in steps if st.parent == parent]
-        parents = sorted({by_frame[f].parent for f in level}, key=previous.index)
-        start = len(order) + 1
-        order += level
-        first = (start - len(previous)) if previous != ["0"] else 0
-        p_start = first + previous.index(parents[0])
-        levels.append((start, start + len(level), p_start, p_start + len(parents)))
-        i = previous.index(parents[0])
-        if previous[i:i + len(parents)] != parents or len(parents) not in (1, len(level)):
-            raise RuntimeError("chain levels must fan out from one frame or continue one-to-one")
-        previous = level
-    slots = {"0": 0, **{f: i + 1 for i, f in enumerate(order)}}
-    joint = [f for f in order if by_frame[f].var is not None]
-    fixed_only = [f for f in order if by_frame[f].var is None]
-
-    def fixed_of(st: Step) -> np.ndarray:
-        m = np.eye(4)
-        if st.rot is not None:
-            m[:3, :3] = np.asarray(st.rot)
-        if st.trans is not None:
-            m[:3, 3] = st.trans
-        return m
-
-    basis = np.zeros((len(joint), 3, 4, 4))
-    for j, f in enumerate(joint):
-        st = by_frame[f]
-        ca, sa = round(math.cos(st.alpha), 15), round(math.sin(st.alpha), 15)
-        # DHMat (book eq. 2.40) = cos(delta) K_cos + sin(delta) K_sin + K_one, then the step's fixed part.
-        k = basis[j]
-        k[0, 0, 0], k[0, 0, 3], k[0, 1, 1], k[0, 1, 2] = 1.0, st.a, ca, -sa
-        k[1, 0, 1], k[1, 0, 2], k[1, 1, 0], k[1, 1, 3] = -ca, sa, 1.0, st.a
-        k[2, 2, 1], k[2, 2, 2], k[2, 2, 3], k[2, 3, 3] = sa, ca, st.d, 1.0
-        basis[j] = k @ fixed_of(st)
-    root = np.eye(4)
-    root[:3, :3], root[2, 3] = np.asarray(_W0), spec.geometry.ankle_to_sole
-    return _MatrixPlan(np.array([by_frame[f].var for f in joint]),
-                       np.array([by_frame[f].sign for f in joint])[:, None],
-                       np.array([by_frame[f].offset for f in joint])[:, None], basis.reshape(len(joint), 3, 16),
-                       np.array([slots[f] - 1 for f in joint]), np.array([slots[f] - 1 for f in fixed_only]),
-                       np.array([fixed_of(by_frame[f]) for f in fixed_only]), root, tuple(levels), slots)
-
-
-def _matrices(q: np.ndarray, out: np.ndarray, spec: Spec, support: str) -> None:
-    """4x4 matrix evaluator for small batches; fills out (rows, 3, m) like :func:`_columns`."""
+def _matrix_frames(q: np.ndarray, spec: Spec, support: str) -> np.ndarray:
+    """Every frame of the chain for each pose, (slots, m, 4, 4), slot order of :func:`matrix_plan`."""
     m = q.shape[0]
-    plan = _matrix_plan(spec, support)
+    plan = matrix_plan(spec, support)
     delta = plan.sign * q.T[plan.var] + plan.offset                  # (joints, m)
     coef = np.empty((len(plan.var), m, 3))
     coef[:, :, 0], coef[:, :, 1], coef[:, :, 2] = np.cos(delta), np.sin(delta), 1.0
@@ -238,40 +85,97 @@ def _matrices(q: np.ndarray, out: np.ndarray, spec: Spec, support: str) -> None:
     frames[0] = plan.root
     for start, stop, p_start, p_stop in plan.levels:   # one level of the tree in one batched product
         np.matmul(frames[p_start:p_stop], local[start - 1:stop - 1], out=frames[start:stop])
-    _, origin_rows, origin_frames, offset_rows, offset_frames, offsets = _point_layout(spec, support)
+    return frames
+
+
+def _matrices(q: np.ndarray, out: np.ndarray, spec: Spec, support: str, full_com: np.ndarray | None = None) -> None:
+    """4x4 matrix evaluator for small batches; fills out (rows, 3, m) like :func:`_columns`."""
+    plan = matrix_plan(spec, support)
+    frames = _matrix_frames(q, spec, support)
+    _, origin_rows, origin_frames, offset_rows, offset_frames, offsets = point_layout(spec, support)
     out[origin_rows] = frames[origin_frames, :, :3, 3].transpose(0, 2, 1)
     rot = frames[offset_frames, :, :3, :3]
     out[offset_rows] = np.einsum("fmij,fj->fim", rot, offsets) + frames[offset_frames, :, :3, 3].transpose(0, 2, 1)
     five, six = plan.slots["5"], plan.slots["6"]
     out[ROW["pelvis"]] = 0.5 * (frames[five, :, :3, 3] + frames[six, :, :3, 3]).T
     fill_support_foot(out, spec.foot, support)
+    if full_com is not None:
+        com = full_com_plan(spec, support)
+        picked = frames[com.slots]                                         # (F, m, 4, 4)
+        total = np.einsum("fmij,fj->im", picked[:, :, :3, :3], com.weighted)
+        total += np.einsum("f,fmi->im", com.masses, picked[:, :, :3, 3])
+        full_com[:] = total / com.total
 
 
-def _point_layout(spec: Spec, support: str) -> tuple:
-    """Index arrays for the matrix evaluator's point gathering (cached per spec and support)."""
-    return _cached("layout", spec, support, _build_point_layout)
+@dataclass(frozen=True)
+class FullComPlan:
+    """Where the spec's link inertials sit in the chain: for each D-H frame that carries mass, the mass [kg] and
+    the mass-weighted centre of mass in that frame [kg·m]; the total mass [kg]."""
+
+    frames: tuple[str, ...]
+    slots: np.ndarray
+    masses: np.ndarray
+    weighted: np.ndarray
+    total: float
 
 
-def _build_point_layout(spec: Spec, support: str) -> tuple:
-    slots = _matrix_plan(spec, support).slots
-    points = _points(spec, support)
-    origin = [(ROW[r], slots[f]) for r, f, p in points if p == (0.0, 0.0, 0.0)]
-    offset = [(ROW[r], slots[f], p) for r, f, p in points if p != (0.0, 0.0, 0.0)]
-    return (None, np.array([r for r, _ in origin]), np.array([f for _, f in origin]),
-            np.array([r for r, _, _ in offset]), np.array([f for _, f, _ in offset]),
-            np.array([p for _, _, p in offset], dtype=float))
+CALIBRATION_POSES = 3
+ATTACHED_M = 1e-9   # a link is fixed to a D-H frame when its CoM keeps its place in that frame to this [m]
 
 
-def forward_dh(angles: BookAngles, spec: Spec) -> BodyPoints:
-    """Body points of N poses in the support-foot frame (sole centre at the origin, gamma = 0)."""
+def full_com_plan(spec: Spec, support: str) -> FullComPlan:
+    """The plan of the full-inertia CoM for ``support`` (computed once per spec, see :func:`_calibrate`)."""
+    return cached("fullcom", spec, support, _calibrate)  # type: ignore[return-value]
+
+
+def _calibrate(spec: Spec, support: str) -> FullComPlan:
+    """Find, for each link inertial, the D-H frame it moves with and its CoM in that frame: on a few poses, walk
+    the official joint table (:mod:`.tree`) to the link's CoM in the support sole frame and keep the frame in which
+    it does not move."""
+    rng = np.random.default_rng(0)
+    angles = BookAngles.random(CALIBRATION_POSES, rng, support)
+    frames = _matrix_frames(angles.vector(), spec, support)                 # (slots, k, 4, 4)
+    servo = book_to_servo(angles, spec)
+    sole_drop = np.array([0.0, 0.0, -spec.foot.sole_below_ankle])
+    links = {i.link: i for i in spec.inertials}
+    com_world = {link: [] for link in links}
+    for k in range(CALIBRATION_POSES):
+        tree = link_frames(spec, servo[k])
+        r_foot, p_foot = tree[spec.joint(f"{support[0]}_ank_roll").child]
+        r_sole, p_sole = r_foot, p_foot + r_foot @ sole_drop
+        for link, inertial in links.items():
+            r, p = tree[link]
+            com_world[link].append(r_sole.T @ (p + r @ inertial.link_com - p_sole))
+    rot, origin = frames[:, :, :3, :3], frames[:, :, :3, 3]
+    slot_of = {slot: name for name, slot in matrix_plan(spec, support).slots.items()}
+    masses: dict[int, float] = {}
+    weighted: dict[int, np.ndarray] = {}
+    for link, points in com_world.items():
+        local = np.einsum("skji,skj->ski", rot, np.asarray(points)[None] - origin)   # (slots, k, 3)
+        spread = np.ptp(local, axis=1).max(axis=1)
+        slot = int(np.argmax(spread < ATTACHED_M))
+        if spread[slot] >= ATTACHED_M:
+            raise SpecError(f"link {link!r} moves with no frame of the D-H chain", spec.path)
+        m = links[link].mass
+        masses[slot] = masses.get(slot, 0.0) + m
+        weighted[slot] = weighted.get(slot, np.zeros(3)) + m * local[slot, 0]
+    slots = sorted(masses)
+    return FullComPlan(tuple(slot_of[s] for s in slots), np.array(slots), np.array([masses[s] for s in slots]),
+                       np.array([weighted[s] for s in slots]), float(sum(masses.values())))
+
+
+def forward_dh(angles: BookAngles, spec: Spec, full_com: bool = False) -> BodyPoints:
+    """Body points of N poses in the support-foot frame (sole centre at the origin, gamma = 0), the lumped CoM
+    and, with ``full_com``, the full-inertia CoM."""
     n, support = angles.n, angles.support
     out, com = new_slab(n), np.empty((3, n))
+    full = np.empty((3, n)) if full_com else None
     q = angles.vector()
     evaluate = _matrices if n < MATRIX_BELOW else _columns
 
     def work(a: int, b: int) -> None:
-        evaluate(q[a:b], out[:, :, a:b], spec, support)
+        evaluate(q[a:b], out[:, :, a:b], spec, support, None if full is None else full[:, a:b])
         com[:, a:b] = slab_com(out[:, :, a:b], spec)
 
     run_chunked(n, work)
-    return BodyPoints(out, com, support, "dh")
+    return BodyPoints(out, com, support, "dh", full)

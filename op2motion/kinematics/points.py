@@ -58,6 +58,7 @@ class BodyPoints:
     com: np.ndarray
     support: str
     model: str
+    com_full: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -92,15 +93,15 @@ class BodyPoints:
     def placed(self, sp: Iterable[float] = (0.0, 0.0, 0.0), gamma: float = 0.0) -> "BodyPoints":
         """The same points with the support sole centre moved to ``sp`` [m] and turned by ``gamma`` [rad] about Z."""
         c, s = np.cos(gamma), np.sin(gamma)
-        x, y = self.data[:, 0], self.data[:, 1]
         shift = np.asarray(tuple(sp), dtype=float)
-        out = self.data.copy()
-        out[:, 0], out[:, 1] = c * x - s * y, s * x + c * y
-        out += shift[None, :, None]
-        com = self.com.copy()
-        com[0], com[1] = c * self.com[0] - s * self.com[1], s * self.com[0] + c * self.com[1]
-        com += shift[:, None]
-        return BodyPoints(out, com, self.support, self.model)
+
+        def move(v: np.ndarray) -> np.ndarray:      # (..., 3, N) points
+            out = v.copy()
+            out[..., 0, :], out[..., 1, :] = c * v[..., 0, :] - s * v[..., 1, :], s * v[..., 0, :] + c * v[..., 1, :]
+            return out + shift[:, None]
+
+        return BodyPoints(move(self.data), move(self.com), self.support, self.model,
+                          None if self.com_full is None else move(self.com_full))
 
     def as_dict(self, i: int = 0) -> dict[str, list[float]]:
         """Pose ``i`` as ``{point name: [x, y, z]}`` [m]."""

@@ -46,6 +46,7 @@ class BuildSettings:
     restarts: int = DEFAULT_RESTARTS
     validate: bool = False
     seconds: float = DEFAULT_SECONDS
+    engine: str = "pybullet"
 
 
 @dataclass(frozen=True)
@@ -102,7 +103,7 @@ def _solve_job(task: tuple[Job, str | None, str, BuildSettings]) -> tuple[IndexR
         if spec.sha256 != sha:
             return _row(job, False, "error: the spec file changed during the build"), None
         out = solve(job.problem, spec, settings.pso, restarts=settings.restarts, validate=settings.validate,
-                    seconds=settings.seconds)
+                    seconds=settings.seconds, engine=settings.engine)
     except Op2MotionError as exc:
         return _row(job, False, f"error: {exc}"), None
     r, v = out.result, out.validation

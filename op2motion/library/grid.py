@@ -14,6 +14,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..balance import COM_MODEL_FULL
 from ..errors import InputError
 from ..posture.cost import PostureProblem
 
@@ -29,11 +30,12 @@ class Job:
     support: str
     br: float
     target: tuple[float, float, float]
+    com_model: str = COM_MODEL_FULL
 
     @property
     def problem(self) -> PostureProblem:
         """The posture problem of this grid point."""
-        return PostureProblem(self.support, self.hand, self.target, self.br)
+        return PostureProblem(self.support, self.hand, self.target, self.br, com_model=self.com_model)
 
     @property
     def name(self) -> str:
@@ -51,14 +53,14 @@ def axis(start: float, stop: float, count: float, name: str) -> list[float]:
 
 
 def grid_jobs(hands: Sequence[str], supports: Sequence[str], brs: Sequence[float], xs: Sequence[float],
-              ys: Sequence[float], zs: Sequence[float]) -> list[Job]:
+              ys: Sequence[float], zs: Sequence[float], com_model: str = COM_MODEL_FULL) -> list[Job]:
     """All combinations, each checked; raises :class:`InputError` for too many targets or colliding names."""
     total = len(hands) * len(supports) * len(brs) * len(xs) * len(ys) * len(zs)
     if total > MAX_TARGETS:
         raise InputError(f"the grid has {total} targets, more than the cap of {MAX_TARGETS}", "grid")
     if total == 0:
         raise InputError("the grid is empty", "grid")
-    jobs = [Job(h, s, float(b), (float(x), float(y), float(z)))
+    jobs = [Job(h, s, float(b), (float(x), float(y), float(z)), com_model)
             for h, s, b, x, y, z in itertools.product(dict.fromkeys(hands), dict.fromkeys(supports), brs, xs, ys, zs)]
     names: dict[str, Job] = {}
     for job in jobs:

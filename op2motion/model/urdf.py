@@ -10,7 +10,6 @@ Frame links carry a tiny inertial (:data:`FRAME_LINK_MASS_KG`): a link without o
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from xml.sax.saxutils import quoteattr
 
@@ -25,15 +24,6 @@ _COLOURS = {"left": ("left_blue", "0.25 0.45 0.85 1"), "right": ("right_red", "0
             "body": ("body_ivory", "0.93 0.91 0.84 1")}  # left/right as in op2motion's plots; the OP2 is ivory
 
 
-def rpy_matrix(rpy: tuple[float, float, float]) -> np.ndarray:
-    """URDF fixed-axis roll-pitch-yaw to a rotation matrix (Rz(yaw) Ry(pitch) Rx(roll))."""
-    r, p, y = rpy
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-                     [-sp, cp * sr, cp * cr]])
-
-
 @dataclass(frozen=True)
 class LinkInertial:
     """Mass [kg], CoM [m] and inertia tensor about the CoM [kg·m²], all in our link frame."""
@@ -44,12 +34,8 @@ class LinkInertial:
 
 
 def link_inertial(item: Inertial) -> LinkInertial:
-    """Re-express a Webots inertial in our link frame (rotate the tensor, move the CoM)."""
-    rot = rpy_matrix(item.webots_frame_rpy)
-    ixx, iyy, izz, ixy, ixz, iyz = item.inertia
-    tensor_w = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
-    com = rot @ np.asarray(item.com) + np.asarray(item.webots_frame_xyz)
-    return LinkInertial(item.mass, com, rot @ tensor_w @ rot.T)
+    """A Webots inertial re-expressed in our link frame (see :attr:`Inertial.link_com`, ``link_tensor``)."""
+    return LinkInertial(item.mass, item.link_com, item.link_tensor)
 
 
 def frame_link(name: str) -> str:

@@ -20,17 +20,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import book
-from ..balance import FLOOR_TOLERANCE_M, PENALTY, check_br, rectangle_margin
+from ..balance import (COM_MODEL_FULL, COM_MODELS, FLOOR_TOLERANCE_M, PENALTY, check_br, rectangle_margin,
+                       support_extents)
 from ..errors import InputError
 from ..joints import BookAngles, check_support
 from ..kinematics import MODELS, BodyPoints, forward
 from ..kinematics.points import ROW, row_of
 from ..spec import Spec, swing_of
+from .compliance import Compliance
 
 W_VIOLATION = 10.0     # cost per metre by which a violated constraint is violated, on top of the book's 100
 W_MARGIN = 0.02        # cost per metre of stability margin below MARGIN_CAP
 MARGIN_CAP_M = 0.02    # margins beyond this earn nothing more
 W_UPRIGHT = 0.002      # cost per rad² of torso tilt from vertical
+SAG_TILT_LIMIT_RAD = 0.105   # 6°: the torso may turn this much as the servos take the load (physics calls 10° a fall)
 TARGET_LIMIT_M = 1.0   # a target farther than this from the support foot is not a target for a 45 cm robot
 
 
@@ -44,11 +47,13 @@ class PostureProblem:
     target: tuple[float, float, float]
     br: float = book.DEFAULT_PROBLEM.br
     model: str = "dh"
+    com_model: str = COM_MODEL_FULL
 
     @classmethod
-    def from_scenario(cls, scenario: book.Scenario, model: str = "dh") -> "PostureProblem":
+    def from_scenario(cls, scenario: book.Scenario, model: str = "dh",
+                      com_model: str = COM_MODEL_FULL) -> "PostureProblem":
         """The problem of one of the book's scenarios (or the default problem)."""
-        return cls(scenario.support, scenario.hand, scenario.target, scenario.br, model)
+        return cls(scenario.support, scenario.hand, scenario.target, scenario.br, model, com_model)
 
     def validated(self) -> "PostureProblem":
         """Check the fields; raise :class:`InputError` on bad values."""
@@ -62,7 +67,16 @@ class PostureProblem:
         check_br(self.br)
         if self.model not in MODELS:
             raise InputError(f"expected 'dh' or 'pb', got {self.model!r}", "model")
+        if self.com_model not in COM_MODELS:
+            raise InputError(f"expected one of {', '.join(COM_MODELS)}, got {self.com_model!r}", "com_model")
+        if self.com_model == COM_MODEL_FULL and self.model != "dh":
+            raise InputError("the full-inertia CoM needs the D-H model; choose --model dh or --com-model book",
+                             "com_model")
         return self
+
+    def extents(self, spec: Spec) -> tuple[float, float, float, float]:
+        """The support rectangle (front, back, left, right) [m] of :attr:`com_model`, shrunk by ``br``."""
+        return support_extents(spec, self.support, self.br, self.com_model)
 
     @property
     def hand_point(self) -> str:
@@ -79,8 +93,9 @@ class PostureProblem:
 
 @dataclass(frozen=True)
 class CostTerms:
-    """Per-pose cost and its parts, each (N,): total and book cost, hand error [m], stability margin [m], lowest
-    swing-foot corner [m], torso tilt [rad], self-collision penalty."""
+    """Per-pose cost and its parts, each (N,): total and book cost, hand error [m], stability margin [m] (of the
+    settled CoM for the full-inertia model), lowest swing-foot corner [m], torso tilt [rad], self-collision
+    penalty, and the torso turn as the servos take the load [rad] (0 for the book's rigid model)."""
 
     total: np.ndarray
     book: np.ndarray
@@ -89,6 +104,7 @@ class CostTerms:
     swing_min_z: np.ndarray
     tilt: np.ndarray
     collision: np.ndarray
+    sag_tilt: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -162,7 +178,9 @@ class CostModel:
 
     def __init__(self, problem: PostureProblem, spec: Spec):
         self.problem, self.spec = problem.validated(), spec
-        self.extents = spec.foot.extents(problem.support, problem.br)
+        self.extents = problem.extents(spec)
+        self.full = problem.com_model == COM_MODEL_FULL
+        self.compliance = Compliance(spec) if self.full else None
         self.target = np.asarray(problem.target, dtype=float)[:, None]
         self.hand_row = row_of(problem.hand_point)
         first = ROW[f"{swing_of(problem.support)}_foot_0"]
@@ -171,22 +189,30 @@ class CostModel:
 
     def __call__(self, angles: BookAngles) -> CostTerms:
         """All cost terms for a batch of poses (book variables, support = the problem's)."""
-        points = forward(angles, self.spec, self.problem.model)
+        points = forward(angles, self.spec, self.problem.model, full_com=self.full)
         data = points.data
         hand = data[self.hand_row] - self.target
         hand_error = np.sqrt(np.einsum("in,in->n", hand, hand))
         swing_min_z = data[self.swing_rows, 2].min(axis=0)
-        margin = rectangle_margin(points.com[0], points.com[1], self.extents)  # world = support frame
-        # The book's penalties (code 2.8, 2.9): PenaltyStability is 100 exactly where the margin is negative.
+        if self.compliance is not None:   # the body physics simulates: full inertia on compliant servos
+            settled = self.compliance.settle(points, points.com_full)
+            com_xy, sag_tilt = np.nan_to_num(settled.com_xy, posinf=1.0, neginf=-1.0), settled.tilt
+        else:                             # the book's body: lumped masses on rigid joints
+            com_xy, sag_tilt = points.com[:2], np.zeros(points.n)
+        margin = rectangle_margin(com_xy[0], com_xy[1], self.extents)  # world = support frame
+        sag_excess = np.maximum(np.nan_to_num(sag_tilt, posinf=1.0) - SAG_TILT_LIMIT_RAD, 0.0)
+        # The book's penalties (code 2.8, 2.9): PenaltyStability is 100 exactly where the margin is negative; on
+        # compliant servos also where the load would turn the torso over the limit.
         below = swing_min_z < -FLOOR_TOLERANCE_M
-        book_cost = np.where(below, PENALTY, 0.0) + np.where(margin < 0.0, PENALTY, 0.0) + hand_error
+        unstable = (margin < 0.0) | (sag_excess > 0.0)
+        book_cost = np.where(below, PENALTY, 0.0) + np.where(unstable, PENALTY, 0.0) + hand_error
         # Beyond the book: a slope inside the penalised region leads a swarm that starts there out of it.
-        slope = W_VIOLATION * (np.where(below, -swing_min_z, 0.0) + np.maximum(-margin, 0.0))
+        slope = W_VIOLATION * (np.where(below, -swing_min_z, 0.0) + np.maximum(-margin, 0.0) + 0.1 * sag_excess)
         tilt = torso_tilt(points, self.spec)
         collision = self_collision_penalty(points, self.spec, self.screen)
         total = (book_cost + slope + W_MARGIN * (MARGIN_CAP_M - np.minimum(margin, MARGIN_CAP_M))
                  + W_UPRIGHT * tilt * tilt + collision)
-        return CostTerms(total, book_cost, hand_error, margin, swing_min_z, tilt, collision)
+        return CostTerms(total, book_cost, hand_error, margin, swing_min_z, tilt, collision, sag_tilt)
 
 
 def evaluate_cost(angles: BookAngles, problem: PostureProblem, spec: Spec) -> CostTerms:

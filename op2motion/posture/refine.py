@@ -2,8 +2,8 @@
 
 First the iterated Taylor arm IK on the D-H model (true geometry) moves the reaching arm's three joints; if that
 cannot reach, or the arm's moved mass breaks a constraint, SLSQP adjusts all variables inside the search box,
-minimising the squared hand error subject to: stability margin >= 0 (CoM inside the br-shrunk rectangle), swing
-foot not below the floor, and no self-collision. Gradients are central differences of the batched model (one
+minimising the squared hand error subject to: stability margin >= 0 (the settled CoM inside the br-shrunk
+rectangle), the torso's turn under load within its limit, swing foot not below the floor, and no self-collision. Gradients are central differences of the batched model (one
 forward call for all 2 x 20 perturbations).
 """
 
@@ -20,7 +20,7 @@ from ..errors import Op2MotionError
 from ..joints import BookAngles
 from ..kinematics import forward
 from ..spec import Spec
-from .cost import CostModel, CostTerms, PostureProblem
+from .cost import SAG_TILT_LIMIT_RAD, CostModel, CostTerms, PostureProblem
 
 REFINE_TOL_M = 1e-3          # hand within 1 mm after refinement
 FD_STEP_RAD = 1e-6
@@ -38,7 +38,8 @@ class Refinement:
 
 def feasible(terms: CostTerms, i: int = 0) -> bool:
     """Balance, floor and self-collision constraints hold for pose ``i``."""
-    return bool(terms.margin[i] >= 0.0 and terms.swing_min_z[i] >= 0.0 and terms.collision[i] == 0.0)
+    return bool(terms.margin[i] >= 0.0 and terms.swing_min_z[i] >= 0.0 and terms.collision[i] == 0.0
+                and terms.sag_tilt[i] <= SAG_TILT_LIMIT_RAD)
 
 
 def refine(x0: np.ndarray, problem: PostureProblem, spec: Spec, bounds: tuple[np.ndarray, np.ndarray]) -> Refinement:
@@ -93,13 +94,14 @@ def _slsqp(x0: np.ndarray, model: CostModel, problem: PostureProblem,
 
             err2 = terms.hand_error ** 2
             cache.clear()
-            cache[key] = (split(err2), split(terms.margin), split(terms.swing_min_z))
+            cache[key] = (split(err2), split(terms.margin), split(terms.swing_min_z),
+                          split(SAG_TILT_LIMIT_RAD - np.minimum(terms.sag_tilt, 1.0)))
         return cache[key]
 
     res = minimize(lambda x: values(x)[0][0], x0, jac=lambda x: values(x)[0][1], method="SLSQP",
                    bounds=list(zip(lo, hi)),
-                   constraints=[{"type": "ineq", "fun": lambda x: values(x)[1][0], "jac": lambda x: values(x)[1][1]},
-                                {"type": "ineq", "fun": lambda x: values(x)[2][0], "jac": lambda x: values(x)[2][1]}],
+                   constraints=[{"type": "ineq", "fun": lambda x, k=k: values(x)[k][0],
+                                 "jac": lambda x, k=k: values(x)[k][1]} for k in (1, 2, 3)],
                    options={"maxiter": SLSQP_MAX_ITER, "ftol": 1e-14})
     if not np.all(np.isfinite(res.x)):
         return None

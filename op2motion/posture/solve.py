@@ -9,10 +9,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..balance import COM_MODEL_FULL, COM_MODEL_LUMPED, stability_margin
-from ..joints import BookAngles, book_to_servo
+from ..balance import COM_MODEL_FULL, COM_MODEL_LUMPED, rectangle_margin
+from ..joints import BookAngles
 from ..kinematics import forward
-from ..model.dynamics import dynamics_for
 from ..pose import Pose
 from ..spec import Spec
 from .cost import CostModel, CostTerms, PostureProblem
@@ -30,8 +29,9 @@ def _vec(v: np.ndarray) -> list[float]:
 class PostureResult:
     """Outcome of :func:`optimize_posture`; every length [m] in the support-foot frame, on the D-H model.
 
-    ``com_lumped``/``margin_lumped_m`` use the book's lumped masses, ``com_full``/``margin_full_m`` the spec's
-    per-link inertials; both margins are to the br-shrunk support rectangle.
+    ``com_lumped``/``margin_lumped_m``: the book's lumped masses, margin to the book's foot rectangle (table 2.7);
+    ``com_full``/``margin_full_m``: the spec's per-link inertials, margin to the real sole (the foot box); both
+    rectangles shrunk by br. ``problem.com_model`` says which of the two the optimiser balanced.
     """
 
     problem: PostureProblem
@@ -77,6 +77,7 @@ class PostureResult:
         """The metrics, JSON-ready (also the ``metrics`` of the pose file)."""
         return {
             "target": list(self.problem.target), "hand_error_m": self.hand_error_m, "br": self.problem.br,
+            "balanced_com_model": self.problem.com_model,
             "com": _vec(self.com_lumped), "com_model": COM_MODEL_LUMPED, "stability_margin_m": self.margin_lumped_m,
             "com_full": _vec(self.com_full), "com_full_model": COM_MODEL_FULL,
             "stability_margin_full_m": self.margin_full_m,
@@ -89,6 +90,7 @@ class PostureResult:
         """The solution as a pose (support = the problem's support foot), metrics and provenance filled in."""
         p = self.problem
         prov = {"target_m": list(p.target), "hand": p.hand, "support": p.support, "br": p.br, "model": p.model,
+                "com_model": p.com_model,
                 "seed": self.settings.seed, "particles": self.settings.particles,
                 "iterations": self.settings.iterations, "refinement": self.method, **(provenance or {})}
         return Pose.from_book(name, self.angles, spec, metrics=self.as_dict(), provenance=prov)
@@ -156,10 +158,12 @@ def _solve_once(problem: PostureProblem, spec: Spec, settings: PSOSettings, refi
         terms = CostModel(replace(problem, model="dh"), spec)(BookAngles.from_vector(x, problem.support))
     angles = BookAngles.from_vector(x, problem.support)
     reached, message = _verdict(terms, tol)
-    points = forward(angles, spec, "dh")
-    full = dynamics_for(spec).com(book_to_servo(angles, spec)[0], problem.support)
+    points = forward(angles, spec, "dh", full_com=True)
+    lumped, full = points.com[:, 0].copy(), points.com_full[:, 0].copy()
+    book_rect = replace(problem, com_model=COM_MODEL_LUMPED).extents(spec)
+    sole_rect = replace(problem, com_model=COM_MODEL_FULL).extents(spec)
     return PostureResult(
         problem, settings, angles, terms, pso, method, time.perf_counter() - t0, reached, message, tol,
-        com_lumped=points.com[:, 0].copy(), margin_lumped_m=float(terms.margin[0]), com_full=full,
-        margin_full_m=float(stability_margin(full[None, :2], spec, problem.support, problem.br)[0]),
+        com_lumped=lumped, margin_lumped_m=float(rectangle_margin(lumped[0:1], lumped[1:2], book_rect)[0]),
+        com_full=full, margin_full_m=float(rectangle_margin(full[0:1], full[1:2], sole_rect)[0]),
         left_hand=points.point("left_hand")[0].copy(), right_hand=points.point("right_hand")[0].copy())

@@ -1,0 +1,111 @@
+"""Physics checks of poses: one verdict, two engines (PyBullet, the default, and MuJoCo), one servo model.
+
+:func:`validate` places a pose on the floor, ramps gravity in, holds the pose with the calibrated MX-28 model
+(:mod:`op2motion.servo`) at 1 kHz and judges it with named reasons (:mod:`.verdict`); ``push_n`` adds separate runs
+with a push in four directions after settling; ``engine="both"`` runs PyBullet and MuJoCo and compares them.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Callable
+
+import numpy as np
+
+from ..errors import InputError
+from ..pose import check_pose_support
+from ..servo import ServoModel
+from ..spec import Spec
+from .run import RAMP_S, STEADY_S, Push, judge, simulate
+from .scene import ENGINES, TIME_STEP_S
+from .verdict import PUSH_DIRECTIONS, REASONS, PushResult, Validation
+
+__all__ = ["DEFAULT_SECONDS", "ENGINES", "MAX_SECONDS", "MIN_SECONDS", "REASONS", "Validation", "make_engine",
+           "steps_for", "validate"]
+
+MIN_SECONDS, MAX_SECONDS = RAMP_S + STEADY_S + 0.5, 60.0
+DEFAULT_SECONDS = 5.0
+PUSH_DURATION_S = 0.1
+PUSH_SETTLE_S = 1.0            # a push starts this long after gravity reached full strength
+MAX_PUSH_N = 100.0
+
+
+def steps_for(seconds: float) -> int:
+    """Simulation steps in ``seconds`` (see :data:`MIN_SECONDS`, :data:`MAX_SECONDS`)."""
+    if not (math.isfinite(seconds) and MIN_SECONDS <= seconds <= MAX_SECONDS):
+        raise InputError(f"expected {MIN_SECONDS:g} to {MAX_SECONDS:g} s, got {seconds!r}", "seconds")
+    return int(round(seconds / TIME_STEP_S))
+
+
+def make_engine(name: str, spec: Spec, servo: ServoModel) -> Any:
+    """A fresh world of engine ``name`` (``pybullet`` or ``mujoco``) with the robot and the floor."""
+    if name == "pybullet":
+        from .pybullet_engine import PyBulletEngine
+
+        return PyBulletEngine(spec, servo, TIME_STEP_S)
+    if name == "mujoco":
+        from .mujoco_engine import MuJoCoEngine
+
+        return MuJoCoEngine(spec, servo, TIME_STEP_S)
+    raise InputError(f"expected one of {', '.join(ENGINES)}, got {name!r}", "engine")
+
+
+def _run(engine_name: str, servo_angles: np.ndarray, support: str, spec: Spec, model: ServoModel, seconds: float,
+         push: Push | None, snapshot: bool, on_step: Callable[[], Any] | None) -> Validation:
+    engine = make_engine(engine_name, spec, model)
+    try:
+        track, facts = simulate(engine, spec, model, servo_angles, support, seconds, push, on_step)
+        verdict = judge(track, facts, spec, model, servo_angles, support, engine_name, engine.time_step, seconds)
+        if snapshot:
+            verdict = _with_snapshot(verdict, engine, spec, model)
+        return verdict
+    finally:
+        engine.close()
+
+
+def _with_snapshot(verdict: Validation, engine: Any, spec: Spec, model: ServoModel) -> Validation:
+    """The verdict with a TinyRenderer picture of the final state (PyBullet renders for both engines)."""
+    from dataclasses import replace
+
+    from .pybullet_engine import PyBulletEngine
+
+    if isinstance(engine, PyBulletEngine):
+        return replace(verdict, snapshot_png=engine.snapshot())
+    q, _ = engine.state()
+    pos, rot = engine.base()
+    painter = PyBulletEngine(spec, model, TIME_STEP_S)
+    try:
+        painter.reset(pos, rot, q)
+        return replace(verdict, snapshot_png=painter.snapshot())
+    finally:
+        painter.close()
+
+
+def validate(servo_angles: np.ndarray, support: str, spec: Spec, seconds: float = DEFAULT_SECONDS,
+             engine: str = "pybullet", push_n: float = 0.0, stiffness: float = 1.0,
+             p_gains: np.ndarray | None = None, snapshot: bool = False,
+             on_step: Callable[[], Any] | None = None, voltage: float | None = None) -> Validation:
+    """Does a pose (servo angles (20,) [rad], support left/right/double) stand on ``engine``? See the package
+    docstring; ``stiffness`` scales the servos' Kp, ``p_gains`` sets each servo's P gain (default 32),
+    ``voltage`` [V] picks the servo's rating (default: the spec's supply voltage)."""
+    check_pose_support(support)
+    servo_angles = np.asarray(servo_angles, dtype=float)
+    if servo_angles.shape != (len(spec.joints),) or not np.all(np.isfinite(servo_angles)):
+        raise InputError(f"expected {len(spec.joints)} finite servo angles", "servo angles")
+    steps_for(seconds)
+    if not (math.isfinite(push_n) and 0.0 <= push_n <= MAX_PUSH_N):
+        raise InputError(f"expected a force from 0 to {MAX_PUSH_N:g} N, got {push_n!r}", "push")
+    model = ServoModel.of(spec, p_gains, stiffness, voltage)
+    verdict = _run(engine, servo_angles, support, spec, model, seconds, None, snapshot, on_step)
+    if push_n > 0.0:
+        start = RAMP_S + PUSH_SETTLE_S
+        results = []
+        for direction, (dx, dy) in PUSH_DIRECTIONS.items():
+            push = Push(np.array([dx * push_n, dy * push_n, 0.0]), start, PUSH_DURATION_S)
+            pushed = _run(engine, servo_angles, support, spec, model, seconds, push, False, None)
+            results.append(PushResult(direction, push_n, start, PUSH_DURATION_S, pushed.stable, pushed.reasons))
+        from dataclasses import replace
+
+        verdict = replace(verdict, pushes=results)
+    return verdict
+

@@ -1,0 +1,107 @@
+"""The robot's state measured the same way for every engine, and where a pose starts on the floor.
+
+An engine reports only the torso (``body_link``) pose and the 20 joint angles; :class:`Body` turns them into the
+full-inertia centre of mass, the sole frames and the corners of both foot boxes with pinocchio on the generated
+URDF, so both engines are judged by one piece of code. The feet are the spec's foot collision boxes (the real
+soles, 105 x 66 mm), not the book's support rectangle.
+
+:func:`placement` puts a pose on the floor: the support sole flat at the origin (X forward, Y left); in double
+support the lower, more level sole is laid flat (the one that leaves the other foot at or above the floor, its
+lowest corner touching when the soles are parallel); then the robot is lifted if any foot corner would start
+below the floor, so nothing starts inside the ground.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..model.dynamics import dynamics_for
+from ..model.urdf import foot_link
+from ..spec import SUPPORTS, Spec, feet_of
+
+GROUND_TOLERANCE_M = 1e-9
+
+
+def foot_box_corners(spec: Spec, side: str) -> np.ndarray:
+    """The 4 bottom corners (4, 3) [m] of a foot's collision box in its ankle-roll link frame (the sole)."""
+    link = foot_link(spec, side)
+    boxes = spec.collisions_of(link, "box")
+    if not boxes:
+        raise InputError(f"the spec has no box collision shape on {link}: the foot's sole is unknown", "spec")
+    box = boxes[0]
+    if any(abs(a) > 1e-12 for a in box.origin_rpy):
+        raise InputError(f"the foot box on {link} must not be rotated", "spec")
+    (sx, sy, sz), (ox, oy, oz) = box.size, box.origin_xyz
+    return np.array([[ox + dx * sx / 2, oy + dy * sy / 2, oz - sz / 2]
+                     for dx, dy in ((1, 1), (1, -1), (-1, -1), (-1, 1))])
+
+
+@dataclass(frozen=True)
+class BodyState:
+    """Measured state [m] in the world (floor) frame."""
+
+    com: np.ndarray                         # (3,) full-inertia centre of mass
+    soles: dict[str, tuple[np.ndarray, np.ndarray]]   # side -> (position (3,), rotation (3, 3)) of the sole frame
+    corners: dict[str, np.ndarray]          # side -> (4, 3) bottom corners of the foot box
+
+    @property
+    def lowest_corner_z(self) -> float:
+        """Height of the lowest foot corner [m]."""
+        return float(min(c[:, 2].min() for c in self.corners.values()))
+
+
+class Body:
+    """Pinocchio evaluation of the generated URDF for a torso pose and joint angles."""
+
+    def __init__(self, spec: Spec):
+        self.spec = spec
+        self.dyn = dynamics_for(spec)
+        self.pin = self.dyn.pin
+        self.local_corners = {side: foot_box_corners(spec, side) for side in SUPPORTS}
+        self.foot_ids = {side: self.dyn.model.getFrameId(foot_link(spec, side)) for side in SUPPORTS}
+
+    def _configuration(self, base_pos: np.ndarray, base_rot: np.ndarray, q: np.ndarray) -> np.ndarray:
+        config = self.dyn.configuration(q)
+        config[:3] = base_pos
+        config[3:7] = self.pin.Quaternion(np.asarray(base_rot, dtype=float)).coeffs()   # x, y, z, w
+        return config
+
+    def state(self, base_pos: np.ndarray, base_rot: np.ndarray, q: np.ndarray) -> BodyState:
+        """The measured state for the torso frame at (``base_pos``, ``base_rot``) and joint angles ``q`` [rad]."""
+        pin, model, data = self.pin, self.dyn.model, self.dyn.data
+        config = self._configuration(base_pos, base_rot, q)
+        com = pin.centerOfMass(model, data, config).copy()
+        pin.updateFramePlacements(model, data)
+        soles, corners = {}, {}
+        for side in SUPPORTS:
+            sole = data.oMf[self.dyn.sole_ids[side]]
+            foot = data.oMf[self.foot_ids[side]]
+            soles[side] = (sole.translation.copy(), sole.rotation.copy())
+            corners[side] = self.local_corners[side] @ foot.rotation.T + foot.translation
+        return BodyState(com, soles, corners)
+
+
+def _sole_flat(body: Body, q: np.ndarray, side: str) -> tuple[np.ndarray, np.ndarray]:
+    """Torso pose (position, rotation) that puts the ``side`` sole at the origin, level, facing +X."""
+    state = body.state(np.zeros(3), np.eye(3), q)
+    pos, rot = state.soles[side]
+    base_rot = rot.T                       # sole frame -> world identity
+    return -base_rot @ pos, base_rot
+
+
+def placement(body: Body, q: np.ndarray, support: str) -> tuple[np.ndarray, np.ndarray, str, float]:
+    """Where a pose starts: torso (position [m], rotation), the sole laid level, and the settling gap [m]: how
+    high the supporting foot that does not touch starts above the floor (0 when every supporting foot touches).
+    See the module docstring."""
+    options = []
+    for side in feet_of(support):
+        pos, rot = _sole_flat(body, q, side)
+        state = body.state(pos, rot, q)
+        lift = max(0.0, -state.lowest_corner_z)      # nothing starts below the floor
+        gap = max(float(state.corners[s][:, 2].min()) + lift for s in feet_of(support))
+        options.append((gap, side, pos + np.array([0.0, 0.0, lift]), rot))
+    gap, side, pos, rot = min(options, key=lambda o: o[0])   # the lower, more level sole: the smallest gap
+    return pos, rot, side, gap

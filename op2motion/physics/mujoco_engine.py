@@ -1,0 +1,125 @@
+"""MuJoCo as a physics engine for the run loop (:mod:`.run`): the same generated URDF, compiled with ``MjSpec``.
+
+The URDF is loaded into an ``MjSpec``; the torso gets a free joint (without it MuJoCo would weld the torso to the
+world), the named frame links become sites, inertias are taken from the URDF only, and a floor plane is added.
+Each of the 20 joints gets a torque motor and the servo's losses as joint properties, which MuJoCo integrates
+implicitly (``implicitfast``): damping (back-EMF and viscous), Coulomb friction (``frictionloss``) and the rotor
+inertia reflected through the gearbox (``armature``). Contacts: elliptic friction cones, friction
+:data:`FLOOR_FRICTION`, a 5 ms critically damped contact time constant (about 0.02 mm of penetration).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..model.urdf import build_urdf, frame_link, frame_points
+from ..servo import ServoModel
+from ..spec import Spec
+from .scene import FLOOR_FRICTION, GRAVITY_M_S2, Contact
+
+SOLREF = (0.005, 1.0)                    # contact time constant [s] and damping ratio
+SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)   # contact impedance: stiff, little penetration
+IMPRATIO = 10.0                          # friction-to-normal impedance ratio (MuJoCo's advice for legged robots)
+
+
+class MuJoCoEngine:
+    """One MuJoCo world with the floor and the robot."""
+
+    name = "mujoco"
+
+    def __init__(self, spec: Spec, servo: ServoModel, time_step: float):
+        import mujoco
+
+        self.mj, self.spec, self.servo, self.time_step = mujoco, spec, servo, time_step
+        ms = mujoco.MjSpec.from_string(build_urdf(spec))
+        c = ms.compiler
+        c.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
+        c.balanceinertia, c.boundmass, c.boundinertia, c.discardvisual = False, 0.0, 0.0, True
+        for name in frame_points(spec):
+            ms.body(frame_link(name)).add_site(name=frame_link(name))
+        o = ms.option
+        o.timestep, o.gravity = time_step, [0.0, 0.0, -GRAVITY_M_S2]
+        o.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+        o.cone, o.impratio = mujoco.mjtCone.mjCONE_ELLIPTIC, IMPRATIO
+        friction = [FLOOR_FRICTION, 0.005, 0.0001]
+        ms.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], friction=friction,
+                              solref=list(SOLREF), solimp=list(SOLIMP), condim=3)
+        for g in ms.geoms:
+            if g.name != "floor":
+                g.friction, g.solref, g.solimp, g.condim = friction, list(SOLREF), list(SOLIMP), 3
+        ms.body(spec.root_link).add_freejoint(name="root")
+        limit = servo.torque_max
+        for j in ms.joints:
+            if j.type != mujoco.mjtJoint.mjJNT_HINGE:
+                continue
+            j.armature, j.damping, j.frictionloss = servo.armature, [servo.damping, 0.0, 0.0], servo.friction
+            a = ms.add_actuator(name=j.name, target=j.name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+            a.set_to_motor()
+            a.ctrllimited, a.ctrlrange = mujoco.mjtLimited.mjLIMITED_TRUE, [-limit, limit]
+        self.model = ms.compile()
+        self.data = mujoco.MjData(self.model)
+        m = self.model
+        self.actuator = np.array([m.actuator(n).id for n in spec.joint_names])
+        self.qadr = np.array([m.jnt_qposadr[m.joint(n).id] for n in spec.joint_names])
+        self.dadr = np.array([m.jnt_dofadr[m.joint(n).id] for n in spec.joint_names])
+        self.root = m.body(spec.root_link).id
+        self.floor = m.geom("floor").id
+        self.body_name = {i: m.body(i).name for i in range(m.nbody)}
+
+    def close(self) -> None:
+        """Nothing to release."""
+
+    def total_mass(self) -> float:
+        """Mass of the compiled model [kg]."""
+        return float(self.mj.mj_getTotalmass(self.model))
+
+    def reset(self, base_pos: np.ndarray, base_rot: np.ndarray, q: np.ndarray) -> None:
+        """Teleport: torso link frame at (``base_pos``, ``base_rot``), joints at ``q`` [rad], all at rest."""
+        mj, d = self.mj, self.data
+        mj.mj_resetData(self.model, d)
+        quat = np.zeros(4)
+        mj.mju_mat2Quat(quat, np.asarray(base_rot, dtype=float).reshape(-1))
+        d.qpos[0:3], d.qpos[3:7] = base_pos, quat
+        d.qpos[self.qadr] = q
+        mj.mj_forward(self.model, d)
+
+    def set_gravity(self, scale: float) -> None:
+        """Gravity at ``scale`` of its full strength."""
+        self.model.opt.gravity[2] = -GRAVITY_M_S2 * scale
+
+    def state(self) -> tuple[np.ndarray, np.ndarray]:
+        """Joint angles and velocities (20,) [rad, rad/s]."""
+        return self.data.qpos[self.qadr].copy(), self.data.qvel[self.dadr].copy()
+
+    def step(self, torque: np.ndarray, push: np.ndarray | None = None) -> None:
+        """One time step with the servos' active ``torque`` (20,) [N·m] and an optional ``push`` (3,) [N] at the
+        torso's centre of mass."""
+        d = self.data
+        d.ctrl[self.actuator] = torque
+        d.xfrc_applied[self.root, :3] = 0.0 if push is None else push
+        self.mj.mj_step(self.model, d)
+
+    def base(self) -> tuple[np.ndarray, np.ndarray]:
+        """Torso link frame: position [m] and rotation (3, 3), at the current state."""
+        d = self.data
+        self.mj.mj_kinematics(self.model, d)
+        return d.xpos[self.root].copy(), d.xmat[self.root].reshape(3, 3).copy()
+
+    def contacts(self) -> list[Contact]:
+        """Contacts of the robot with the floor (``other`` None) and with itself, at the current state."""
+        mj, m, d = self.mj, self.model, self.data
+        mj.mj_forward(m, d)
+        out, wrench = [], np.zeros(6)
+        for i in range(d.ncon):
+            con = d.contact[i]
+            g0, g1 = int(con.geom[0]), int(con.geom[1])
+            mj.mj_contactForce(m, d, i, wrench)
+            on_g1 = con.frame.reshape(3, 3).T @ wrench[:3]          # force on geom[1] from geom[0], world frame
+            if self.floor in (g0, g1):
+                robot, force = (g1, on_g1) if g0 == self.floor else (g0, -on_g1)
+                out.append(Contact(self.body_name[int(m.geom_bodyid[robot])], None, float(wrench[0]), force,
+                                   con.pos.copy()))
+            else:
+                out.append(Contact(self.body_name[int(m.geom_bodyid[g0])], self.body_name[int(m.geom_bodyid[g1])],
+                                   float(wrench[0]), -on_g1, con.pos.copy()))
+        return out

@@ -1,0 +1,191 @@
+"""PyBullet as a physics engine for the run loop (:mod:`.run`): the generated URDF on a floor, torque-controlled.
+
+PyBullet traps handled here: ``loadURDF`` needs a file path (a temporary file, removed after loading); the URDF's
+inertias are used only with ``URDF_USE_INERTIA_FROM_FILE`` (else they are recomputed from the collision shapes); a
+link without ``<inertial>`` would weigh 1 kg (every generated link has one); the base position PyBullet reports
+and expects is the base's centre of mass, not its link frame; the default velocity motors hold every joint unless
+switched off; a C-level banner on stdout would spoil JSON output.
+
+Servo losses: PyBullet integrates applied torques explicitly, so the servo's damping (0.44 N·m·s/rad on a foot of
+4e-5 kg·m² would diverge at 1 kHz) and Coulomb friction act through each joint's velocity motor, which PyBullet
+solves as a constraint: target velocity 0, force limit ``damping * |dq| + friction``. PyBullet has no rotor
+inertia (armature); :mod:`.mujoco_engine` models it, and the two engines' verdicts are compared.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import os
+import sys
+import tempfile
+from typing import Any, Iterator
+
+import numpy as np
+
+from ..model.urdf import build_urdf
+from ..servo import ServoModel
+from ..spec import Spec
+from .scene import FLOOR_FRICTION, GRAVITY_M_S2, Contact
+
+SOLVER_ITERATIONS = 20   # PyBullet's default 50 gives the same verdicts and margins (within 0.4 mm), 25 % slower
+
+
+@contextlib.contextmanager
+def quiet_c_output() -> Iterator[None]:
+    """Silence C-level writes to stdout and stderr (PyBullet prints a banner on import and on connect)."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
+    try:
+        with open(os.devnull, "w") as devnull:
+            os.dup2(devnull.fileno(), 1)
+            os.dup2(devnull.fileno(), 2)
+        yield
+    finally:
+        ctypes.CDLL(None).fflush(None)  # flush C stdio buffers into /dev/null before restoring the descriptors
+        for fd, copy in zip((1, 2), saved):
+            os.dup2(copy, fd)
+            os.close(copy)
+
+
+def load_robot(client: Any, urdf_text: str, flags: int) -> int:
+    """``loadURDF`` from text: PyBullet only loads files, so write a temporary one and remove it after."""
+    fd, path = tempfile.mkstemp(prefix="op2motion-", suffix=".urdf")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as handle:
+            handle.write(urdf_text)
+        return client.loadURDF(path, basePosition=(0.0, 0.0, 1.0), flags=flags)
+    finally:
+        os.unlink(path)
+
+
+class PyBulletEngine:
+    """One DIRECT-mode PyBullet world with the floor and the robot."""
+
+    name = "pybullet"
+
+    def __init__(self, spec: Spec, servo: ServoModel, time_step: float, use_inertia_from_file: bool = True):
+        with quiet_c_output():
+            import pybullet as pb
+            from pybullet_utils import bullet_client
+
+            self.client = bullet_client.BulletClient(connection_mode=pb.DIRECT)
+        self.pb, self.spec, self.servo, self.time_step = pb, spec, servo, time_step
+        c = self.client
+        c.resetSimulation()
+        c.setGravity(0.0, 0.0, -GRAVITY_M_S2)
+        c.setTimeStep(time_step)
+        c.setPhysicsEngineParameter(deterministicOverlappingPairs=1, numSolverIterations=SOLVER_ITERATIONS)
+        self.plane = c.createMultiBody(0, c.createCollisionShape(pb.GEOM_PLANE))
+        c.changeDynamics(self.plane, -1, lateralFriction=1.0)     # PyBullet multiplies the two frictions
+        flags = pb.URDF_USE_SELF_COLLISION | pb.URDF_USE_SELF_COLLISION_EXCLUDE_PARENT
+        if use_inertia_from_file:
+            flags |= pb.URDF_USE_INERTIA_FROM_FILE
+        self.robot = load_robot(c, build_urdf(spec), flags)
+        self.link_index = {spec.root_link: -1}
+        self.joint_index: dict[str, int] = {}
+        for i in range(c.getNumJoints(self.robot)):
+            info = c.getJointInfo(self.robot, i)
+            self.link_index[info[12].decode()] = i
+            self.joint_index[info[1].decode()] = i
+        self.link_name = {i: n for n, i in self.link_index.items()}
+        for i in self.link_index.values():
+            c.changeDynamics(self.robot, i, lateralFriction=FLOOR_FRICTION)
+        self.joints = [self.joint_index[n] for n in spec.joint_names]
+        c.setJointMotorControlArray(self.robot, self.joints, pb.VELOCITY_CONTROL, forces=[0.0] * len(self.joints))
+        info = c.getDynamicsInfo(self.robot, -1)
+        self._inertial = (info[3], info[4])      # base CoM frame in the base link frame
+        self._dq = np.zeros(len(self.joints))
+        self._zero = [0.0] * len(self.joints)
+
+    def close(self) -> None:
+        """Disconnect."""
+        self.client.disconnect()
+
+    def masses(self) -> dict[str, float]:
+        """Mass [kg] PyBullet assigned to each link."""
+        return {name: self.client.getDynamicsInfo(self.robot, i)[0] for name, i in self.link_index.items()}
+
+    def reset(self, base_pos: np.ndarray, base_rot: np.ndarray, q: np.ndarray) -> None:
+        """Teleport: torso link frame at (``base_pos``, ``base_rot``), joints at ``q`` [rad], all at rest."""
+        c = self.client
+        for j, angle in zip(self.joints, q):
+            c.resetJointState(self.robot, j, float(angle), 0.0)
+        orn = _quat_xyzw(base_rot)
+        com = c.multiplyTransforms(tuple(base_pos), orn, *self._inertial)
+        c.resetBasePositionAndOrientation(self.robot, com[0], com[1])
+        c.resetBaseVelocity(self.robot, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+        self._dq[:] = 0.0
+
+    def set_gravity(self, scale: float) -> None:
+        """Gravity at ``scale`` of its full strength."""
+        self.client.setGravity(0.0, 0.0, -GRAVITY_M_S2 * scale)
+
+    def state(self) -> tuple[np.ndarray, np.ndarray]:
+        """Joint angles and velocities (20,) [rad, rad/s]."""
+        states = self.client.getJointStates(self.robot, self.joints)
+        q = np.fromiter((s[0] for s in states), float, len(states))
+        self._dq = np.fromiter((s[1] for s in states), float, len(states))
+        return q, self._dq
+
+    def step(self, torque: np.ndarray, push: np.ndarray | None = None) -> None:
+        """One time step with the servos' active ``torque`` (20,) [N·m] and an optional ``push`` (3,) [N] at the
+        torso's centre of mass."""
+        c, pb = self.client, self.pb
+        losses = (self.servo.damping * np.abs(self._dq) + self.servo.friction).tolist()
+        c.setJointMotorControlArray(self.robot, self.joints, pb.VELOCITY_CONTROL, targetVelocities=self._zero,
+                                    forces=losses)
+        c.setJointMotorControlArray(self.robot, self.joints, pb.TORQUE_CONTROL, forces=torque.tolist())
+        if push is not None:
+            com = c.getBasePositionAndOrientation(self.robot)[0]
+            c.applyExternalForce(self.robot, -1, push.tolist(), com, pb.WORLD_FRAME)
+        c.stepSimulation()
+
+    def base(self) -> tuple[np.ndarray, np.ndarray]:
+        """Torso link frame: position [m] and rotation (3, 3)."""
+        c = self.client
+        com_pos, com_orn = c.getBasePositionAndOrientation(self.robot)
+        inv = c.invertTransform(*self._inertial)
+        pos, orn = c.multiplyTransforms(com_pos, com_orn, inv[0], inv[1])
+        return np.asarray(pos), np.asarray(c.getMatrixFromQuaternion(orn)).reshape(3, 3)
+
+    def contacts(self) -> list[Contact]:
+        """Contacts of the robot with the floor (``other`` None) and with itself."""
+        out = []
+        for cp in self.client.getContactPoints(self.robot):
+            normal = np.asarray(cp[7])                  # on B, pointing towards A
+            force = cp[9] * normal + cp[10] * np.asarray(cp[11]) + cp[12] * np.asarray(cp[13])
+            other = None if cp[2] == self.plane else self.link_name[cp[4]]
+            out.append(Contact(self.link_name[cp[3]], other, float(cp[9]), force, np.asarray(cp[5])))
+        return out
+
+    def snapshot(self, width: int = 640, height: int = 480) -> bytes:
+        """PNG bytes of the scene from the front left (TinyRenderer: works headless)."""
+        return render_png(self.client, self.pb, self.base()[0], width, height)
+
+
+def _quat_xyzw(rot: np.ndarray) -> tuple[float, float, float, float]:
+    """Rotation matrix -> quaternion (x, y, z, w)."""
+    from scipy.spatial.transform import Rotation
+
+    return tuple(float(v) for v in Rotation.from_matrix(np.asarray(rot, dtype=float)).as_quat())
+
+
+def render_png(client: Any, pb: Any, centre: np.ndarray, width: int, height: int) -> bytes:
+    """A TinyRenderer picture of a PyBullet scene looking at ``centre`` [m] from the front left."""
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.image as mpimg
+
+    view = client.computeViewMatrix(cameraEyePosition=(centre[0] + 0.55, centre[1] + 0.45, 0.35),
+                                    cameraTargetPosition=(centre[0], centre[1], 0.18), cameraUpVector=(0, 0, 1))
+    proj = client.computeProjectionMatrixFOV(fov=50, aspect=width / height, nearVal=0.05, farVal=5.0)
+    img = client.getCameraImage(width, height, view, proj, renderer=pb.ER_TINY_RENDERER)
+    rgb = np.reshape(np.asarray(img[2], dtype=np.uint8), (height, width, 4))[:, :, :3]
+    buf = io.BytesIO()
+    mpimg.imsave(buf, rgb, format="png")
+    return buf.getvalue()

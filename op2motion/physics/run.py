@@ -1,0 +1,227 @@
+"""The physics check, engine-independent: place the pose, ramp gravity in, hold it with the servo model, watch.
+
+Every engine offers the same few operations (``reset``, ``set_gravity``, ``state``, ``step``, ``base``,
+``contacts``); this module runs the loop and judges, so a verdict means the same in every engine:
+
+1. the pose is placed on the floor (:func:`.body.placement`), all joints at their goals and at rest;
+2. gravity rises from zero to full strength over :data:`RAMP_S`, so the robot sags into its loaded posture
+   without an impact;
+3. the servos hold the goals for the rest of ``seconds`` (optionally with a push at the torso's centre of mass);
+4. every :data:`SAMPLE_S` the torso attitude, the centre of mass, the soles, the contacts and the servo torques
+   are recorded; the last :data:`STEADY_S` is the steady window for torques, sag and centre of pressure.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from ..balance import convex_hull, polygon_margin
+from ..servo import ServoModel
+from ..spec import Spec, feet_of, swing_of
+from .body import Body, BodyState, placement
+from .verdict import (
+    COM_DROP_FRACTION,
+    CONTACT_FORCE_N,
+    LIMIT_AT_RAD,
+    LIMIT_AWAY_RAD,
+    LIMIT_HOLD_S,
+    SATURATION_FRACTION,
+    SATURATION_HOLD_S,
+    SLIP_LIMIT_M,
+    TILT_LIMIT_DEG,
+    Failure,
+    Validation,
+)
+
+RAMP_S = 0.5
+SAMPLE_S = 0.01
+STEADY_S = 1.0
+
+
+@dataclass(frozen=True)
+class Push:
+    """A force [N] (world frame) at the torso's centre of mass from ``start_s`` for ``duration_s`` [s]."""
+
+    force: np.ndarray
+    start_s: float
+    duration_s: float
+
+
+@dataclass
+class _Track:
+    """What the loop records at each sample."""
+
+    times: list = field(default_factory=list)
+    tilt: list = field(default_factory=list)
+    com: list = field(default_factory=list)
+    soles: list = field(default_factory=list)
+    q: list = field(default_factory=list)
+    torque: list = field(default_factory=list)
+    available: list = field(default_factory=list)
+    cop: list = field(default_factory=list)
+    ground: list = field(default_factory=list)
+    self_pairs: list = field(default_factory=list)
+    states: list = field(default_factory=list)
+
+
+def _tilt_deg(r0: np.ndarray, r1: np.ndarray) -> float:
+    return math.degrees(math.acos(float(np.clip(r0[:, 2] @ r1[:, 2], -1.0, 1.0))))
+
+
+def support_polygon_of(state: BodyState, support: str) -> np.ndarray:
+    """The real support polygon (m, 2) [m]: the sole box of the support foot, or the hull of both soles."""
+    return convex_hull(np.vstack([state.corners[side][:, :2] for side in feet_of(support)]))
+
+
+def simulate(engine: Any, spec: Spec, servo: ServoModel, goal: np.ndarray, support: str, seconds: float,
+             push: Push | None = None, on_step: Callable[[], Any] | None = None) -> tuple[_Track, dict[str, Any]]:
+    """Run one check (see the module docstring); returns the samples and the start facts."""
+    body = Body(spec)
+    base_pos, base_rot, flat_foot, gap = placement(body, goal, support)
+    engine.reset(base_pos, base_rot, goal)
+    dt = engine.time_step
+    steps = int(round(seconds / dt))
+    every = max(1, int(round(SAMPLE_S / dt)))
+    track = _Track()
+    start = body.state(base_pos, base_rot, goal)
+    push_steps = (range(0) if push is None else
+                  range(int(round(push.start_s / dt)), int(round((push.start_s + push.duration_s) / dt))))
+    for k in range(steps):
+        t = k * dt
+        if t <= RAMP_S + dt:
+            engine.set_gravity(min(1.0, t / RAMP_S))
+        q, dq = engine.state()
+        engine.step(servo.active_torque(goal, q), push.force if k in push_steps else None)
+        if k % every == every - 1 or k == steps - 1:
+            _sample(engine, body, servo, goal, base_rot, track, (k + 1) * dt)
+        if on_step is not None:
+            on_step()
+    return track, {"start": start, "flat_foot": flat_foot, "gap": gap, "base_rot": base_rot}
+
+
+def _sample(engine: Any, body: Body, servo: ServoModel, goal: np.ndarray, rot0: np.ndarray, track: _Track,
+            t: float) -> None:
+    q, dq = engine.state()
+    pos, rot = engine.base()
+    state = body.state(pos, rot, q)
+    contacts = engine.contacts()
+    ground = [c for c in contacts if c.other is None and c.normal_force > 0.0]
+    load = sum(c.force[2] for c in ground)
+    cop = (sum(c.force[2] * c.point[:2] for c in ground) / load) if load > 1e-6 else None
+    pressed = {c.link: 0.0 for c in ground}
+    for c in ground:
+        pressed[c.link] += c.normal_force
+    self_force: dict[tuple[str, str], float] = {}
+    for c in contacts:
+        if c.other is not None:
+            pair = tuple(sorted((c.link, c.other)))
+            self_force[pair] = self_force.get(pair, 0.0) + c.normal_force
+    track.times.append(t)
+    track.tilt.append(_tilt_deg(rot0, rot))
+    track.com.append(state.com)
+    track.soles.append({side: p for side, (p, _) in state.soles.items()})
+    track.q.append(q)
+    track.torque.append(servo.motor_torque(goal, q, dq))
+    track.available.append(servo.available(dq))
+    track.cop.append(cop)
+    track.ground.append({link for link, f in pressed.items() if f > CONTACT_FORCE_N})
+    track.self_pairs.append({pair for pair, f in self_force.items() if f > CONTACT_FORCE_N and pair[0] != pair[1]})
+    track.states.append(state)
+
+
+def _first_held(mask: np.ndarray, times: np.ndarray, hold_s: float) -> int | None:
+    """Index of the first sample that starts a run of True lasting ``hold_s`` (or reaching the end)."""
+    start = None
+    for i, m in enumerate(mask):
+        if m and start is None:
+            start = i
+        elif not m:
+            start = None
+        if start is not None and (times[i] - times[start] >= hold_s - 1e-9 or i == len(mask) - 1 and
+                                  times[i] - times[start] >= min(hold_s, STEADY_S) - 1e-9):
+            return start
+    return None
+
+
+def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, goal: np.ndarray, support: str,
+          engine_name: str, dt: float, seconds: float) -> Validation:
+    """The verdict and measurements of a recorded run (see :mod:`.verdict` for the reasons)."""
+    times = np.asarray(track.times)
+    tilt = np.asarray(track.tilt)
+    com = np.asarray(track.com)
+    q, torque, available = np.asarray(track.q), np.abs(np.asarray(track.torque)), np.asarray(track.available)
+    start: BodyState = facts["start"]
+    failures: list[Failure] = []
+
+    def first(mask: np.ndarray) -> int | None:
+        hits = np.flatnonzero(mask)
+        return int(hits[0]) if hits.size else None
+
+    supports = set(feet_of(support))
+    foot_links = {spec.joint(f"{s[0]}_ank_roll").child: s for s in ("left", "right")}
+    i = first(tilt > TILT_LIMIT_DEG)
+    if i is not None:
+        failures.append(Failure("tilt", times[i], f"the torso tilted {tilt.max():.0f}° (limit {TILT_LIMIT_DEG:g}°)"))
+    i = first(com[:, 2] < (1.0 - COM_DROP_FRACTION) * start.com[2])
+    if i is not None:
+        failures.append(Failure("com_drop", times[i], f"the centre of mass sank from {start.com[2]:.3f} m to "
+                                                      f"{com[:, 2].min():.3f} m"))
+    swing = swing_of(support) if support != "double" else None
+    for reason, wanted in (("swing_foot_contact", lambda link: swing is not None and foot_links.get(link) == swing),
+                           ("ground_contact", lambda link: link not in foot_links)):
+        hits = [(k, sorted(link for link in g if wanted(link))) for k, g in enumerate(track.ground)]
+        hits = [(k, links) for k, links in hits if links]
+        if hits:
+            failures.append(Failure(reason, times[hits[0][0]], f"{', '.join(hits[0][1])} pressed on the floor"))
+    hits = [(k, sorted(pairs)) for k, pairs in enumerate(track.self_pairs) if pairs]
+    if hits:
+        failures.append(Failure("self_collision", times[hits[0][0]],
+                                "; ".join(" against ".join(p) for p in hits[0][1])))
+    ratio = torque / np.maximum(available, 1e-9)
+    i = _first_held(np.any(ratio >= SATURATION_FRACTION, axis=1), times, SATURATION_HOLD_S)
+    if i is not None:
+        j = int(np.argmax(ratio[i]))
+        failures.append(Failure("torque_saturation", times[i], f"{spec.joint_names[j]} needs {torque[i, j]:.2f} N·m "
+                                                               f"of {available[i, j]:.2f} N·m available"))
+    lower = np.array([j.mechanical[0] for j in spec.joints])
+    upper = np.array([j.mechanical[1] for j in spec.joints])
+    at_stop = ((q - lower < LIMIT_AT_RAD) | (upper - q < LIMIT_AT_RAD)) & (np.abs(q - goal) > LIMIT_AWAY_RAD)
+    i = _first_held(np.any(at_stop, axis=1), times, LIMIT_HOLD_S)
+    if i is not None:
+        j = int(np.argmax(at_stop[i]))
+        failures.append(Failure("joint_limit", times[i], f"{spec.joint_names[j]} lies on its stop at "
+                                                         f"{math.degrees(q[i, j]):.1f}° (goal {math.degrees(goal[j]):.1f}°)"))
+    slip = max(float(np.hypot(*(s[side][:2] - start.soles[side][0][:2]))) for s in track.soles for side in supports)
+    if slip > SLIP_LIMIT_M:
+        k = next(k for k, s in enumerate(track.soles)
+                 if max(np.hypot(*(s[side][:2] - start.soles[side][0][:2])) for side in supports) > SLIP_LIMIT_M)
+        failures.append(Failure("slip", times[k], f"a supporting sole slid {slip * 1000:.0f} mm"))
+    failures.sort(key=lambda f: f.time_s)
+    steady = times >= times[-1] - STEADY_S + 1e-9
+    mean_torque = torque[steady].mean(axis=0)
+    worst = int(np.argmax(mean_torque / np.maximum(available[steady].mean(axis=0), 1e-9)))
+    last = track.states[-1]
+    load_index = int(np.searchsorted(times, RAMP_S))
+    margin = float(polygon_margin(com[-1, :2], support_polygon_of(last, support))[0])
+    load_state = track.states[min(load_index, len(track.states) - 1)]
+    margin_load = float(polygon_margin(load_state.com[:2], support_polygon_of(load_state, support))[0])
+    cops = [c for c, s in zip(track.cop, steady) if s and c is not None]
+    reasons = list(dict.fromkeys(f.reason for f in failures))
+    return Validation(
+        engine=engine_name, servo=servo.describe(), time_step_s=dt, seconds=seconds, stable=not failures,
+        reasons=reasons, failures=failures, support_margin_m=round(margin, 5), margin_at_load_m=round(margin_load, 5),
+        cop_xy=None if not cops else [round(float(v), 5) for v in np.mean(cops, axis=0)],
+        com_settled=[round(float(v), 5) for v in com[-1]], com_start=[round(float(v), 5) for v in start.com],
+        max_tilt_deg=round(float(tilt.max()), 3), settled_tilt_deg=round(float(tilt[-1]), 3),
+        com_drift_m=round(float(np.max(np.hypot(*(com[:, :2] - start.com[:2]).T))), 5), feet_slip_m=round(slip, 5),
+        start_gap_m=round(facts["gap"], 5), flat_foot=facts["flat_foot"],
+        self_collisions=[list(p) for p in sorted({p for pairs in track.self_pairs for p in pairs})],
+        ground_contacts=sorted({link for g in track.ground for link in g}),
+        max_torque_nm=round(float(mean_torque[worst]), 4),
+        torque_ratio=round(float(mean_torque[worst] / max(available[steady][:, worst].mean(), 1e-9)), 4),
+        worst_joint=spec.joint_names[worst], peak_torque_nm=round(float(torque.max()), 4),
+        sag_deg={n: round(float(math.degrees(v)), 3) for n, v in zip(spec.joint_names, (q[steady] - goal).mean(axis=0))})
