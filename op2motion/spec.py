@@ -152,10 +152,11 @@ class Foot:
 
 @dataclass(frozen=True)
 class PointSpec:
-    """A named point fixed to a link: ``xyz`` [m] in the frame of ``link``."""
+    """A named point fixed to a link: ``xyz`` [m] in the frame of ``link``; ``frame`` names its URDF frame link."""
 
     link: str
     xyz: tuple[float, float, float]
+    frame: str
 
 
 @dataclass(frozen=True)

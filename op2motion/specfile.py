@@ -254,6 +254,7 @@ def parse_spec(text: str, path: str = "<spec>") -> Spec:
     except tomllib.TOMLDecodeError as exc:
         raise SpecError(f"not valid TOML: {exc}", path) from None
     top = TableReader(path, "", raw)
+    # (the URDF root "base_link" and the sole frames are made by the URDF generator)
     if top.get("schema", str) != SCHEMA:
         raise SpecError(f"expected {SCHEMA!r}, got {raw['schema']!r}", f"{path}: schema")
     name, root = top.get("name", str), top.get("root_link", str)
@@ -262,7 +263,7 @@ def parse_spec(text: str, path: str = "<spec>") -> Spec:
     points: dict[str, PointSpec] = {}
     for key in list(points_reader.table):
         pr = points_reader.sub(key)
-        points[key] = PointSpec(pr.get("link", str), pr.vector("xyz_m"))  # type: ignore[arg-type]
+        points[key] = PointSpec(pr.get("link", str), pr.vector("xyz_m"), pr.get("frame", str))  # type: ignore[arg-type]
         pr.done()
     points_reader.done()
     for required in ("left_hand", "right_hand", "head_top"):

@@ -85,3 +85,68 @@ def _hip_roll_sign(spec, side: str) -> float:
     """Sign that makes a hip-roll change undo an ankle-roll change, so the torso stays level: with the pitch joints
     cancelling, the roll from torso to foot is a_hip q_hip + a_ankle q_ankle (a: the axes' x components)."""
     return -spec.joint(f"{side}_ank_roll").axis[0] / spec.joint(f"{side}_hip_roll").axis[0]
+
+
+def centred(spec, servo: np.ndarray, x: float = 0.0, iterations: int = 20) -> np.ndarray:
+    """A double-support pose leaned at both ankles (the feet stay flat) until its full-inertia CoM is ``x`` [m]
+    ahead of the soles' centres."""
+    from op2motion.model.dynamics import dynamics_for
+
+    dyn = dynamics_for(spec)
+    left, right = spec.joint_names.index("l_ank_pitch"), spec.joint_names.index("r_ank_pitch")
+    sign = spec.joint("l_ank_pitch").axis[1] / spec.joint("r_ank_pitch").axis[1]   # the same lean on both legs
+    out = np.array(servo, dtype=float)
+
+    def com_x(v: np.ndarray) -> float:
+        return float(dyn.com(v, "double")[0])
+
+    for _ in range(iterations):
+        err = x - com_x(out)
+        if abs(err) < 1e-6:
+            break
+        probe = out.copy()
+        probe[left] += 1e-4
+        probe[right] += 1e-4 * sign
+        step = err / ((com_x(probe) - com_x(out)) / 1e-4)
+        out[left] += step
+        out[right] += step * sign
+    return out
+
+
+ARMS_FORWARD = dict(r_sho_pitch=-90, l_sho_pitch=90)
+FOLDED_SWING = dict(r_hip_roll=25, r_ank_roll=25, r_hip_pitch=-90, r_knee=140, r_ank_pitch=50)
+
+
+def sweep_base(spec, support: str) -> np.ndarray:
+    """The start of a lean sweep: a balanced one-leg stance on the left foot (swing leg folded, arms forward), or
+    the standing pose with arms forward centred over the soles."""
+    if support == "double":
+        return centred(spec, servo_pose(spec, **ARMS_FORWARD))
+    return balanced(spec, servo_pose(spec, "left", **ARMS_FORWARD, **FOLDED_SWING), "left", (0.0, 0.011))
+
+
+def leaned(spec, base: np.ndarray, support: str, kind: str, degrees: float) -> np.ndarray:
+    """``base`` leaned by ``degrees`` at the support ankle(s): ``pitch`` (positive forward) or ``roll`` (positive
+    to the left, outward for the left foot; in double support the legs lean as a parallelogram, torso level)."""
+    out = np.array(base, dtype=float)
+    angle = np.radians(degrees)
+    sides = ("l", "r") if support == "double" else ("l",)
+    for s in sides:
+        if kind == "pitch":                   # forward: the shank turns about +Y relative to the foot
+            out[spec.joint_names.index(f"{s}_ank_pitch")] -= angle * spec.joint(f"{s}_ank_pitch").axis[1]
+        else:
+            out[spec.joint_names.index(f"{s}_ank_roll")] += angle
+            out[spec.joint_names.index(f"{s}_hip_roll")] += angle * _hip_roll_sign(spec, s)
+    return out
+
+
+def sweep_verdict(task: tuple) -> tuple[bool, float, list]:
+    """Worker of the lean sweeps: (support, kind, degrees, engine, seconds) -> (stable, margin [m], reasons); the
+    margin is the settled one for a standing pose, the one when gravity reached full strength for a falling one."""
+    from op2motion.physics import validate
+    from op2motion.specfile import default_spec
+
+    support, kind, degrees, engine, seconds = task
+    spec = default_spec()
+    v = validate(leaned(spec, sweep_base(spec, support), support, kind, degrees), support, spec, seconds, engine)
+    return v.stable, (v.support_margin_m if v.stable else v.margin_at_load_m), v.reasons

@@ -154,7 +154,7 @@ CASES = [
     (["optimize", "--iters", "100", "--out", "/proc/op2motion/x.json"], "cannot write"),
     (["export", "--format", "csv", STAND, "-o", "/proc/x.csv"], "cannot write"),
     (["import-action", str(STOCK), "--page", "9", "--out", "/proc/x.json"], "cannot write"),
-    (["validate", WALKREADY, "--seconds", "2", "--gui-png", "/proc/x.png"], "cannot write"),
+    (["validate", WALKREADY, "--seconds", "3", "--gui-png", "/proc/x.png"], "cannot write"),
     (["urdf", "-o", "/proc/op2.urdf"], "cannot write"),
     # urdf, bench, the parser itself
     (["urdf", "-o", f"{IN}/folder"], "directory"),

@@ -105,7 +105,7 @@ def test_validate_command(capsys, tmp_path):
 
     poses = os.path.join(os.path.dirname(__file__), "..", "poses")
     png = tmp_path / "snap.png"
-    code, out, err = run_cli(capsys, "validate", os.path.join(poses, "walkready.json"), "--seconds", "2",
+    code, out, err = run_cli(capsys, "validate", os.path.join(poses, "walkready.json"), "--seconds", "3",
                              "--gui-png", str(png), "--json")
     doc = json.loads(out)
     assert code == 0 and err == ""
@@ -115,7 +115,7 @@ def test_validate_command(capsys, tmp_path):
         assert key in doc
     assert doc["stable"] is True and doc["reasons"] == [] and png.read_bytes()[:4] == b"\x89PNG"
     assert doc["time_step_s"] == 0.001 and "P 32" in doc["servo"]
-    code, out, _ = run_cli(capsys, "validate", os.path.join(poses, "walkready.json"), "--seconds", "2",
+    code, out, _ = run_cli(capsys, "validate", os.path.join(poses, "walkready.json"), "--seconds", "3",
                            "--engine", "both", "--json")
     both = json.loads(out)
     assert code == 0 and both["agree"] is True and set(both["engines"]) == {"pybullet", "mujoco"}
@@ -126,7 +126,7 @@ def test_validate_command(capsys, tmp_path):
     del stand["book_deg"]
     falling = tmp_path / "lean_back.json"
     falling.write_text(json.dumps(stand), encoding="utf-8")
-    code, out, err = run_cli(capsys, "validate", str(falling), "--seconds", "2")
+    code, out, err = run_cli(capsys, "validate", str(falling), "--seconds", "3")
     assert code == 1 and "does not stand: tilt" in err and err.count("\n") == 1 and "NOT STABLE (tilt" in out
     code, out, err = run_cli(capsys, "validate", str(tmp_path / "none.json"))
     assert code == 2 and out == "" and err.count("\n") == 1

@@ -31,10 +31,16 @@ def test_urdf_has_the_official_joints_and_an_inertial_everywhere(spec):
         assert float(lim.get("effort")) == 2.5 and float(lim.get("velocity")) == 5.76
         assert float(lim.get("lower")) == pytest.approx(joint.mechanical[0])
         assert float(lim.get("upper")) == pytest.approx(joint.mechanical[1])
-    assert root.find("link").get("name") == "body_link"
+    # ROS tools find what they expect: base_link as the root, the torso on a fixed joint, the camera as head_cam
+    assert root.find("link").get("name") == "base_link"
+    base = next(j for j in root.iter("joint") if j.find("child").get("link") == "body_link")
+    assert base.get("type") == "fixed" and base.find("parent").get("link") == "base_link"
     assert all(link.find("inertial") is not None for link in root.iter("link"))
     frames = {link.get("name") for link in root.iter("link")}
-    assert {"left_hand_link", "right_hand_link", "left_sole_link", "right_sole_link"} <= frames
+    assert {"left_hand_link", "right_hand_link", "left_sole_link", "right_sole_link", "head_cam"} <= frames
+    cam = next(j for j in root.iter("joint") if j.find("child").get("link") == "head_cam")
+    assert cam.find("parent").get("link") == "head_tilt_link"
+    assert [float(v) for v in cam.find("origin").get("xyz").split()] == pytest.approx([0.0332, 0.0, 0.0344])
     assert build_urdf(spec) == build_urdf(spec)  # deterministic
 
 

@@ -60,14 +60,21 @@ def test_full_cost_balances_the_settled_full_inertia_com(spec, rng):
     assert np.allclose(terms.sag_tilt, settled.tilt)
     unstable = (terms.margin < 0) | (terms.sag_tilt > SAG_TILT_LIMIT_RAD)
     assert np.array_equal(unstable, terms.book - terms.hand_error - np.where(terms.swing_min_z < -1e-9, 100, 0) > 0)
-    # the settled x solves the equilibrium x_s = x + sum_j (W / Kp) (z - z_j) (x_s - x_j) of the pitch joints
+
+
+def test_a_load_over_the_joints_does_not_sag(spec):
+    """Known answer: a straight support leg with the whole robot's CoM straight above its joints has no gravity
+    torque to sag under: the settled CoM is the CoM and the torso does not turn."""
     model = Compliance(spec)
-    ok = settled.stable
-    rhs = pts.com_full[0].copy()
-    for name, kp in model.pitch["left"]:
-        joint = pts.point(name)
-        rhs += model.weight / kp * (pts.com_full[2] - joint[:, 2]) * (settled.com_xy[0] - joint[:, 0])
-    assert np.allclose(settled.com_xy[0][ok], rhs[ok], atol=1e-12)
+    pts = forward(BookAngles.standing("left"), spec, full_com=True)
+    com = pts.com_full.copy()
+    com[:2] = pts.point("l_ank_pitch")[:, :2].T            # the CoM over the ankle (and the knee and hip above it)
+    # the leg's own links sit on its axis too, so nothing loads the pitch or roll joints
+    settled = model.settle(pts, com)
+    assert settled.com_xy[:, 0] == pytest.approx(com[:2, 0], abs=1e-6) and settled.tilt[0] < 1e-3
+    com[0] += 0.01                                          # 10 mm ahead: every pitch joint sags forward, amplified
+    settled = model.settle(pts, com)
+    assert settled.com_xy[0, 0] - com[0, 0] > 0.01 and settled.tilt[0] > 0.01
 
 
 SETTLE_PREDICTION_M = 0.010   # the compliance model against MuJoCo's settled CoM on standing one-leg poses

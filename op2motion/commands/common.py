@@ -54,6 +54,21 @@ def emit(args: argparse.Namespace, result: dict[str, Any], text: str) -> None:
         print(text)
 
 
+def warn(result: dict[str, Any], warnings: Sequence[str]) -> None:
+    """Record ``warnings`` in the JSON result and print each as one line on stderr (stdout stays the result)."""
+    result["warnings"] = list(warnings)
+    for w in warnings:
+        print(f"op2motion: warning: {w}", file=sys.stderr)
+
+
+def cable_warnings(poses: Sequence[Any], spec: Spec) -> list[str]:
+    """Advice for poses with joints outside their cable-safe range (inside the mechanical range: still valid)."""
+    from ..joints import limit_violations
+
+    return [f"{pose.name}: {v.describe()} (the robot can do it, but the cable may be strained)"
+            for pose in poses for v in limit_violations(pose.servo, spec, "cable-safe")]
+
+
 def progress_enabled(args: argparse.Namespace) -> bool:
     """Progress bars go to stderr when it is a terminal and the output is not JSON."""
     return sys.stderr.isatty() and not getattr(args, "json", False)

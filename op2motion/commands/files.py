@@ -10,7 +10,7 @@ from ..errors import InputError
 from ..export.action import NUM_PAGES
 from ..export.tables import MAX_TIME_S
 from ..spec import Spec
-from .common import add_command, emit, number, output_path, pose_name, whole
+from .common import add_command, cable_warnings, emit, number, output_path, pose_name, warn, whole
 
 PAGE = whole(1, NUM_PAGES - 1)
 
@@ -55,7 +55,9 @@ def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
         outputs.put("output", render(poses, spec, args.time))
         text = f"{len(poses)} pose(s)"
     out = outputs.commit()["output"]
-    emit(args, {"path": str(out), "format": args.format, "poses": [p.name for p in poses]}, f"wrote {out}: {text}")
+    result = {"path": str(out), "format": args.format, "poses": [p.name for p in poses]}
+    warn(result, cable_warnings(poses, spec))
+    emit(args, result, f"wrote {out}: {text}")
     return 0
 
 
@@ -75,8 +77,9 @@ def cmd_import_action(args: argparse.Namespace, spec: Spec) -> int:
         if args.out:
             outputs.put("out", text)
             outputs.commit()
-        emit(args, {"page": args.page, "pose": json.loads(text), "path": args.out},
-             f"page {args.page} -> pose {pose.name!r}" + (f", wrote {args.out}" if args.out else ""))
+        result = {"page": args.page, "pose": json.loads(text), "path": args.out}
+        warn(result, cable_warnings([pose], spec))
+        emit(args, result, f"page {args.page} -> pose {pose.name!r}" + (f", wrote {args.out}" if args.out else ""))
         return 0
     pages = list_pages(data, spec, args.file)
     result = {"pages": [{"index": p.index, "name": p.name, "repeat": p.repeat, "next": p.next,

@@ -24,6 +24,7 @@ from .common import (
     pose_name,
     progress_enabled,
     vec3,
+    warn,
     whole,
 )
 
@@ -115,9 +116,7 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     v = outcome.validation
     if v is not None:
         lines.append(f"  physics: {v.summary()}")
-    warnings = outcome.warnings()
-    result["warnings"] = warnings
-    lines += [f"  warning: {w}" for w in warnings]
+    warn(result, outcome.warnings())
     if not outcome.ok:
         emit(args, result, "\n".join(lines))
         raise CheckFailed(f"{r.message}; nothing written")
@@ -130,6 +129,4 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     result["figure"] = drawn
     lines.append(f"  wrote {files['out']}, {files['plot']}, {files['cost curve']}")
     emit(args, result, "\n".join(lines))
-    if warnings and args.json:   # people see them in the text; JSON readers on stdout, and a line on stderr
-        print(f"op2motion: warning: {warnings[0]}", file=sys.stderr)
     return 0

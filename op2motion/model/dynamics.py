@@ -76,8 +76,8 @@ class Dynamics:
         q = self.configuration(servo)
         inv = self._sole_frame(q, support).inverse()
         out = {n: (inv * self.data.oMi[i]).translation.copy() for n, i in zip(self.spec.joint_names, self.joint_ids)}
-        for name in frame_points(self.spec):
-            out[name] = (inv * self.data.oMf[self.model.getFrameId(frame_link(name))]).translation.copy()
+        for name, (link, _, _) in frame_points(self.spec).items():
+            out[name] = (inv * self.data.oMf[self.model.getFrameId(link)]).translation.copy()
         return out
 
     def frame_jacobian(self, servo: np.ndarray, frame: str, support: str) -> np.ndarray:
@@ -87,7 +87,7 @@ class Dynamics:
         q = self.level_configuration(servo, support)
         pin.computeJointJacobians(self.model, self.data, q)
         pin.framesForwardKinematics(self.model, self.data, q)
-        fid = self.model.getFrameId(frame_link(frame))
+        fid = self.model.getFrameId(frame_link(self.spec, frame))
         if fid >= len(self.model.frames):
             raise InputError(f"unknown frame {frame!r}", "frame")
         world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED

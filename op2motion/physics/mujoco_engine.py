@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model.urdf import build_urdf, frame_link, frame_points
+from ..model.urdf import URDF_ROOT, build_urdf, frame_points
 from ..servo import ServoModel
 from ..spec import Spec
 from .scene import FLOOR_FRICTION, GRAVITY_M_S2, Contact
@@ -35,8 +35,9 @@ class MuJoCoEngine:
         c = ms.compiler
         c.inertiafromgeom = mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE
         c.balanceinertia, c.boundmass, c.boundinertia, c.discardvisual = False, 0.0, 0.0, True
-        for name in frame_points(spec):
-            ms.body(frame_link(name)).add_site(name=frame_link(name))
+        for link, _, _ in frame_points(spec).values():
+            ms.body(link).add_site(name=link)
+        ms.body(spec.root_link).fuse = False      # keep the torso a body of its own, under the URDF root
         o = ms.option
         o.timestep, o.gravity = time_step, [0.0, 0.0, -GRAVITY_M_S2]
         o.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
@@ -47,7 +48,7 @@ class MuJoCoEngine:
         for g in ms.geoms:
             if g.name != "floor":
                 g.friction, g.solref, g.solimp, g.condim = friction, list(SOLREF), list(SOLIMP), 3
-        ms.body(spec.root_link).add_freejoint(name="root")
+        ms.body(URDF_ROOT).add_freejoint(name="root")
         limit = servo.torque_max
         for j in ms.joints:
             if j.type != mujoco.mjtJoint.mjJNT_HINGE:

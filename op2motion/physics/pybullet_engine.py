@@ -23,7 +23,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from ..model.urdf import build_urdf
+from ..model.urdf import URDF_ROOT, build_urdf
 from ..servo import ServoModel
 from ..spec import Spec
 from .scene import FLOOR_FRICTION, GRAVITY_M_S2, Contact
@@ -83,7 +83,7 @@ class PyBulletEngine:
         if use_inertia_from_file:
             flags |= pb.URDF_USE_INERTIA_FROM_FILE
         self.robot = load_robot(c, build_urdf(spec), flags)
-        self.link_index = {spec.root_link: -1}
+        self.link_index = {URDF_ROOT: -1}
         self.joint_index: dict[str, int] = {}
         for i in range(c.getNumJoints(self.robot)):
             info = c.getJointInfo(self.robot, i)
@@ -96,6 +96,7 @@ class PyBulletEngine:
         c.setJointMotorControlArray(self.robot, self.joints, pb.VELOCITY_CONTROL, forces=[0.0] * len(self.joints))
         info = c.getDynamicsInfo(self.robot, -1)
         self._inertial = (info[3], info[4])      # base CoM frame in the base link frame
+        self.torso = self.link_index[spec.root_link]
         self._dq = np.zeros(len(self.joints))
         self._zero = [0.0] * len(self.joints)
 
@@ -138,12 +139,12 @@ class PyBulletEngine:
                                     forces=losses)
         c.setJointMotorControlArray(self.robot, self.joints, pb.TORQUE_CONTROL, forces=torque.tolist())
         if push is not None:
-            com = c.getBasePositionAndOrientation(self.robot)[0]
-            c.applyExternalForce(self.robot, -1, push.tolist(), com, pb.WORLD_FRAME)
+            com = c.getLinkState(self.robot, self.torso)[0]                # the torso's centre of mass
+            c.applyExternalForce(self.robot, self.torso, push.tolist(), com, pb.WORLD_FRAME)
         c.stepSimulation()
 
     def base(self) -> tuple[np.ndarray, np.ndarray]:
-        """Torso link frame: position [m] and rotation (3, 3)."""
+        """Torso link frame (= the URDF root's): position [m] and rotation (3, 3)."""
         c = self.client
         com_pos, com_orn = c.getBasePositionAndOrientation(self.robot)
         inv = c.invertTransform(*self._inertial)

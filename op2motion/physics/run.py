@@ -29,6 +29,7 @@ from .verdict import (
     LIMIT_AT_RAD,
     LIMIT_AWAY_RAD,
     LIMIT_HOLD_S,
+    LOADING_TILT_LIMIT_DEG,
     SATURATION_FRACTION,
     SATURATION_HOLD_S,
     SLIP_LIMIT_M,
@@ -37,7 +38,7 @@ from .verdict import (
     Validation,
 )
 
-RAMP_S = 0.5
+RAMP_S = 1.0
 SAMPLE_S = 0.01
 STEADY_S = 1.0
 
@@ -56,7 +57,8 @@ class _Track:
     """What the loop records at each sample."""
 
     times: list = field(default_factory=list)
-    tilt: list = field(default_factory=list)
+    tilt: list = field(default_factory=list)          # from the start (unloaded) attitude [deg]
+    rot: list = field(default_factory=list)
     com: list = field(default_factory=list)
     soles: list = field(default_factory=list)
     q: list = field(default_factory=list)
@@ -122,6 +124,7 @@ def _sample(engine: Any, body: Body, servo: ServoModel, goal: np.ndarray, rot0: 
             self_force[pair] = self_force.get(pair, 0.0) + c.normal_force
     track.times.append(t)
     track.tilt.append(_tilt_deg(rot0, rot))
+    track.rot.append(rot)
     track.com.append(state.com)
     track.soles.append({side: p for side, (p, _) in state.soles.items()})
     track.q.append(q)
@@ -147,25 +150,36 @@ def _first_held(mask: np.ndarray, times: np.ndarray, hold_s: float) -> int | Non
     return None
 
 
+def first(mask: np.ndarray) -> int | None:
+    """Index of the first true sample, or None."""
+    hits = np.flatnonzero(mask)
+    return int(hits[0]) if hits.size else None
+
+
 def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, goal: np.ndarray, support: str,
           engine_name: str, dt: float, seconds: float) -> Validation:
     """The verdict and measurements of a recorded run (see :mod:`.verdict` for the reasons)."""
     times = np.asarray(track.times)
-    tilt = np.asarray(track.tilt)
+    loaded = int(min(np.searchsorted(times, RAMP_S), len(times) - 1))
+    # tilt counts from the loaded attitude (gravity at full strength): the sag while loading is not a fall; while
+    # loading, a turn beyond LOADING_TILT_LIMIT_DEG from the start is.
+    tilt = np.array([_tilt_deg(track.rot[loaded], r) if k >= loaded else 0.0 for k, r in enumerate(track.rot)])
+    load_tilt = float(track.tilt[loaded])
+    loading_fall = first(np.asarray(track.tilt[:loaded]) > LOADING_TILT_LIMIT_DEG)
     com = np.asarray(track.com)
     q, torque, available = np.asarray(track.q), np.abs(np.asarray(track.torque)), np.asarray(track.available)
     start: BodyState = facts["start"]
     failures: list[Failure] = []
 
-    def first(mask: np.ndarray) -> int | None:
-        hits = np.flatnonzero(mask)
-        return int(hits[0]) if hits.size else None
-
     supports = set(feet_of(support))
     foot_links = {spec.joint(f"{s[0]}_ank_roll").child: s for s in ("left", "right")}
     i = first(tilt > TILT_LIMIT_DEG)
+    if loading_fall is not None:
+        i = loading_fall
     if i is not None:
-        failures.append(Failure("tilt", times[i], f"the torso tilted {tilt.max():.0f}° (limit {TILT_LIMIT_DEG:g}°)"))
+        turned = max(float(tilt.max()), float(np.max(track.tilt)) - load_tilt)
+        failures.append(Failure("tilt", times[i], f"the torso tilted {turned:.0f}° (limit {TILT_LIMIT_DEG:g}° after "
+                                                  f"loading)"))
     i = first(com[:, 2] < (1.0 - COM_DROP_FRACTION) * start.com[2])
     if i is not None:
         failures.append(Failure("com_drop", times[i], f"the centre of mass sank from {start.com[2]:.3f} m to "
@@ -205,9 +219,8 @@ def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, g
     mean_torque = torque[steady].mean(axis=0)
     worst = int(np.argmax(mean_torque / np.maximum(available[steady].mean(axis=0), 1e-9)))
     last = track.states[-1]
-    load_index = int(np.searchsorted(times, RAMP_S))
     margin = float(polygon_margin(com[-1, :2], support_polygon_of(last, support))[0])
-    load_state = track.states[min(load_index, len(track.states) - 1)]
+    load_state = track.states[loaded]
     margin_load = float(polygon_margin(load_state.com[:2], support_polygon_of(load_state, support))[0])
     cops = [c for c, s in zip(track.cop, steady) if s and c is not None]
     reasons = list(dict.fromkeys(f.reason for f in failures))
@@ -216,7 +229,9 @@ def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, g
         reasons=reasons, failures=failures, support_margin_m=round(margin, 5), margin_at_load_m=round(margin_load, 5),
         cop_xy=None if not cops else [round(float(v), 5) for v in np.mean(cops, axis=0)],
         com_settled=[round(float(v), 5) for v in com[-1]], com_start=[round(float(v), 5) for v in start.com],
-        max_tilt_deg=round(float(tilt.max()), 3), settled_tilt_deg=round(float(tilt[-1]), 3),
+        max_tilt_deg=round(float(tilt.max() if loading_fall is None else max(track.tilt)), 3),
+        settled_tilt_deg=round(float(track.tilt[-1]), 3),
+        load_tilt_deg=round(load_tilt, 3),
         com_drift_m=round(float(np.max(np.hypot(*(com[:, :2] - start.com[:2]).T))), 5), feet_slip_m=round(slip, 5),
         start_gap_m=round(facts["gap"], 5), flat_foot=facts["flat_foot"],
         self_collisions=[list(p) for p in sorted({p for pairs in track.self_pairs for p in pairs})],

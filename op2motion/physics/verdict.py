@@ -2,7 +2,9 @@
 
 Reasons (a fixed vocabulary; ``stable`` is true only when there is none), listed in the order they first happened:
 
-* ``tilt``: the torso turned more than :data:`TILT_LIMIT_DEG` from its starting attitude.
+* ``tilt``: the torso turned more than :data:`TILT_LIMIT_DEG` from its loaded attitude (when gravity reached full
+  strength: the servos' sag while the pose takes its weight is reported as ``load_tilt_deg``, not counted), or more
+  than :data:`LOADING_TILT_LIMIT_DEG` from the start while gravity ramped in (a fall during loading).
 * ``com_drop``: the centre of mass sank below (1 - :data:`COM_DROP_FRACTION`) of its starting height.
 * ``ground_contact``: a link other than a supporting foot pressed on the floor.
 * ``swing_foot_contact``: in a single-support pose, the swing foot pressed on the floor (the robot is then on two
@@ -24,6 +26,7 @@ from typing import Any
 REASONS = ("tilt", "com_drop", "ground_contact", "swing_foot_contact", "self_collision", "torque_saturation",
            "joint_limit", "slip")
 TILT_LIMIT_DEG = 10.0
+LOADING_TILT_LIMIT_DEG = 20.0   # while gravity ramps in, a turn this large from the start is a fall
 COM_DROP_FRACTION = 0.25
 CONTACT_FORCE_N = 0.5
 SATURATION_FRACTION = 0.95
@@ -72,8 +75,9 @@ class Validation:
     cop_xy: list[float] | None       # measured centre of pressure (steady window), world frame
     com_settled: list[float]
     com_start: list[float]
-    max_tilt_deg: float
-    settled_tilt_deg: float
+    max_tilt_deg: float              # largest turn of the torso after loading (from the start if it fell loading)
+    settled_tilt_deg: float          # the torso's turn from the start to the end, loading included
+    load_tilt_deg: float             # the torso's turn while the pose took its weight (servo sag)
     com_drift_m: float
     feet_slip_m: float
     start_gap_m: float               # double support: height of the other foot's lowest corner at the start

@@ -20,8 +20,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import book
-from ..balance import (COM_MODEL_FULL, COM_MODELS, FLOOR_TOLERANCE_M, PENALTY, check_br, rectangle_margin,
-                       support_extents)
+from ..balance import (
+    COM_MODEL_FULL,
+    COM_MODELS,
+    FLOOR_TOLERANCE_M,
+    PENALTY,
+    check_br,
+    rectangle_margin,
+    support_extents,
+)
 from ..errors import InputError
 from ..joints import BookAngles, check_support
 from ..kinematics import MODELS, BodyPoints, forward
