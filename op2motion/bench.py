@@ -50,6 +50,16 @@ def _dh_vs_pinocchio_m(spec: Spec, poses: BookAngles) -> float:
     return worst
 
 
+def _full_com_vs_pinocchio_m(spec: Spec, poses: BookAngles) -> float:
+    """Largest distance [m] between the D-H model's batched full-inertia CoM and pinocchio's ``centerOfMass``."""
+    dyn = dynamics_for(spec)
+    n = min(CHECK_POSES, poses.n)
+    sub = BookAngles(poses.th[:n], poses.phi[:n], poses.psi[:n], poses.support)
+    full = forward(sub, spec, "dh", full_com=True).com_full
+    servo = book_to_servo(sub, spec)
+    return max(float(np.linalg.norm(full[:, i] - dyn.com(servo[i], poses.support))) for i in range(n))
+
+
 def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0) -> dict[str, Any]:
     """Time batched forward kinematics + CoM for ``n`` poses with each model, one physics validation and one PSO
     solve; figures in milliseconds (scaled to 40 000 poses), with their correctness checks."""
@@ -59,6 +69,7 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0) 
     scale = BENCH_POSES / n
     pb_ms = _best_ms(lambda: forward(poses_pb, spec, "pb").com, repeat) * scale
     dh_ms = _best_ms(lambda: forward(poses_dh, spec, "dh").com, repeat) * scale
+    dh_full_ms = _best_ms(lambda: forward(poses_dh, spec, "dh", full_com=True).com_full, repeat) * scale
     dyn = dynamics_for(spec)
     servo = book_to_servo(poses_dh, spec)
     pin_ms = _best_ms(lambda: dyn.com_loop(servo), 1) * scale
@@ -73,6 +84,7 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0) 
         "repeat": repeat,
         "fk_pb_40k_ms": round(pb_ms, 2),
         "fk_dh_40k_ms": round(dh_ms, 2),
+        "fk_dh_full_com_40k_ms": round(dh_full_ms, 2),
         "pinocchio_com_40k_ms": round(pin_ms, 1),
         "validate_ms": round(validate_ms, 1),
         "validate_seconds": DEFAULT_SECONDS,
@@ -80,6 +92,7 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0) 
         "book_matlab_pb_40k_ms": book.MATLAB_40K_MS["pb"],
         "book_matlab_dh_40k_ms": book.MATLAB_40K_MS["dh"],
         "check_dh_vs_pinocchio_m": _dh_vs_pinocchio_m(spec, poses_dh),
+        "check_full_com_vs_pinocchio_m": _full_com_vs_pinocchio_m(spec, poses_dh),
         "check_standing_stands": bool(verdict["v"].stable),
         "check_pso_hand_error_m": float(evaluate_cost(BookAngles.from_vector(pso["r"].x), problem,
                                                       spec).hand_error[0]),

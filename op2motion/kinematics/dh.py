@@ -102,9 +102,9 @@ def _matrices(q: np.ndarray, out: np.ndarray, spec: Spec, support: str, full_com
     if full_com is not None:
         com = full_com_plan(spec, support)
         picked = frames[com.slots]                                         # (F, m, 4, 4)
-        total = np.einsum("fmij,fj->im", picked[:, :, :3, :3], com.weighted)
-        total += np.einsum("f,fmi->im", com.masses, picked[:, :, :3, 3])
-        full_com[:] = total / com.total
+        homogeneous = np.concatenate([com.weighted, com.masses[:, None]], axis=1)   # (F, 4): [M c, M]
+        total = (picked[:, :, :3, :] @ homogeneous[:, None, :, None])[..., 0].sum(axis=0)   # (m, 3)
+        full_com[:] = total.T / com.total
 
 
 @dataclass(frozen=True)

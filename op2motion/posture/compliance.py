@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kinematics import BodyPoints
+from ..kinematics.points import row_of
 from ..servo import ServoModel
 from ..spec import GRAVITY_M_S2, Spec
 
@@ -56,7 +57,7 @@ class Compliance:
         self.mass = sum(i.mass for i in spec.inertials)
         masses = {i.link: i.mass for i in spec.inertials}
         index = {n: i for i, n in enumerate(spec.joint_names)}
-        self.chains: dict[str, tuple[list[_Joint], list[_Joint]]] = {}
+        self.chains: dict[str, tuple[tuple, tuple]] = {}
         for side in ("left", "right"):
             s = side[0]
 
@@ -79,51 +80,80 @@ class Compliance:
                     _Joint(f"{s}_hip_roll", f"{s}_hip", kp("hip_roll"),
                            ((link("ank_roll"), foot, 0), (link("ank_pitch"), ankle, 1), (link("knee"), shank, 1),
                             (link("hip_pitch"), thigh, 1), (link("hip_roll"), hip, 1)))]
-            self.chains[side] = (pitch, roll)
+            self.chains[side] = (self._plan(pitch), self._plan(roll))
 
-    def _axis(self, points: BodyPoints, com: np.ndarray, chain: list[_Joint], k: int) -> tuple[np.ndarray, np.ndarray]:
-        """Settled coordinate ``k`` (0: x with the pitch joints, 1: y with the roll joints) and the summed sag [rad]:
-        the system of the module docstring, unknowns (M x', theta_1..theta_m), for each pose."""
-        m, n, mass = len(chain), points.n, self.mass
+    def _plan(self, chain: list[_Joint]) -> tuple:
+        """The system of the module docstring as constant tensors: with v = the coordinates [z or x] of the chain's
+        body points followed by the centre of mass, system = s0 + v_z . sz and rhs = v_x . rx (both linear)."""
+        names = sorted({p for j in chain for _, where, _ in j.below for p in where} | {j.point for j in chain})
+        col = {name: i for i, name in enumerate(names)}
+        com = len(names)
+        m = len(chain)
+        s0 = np.zeros((m + 1, m + 1))
+        sz = np.zeros((len(names) + 1, m + 1, m + 1))       # coefficient of each z coordinate in each entry
+        rx = np.zeros((len(names) + 1, m + 1))               # coefficient of each x coordinate in each rhs entry
 
-        def at(names: tuple[str, ...]) -> np.ndarray:
-            return np.mean([points.point(p) for p in names], axis=0)          # (N, 3)
+        def add_at(target: np.ndarray, where: tuple[str, ...], weight: float) -> None:   # an averaged point
+            for name in where:
+                target[col[name]] += weight / len(where)
 
-        joint_pos = [points.point(j.point) for j in chain]
-        system = np.zeros((n, m + 1, m + 1))
-        rhs = np.zeros((n, m + 1))
-        # M x' - sum_i theta_i (M (z - z_i) - sum_{b below i} m_b (z_b - z_i)) = M x
-        system[:, 0, 0] = 1.0
+        s0[0, 0] = 1.0                                        # M x' - sum_i theta_i lever_i = M x
+        rx[com, 0] = self.mass
         for i, joint in enumerate(chain):
-            lever = mass * (com[2] - joint_pos[i][:, 2])
+            sz[com, 0, 1 + i] -= self.mass                    # lever_i = M (z - z_i) - sum_b m_b (z_b - z_i)
+            sz[col[joint.point], 0, 1 + i] += self.mass
             for mb, where, _ in joint.below:
-                lever -= mb * (at(where)[:, 2] - joint_pos[i][:, 2])
-            system[:, 0, 1 + i] = -lever
-        rhs[:, 0] = mass * com[k]
-        # theta_j Kp_j / g - M x' + sum_b m_b x_b' + M_above x_j' = 0, with x_b', x_j' moved by the sags below them
-        for j, joint in enumerate(chain):
-            system[:, 1 + j, 1 + j] = joint.kp / GRAVITY_M_S2
-            system[:, 1 + j, 0] = -1.0
-            above = mass - sum(mb for mb, _, _ in joint.below)
-            constant = above * joint_pos[j][:, k]
-            for i in range(j):                                        # the joint moves with the sags below it
-                system[:, 1 + j, 1 + i] += above * (joint_pos[j][:, 2] - joint_pos[i][:, 2])
+                add_at(sz[:, 0, 1 + i], where, mb)
+                sz[col[joint.point], 0, 1 + i] -= mb
+        for j, joint in enumerate(chain):                     # theta_j Kp_j / g - M x' + ... = -(...)
+            s0[1 + j, 1 + j] = joint.kp / GRAVITY_M_S2
+            s0[1 + j, 0] = -1.0
+            above = self.mass - sum(mb for mb, _, _ in joint.below)
+            rx[col[joint.point], 1 + j] -= above
+            for i in range(j):                                # the joint moves with the sags below it
+                sz[col[joint.point], 1 + j, 1 + i] += above
+                sz[col[chain[i].point], 1 + j, 1 + i] -= above
             for mb, where, moved_by in joint.below:
-                pos = at(where)
-                constant = constant + mb * pos[:, k]
-                for i in range(moved_by):                             # a lower link moves with the sags below it
-                    system[:, 1 + j, 1 + i] += mb * (pos[:, 2] - joint_pos[i][:, 2])
-            rhs[:, 1 + j] = -constant
-        det = np.linalg.det(system)
-        ok = det > 0.0          # the servos outweigh gravity's negative stiffness: a stable equilibrium
-        solution = np.linalg.solve(np.where(ok[:, None, None], system, np.eye(m + 1)), rhs[..., None])[..., 0]
-        settled = np.where(ok, solution[:, 0] / mass, np.copysign(np.inf, com[k] - joint_pos[0][:, k]))
-        return settled, np.where(ok, solution[:, 1:].sum(axis=1), np.inf)
+                add_at(rx[:, 1 + j], where, -mb)
+                for i in range(moved_by):                     # a lower link moves with the sags below it
+                    add_at(sz[:, 1 + j, 1 + i], where, mb)
+                    sz[col[chain[i].point], 1 + j, 1 + i] -= mb
+        return np.array([row_of(n) for n in names]), s0, sz, rx
+
+    def _system(self, points: BodyPoints, com: np.ndarray, plan: tuple, k: int,
+                size: int) -> tuple[np.ndarray, np.ndarray]:
+        """The system of one chain for every pose, padded to ``size`` unknowns (an identity on the extra ones)."""
+        rows, s0, sz, rx = plan
+        coords = points.data[rows]                                            # (points, 3, N)
+        z = np.concatenate([coords[:, 2], com[2][None]]).T                    # (N, points + 1)
+        x = np.concatenate([coords[:, k], com[k][None]]).T
+        system = np.zeros((points.n, size, size))
+        m = len(s0)
+        system[:, :m, :m] = s0 + np.einsum("nk,kij->nij", z, sz)
+        system[:, m:, m:] = np.eye(size - m)
+        rhs = np.zeros((points.n, size))
+        rhs[:, :m] = x @ rx
+        return system, rhs
 
     def settle(self, points: BodyPoints, com: np.ndarray) -> Settled:
-        """Where poses standing on ``points.support`` settle, given their centre of mass ``com`` (3, N) [m]."""
+        """Where poses standing on ``points.support`` settle, given their centre of mass ``com`` (3, N) [m]: the
+        pitch (x) and roll (y) systems solved together, unknowns (M x', theta_1..theta_m) each."""
         pitch, roll = self.chains[points.support]
-        x, pitch_sag = self._axis(points, com, pitch, 0)
-        y, roll_sag = self._axis(points, com, roll, 1)
-        tilt = np.hypot(pitch_sag, roll_sag)
-        return Settled(np.vstack([x, y]), tilt, np.isfinite(tilt))
+        size = max(len(pitch[1]), len(roll[1]))
+        sp, rp = self._system(points, com, pitch, 0, size)
+        sr, rr = self._system(points, com, roll, 1, size)
+        system, rhs = np.concatenate([sp, sr]), np.concatenate([rp, rr])
+        ok = np.linalg.det(system) > 0.0    # the servos outweigh gravity's negative stiffness: a stable equilibrium
+        solution = np.linalg.solve(np.where(ok[:, None, None], system, np.eye(size)), rhs[..., None])[..., 0]
+        n = points.n
+        settled = np.where(ok, solution[:, 0] / self.mass, np.inf)
+        sag = np.where(ok, solution[:, 1:].sum(axis=1), np.inf)
+        xy = np.vstack([settled[:n], settled[n:]])
+        xy = np.where(np.isfinite(xy), xy, np.copysign(np.inf, com[:2] - points.point(pitch_root(points))[:, :2].T))
+        tilt = np.hypot(sag[:n], sag[n:])
+        return Settled(xy, tilt, np.isfinite(tilt))
+
+
+def pitch_root(points: BodyPoints) -> str:
+    """The support ankle's body point (where an unstable pose falls away from)."""
+    return f"{points.support[0]}_ankle"

@@ -153,21 +153,24 @@ def torso_axes(data: np.ndarray, spec: Spec) -> np.ndarray:
     u = u / np.sqrt(np.einsum("in,in->n", u, u))
     g = spec.geometry
     a, b = np.array([g.hip_x, -g.torso]) / np.hypot(g.hip_x, g.torso)   # u = a x + b z
-    w = np.cross(y, u, axis=0)                                          # = a (y × x) + b (y × z) = -a z + b x
+    w = np.stack([y[1] * u[2] - y[2] * u[1], y[2] * u[0] - y[0] * u[2],   # y × u = -a z + b x
+                  y[0] * u[1] - y[1] * u[0]])
     return np.stack([b * w + a * u, y, b * u - a * w])
 
 
-def torso_tilt(points: BodyPoints, spec: Spec) -> np.ndarray:
-    """Angle [rad] between the torso's z axis and the vertical, (N,)."""
-    return np.arccos(np.clip(torso_axes(points.data, spec)[2, 2], -1.0, 1.0))
+def torso_tilt(points: BodyPoints, spec: Spec, axes: np.ndarray | None = None) -> np.ndarray:
+    """Angle [rad] between the torso's z axis and the vertical, (N,) (``axes``: :func:`torso_axes`, if known)."""
+    axes = torso_axes(points.data, spec) if axes is None else axes
+    return np.arccos(np.clip(axes[2, 2], -1.0, 1.0))
 
 
-def self_collision_penalty(points: BodyPoints, spec: Spec, screen: Screen | None = None) -> np.ndarray:
+def self_collision_penalty(points: BodyPoints, spec: Spec, screen: Screen | None = None,
+                           axes: np.ndarray | None = None) -> np.ndarray:
     """Screening for obvious self-collisions: 100 per pose with a hand or elbow inside the torso, the swing foot
     over the support foot, or the knees crossing; (N,)."""
     screen = screen or Screen.of(spec)
     data = points.data
-    axes = torso_axes(data, spec)
+    axes = torso_axes(data, spec) if axes is None else axes
     local = np.einsum("pjn,kjn->pkn", data[_ARM_ROWS] - data[_ROWS["neck"]], axes) - screen.torso_centre[None, :, None]
     bad = np.any(np.all(np.abs(local) < screen.torso_half[None, :, None], axis=1), axis=0)
     knees = data[_ROWS["l_knee"]] - data[_ROWS["r_knee"]]
@@ -203,20 +206,22 @@ class CostModel:
         swing_min_z = data[self.swing_rows, 2].min(axis=0)
         if self.compliance is not None:   # the body physics simulates: full inertia on compliant servos
             settled = self.compliance.settle(points, points.com_full)
-            com_xy, sag_tilt = np.nan_to_num(settled.com_xy, posinf=1.0, neginf=-1.0), settled.tilt
+            com_xy, sag_tilt = settled.com_xy, settled.tilt      # infinite where no equilibrium exists
         else:                             # the book's body: lumped masses on rigid joints
             com_xy, sag_tilt = points.com[:2], np.zeros(points.n)
         margin = rectangle_margin(com_xy[0], com_xy[1], self.extents)  # world = support frame
-        sag_excess = np.maximum(np.nan_to_num(sag_tilt, posinf=1.0) - SAG_TILT_LIMIT_RAD, 0.0)
+        sag_excess = np.maximum(np.minimum(sag_tilt, 1.0) - SAG_TILT_LIMIT_RAD, 0.0)
         # The book's penalties (code 2.8, 2.9): PenaltyStability is 100 exactly where the margin is negative; on
         # compliant servos also where the load would turn the torso over the limit.
         below = swing_min_z < -FLOOR_TOLERANCE_M
         unstable = (margin < 0.0) | (sag_excess > 0.0)
         book_cost = np.where(below, PENALTY, 0.0) + np.where(unstable, PENALTY, 0.0) + hand_error
         # Beyond the book: a slope inside the penalised region leads a swarm that starts there out of it.
-        slope = W_VIOLATION * (np.where(below, -swing_min_z, 0.0) + np.maximum(-margin, 0.0) + 0.1 * sag_excess)
-        tilt = torso_tilt(points, self.spec)
-        collision = self_collision_penalty(points, self.spec, self.screen)
+        slope = W_VIOLATION * (np.where(below, -swing_min_z, 0.0) + np.minimum(np.maximum(-margin, 0.0), 1.0)
+                               + 0.1 * sag_excess)
+        axes = torso_axes(data, self.spec)
+        tilt = torso_tilt(points, self.spec, axes)
+        collision = self_collision_penalty(points, self.spec, self.screen, axes)
         total = (book_cost + slope + W_MARGIN * (MARGIN_CAP_M - np.minimum(margin, MARGIN_CAP_M))
                  + W_UPRIGHT * tilt * tilt + collision)
         return CostTerms(total, book_cost, hand_error, margin, swing_min_z, tilt, collision, sag_tilt)
