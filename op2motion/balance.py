@@ -59,9 +59,9 @@ def rectangle_margin(dx: np.ndarray, dy: np.ndarray, extents: tuple[float, float
 
 
 def support_polygon(spec: Spec, support: str, br: float = 1.0, sp: tuple[float, float] = (0.0, 0.0),
-                    gamma: float = 0.0) -> np.ndarray:
-    """Corners (4, 2) [m] of the br-shrunk support rectangle in the world XY plane."""
-    front, back, left, right = spec.foot.extents(support, check_br(br))
+                    gamma: float = 0.0, com_model: str = COM_MODEL_LUMPED) -> np.ndarray:
+    """Corners (4, 2) [m] of the br-shrunk support rectangle of ``com_model`` in the world XY plane."""
+    front, back, left, right = support_extents(spec, support, br, com_model)
     local = np.array([[front, left], [front, -right], [-back, -right], [-back, left]])
     c, s = np.cos(gamma), np.sin(gamma)
     return local @ np.array([[c, s], [-s, c]]) + np.asarray(sp, dtype=float)

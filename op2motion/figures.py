@@ -14,6 +14,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from .joints import BookAngles
+from .balance import convex_hull, polygon_margin
 from .kinematics import forward
 from .physics import Validation
 from .plot import PoseFigure, TitleBlock, render_cost_curve, render_poses
@@ -36,9 +37,19 @@ def verdict_of(validation: Validation | None, metrics: Mapping[str, Any] | None 
     return "not checked in physics (use --validate)", None
 
 
-def _numbers(report: PoseReport) -> list[str]:
+def double_support_margin_m(report: PoseReport) -> float:
+    """Margin [m] of the full-inertia CoM to the convex hull of both soles (double support)."""
+    hull = convex_hull(np.vstack([report.points.foot_corners(s)[0][:, :2] for s in ("left", "right")]))
+    return float(polygon_margin(report.com_full[:2], hull)[0])
+
+
+def _numbers(report: PoseReport, double: bool = False) -> list[str]:
     mm = lambda v: f"{v * 1000:+6.1f} mm"  # noqa: E731
     com, full = report.com, report.com_full
+    if double:
+        return [f"CoM lumped (book)  ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m",
+                f"CoM full inertia   ({full[0]:+.3f}, {full[1]:+.3f}, {full[2]:.3f}) m   margin "
+                f"{mm(double_support_margin_m(report))}   (to the hull of both soles)"]
     return [f"CoM lumped (book)  ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m   margin {mm(report.stability_margin_m)}",
             f"CoM full inertia   ({full[0]:+.3f}, {full[1]:+.3f}, {full[2]:.3f}) m   margin "
             f"{mm(report.stability_margin_full_m)}   (to the support rectangle shrunk by br {report.br:g})",
@@ -48,8 +59,13 @@ def _numbers(report: PoseReport) -> list[str]:
 def pose_figure(name: str, angles: BookAngles, spec: Spec, models: Sequence[str] = ("dh",), br: float = 1.0,
                 target: Sequence[float] | None = None, validation: Validation | None = None,
                 metrics: Mapping[str, Any] | None = None, lines: Sequence[str] = (),
-                ghost: BookAngles | None = None) -> tuple[bytes, dict[str, Any], list[PoseReport]]:
-    """PNG bytes, a report of what was drawn, and the pose reports of one pose on ``models``."""
+                ghost: BookAngles | None = None, double: bool = False
+                ) -> tuple[bytes, dict[str, Any], list[PoseReport]]:
+    """PNG bytes, a report of what was drawn, and the pose reports of one pose on ``models``.
+
+    ``double`` draws and measures the pose as standing on both feet: the support polygon is the hull of both soles
+    (the kinematic chain still starts at ``angles.support``'s sole).
+    """
     rows, reports = [], []
     for model in models:
         note, shown = "", angles
@@ -59,11 +75,13 @@ def pose_figure(name: str, angles: BookAngles, spec: Spec, models: Sequence[str]
         reports.append(report)
         label = {"dh": "D-H model", "pb": "projection model"}[model]
         rows.append(PoseFigure(report.points, label, report.com, report.com_full, br, target,
-                               None if ghost is None else forward(ghost, spec, model), note))
+                               None if ghost is None else forward(ghost, spec, model), note, double))
     verdict, ok = verdict_of(validation, metrics)
-    block = TitleBlock(f"{name}: {spec.name}, {angles.support} support", [*lines, *_numbers(reports[0])], verdict, ok,
-                       {"margin_lumped_m": reports[0].stability_margin_m,
-                        "margin_full_m": reports[0].stability_margin_full_m})
+    support = "double" if double else angles.support
+    margins = ({"margin_full_double_m": double_support_margin_m(reports[0])} if double else
+               {"margin_lumped_m": reports[0].stability_margin_m, "margin_full_m": reports[0].stability_margin_full_m})
+    block = TitleBlock(f"{name}: {spec.name}, {support} support", [*lines, *_numbers(reports[0], double)], verdict, ok,
+                       margins)
     png, drawn = render_poses(rows, spec, block)
     return png, drawn, reports
 

@@ -16,7 +16,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .balance import support_polygon
+from .balance import COM_MODEL_FULL, convex_hull, support_polygon
 from .kinematics.points import BodyPoints
 from .spec import Spec
 
@@ -52,6 +52,7 @@ class PoseFigure:
     target: Sequence[float] | None = None
     ghost: BodyPoints | None = None   # an earlier pose drawn in grey (e.g. before an arm IK step)
     note: str = ""
+    double: bool = False              # double support: the support polygon is the hull of both soles
 
 
 @dataclass(frozen=True)
@@ -103,9 +104,16 @@ def _draw(ax, xyz: dict[str, np.ndarray], fig: PoseFigure, spec: Spec, h: int | 
         if side == fig.points.support and (h, v) == (0, 1):
             ax.fill(ring[:, 0], ring[:, 1], color=colour, alpha=0.15)
     sp = fig.points.point(f"{fig.points.support}_sole")[0]
-    poly = support_polygon(spec, fig.points.support, fig.br, (sp[0], sp[1]))
-    ring = np.vstack([poly, poly[:1]])
-    line(np.column_stack([ring, np.full(len(ring), sp[2])]), color=LUMPED_COLOUR, linestyle="--", linewidth=1)
+    if fig.double:      # the hull of both real soles
+        polys = [(convex_hull(np.vstack([fig.points.foot_corners(s)[0][:, :2] for s in ("left", "right")])),
+                  FULL_COLOUR)]
+    else:               # the book's rectangle (lumped CoM) and the real sole (full-inertia CoM), both shrunk by br
+        polys = [(support_polygon(spec, fig.points.support, fig.br, (sp[0], sp[1])), LUMPED_COLOUR),
+                 (support_polygon(spec, fig.points.support, fig.br, (sp[0], sp[1]), com_model=COM_MODEL_FULL),
+                  FULL_COLOUR)]
+    for poly, colour in polys:
+        ring = np.vstack([poly, poly[:1]])
+        line(np.column_stack([ring, np.full(len(ring), sp[2])]), color=colour, linestyle="--", linewidth=1)
     for com, colour, marker in ((fig.com_lumped, LUMPED_COLOUR, "s"), (fig.com_full, FULL_COLOUR, "D")):
         if com is None:
             continue
@@ -125,9 +133,13 @@ def _legend_handles(figures: Sequence[PoseFigure]) -> list:
     handles = [Line2D([], [], color=LEFT_COLOUR, lw=2, marker="o", ms=3, label="left limbs"),
                Line2D([], [], color=RIGHT_COLOUR, lw=2, marker="o", ms=3, label="right limbs"),
                Line2D([], [], color=BODY_COLOUR, lw=2, label="torso, pelvis, head"),
-               Patch(color="grey", alpha=0.3, label="support foot"),
-               Line2D([], [], color=LUMPED_COLOUR, ls="--", label="support rectangle (shrunk by br)"),
-               Line2D([], [], color=LUMPED_COLOUR, marker="s", ls="none", label="CoM, lumped (book masses)")]
+               Patch(color="grey", alpha=0.3, label="support foot")]
+    if not all(f.double for f in figures):
+        handles += [Line2D([], [], color=LUMPED_COLOUR, ls="--", label="book's foot rectangle (shrunk by br)"),
+                    Line2D([], [], color=FULL_COLOUR, ls="--", label="real sole (shrunk by br)")]
+    if any(f.double for f in figures):
+        handles.append(Line2D([], [], color=FULL_COLOUR, ls="--", label="support polygon (both soles)"))
+    handles.append(Line2D([], [], color=LUMPED_COLOUR, marker="s", ls="none", label="CoM, lumped (book masses)"))
     if any(f.com_full is not None for f in figures):
         handles.append(Line2D([], [], color=FULL_COLOUR, marker="D", ls="none", label="CoM, full inertia (physics)"))
     handles.append(Line2D([], [], color="grey", marker="x", ls="none", label="CoM ground projection"))

@@ -101,3 +101,13 @@ def test_the_optimiser_depends_on_no_file_format_nor_physics():
     for module, targets in GRAPH.items():
         if module.startswith("posture"):
             assert not {t for t in targets if t.startswith(("export", "physics", "workflow", "library"))}, module
+
+
+def test_every_subpackage_is_packaged():
+    """A sub-package missing from ``pyproject.toml`` works in the source tree and is absent from an install."""
+    import re
+
+    text = (PACKAGE.parent / "pyproject.toml").read_text()
+    listed = set(re.findall(r'"(op2motion(?:\.\w+)*)"', re.search(r"packages = \[(.*?)\]", text).group(1)))
+    present = {".".join(("op2motion", *p.parent.relative_to(PACKAGE).parts)) for p in PACKAGE.rglob("__init__.py")}
+    assert present <= listed, f"not in pyproject.toml packages: {sorted(present - listed)}"

@@ -148,7 +148,7 @@ def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
         servo = pose.servo if pose is not None else book_to_servo(angles, spec)[0]
         validation = validate(servo, support, spec, args.seconds)
     png, drawn, reports = pose_figure(name, angles, spec, models, args.br, target, validation,
-                                      None if pose is None else pose.metrics)
+                                      None if pose is None else pose.metrics, double=support == "double")
     outputs.put("output", png)
     out = outputs.commit()["output"]
     summary = {"png": str(out), "support": support, "drawn": drawn,
