@@ -16,9 +16,11 @@ import numpy as np
 from . import book
 from .joints import BookAngles, book_to_servo
 from .kinematics import forward
+from .kinematics.dh_chain import matrix_frames
+from .kinematics.shapes import clearances, shape_set
 from .model.dynamics import dynamics_for
 from .physics import DEFAULT_SECONDS, validate
-from .posture.cost import PostureProblem, evaluate_cost
+from .posture.cost import CLEARANCE_EXACT_M, PostureProblem, evaluate_cost
 from .posture.pso import PSOSettings, run_pso
 from .spec import Spec
 
@@ -76,6 +78,10 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0) 
     stand = book_to_servo(BookAngles.standing("left"), spec)[0]
     verdict = {}
     validate_ms = _best_ms(lambda: verdict.update(v=validate(stand, "double", spec, DEFAULT_SECONDS)), 1)
+    swarm = BookAngles.random(PSOSettings().particles, rng, "left")
+    frames, shapes = matrix_frames(swarm.vector(), spec, "left"), shape_set(spec, "left")
+    clearance_ms = _best_ms(lambda: clearances(frames, shapes, CLEARANCE_EXACT_M), repeat)
+    standing = matrix_frames(BookAngles.standing("left").vector(), spec, "left")
     problem = PostureProblem.from_scenario(book.DEFAULT_PROBLEM)
     pso = {}
     pso_ms = _best_ms(lambda: pso.update(r=run_pso(problem, spec, PSOSettings())), 3)
@@ -88,12 +94,14 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0) 
         "pinocchio_com_40k_ms": round(pin_ms, 1),
         "validate_ms": round(validate_ms, 1),
         "validate_seconds": DEFAULT_SECONDS,
+        "self_clearance_swarm_ms": round(clearance_ms, 2),
         "pso_solve_ms": round(pso_ms, 1),
         "book_matlab_pb_40k_ms": book.MATLAB_40K_MS["pb"],
         "book_matlab_dh_40k_ms": book.MATLAB_40K_MS["dh"],
         "check_dh_vs_pinocchio_m": _dh_vs_pinocchio_m(spec, poses_dh),
         "check_full_com_vs_pinocchio_m": _full_com_vs_pinocchio_m(spec, poses_dh),
         "check_standing_stands": bool(verdict["v"].stable),
+        "check_standing_clearance_m": float(clearances(standing, shapes).min()),
         "check_pso_hand_error_m": float(evaluate_cost(BookAngles.from_vector(pso["r"].x), problem,
                                                       spec).hand_error[0]),
     }

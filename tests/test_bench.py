@@ -5,6 +5,7 @@ from op2motion.bench import run_bench
 
 DH_VS_PINOCCHIO_M = 1e-9      # the D-H joint centres equal pinocchio's on the generated URDF
 PSO_REACH_M = 0.01            # the default problem's swarm lands the hand within a centimetre
+STANDING_CLEARANCE_M = 0.010   # standing, the forearms hang 8 mm beside the thighs
 FULL_COM_VS_PINOCCHIO_M = 1e-5  # the URDF's six 10-mg frame links are the only difference (2 µm)
 
 
@@ -12,10 +13,11 @@ def test_bench_reports_every_figure_and_its_work_is_right(spec):
     result = run_bench(spec, n=500, repeat=1)
     assert result["poses"] == 500 and result["repeat"] == 1
     for key in ("fk_pb_40k_ms", "fk_dh_40k_ms", "fk_dh_full_com_40k_ms", "pinocchio_com_40k_ms", "validate_ms",
-                "pso_solve_ms"):
+                "pso_solve_ms", "self_clearance_swarm_ms"):
         assert result[key] > 0, key
     assert result["check_dh_vs_pinocchio_m"] < DH_VS_PINOCCHIO_M
     assert result["check_full_com_vs_pinocchio_m"] < FULL_COM_VS_PINOCCHIO_M
     assert result["check_standing_stands"] is True
+    assert 0.0 < result["check_standing_clearance_m"] < STANDING_CLEARANCE_M
     assert result["check_pso_hand_error_m"] < PSO_REACH_M
     assert result["book_matlab_dh_40k_ms"] == 3350.0 and result["book_matlab_pb_40k_ms"] == 780.0

@@ -16,20 +16,18 @@ NumPy calls, not arithmetic, sets the time.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import SpecError
-from ..joints import BookAngles, book_to_servo
+from ..joints import BookAngles
 from ..spec import Spec
 from ..trig import sincos
 from .batch import run_chunked
 from .com import slab_com
-from .dh_chain import W0, cached, chain, chain_points, matrix_plan, point_layout
+from .dh_chain import W0, chain, chain_points, matrix_frames, matrix_plan, point_layout
 from .frames import Frame
+from .links import full_com_plan
 from .points import ROW, BodyPoints, fill_support_foot, new_slab
-from .tree import link_frames
 
 MATRIX_BELOW = 64  # batches smaller than this (a PSO swarm) use the 4x4 matrix evaluator
 _HALF_PI = math.pi / 2
@@ -71,27 +69,10 @@ def _columns(q: np.ndarray, out: np.ndarray, spec: Spec, support: str, full_com:
         full_com /= plan.total
 
 
-def _matrix_frames(q: np.ndarray, spec: Spec, support: str) -> np.ndarray:
-    """Every frame of the chain for each pose, (slots, m, 4, 4), slot order of :func:`matrix_plan`."""
-    m = q.shape[0]
-    plan = matrix_plan(spec, support)
-    delta = plan.sign * q.T[plan.var] + plan.offset                  # (joints, m)
-    coef = np.empty((len(plan.var), m, 3))
-    coef[:, :, 0], coef[:, :, 1], coef[:, :, 2] = np.cos(delta), np.sin(delta), 1.0
-    local = np.empty((len(plan.slots) - 1, m, 4, 4))
-    local[plan.joint_slots] = (coef @ plan.basis).reshape(len(plan.var), m, 4, 4)
-    local[plan.fixed_slots] = plan.fixed_local[:, None]
-    frames = np.empty((len(plan.slots), m, 4, 4))
-    frames[0] = plan.root
-    for start, stop, p_start, p_stop in plan.levels:   # one level of the tree in one batched product
-        np.matmul(frames[p_start:p_stop], local[start - 1:stop - 1], out=frames[start:stop])
-    return frames
-
-
 def _matrices(q: np.ndarray, out: np.ndarray, spec: Spec, support: str, full_com: np.ndarray | None = None) -> None:
     """4x4 matrix evaluator for small batches; fills out (rows, 3, m) like :func:`_columns`."""
     plan = matrix_plan(spec, support)
-    frames = _matrix_frames(q, spec, support)
+    frames = matrix_frames(q, spec, support)
     _, origin_rows, origin_frames, offset_rows, offset_frames, offsets = point_layout(spec, support)
     out[origin_rows] = frames[origin_frames, :, :3, 3].transpose(0, 2, 1)
     rot = frames[offset_frames, :, :3, :3]
@@ -105,63 +86,6 @@ def _matrices(q: np.ndarray, out: np.ndarray, spec: Spec, support: str, full_com
         homogeneous = np.concatenate([com.weighted, com.masses[:, None]], axis=1)   # (F, 4): [M c, M]
         total = (picked[:, :, :3, :] @ homogeneous[:, None, :, None])[..., 0].sum(axis=0)   # (m, 3)
         full_com[:] = total.T / com.total
-
-
-@dataclass(frozen=True)
-class FullComPlan:
-    """Where the spec's link inertials sit in the chain: for each D-H frame that carries mass, the mass [kg] and
-    the mass-weighted centre of mass in that frame [kg·m]; the total mass [kg]."""
-
-    frames: tuple[str, ...]
-    slots: np.ndarray
-    masses: np.ndarray
-    weighted: np.ndarray
-    total: float
-
-
-CALIBRATION_POSES = 3
-ATTACHED_M = 1e-9   # a link is fixed to a D-H frame when its CoM keeps its place in that frame to this [m]
-
-
-def full_com_plan(spec: Spec, support: str) -> FullComPlan:
-    """The plan of the full-inertia CoM for ``support`` (computed once per spec, see :func:`_calibrate`)."""
-    return cached("fullcom", spec, support, _calibrate)  # type: ignore[return-value]
-
-
-def _calibrate(spec: Spec, support: str) -> FullComPlan:
-    """Find, for each link inertial, the D-H frame it moves with and its CoM in that frame: on a few poses, walk
-    the official joint table (:mod:`.tree`) to the link's CoM in the support sole frame and keep the frame in which
-    it does not move."""
-    rng = np.random.default_rng(0)
-    angles = BookAngles.random(CALIBRATION_POSES, rng, support)
-    frames = _matrix_frames(angles.vector(), spec, support)                 # (slots, k, 4, 4)
-    servo = book_to_servo(angles, spec)
-    sole_drop = np.array([0.0, 0.0, -spec.foot.sole_below_ankle])
-    links = {i.link: i for i in spec.inertials}
-    com_world = {link: [] for link in links}
-    for k in range(CALIBRATION_POSES):
-        tree = link_frames(spec, servo[k])
-        r_foot, p_foot = tree[spec.joint(f"{support[0]}_ank_roll").child]
-        r_sole, p_sole = r_foot, p_foot + r_foot @ sole_drop
-        for link, inertial in links.items():
-            r, p = tree[link]
-            com_world[link].append(r_sole.T @ (p + r @ inertial.link_com - p_sole))
-    rot, origin = frames[:, :, :3, :3], frames[:, :, :3, 3]
-    slot_of = {slot: name for name, slot in matrix_plan(spec, support).slots.items()}
-    masses: dict[int, float] = {}
-    weighted: dict[int, np.ndarray] = {}
-    for link, points in com_world.items():
-        local = np.einsum("skji,skj->ski", rot, np.asarray(points)[None] - origin)   # (slots, k, 3)
-        spread = np.ptp(local, axis=1).max(axis=1)
-        slot = int(np.argmax(spread < ATTACHED_M))
-        if spread[slot] >= ATTACHED_M:
-            raise SpecError(f"link {link!r} moves with no frame of the D-H chain", spec.path)
-        m = links[link].mass
-        masses[slot] = masses.get(slot, 0.0) + m
-        weighted[slot] = weighted.get(slot, np.zeros(3)) + m * local[slot, 0]
-    slots = sorted(masses)
-    return FullComPlan(tuple(slot_of[s] for s in slots), np.array(slots), np.array([masses[s] for s in slots]),
-                       np.array([weighted[s] for s in slots]), float(sum(masses.values())))
 
 
 def forward_dh(angles: BookAngles, spec: Spec, full_com: bool = False) -> BodyPoints:

@@ -186,6 +186,23 @@ def _build_matrix_plan(spec: Spec, support: str) -> MatrixPlan:
                        np.array([fixed_of(by_frame[f]) for f in fixed_only]), root, tuple(levels), slots)
 
 
+def matrix_frames(q: np.ndarray, spec: Spec, support: str) -> np.ndarray:
+    """Every frame of the chain for each pose, (slots, m, 4, 4), slot order of :func:`matrix_plan`."""
+    m = q.shape[0]
+    plan = matrix_plan(spec, support)
+    delta = plan.sign * q.T[plan.var] + plan.offset                  # (joints, m)
+    coef = np.empty((len(plan.var), m, 3))
+    coef[:, :, 0], coef[:, :, 1], coef[:, :, 2] = np.cos(delta), np.sin(delta), 1.0
+    local = np.empty((len(plan.slots) - 1, m, 4, 4))
+    local[plan.joint_slots] = (coef @ plan.basis).reshape(len(plan.var), m, 4, 4)
+    local[plan.fixed_slots] = plan.fixed_local[:, None]
+    frames = np.empty((len(plan.slots), m, 4, 4))
+    frames[0] = plan.root
+    for start, stop, p_start, p_stop in plan.levels:   # one level of the tree in one batched product
+        np.matmul(frames[p_start:p_stop], local[start - 1:stop - 1], out=frames[start:stop])
+    return frames
+
+
 def point_layout(spec: Spec, support: str) -> tuple:
     """Index arrays for the matrix evaluator's point gathering (cached per spec and support)."""
     return cached("layout", spec, support, _build_point_layout)

@@ -239,4 +239,5 @@ def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, g
         max_torque_nm=round(float(mean_torque[worst]), 4),
         torque_ratio=round(float(mean_torque[worst] / max(available[steady][:, worst].mean(), 1e-9)), 4),
         worst_joint=spec.joint_names[worst], peak_torque_nm=round(float(torque.max()), 4),
-        sag_deg={n: round(float(math.degrees(v)), 3) for n, v in zip(spec.joint_names, (q[steady] - goal).mean(axis=0))})
+        sag_deg={n: round(float(math.degrees(v)), 3) for n, v in zip(spec.joint_names, (q[steady] - goal).mean(axis=0))},
+        swing_foot_min_z_m=None if swing is None else round(float(last.corners[swing][:, 2].min()), 5))

@@ -89,6 +89,7 @@ class Validation:
     worst_joint: str
     peak_torque_nm: float
     sag_deg: dict[str, float]        # steady-window joint angle minus goal
+    swing_foot_min_z_m: float | None = None   # single support: the swing foot's lowest corner at the end [m]
     pushes: list[PushResult] = field(default_factory=list)
     snapshot_png: bytes | None = field(default=None, repr=False, compare=False)
 

@@ -17,6 +17,11 @@ same sideways with the roll joints (ankle, hip). Gravity acts as a negative stif
 between the centre of mass and the joints grow as the pose loads (about threefold on one leg of the OP2), and where
 the system's determinant is not positive no equilibrium exists. The torso turns by the sum of the sags. Checked
 against MuJoCo's settled centre of mass and tilt on standing one-leg poses (tests/test_posture.py).
+
+The swing leg hangs from its hip on the same springs: each of its joints gives by its gravity torque over its
+stiffness, theta_j = a_j . ((c_j - o_j) x m_j g) / Kp_j (a_j its axis, o_j its centre, m_j and c_j the mass and
+centre of mass of the leg below it), and the swing foot moves by sum_j theta_j a_j x (p - o_j)
+(:class:`SwingLegSag`; small angles, each joint on its own, static friction neglected, so it errs towards more sag).
 """
 
 from __future__ import annotations
@@ -26,18 +31,23 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..kinematics import BodyPoints
+from ..kinematics.links import attachments
 from ..kinematics.points import row_of
 from ..servo import ServoModel
-from ..spec import GRAVITY_M_S2, Spec
+from ..spec import GRAVITY_M_S2, Spec, swing_of
 
 @dataclass(frozen=True)
 class Settled:
     """Predicted settled centre of mass (2, N) [m] in the support frame and the sag-induced torso turn (N,) [rad];
-    ``stable`` (N,) is false where the servos are too soft for any equilibrium."""
+    ``stable`` (N,) is false where the servos are too soft for any equilibrium; the sag of each support-leg joint
+    [rad], pitch (ankle, knee, hip) and roll (ankle, hip), (joints, N), each turning everything above its axis
+    forward / outward (NaN without an equilibrium)."""
 
     com_xy: np.ndarray
     tilt: np.ndarray
     stable: np.ndarray
+    pitch_sag: np.ndarray
+    roll_sag: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -118,12 +128,12 @@ class Compliance:
                 for i in range(moved_by):                     # a lower link moves with the sags below it
                     add_at(sz[:, 1 + j, 1 + i], where, mb)
                     sz[col[chain[i].point], 1 + j, 1 + i] -= mb
-        return np.array([row_of(n) for n in names]), s0, sz, rx
+        return np.array([row_of(n) for n in names]), s0, sz, rx, np.array([row_of(j.point) for j in chain])
 
     def _system(self, points: BodyPoints, com: np.ndarray, plan: tuple, k: int,
                 size: int) -> tuple[np.ndarray, np.ndarray]:
         """The system of one chain for every pose, padded to ``size`` unknowns (an identity on the extra ones)."""
-        rows, s0, sz, rx = plan
+        rows, s0, sz, rx, _ = plan
         coords = points.data[rows]                                            # (points, 3, N)
         z = np.concatenate([coords[:, 2], com[2][None]]).T                    # (N, points + 1)
         x = np.concatenate([coords[:, k], com[k][None]]).T
@@ -151,9 +161,68 @@ class Compliance:
         xy = np.vstack([settled[:n], settled[n:]])
         xy = np.where(np.isfinite(xy), xy, np.copysign(np.inf, com[:2] - points.point(pitch_root(points))[:, :2].T))
         tilt = np.hypot(sag[:n], sag[n:])
-        return Settled(xy, tilt, np.isfinite(tilt))
+        each = np.where(ok[:, None], solution[:, 1:], np.nan)
+        return Settled(xy, tilt, np.isfinite(tilt), each[:n, :len(pitch[4])].T, each[n:, :len(roll[4])].T)
+
+    def settled_heights(self, points: BodyPoints, settled: Settled, xyz: np.ndarray) -> np.ndarray:
+        """Heights [m] (k, N) after the sags of points ``xyz`` (k, 3, N) above the support leg (e.g. the swing foot's
+        corners): each sag turns them about its joint's axis, so z drops by the sag times the lever in x (pitch)
+        or y (roll). NaN where no equilibrium exists."""
+        pitch, roll = self.chains[points.support]
+        z = xyz[:, 2].copy()
+        for (_, _, _, _, axes), sag, k in ((pitch, settled.pitch_sag, 0), (roll, settled.roll_sag, 1)):
+            for axis_row, theta in zip(axes, sag):
+                z -= theta * (xyz[:, k] - points.data[axis_row, k])
+        return z
 
 
 def pitch_root(points: BodyPoints) -> str:
     """The support ankle's body point (where an unstable pose falls away from)."""
     return f"{points.support[0]}_ankle"
+
+
+_SWING_JOINTS = ("hip_yaw", "hip_roll", "hip_pitch", "knee", "ank_pitch", "ank_roll")
+
+
+class SwingLegSag:
+    """How far the swing leg's own weight lowers its foot on compliant servos, for one spec, support and servo
+    model; evaluated on the D-H chain's frames (:func:`op2motion.kinematics.dh_chain.matrix_frames`)."""
+
+    def __init__(self, spec: Spec, support: str, servo: ServoModel | None = None):
+        servo = servo or ServoModel.of(spec)
+        attached = attachments(spec, support)
+        side = swing_of(support)[0]
+        joints = [spec.joint(f"{side}_{name}") for name in _SWING_JOINTS]
+        inertial = {i.link: i for i in spec.inertials}
+        index = {n: i for i, n in enumerate(spec.joint_names)}
+        self.slots = np.array([attached[j.child].slot for j in joints])
+        self.local = np.array([attached[j.child].local for j in joints])            # (J, 4, 4) joint frames
+        self.axes = np.array([j.axis for j in joints], dtype=float)                 # in the child link frames
+        self.kp = np.array([servo.kp[index[j.name]] for j in joints])
+        # each link of the leg below the hip: its slot, local CoM [m] and mass [kg]; joint j carries links j..end
+        links = [j.child for j in joints]
+        self.link_slots = np.array([attached[link].slot for link in links])
+        self.link_com = np.array([attached[link].local[:3, :3] @ np.asarray(inertial[link].link_com)
+                                  + attached[link].local[:3, 3] if link in inertial else np.zeros(3)
+                                  for link in links])
+        self.link_mass = np.array([inertial[link].mass if link in inertial else 0.0 for link in links])
+
+    def heights(self, frames: np.ndarray, xyz: np.ndarray) -> np.ndarray:
+        """Height change [m] (k, N) of points ``xyz`` (k, 3, N) on the swing foot, for chain frames
+        (slots, N, 4, 4)."""
+        joint = frames[self.slots] @ self.local[:, None]                             # (J, N, 4, 4)
+        origin = joint[..., :3, 3]                                                   # (J, N, 3)
+        axis = np.einsum("jnab,jb->jna", joint[..., :3, :3], self.axes)               # (J, N, 3) world axes
+        f = frames[self.link_slots]
+        com = np.einsum("jnab,jb->jna", f[..., :3, :3], self.link_com) + f[..., :3, 3]
+        moment = np.cumsum((self.link_mass[:, None, None] * com)[::-1], axis=0)[::-1]  # links j..end: sum m c
+        mass = np.cumsum(self.link_mass[::-1])[::-1]
+        lever = moment - mass[:, None, None] * origin                                # m_j (c_j - o_j)
+        # gravity torque about each axis: a . (lever x (0, 0, -g)) = -g (a_x lever_y - a_y lever_x)
+        torque = -GRAVITY_M_S2 * (axis[..., 0] * lever[..., 1] - axis[..., 1] * lever[..., 0])
+        theta = torque / self.kp[:, None]                                            # (J, N)
+        rel = xyz.transpose(0, 2, 1)[None] - origin[:, None]                         # (J, k, N, 3)
+        # z of a x rel = a_x rel_y - a_y rel_x
+        dz = axis[:, None, :, 0] * rel[..., 1] - axis[:, None, :, 1] * rel[..., 0]
+        return np.einsum("jn,jkn->kn", theta, dz)
+

@@ -3,14 +3,16 @@
     cost = PenaltySwingFootHeight + PenaltyStability(br) + |hand - target|            (the book)
          + W_VIOLATION * (how far a violated constraint is violated)                (beyond the book)
          + W_MARGIN * (MARGIN_CAP - min(margin, MARGIN_CAP))
-         + W_UPRIGHT * torso_tilt^2 + PenaltySelfCollision
+         + W_UPRIGHT * torso_tilt^2
+         + 100 * (self-clearance < SELF_CLEARANCE_M) + W_VIOLATION * (how far below it)
 
 The book's terms are a step penalty of 100 when the swing foot's lowest corner is below the floor or the CoM
 leaves the br-shrunk support rectangle, plus the hand's distance to the target [m]. The extra terms are small
 tie-breakers (a centimetre of margin or 30° of torso tilt weigh about as much as 0.2-0.5 mm of reach), so that
 among poses that reach the target the more stable, more upright one wins; and a screening penalty for obvious
-self-collisions (:class:`Screen`: a hand or elbow inside the torso, the swing foot over the support foot, knees
-crossing), sized from the spec's collision shapes.
+self-collisions: the least distance between the spec's collision shapes (the ones physics simulates) on the D-H
+chain (:mod:`..kinematics.shapes`) must be at least :data:`SELF_CLEARANCE_M`, whichever model the hand and CoM
+come from.
 """
 
 from __future__ import annotations
@@ -32,15 +34,20 @@ from ..balance import (
 from ..errors import InputError
 from ..joints import BookAngles, check_support
 from ..kinematics import MODELS, BodyPoints, forward
+from ..kinematics.dh_chain import matrix_frames
 from ..kinematics.points import ROW, row_of
+from ..kinematics.shapes import clearances, shape_set
 from ..spec import Spec, swing_of
-from .compliance import Compliance
+from .compliance import Compliance, SwingLegSag
 
 W_VIOLATION = 10.0     # cost per metre by which a violated constraint is violated, on top of the book's 100
 W_MARGIN = 0.02        # cost per metre of stability margin below MARGIN_CAP
 MARGIN_CAP_M = 0.02    # margins beyond this earn nothing more
 W_UPRIGHT = 0.002      # cost per rad² of torso tilt from vertical
 SAG_TILT_LIMIT_RAD = 0.105   # 6°: the torso may turn this much as the servos take the load (physics calls 10° a fall)
+SWING_LIFT_M = 0.005       # full model: the swing foot's lowest corner this far above the floor after the sag
+SELF_CLEARANCE_M = 0.004   # least distance between collision shapes: covers the shape approximations (<= 3 mm)
+CLEARANCE_EXACT_M = 0.01   # clearances are computed exactly below this (above it, a lower bound is enough)
 TARGET_LIMIT_M = 1.0   # a target farther than this from the support foot is not a target for a 45 cm robot
 
 
@@ -102,7 +109,10 @@ class PostureProblem:
 class CostTerms:
     """Per-pose cost and its parts, each (N,): total and book cost, hand error [m], stability margin [m] (of the
     settled CoM for the full-inertia model), lowest swing-foot corner [m], torso tilt [rad], self-collision
-    penalty, and the torso turn as the servos take the load [rad] (0 for the book's rigid model)."""
+    penalty, the torso turn as the servos take the load [rad] (0 for the book's rigid model) and the least
+    clearance between collision shapes [m] (exact below :data:`CLEARANCE_EXACT_M`); ``swing_lift`` [m] is how far
+    the swing foot clears its limit (feasible at >= 0): the book's floor for its rigid model, :data:`SWING_LIFT_M`
+    above the floor after the sag on compliant servos."""
 
     total: np.ndarray
     book: np.ndarray
@@ -112,36 +122,11 @@ class CostTerms:
     tilt: np.ndarray
     collision: np.ndarray
     sag_tilt: np.ndarray
+    clearance: np.ndarray
+    swing_lift: np.ndarray
 
 
-@dataclass(frozen=True)
-class Screen:
-    """Sizes of the self-collision screen [m], from the spec's collision shapes: the torso box (centre and half
-    extents in the torso frame) grown by the forearm radius, the shin width (knees closer than this cross) and
-    the foot box thickness (a swing sole lower than this over the support foot clashes with it)."""
-
-    torso_centre: np.ndarray
-    torso_half: np.ndarray
-    knee_gap: float
-    foot_thickness: float
-
-    @classmethod
-    def of(cls, spec: Spec) -> "Screen":
-        """The screen of ``spec`` (its first box on the torso, knee and foot links, cylinder on the forearm)."""
-        def shape(joint: str | None, kind: str):  # the collision shape of a joint's child link (or the root)
-            link = spec.root_link if joint is None else spec.joint(joint).child
-            found = spec.collisions_of(link, kind)
-            if not found:
-                raise InputError(f"the spec has no {kind} collision shape on {link}, which the screen needs", "spec")
-            return found[0]
-
-        torso, forearm = shape(None, "box"), shape("l_el", "cylinder")
-        return cls(np.asarray(torso.origin_xyz), np.asarray(torso.size) / 2 + forearm.size[0],
-                   shape("l_knee", "box").size[1], shape("l_ank_roll", "box").size[2])
-
-
-_ARM_ROWS = [row_of(n) for n in ("left_hand", "right_hand", "l_el", "r_el")]
-_ROWS = {n: row_of(n) for n in ("neck", "pelvis", "l_sho_pitch", "r_sho_pitch", "l_knee", "r_knee")}
+_ROWS = {n: row_of(n) for n in ("neck", "pelvis", "l_sho_pitch", "r_sho_pitch")}
 
 
 def torso_axes(data: np.ndarray, spec: Spec) -> np.ndarray:
@@ -164,23 +149,12 @@ def torso_tilt(points: BodyPoints, spec: Spec, axes: np.ndarray | None = None) -
     return np.arccos(np.clip(axes[2, 2], -1.0, 1.0))
 
 
-def self_collision_penalty(points: BodyPoints, spec: Spec, screen: Screen | None = None,
-                           axes: np.ndarray | None = None) -> np.ndarray:
-    """Screening for obvious self-collisions: 100 per pose with a hand or elbow inside the torso, the swing foot
-    over the support foot, or the knees crossing; (N,)."""
-    screen = screen or Screen.of(spec)
-    data = points.data
-    axes = torso_axes(data, spec) if axes is None else axes
-    local = np.einsum("pjn,kjn->pkn", data[_ARM_ROWS] - data[_ROWS["neck"]], axes) - screen.torso_centre[None, :, None]
-    bad = np.any(np.all(np.abs(local) < screen.torso_half[None, :, None], axis=1), axis=0)
-    knees = data[_ROWS["l_knee"]] - data[_ROWS["r_knee"]]
-    bad |= np.einsum("in,in->n", knees, knees) < screen.knee_gap ** 2
-    swing = points.swing_foot_corners
-    support = points.foot_corners(points.support)
-    lo, hi = support[:, :, :2].min(axis=1), support[:, :, :2].max(axis=1)
-    inside = np.all((swing[:, :, :2] > lo[:, None, :]) & (swing[:, :, :2] < hi[:, None, :]), axis=2)
-    bad |= np.any(inside & (swing[:, :, 2] < screen.foot_thickness), axis=1)
-    return np.where(bad, PENALTY, 0.0)
+def self_collision_penalty(frames: np.ndarray, spec: Spec, support: str) -> tuple[np.ndarray, np.ndarray]:
+    """The self-collision penalty (N,) and the least clearance [m] (N,) of a batch of poses given by their D-H chain
+    frames (slots, N, 4, 4): 100 plus the slope where the clearance is below :data:`SELF_CLEARANCE_M`."""
+    clearance = clearances(frames, shape_set(spec, support), CLEARANCE_EXACT_M).min(axis=0)
+    deficit = np.maximum(SELF_CLEARANCE_M - clearance, 0.0)
+    return np.where(deficit > 0.0, PENALTY, 0.0) + W_VIOLATION * deficit, clearance
 
 
 class CostModel:
@@ -191,15 +165,16 @@ class CostModel:
         self.extents = problem.extents(spec)
         self.full = problem.com_model == COM_MODEL_FULL
         self.compliance = Compliance(spec) if self.full else None
+        self.swing_sag = SwingLegSag(spec, problem.support) if self.full else None
         self.target = np.asarray(problem.target, dtype=float)[:, None]
         self.hand_row = row_of(problem.hand_point)
         first = ROW[f"{swing_of(problem.support)}_foot_0"]
         self.swing_rows = slice(first, first + 4)
-        self.screen = Screen.of(spec)
 
     def __call__(self, angles: BookAngles) -> CostTerms:
         """All cost terms for a batch of poses (book variables, support = the problem's)."""
         points = forward(angles, self.spec, self.problem.model, full_com=self.full)
+        frames = matrix_frames(angles.vector(), self.spec, angles.support)     # the real body's links
         data = points.data
         hand = data[self.hand_row] - self.target
         hand_error = np.sqrt(np.einsum("in,in->n", hand, hand))
@@ -207,24 +182,30 @@ class CostModel:
         if self.compliance is not None:   # the body physics simulates: full inertia on compliant servos
             settled = self.compliance.settle(points, points.com_full)
             com_xy, sag_tilt = settled.com_xy, settled.tilt      # infinite where no equilibrium exists
+            corners = data[self.swing_rows]
+            lowered = (self.compliance.settled_heights(points, settled, corners)
+                       + self.swing_sag.heights(frames, corners)).min(axis=0)
+            swing_lift = np.where(np.isfinite(lowered), lowered, swing_min_z) - SWING_LIFT_M
         else:                             # the book's body: lumped masses on rigid joints
             com_xy, sag_tilt = points.com[:2], np.zeros(points.n)
+            swing_lift = swing_min_z + FLOOR_TOLERANCE_M
         margin = rectangle_margin(com_xy[0], com_xy[1], self.extents)  # world = support frame
         sag_excess = np.maximum(np.minimum(sag_tilt, 1.0) - SAG_TILT_LIMIT_RAD, 0.0)
         # The book's penalties (code 2.8, 2.9): PenaltyStability is 100 exactly where the margin is negative; on
         # compliant servos also where the load would turn the torso over the limit.
-        below = swing_min_z < -FLOOR_TOLERANCE_M
+        below = swing_lift < 0.0
         unstable = (margin < 0.0) | (sag_excess > 0.0)
         book_cost = np.where(below, PENALTY, 0.0) + np.where(unstable, PENALTY, 0.0) + hand_error
         # Beyond the book: a slope inside the penalised region leads a swarm that starts there out of it.
-        slope = W_VIOLATION * (np.where(below, -swing_min_z, 0.0) + np.minimum(np.maximum(-margin, 0.0), 1.0)
+        slope = W_VIOLATION * (np.where(below, -swing_lift, 0.0) + np.minimum(np.maximum(-margin, 0.0), 1.0)
                                + 0.1 * sag_excess)
         axes = torso_axes(data, self.spec)
         tilt = torso_tilt(points, self.spec, axes)
-        collision = self_collision_penalty(points, self.spec, self.screen, axes)
+        collision, clearance = self_collision_penalty(frames, self.spec, angles.support)
         total = (book_cost + slope + W_MARGIN * (MARGIN_CAP_M - np.minimum(margin, MARGIN_CAP_M))
                  + W_UPRIGHT * tilt * tilt + collision)
-        return CostTerms(total, book_cost, hand_error, margin, swing_min_z, tilt, collision, sag_tilt)
+        return CostTerms(total, book_cost, hand_error, margin, swing_min_z, tilt, collision, sag_tilt, clearance,
+                         swing_lift)
 
 
 def evaluate_cost(angles: BookAngles, problem: PostureProblem, spec: Spec) -> CostTerms:

@@ -3,8 +3,9 @@
 First the iterated Taylor arm IK on the D-H model (true geometry) moves the reaching arm's three joints; if that
 cannot reach, or the arm's moved mass breaks a constraint, SLSQP adjusts all variables inside the search box,
 minimising the squared hand error subject to: stability margin >= 0 (the settled CoM inside the br-shrunk
-rectangle), the torso's turn under load within its limit, swing foot not below the floor, and no self-collision. Gradients are central differences of the batched model (one
-forward call for all 2 x 20 perturbations).
+rectangle), the torso's turn under load within its limit, swing foot not below the floor, and the collision shapes
+at least SELF_CLEARANCE_M apart. Gradients are central differences of the batched model (one forward call for all
+2 x 20 perturbations).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from ..errors import Op2MotionError
 from ..joints import BookAngles
 from ..kinematics import forward
 from ..spec import Spec
-from .cost import SAG_TILT_LIMIT_RAD, CostModel, CostTerms, PostureProblem
+from .cost import SAG_TILT_LIMIT_RAD, SELF_CLEARANCE_M, CostModel, CostTerms, PostureProblem
 
 REFINE_TOL_M = 1e-3          # hand within 1 mm after refinement
 FD_STEP_RAD = 1e-6
@@ -38,7 +39,7 @@ class Refinement:
 
 def feasible(terms: CostTerms, i: int = 0) -> bool:
     """Balance, floor and self-collision constraints hold for pose ``i``."""
-    return bool(terms.margin[i] >= 0.0 and terms.swing_min_z[i] >= 0.0 and terms.collision[i] == 0.0
+    return bool(terms.margin[i] >= 0.0 and terms.swing_lift[i] >= 0.0 and terms.collision[i] == 0.0
                 and terms.sag_tilt[i] <= SAG_TILT_LIMIT_RAD)
 
 
@@ -94,14 +95,15 @@ def _slsqp(x0: np.ndarray, model: CostModel, problem: PostureProblem,
 
             err2 = terms.hand_error ** 2
             cache.clear()
-            cache[key] = (split(err2), split(terms.margin), split(terms.swing_min_z),
-                          split(SAG_TILT_LIMIT_RAD - np.minimum(terms.sag_tilt, 1.0)))
+            cache[key] = (split(err2), split(terms.margin), split(terms.swing_lift),
+                          split(SAG_TILT_LIMIT_RAD - np.minimum(terms.sag_tilt, 1.0)),
+                          split(terms.clearance - SELF_CLEARANCE_M))
         return cache[key]
 
     res = minimize(lambda x: values(x)[0][0], x0, jac=lambda x: values(x)[0][1], method="SLSQP",
                    bounds=list(zip(lo, hi)),
                    constraints=[{"type": "ineq", "fun": lambda x, k=k: values(x)[k][0],
-                                 "jac": lambda x, k=k: values(x)[k][1]} for k in (1, 2, 3)],
+                                 "jac": lambda x, k=k: values(x)[k][1]} for k in (1, 2, 3, 4)],
                    options={"maxiter": SLSQP_MAX_ITER, "ftol": 1e-14})
     if not np.all(np.isfinite(res.x)):
         return None

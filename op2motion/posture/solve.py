@@ -14,7 +14,7 @@ from ..joints import BookAngles
 from ..kinematics import forward
 from ..pose import Pose
 from ..spec import Spec
-from .cost import CostModel, CostTerms, PostureProblem
+from .cost import SAG_TILT_LIMIT_RAD, CostModel, CostTerms, PostureProblem
 from .pso import PSOResult, PSOSettings, run_pso, variable_bounds
 from .refine import REFINE_TOL_M, feasible, refine
 
@@ -83,6 +83,7 @@ class PostureResult:
             "stability_margin_full_m": self.margin_full_m,
             "left_hand": _vec(self.left_hand), "right_hand": _vec(self.right_hand),
             "swing_foot_min_z": self.swing_foot_min_z, "torso_tilt_deg": float(np.degrees(self.terms.tilt[0])),
+            "self_clearance_m": float(self.terms.clearance[0]),
             "cost": self.cost, "pso_cost": self.pso.cost, "attempts": self.attempts,
         }
 
@@ -141,7 +142,9 @@ def _verdict(terms: CostTerms, tol: float) -> tuple[bool, str]:
         return True, f"reached: hand {error_mm:.2f} mm from the target"
     if not feasible(terms):
         why = ("the CoM leaves the support rectangle" if terms.margin[0] < 0 else
-               "the swing foot goes below the floor" if terms.swing_min_z[0] < 0 else "the pose collides with itself")
+               "the torso turns too far as the servos take the load" if terms.sag_tilt[0] > SAG_TILT_LIMIT_RAD else
+               "the swing foot comes too close to the floor" if terms.swing_lift[0] < 0 else
+               f"the pose collides with itself (clearance {terms.clearance[0] * 1000:.1f} mm)")
         return False, f"infeasible: {why} (best hand residual {error_mm:.1f} mm)"
     return False, f"unreachable: best hand residual {error_mm:.1f} mm (tolerance {tol * 1000:.0f} mm)"
 
