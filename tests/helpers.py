@@ -150,3 +150,22 @@ def sweep_verdict(task: tuple) -> tuple[bool, float, list]:
     spec = default_spec()
     v = validate(leaned(spec, sweep_base(spec, support), support, kind, degrees), support, spec, seconds, engine)
     return v.stable, (v.support_margin_m if v.stable else v.margin_at_load_m), v.reasons
+
+
+STATIC_TORQUE_CASES = (("init", "double"), ("walkready", "double"), ("sit_down", "double"), ("stand_up", "double"),
+                       ("walkready", "left"), ("sit_down", "left"))
+
+
+def static_torque_rows(spec=None) -> list[tuple[str, str, str, float, float]]:
+    """The README's static torque table: (pose, support, worst joint, |torque| [N·m], share of stall) of the stock
+    poses held still (pinocchio), on both feet as recorded and on the left foot alone."""
+    from op2motion.export.posefile import read_pose
+    from op2motion.model.dynamics import dynamics_for
+    from op2motion.specfile import default_spec
+
+    spec = spec or default_spec()
+    rows = []
+    for name, support in STATIC_TORQUE_CASES:
+        report = dynamics_for(spec).static_torques(read_pose(POSES / f"{name}.json", spec).servo, support)
+        rows.append((name, support, report.worst_joint, abs(report.worst_torque_nm), report.worst_ratio))
+    return rows

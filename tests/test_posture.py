@@ -20,7 +20,7 @@ from op2motion.kinematics.points import ROW
 from op2motion.physics import ENGINES, validate
 from op2motion.kinematics.dh_chain import matrix_frames
 from op2motion.posture.compliance import Compliance, SwingLegSag
-from op2motion.posture.cost import SAG_TILT_LIMIT_RAD, PostureProblem, evaluate_cost
+from op2motion.posture.cost import SAG_TILT_LIMIT_RAD, CostModel, PostureProblem, evaluate_cost
 from op2motion.posture.pso import PSOSettings, run_pso, variable_bounds
 from op2motion.posture.solve import optimize_posture
 
@@ -209,3 +209,21 @@ def test_the_default_problems_figure_shows_both_coms_and_the_verdict(capsys, tmp
     # without --validate, the verdict recorded in the pose file is shown
     code, out, _ = run_cli(capsys, "plot", doc["files"]["pose"], "-o", "recorded.png", "--json")
     assert json.loads(out)["drawn"]["verdict"] == "STANDS in physics (recorded)"
+
+
+def test_skipping_hopeless_collision_checks_leaves_the_search_unchanged(spec, monkeypatch):
+    """The PSO checks self-collision only for particles that could beat their personal best; the swarm must move
+    exactly as with every particle checked."""
+    problem = PostureProblem.from_scenario(DEFAULT_PROBLEM)
+    lazy = run_pso(problem, spec, PSOSettings(iterations=60))
+    checked = []
+    every = CostModel.__call__
+
+    def check_all(self, angles, only_below=None):
+        terms = every(self, angles)
+        checked.append(np.isfinite(terms.clearance).all())
+        return terms
+
+    monkeypatch.setattr(CostModel, "__call__", check_all)
+    full = run_pso(problem, spec, PSOSettings(iterations=60))
+    assert all(checked) and np.array_equal(lazy.x, full.x) and np.array_equal(lazy.history, full.history)

@@ -69,10 +69,12 @@ def _columns(q: np.ndarray, out: np.ndarray, spec: Spec, support: str, full_com:
         full_com /= plan.total
 
 
-def _matrices(q: np.ndarray, out: np.ndarray, spec: Spec, support: str, full_com: np.ndarray | None = None) -> None:
-    """4x4 matrix evaluator for small batches; fills out (rows, 3, m) like :func:`_columns`."""
+def _matrices(q: np.ndarray, out: np.ndarray, spec: Spec, support: str, full_com: np.ndarray | None = None,
+              frames: np.ndarray | None = None) -> None:
+    """4x4 matrix evaluator for small batches; fills out (rows, 3, m) like :func:`_columns` (from the chain
+    ``frames`` if already known)."""
     plan = matrix_plan(spec, support)
-    frames = matrix_frames(q, spec, support)
+    frames = matrix_frames(q, spec, support) if frames is None else frames
     _, origin_rows, origin_frames, offset_rows, offset_frames, offsets = point_layout(spec, support)
     out[origin_rows] = frames[origin_frames, :, :3, 3].transpose(0, 2, 1)
     rot = frames[offset_frames, :, :3, :3]
@@ -103,3 +105,15 @@ def forward_dh(angles: BookAngles, spec: Spec, full_com: bool = False) -> BodyPo
 
     run_chunked(n, work)
     return BodyPoints(out, com, support, "dh", full)
+
+
+def forward_dh_frames(angles: BookAngles, spec: Spec, full_com: bool = False) -> tuple[BodyPoints, np.ndarray]:
+    """:func:`forward_dh` for a swarm-sized batch, with the chain frames (slots, N, 4, 4) it was computed from
+    (for the link shapes and joint axes, :mod:`.links`)."""
+    n, support = angles.n, angles.support
+    q = angles.vector()
+    frames = matrix_frames(q, spec, support)
+    out = new_slab(n)
+    full = np.empty((3, n)) if full_com else None
+    _matrices(q, out, spec, support, full, frames)
+    return BodyPoints(out, slab_com(out, spec), support, "dh", full), frames

@@ -174,10 +174,11 @@ def clearances(frames: np.ndarray, shapes: ShapeSet, within: float = BROAD_PHASE
     exact = np.full(out.shape, np.inf)
     if len(shapes.capsule_pairs):
         cp = shapes.capsule_pairs
-        ends = [np.einsum("smij,sj->smi", rot[shapes.pairs[cp, k]], shapes.segment[shapes.pairs[cp, k], e])
-                + origin[shapes.pairs[cp, k]] for k in (0, 1) for e in (0, 1)]
-        flat = [x.reshape(-1, 3) for x in ends]
-        dist = _segment_segment(flat[0], flat[1], flat[2], flat[3]).reshape(len(cp), -1)
+        both = np.concatenate([shapes.pairs[cp, 0], shapes.pairs[cp, 1]])               # (2C,) shapes
+        ends = np.einsum("smij,sej->smei", rot[both], shapes.segment[both]) + origin[both][:, :, None]
+        c = len(cp)
+        flat = [ends[rows, :, e].reshape(-1, 3) for rows in (slice(0, c), slice(c, 2 * c)) for e in (0, 1)]
+        dist = _segment_segment(flat[0], flat[1], flat[2], flat[3]).reshape(c, -1)
         exact[cp] = dist - (shapes.radius[shapes.pairs[cp, 0]] + shapes.radius[shapes.pairs[cp, 1]])[:, None]
     m = frames.shape[1]
     flat_rot, flat_origin = rot.reshape(-1, 3, 3), origin.reshape(-1, 3)

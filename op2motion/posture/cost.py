@@ -34,6 +34,7 @@ from ..balance import (
 from ..errors import InputError
 from ..joints import BookAngles, check_support
 from ..kinematics import MODELS, BodyPoints, forward
+from ..kinematics.dh import MATRIX_BELOW, forward_dh_frames
 from ..kinematics.dh_chain import matrix_frames
 from ..kinematics.points import ROW, row_of
 from ..kinematics.shapes import clearances, shape_set
@@ -171,10 +172,19 @@ class CostModel:
         first = ROW[f"{swing_of(problem.support)}_foot_0"]
         self.swing_rows = slice(first, first + 4)
 
-    def __call__(self, angles: BookAngles) -> CostTerms:
-        """All cost terms for a batch of poses (book variables, support = the problem's)."""
-        points = forward(angles, self.spec, self.problem.model, full_com=self.full)
-        frames = matrix_frames(angles.vector(), self.spec, angles.support)     # the real body's links
+    def __call__(self, angles: BookAngles, only_below: np.ndarray | None = None) -> CostTerms:
+        """All cost terms for a batch of poses (book variables, support = the problem's).
+
+        ``only_below`` (N,) skips the self-collision check of the poses whose other terms already cost at least
+        that much (a PSO particle that cannot beat its personal best): their ``collision`` is 0 and their
+        ``clearance`` NaN, so their total is a lower bound. The penalty is never negative, so a swarm sees the
+        same improvements as with every pose checked.
+        """
+        if self.problem.model == "dh" and angles.n < MATRIX_BELOW:     # one chain evaluation for points and links
+            points, frames = forward_dh_frames(angles, self.spec, full_com=self.full)
+        else:
+            points = forward(angles, self.spec, self.problem.model, full_com=self.full)
+            frames = matrix_frames(angles.vector(), self.spec, angles.support)     # the real body's links
         data = points.data
         hand = data[self.hand_row] - self.target
         hand_error = np.sqrt(np.einsum("in,in->n", hand, hand))
@@ -201,9 +211,13 @@ class CostModel:
                                + 0.1 * sag_excess)
         axes = torso_axes(data, self.spec)
         tilt = torso_tilt(points, self.spec, axes)
-        collision, clearance = self_collision_penalty(frames, self.spec, angles.support)
         total = (book_cost + slope + W_MARGIN * (MARGIN_CAP_M - np.minimum(margin, MARGIN_CAP_M))
-                 + W_UPRIGHT * tilt * tilt + collision)
+                 + W_UPRIGHT * tilt * tilt)
+        collision, clearance = np.zeros(points.n), np.full(points.n, np.nan)
+        check = np.ones(points.n, dtype=bool) if only_below is None else total < only_below
+        if np.any(check):
+            collision[check], clearance[check] = self_collision_penalty(frames[:, check], self.spec, angles.support)
+        total = total + collision
         return CostTerms(total, book_cost, hand_error, margin, swing_min_z, tilt, collision, sag_tilt, clearance,
                          swing_lift)
 

@@ -129,10 +129,14 @@ def run_pso(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSett
     v_max = settings.velocity_fraction * (hi - lo)
     best, best_hand, hand_history = [math.inf], [math.inf], []
     cost_model = CostModel(problem, spec)
+    personal = np.full(settings.particles, np.inf)   # each particle's best cost, as pyswarms keeps it
 
     def objective(swarm: np.ndarray) -> np.ndarray:
         x = swarm if dims == full else np.hstack([swarm, np.zeros((swarm.shape[0], full - dims))])
-        terms = cost_model(BookAngles(x[:, :N_TH], x[:, N_TH:N_TH + N_PHI], x[:, N_TH + N_PHI:], problem.support))
+        # a particle that cannot beat its personal best skips the self-collision check (the search is unchanged)
+        terms = cost_model(BookAngles(x[:, :N_TH], x[:, N_TH:N_TH + N_PHI], x[:, N_TH + N_PHI:], problem.support),
+                           only_below=personal)
+        np.minimum(personal, terms.total, out=personal)
         i = int(np.argmin(terms.total))
         if terms.total[i] < best[0]:
             best[0], best_hand[0] = float(terms.total[i]), float(terms.hand_error[i])
