@@ -13,8 +13,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from .joints import BookAngles
 from .balance import convex_hull, polygon_margin
+from .joints import BookAngles
 from .kinematics import forward
 from .physics import Validation
 from .plot import PoseFigure, TitleBlock, render_cost_curve, render_poses
@@ -50,7 +50,8 @@ def _numbers(report: PoseReport, double: bool = False) -> list[str]:
         return [f"CoM lumped (book)  ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m",
                 f"CoM full inertia   ({full[0]:+.3f}, {full[1]:+.3f}, {full[2]:.3f}) m   margin "
                 f"{mm(double_support_margin_m(report))}   (to the hull of both soles)"]
-    return [f"CoM lumped (book)  ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m   margin {mm(report.stability_margin_m)}",
+    return [f"CoM lumped (book)  ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m   margin "
+            f"{mm(report.stability_margin_m)}",
             f"CoM full inertia   ({full[0]:+.3f}, {full[1]:+.3f}, {full[2]:.3f}) m   margin "
             f"{mm(report.stability_margin_full_m)}   (to the support rectangle shrunk by br {report.br:g})",
             f"swing foot lowest corner {mm(report.swing_foot_min_z)}"]

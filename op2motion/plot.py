@@ -222,9 +222,10 @@ def render_cost_curve(attempts: Sequence[Sequence[float]], hand_errors: Sequence
     ax.text(1, 100, " a penalty (100) is active above this line", va="bottom", fontsize=8, color="grey")
     ax.set_xlabel("iteration")
     ax.set_ylabel("best cost (log)")
-    ax.set_title("cost = 100·[swing foot below floor] + 100·[CoM outside rectangle] + |hand − target| [m]\n"
-                 "+ 10·violation [m] + small tie-breakers (margin, torso tilt, self-collision)", fontsize=9)
-    ax2.axhline(threshold_m * 1000, color=BAD_COLOUR, ls="--", lw=1.2, label=f"reach threshold {threshold_m * 1000:g} mm")
+    ax.set_title("cost = 100·[swing foot too low] + 100·[CoM outside the sole or torso sags too far]\n"
+                 "+ 100·[links too close] + |hand − target| [m] + 10·violation + small tie-breakers", fontsize=9)
+    ax2.axhline(threshold_m * 1000, color=BAD_COLOUR, ls="--", lw=1.2,
+                label=f"reach threshold {threshold_m * 1000:g} mm")
     ax2.set_xlabel("iteration")
     ax2.set_ylabel("hand distance to target of the best particle [mm] (log)")
     ax2.set_title("hand error (the refinement then brings it within 1 mm)", fontsize=9)

@@ -99,5 +99,6 @@ class ServoModel:
         scale = f" x {self.stiffness_scale:g}" if self.stiffness_scale != 1.0 else ""
         return (f"MX-28 at {self.supply_voltage:g} V, P {'/'.join(str(v) for v in p)}: Kp "
                 f"{'/'.join(f'{k:.1f}' for k in sorted(set(np.round(self.kp, 1))))} N·m/rad{scale}, "
-                f"Kd {self.damping:.2f} N·m·s/rad, torque <= {self.torque_max:.2f} N·m, friction {self.friction:g} N·m, "
+                f"Kd {self.damping:.2f} N·m·s/rad, torque <= {self.torque_max:.2f} N·m, "
+                f"friction {self.friction:g} N·m, "
                 f"armature {self.armature:g} kg·m²")

@@ -34,7 +34,8 @@ def stance_of(support: str) -> str:
 def feet_of(support: str) -> tuple[str, ...]:
     """The feet that carry the robot: both for ``double`` support."""
     return SUPPORTS if support == "double" else (stance_of(support),)
-BOOK_VARS = tuple([f"th{i}" for i in range(1, 12)] + [f"phi{i}" for i in range(1, 7)] + [f"psi{i}" for i in range(1, 4)])
+BOOK_VARS = tuple([f"th{i}" for i in range(1, 12)] + [f"phi{i}" for i in range(1, 7)]
+                  + [f"psi{i}" for i in range(1, 4)])
 
 
 @dataclass(frozen=True)

@@ -108,7 +108,8 @@ def _joint(r: TableReader) -> Joint:
         b = books.sub(support)
         var, sign = b.get("var", str), b.get("sign", int)
         if var not in BOOK_VARS:
-            raise SpecError(f"expected one of th1..th11, phi1..phi6, psi1..psi3, got {var!r}", f"{r.path}: {b.where}.var")
+            raise SpecError(f"expected one of th1..th11, phi1..phi6, psi1..psi3, got {var!r}",
+                            f"{r.path}: {b.where}.var")
         if sign not in (-1, 1):
             raise SpecError(f"expected 1 or -1, got {sign!r}", f"{r.path}: {b.where}.sign")
         book[support] = BookMap(var, sign, math.radians(b.number("offset_deg")))
@@ -279,7 +280,8 @@ def parse_spec(text: str, path: str = "<spec>") -> Spec:
             [(c.link, "collision") for c in collisions]
     for link, where in named:
         if link not in links:
-            raise SpecError(f"link {link!r} does not exist (expected one of the joint tree's links)", f"{path}: {where}")
+            raise SpecError(f"link {link!r} does not exist (expected one of the joint tree's links)",
+                            f"{path}: {where}")
     body_points = set(DERIVED_POINTS) | set(points) | {j.name for j in joints}
     for m in masses:
         for end in (m.start, m.end):

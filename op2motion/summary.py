@@ -51,7 +51,8 @@ class PoseReport:
         """JSON-ready dict (the ``fk --json`` keys)."""
         return {
             "model": self.model, "support": self.support, "points": self.points.as_dict(0), "com": _vec(self.com),
-            "com_model": "book", "com_full": _vec(self.com_full), "stability_margin_full_m": self.stability_margin_full_m,
+            "com_model": "book", "com_full": _vec(self.com_full),
+            "stability_margin_full_m": self.stability_margin_full_m,
             "left_hand": _vec(self.points.point("left_hand")[0]),
             "right_hand": _vec(self.points.point("right_hand")[0]),
             "swing_foot_corners": [_vec(c) for c in self.points.swing_foot_corners[0]],
@@ -67,7 +68,8 @@ class PoseReport:
             f"model {self.model.upper()}, {self.support} support",
             f"centre of mass   {fmt(self.com)} m  [lumped, the book's masses]",
             f"                 {fmt(self.com_full)} m  [full inertia, the spec's link inertials]",
-            f"stability margin {self.stability_margin_m * 1000:+.1f} mm lumped, {self.stability_margin_full_m * 1000:+.1f} "
+            f"stability margin {self.stability_margin_m * 1000:+.1f} mm lumped, "
+            f"{self.stability_margin_full_m * 1000:+.1f} "
             f"mm full inertia (br {self.br}; positive = inside)",
             f"left hand        {fmt(self.points.point('left_hand')[0])} m",
             f"right hand       {fmt(self.points.point('right_hand')[0])} m",

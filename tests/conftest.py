@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from helpers import SEED, STOCK
+
 from op2motion.spec import Spec
 from op2motion.specfile import default_spec
 

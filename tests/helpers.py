@@ -140,16 +140,20 @@ def leaned(spec, base: np.ndarray, support: str, kind: str, degrees: float) -> n
     return out
 
 
-def sweep_verdict(task: tuple) -> tuple[bool, float, list]:
-    """Worker of the lean sweeps: (support, kind, degrees, engine, seconds) -> (stable, margin [m], reasons); the
-    margin is the settled one for a standing pose, the one when gravity reached full strength for a falling one."""
+def sweep_verdict(task: tuple) -> tuple[bool, float, list, float]:
+    """Worker of the lean sweeps: (support, kind, degrees, engine, seconds) -> (stable, margin [m], reasons, foot
+    margin [m]); the margin is the settled one for a standing pose, the one when gravity reached full strength for a
+    falling one; the foot margin is the least margin of a foot's own CoP to its sole among the feet carrying at least
+    a tenth of the load (NaN for a falling pose)."""
     from op2motion.physics import validate
     from op2motion.specfile import default_spec
 
     support, kind, degrees, engine, seconds = task
     spec = default_spec()
     v = validate(leaned(spec, sweep_base(spec, support), support, kind, degrees), support, spec, seconds, engine)
-    return v.stable, (v.support_margin_m if v.stable else v.margin_at_load_m), v.reasons
+    feet = [f["cop_margin_m"] for f in v.feet.values() if f["load_share"] >= 0.1]
+    foot = min(feet) if v.stable and feet else float("nan")
+    return v.stable, (v.support_margin_m if v.stable else v.margin_at_load_m), v.reasons, foot
 
 
 STATIC_TORQUE_CASES = (("init", "double"), ("walkready", "double"), ("sit_down", "double"), ("stand_up", "double"),

@@ -7,11 +7,10 @@ import math
 
 import numpy as np
 import pytest
-
-from op2motion.book import ARM_RUNS
+from helpers import run_cli
 
 from op2motion.arm_ik import ARMS, _hands, _with_arm, book_step, pb_hand_jacobian, solve_arm_ik
-from helpers import run_cli
+from op2motion.book import ARM_RUNS
 from op2motion.errors import ModelError
 from op2motion.joints import BookAngles
 

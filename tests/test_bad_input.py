@@ -9,7 +9,6 @@ import os
 from pathlib import Path
 
 import pytest
-
 from helpers import ROOT, STOCK, pose_path, run_cli
 
 STAND = pose_path("standing")

@@ -5,8 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from op2motion.balance import (PENALTY, com_lumped, penalty_stability, penalty_swing_foot_height, stability_margin,
-                               support_polygon)
+from op2motion.balance import (
+    PENALTY,
+    com_lumped,
+    penalty_stability,
+    penalty_swing_foot_height,
+    stability_margin,
+    support_polygon,
+)
 from op2motion.errors import InputError
 from op2motion.joints import BookAngles
 from op2motion.kinematics import forward

@@ -7,8 +7,8 @@ import subprocess
 import sys
 
 import pytest
-
 from helpers import pose_path, run_cli
+
 from op2motion import book
 
 STANDING_POSE = pose_path("standing")

@@ -11,13 +11,22 @@ import time
 
 import numpy as np
 import pytest
+from helpers import DATA, page_last_step_ticks, run_cli
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from helpers import DATA, page_last_step_ticks, run_cli
 from op2motion.errors import InputError, PoseFileError
-from op2motion.export.action import (FILE_SIZE, PAGE_SIZE, checksum_ok, list_pages, page_to_pose, requested_page,
-                                     reset_file, reset_page, encode_poses)
+from op2motion.export.action import (
+    FILE_SIZE,
+    PAGE_SIZE,
+    checksum_ok,
+    encode_poses,
+    list_pages,
+    page_to_pose,
+    requested_page,
+    reset_file,
+    reset_page,
+)
 from op2motion.export.posefile import read_pose
 from op2motion.export.tables import csv_table, webots_motion
 from op2motion.joints import servo_to_ticks

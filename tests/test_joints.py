@@ -6,14 +6,21 @@ import math
 
 import numpy as np
 import pytest
+from helpers import page_last_step_ticks
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from helpers import page_last_step_ticks
 from op2motion.balance import com_lumped, stability_margin
 from op2motion.errors import InputError
-from op2motion.joints import (BookAngles, book_to_servo, servo_dict, servo_from_mapping, servo_to_book,
-                              servo_to_ticks, ticks_to_servo)
+from op2motion.joints import (
+    BookAngles,
+    book_to_servo,
+    servo_dict,
+    servo_from_mapping,
+    servo_to_book,
+    servo_to_ticks,
+    ticks_to_servo,
+)
 from op2motion.kinematics import forward
 from op2motion.specfile import default_spec
 
@@ -70,11 +77,11 @@ STOCK = {
 
 def _stock_servo_deg(page: int) -> dict[str, float]:
     out = {}
-    for joint, (r, l) in STOCK[page].items():
+    for joint, (r, left) in STOCK[page].items():
         if joint == "head":
-            out["head_pan"], out["head_tilt"] = r, l
+            out["head_pan"], out["head_tilt"] = r, left
         else:
-            out[f"r_{joint}"], out[f"l_{joint}"] = r, l
+            out[f"r_{joint}"], out[f"l_{joint}"] = r, left
     return out
 
 

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
 from official_fk import official_points
+
 from op2motion.balance import com_lumped
-from op2motion.errors import InputError, ModelError
 from op2motion.book import STANDING_PHI_DEG, STANDING_TH_DEG
+from op2motion.errors import InputError, ModelError
 from op2motion.joints import BookAngles, book_to_servo, servo_to_book
 from op2motion.kinematics import POINT_NAMES, forward
 from op2motion.specfile import default_spec

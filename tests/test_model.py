@@ -7,8 +7,8 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-
 from helpers import page_last_step_ticks
+
 from op2motion.joints import BookAngles, book_to_servo, ticks_to_servo
 from op2motion.kinematics import POINT_NAMES, forward
 from op2motion.model.dynamics import dynamics_for

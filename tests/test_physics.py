@@ -9,8 +9,8 @@ import tempfile
 
 import numpy as np
 import pytest
-
 from helpers import balanced, pose_path, servo_pose
+
 from op2motion.errors import InputError
 from op2motion.export.posefile import read_pose
 from op2motion.model.urdf import FRAME_LINK_MASS_KG, link_inertial

@@ -8,10 +8,10 @@ import math
 import re
 
 import numpy as np
+from helpers import ROOT, pose_path
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from helpers import ROOT, pose_path
 from op2motion.errors import Op2MotionError, PoseFileError
 from op2motion.export.posefile import parse_pose
 from op2motion.joints import BookAngles

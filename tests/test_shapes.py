@@ -9,6 +9,7 @@ import os
 import numpy as np
 import pybullet as pb
 import pytest
+from helpers import POSES
 from pybullet_utils import bullet_client
 
 from op2motion.export.posefile import read_pose
@@ -20,8 +21,6 @@ from op2motion.kinematics.tree import link_frames
 from op2motion.model.urdf import build_urdf
 from op2motion.physics.pybullet_engine import load_robot
 from op2motion.posture.cost import SELF_CLEARANCE_M
-
-from helpers import POSES
 
 POSES_CHECKED = 150
 NEAR_M = 0.025               # pairs compared where our clearance is below this

@@ -30,7 +30,8 @@ def test_shipped_spec_holds_the_real_op2(spec):
 
 
 def test_lumped_masses_total_the_book_table(spec):
-    # Book table 2.8: head, neck, torso once; shoulder, upper/lower arm, gripper, pelvis, femur, tibia, heel, foot twice.
+    # Book table 2.8: head, neck, torso once; shoulder, upper/lower arm, gripper, pelvis, femur, tibia, heel, foot
+    # twice.
     expected = 0.15804 + 0.02436 + 0.9756 + 2 * (0.02591 + 0.16838 + 0.05929 + 0.010 + 0.16711 + 0.11904 + 0.07031
                                                  + 0.16711 + 0.07945)
     assert spec.lumped_total_mass == pytest.approx(expected, abs=1e-9)

@@ -41,7 +41,8 @@ def main() -> int:
     tasks = [(n, e, s, PUSH_N if s == 1.0 else 0.0) for n in STOCK for e in ("pybullet", "mujoco") for s in STIFFNESS]
     with Pool(2) as pool:
         results = dict(pool.map(_verdict, tasks))
-    print("\n| pose | engine | 0.5× stiffness | 1× (P = 32) | 2× | 2 N pushes survived (1×) |\n|---|---|---|---|---|---|")
+    print("\n| pose | engine | 0.5× stiffness | 1× (P = 32) | 2× | 2 N pushes survived (1×) |")
+    print("|---|---|---|---|---|---|")
     for n in STOCK:
         for e in ("pybullet", "mujoco"):
             cells = []

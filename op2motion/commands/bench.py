@@ -29,7 +29,8 @@ def cmd_bench(args: argparse.Namespace, spec: Spec) -> int:
              f"  D-H model         {r['fk_dh_40k_ms']:8.2f} ms   (book MATLAB: {book.MATLAB_40K_MS['dh']:.0f} ms)",
              f"  D-H + full CoM    {r['fk_dh_full_com_40k_ms']:8.2f} ms   (the spec's link inertials, batched)",
              f"  pinocchio loop    {r['pinocchio_com_40k_ms']:8.2f} ms   (centerOfMass per configuration)",
-             f"one physics validation (PyBullet, {r['validate_seconds']:g} s simulated at 1 kHz): {r['validate_ms']:.0f} ms",
+             f"one physics validation (PyBullet, {r['validate_seconds']:g} s simulated at 1 kHz): "
+             f"{r['validate_ms']:.0f} ms",
              f"one PSO posture solve ({book.PSO_PARTICLES} particles x {book.PSO_ITERATIONS} iterations, D-H): "
              f"{r['pso_solve_ms']:.0f} ms (target <= 150 ms)"]
     emit(args, r, "\n".join(lines))

@@ -109,7 +109,8 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
              f"br {args.br}: {r.message}",
              f"  CoM full inertia ({r.com_full[0]:+.3f}, {r.com_full[1]:+.3f}, {r.com_full[2]:.3f}) m, margin "
              f"{r.margin_full_m * 1000:.1f} mm to the sole shrunk by br; lumped (book) margin "
-             f"{r.margin_lumped_m * 1000:.1f} mm [balanced: {args.com_model}]; swing foot {r.swing_foot_min_z * 1000:.1f} mm above the floor, torso "
+             f"{r.margin_lumped_m * 1000:.1f} mm [balanced: {args.com_model}]; "
+             f"swing foot {r.swing_foot_min_z * 1000:.1f} mm above the floor, torso "
              f"tilt {result['torso_tilt_deg']:.0f}°",
              f"  PSO {settings.particles} particles x {settings.iterations} iterations (seed {r.settings.seed}, "
              f"attempt {r.attempts}), refinement: {r.method}, {r.seconds:.2f} s"]

@@ -71,7 +71,8 @@ class Frame:
             p = p + d * self.z
         return Frame(x, y2, z2, p)
 
-    def fixed(self, rotation: Sequence[Sequence[float]] | None = None, origin: Sequence[float] = (0.0, 0.0, 0.0)) -> "Frame":
+    def fixed(self, rotation: Sequence[Sequence[float]] | None = None,
+              origin: Sequence[float] = (0.0, 0.0, 0.0)) -> "Frame":
         """Compose with a constant transform (the book's "additional transform" matrices)."""
         cols = (self.x, self.y, self.z)
         p = self.point(origin)

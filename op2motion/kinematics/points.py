@@ -75,7 +75,8 @@ class BodyPoints:
         return self.data[row_of(name)].T
 
     def foot_corners(self, side: str) -> np.ndarray:
-        """Corners of the ``left`` or ``right`` foot sole, (N, 4, 3) [m] (front-left, front-right, back-right, back-left)."""
+        """Corners of the ``left`` or ``right`` foot sole, (N, 4, 3) [m] (front-left, front-right, back-right,
+        back-left)."""
         start = ROW[f"{side}_foot_0"]
         return self.data[start:start + 4].transpose(2, 0, 1)
 

@@ -197,7 +197,8 @@ def clearances(frames: np.ndarray, shapes: ShapeSet, within: float = BROAD_PHASE
         corners = into_box(src, box, pose, _CORNERS[None] * shapes.half[src][:, None])       # (I, 8, 3)
         n = len(_EDGES)
         pieces.append((np.repeat(pair, n), np.repeat(pose, n), corners[:, _EDGE_A].reshape(-1, 3),
-                       corners[:, _EDGE_B].reshape(-1, 3), np.repeat(shapes.half[box], n, axis=0), np.zeros(n * len(pair))))
+                       corners[:, _EDGE_B].reshape(-1, 3), np.repeat(shapes.half[box], n, axis=0),
+                       np.zeros(n * len(pair))))
     live, pose = np.nonzero(near[shapes.segment_box[:, 0]])
     if len(live):
         pair, src, box = shapes.segment_box[live].T

@@ -121,7 +121,8 @@ class Dynamics:
         wrench = np.linalg.lstsq(jac[:, :6].T, gravity[:6], rcond=None)[0]
         torques = (gravity - jac.T @ wrench)[self.v_index]
         worst = int(np.argmax(np.abs(torques)))
-        return TorqueReport(torques, self.spec.joint_names[worst], float(torques[worst]), self.spec.servo.stall_torque_nm)
+        return TorqueReport(torques, self.spec.joint_names[worst], float(torques[worst]),
+                            self.spec.servo.stall_torque_nm)
 
     def com_loop(self, servo_batch: np.ndarray) -> np.ndarray:
         """pinocchio ``centerOfMass`` called once per configuration (the baseline of ``op2motion bench``)."""

@@ -1,10 +1,10 @@
 """The OP2 URDF, generated from the spec (never hand-edited).
 
 Root link ``base_link``, carrying the torso ``body_link`` (origin as in the official description) on a fixed joint,
-as ROS tools (robot_state_publisher, RViz) expect; the 20 revolute joints with the
-official names, origins, axes and zero offsets, cable-safe limits, MX-28 effort and velocity; an ``<inertial>``
-on every link (the Webots masses, CoMs and tensors re-expressed in our link frames); simple collision shapes
-(spec ``[[collision]]``); and named frames for the spec's points and the two soles as fixed child links.
+as ROS tools (robot_state_publisher, RViz) expect; the 20 revolute joints with the official names, origins, axes
+and zero offsets, mechanical limits (the stops), MX-28 effort and velocity; an ``<inertial>`` on every link (the
+Webots masses, CoMs and tensors re-expressed in our link frames); simple collision shapes (spec ``[[collision]]``);
+and named frames for the spec's points and the two soles as fixed child links.
 
 Frame links carry a tiny inertial (:data:`FRAME_LINK_MASS_KG`): a link without one would become 1 kg in PyBullet.
 """

@@ -62,6 +62,7 @@ class Body:
         self.pin = self.dyn.pin
         self.local_corners = {side: foot_box_corners(spec, side) for side in SUPPORTS}
         self.foot_ids = {side: self.dyn.model.getFrameId(foot_link(spec, side)) for side in SUPPORTS}
+        self.foot_links = {side: foot_link(spec, side) for side in SUPPORTS}
 
     def _configuration(self, base_pos: np.ndarray, base_rot: np.ndarray, q: np.ndarray) -> np.ndarray:
         config = self.dyn.configuration(q)

@@ -65,6 +65,7 @@ class _Track:
     torque: list = field(default_factory=list)
     available: list = field(default_factory=list)
     cop: list = field(default_factory=list)
+    feet: list = field(default_factory=list)          # per sample: {side: (vertical load [N], its own CoP [m])}
     ground: list = field(default_factory=list)
     self_pairs: list = field(default_factory=list)
     states: list = field(default_factory=list)
@@ -114,6 +115,12 @@ def _sample(engine: Any, body: Body, servo: ServoModel, goal: np.ndarray, rot0: 
     ground = [c for c in contacts if c.other is None and c.normal_force > 0.0]
     load = sum(c.force[2] for c in ground)
     cop = (sum(c.force[2] * c.point[:2] for c in ground) / load) if load > 1e-6 else None
+    feet = {}
+    for side, link in body.foot_links.items():
+        on = [c for c in ground if c.link == link]
+        weight = sum(c.force[2] for c in on)
+        if weight > 1e-6:
+            feet[side] = (weight, sum(c.force[2] * c.point[:2] for c in on) / weight)
     pressed = {c.link: 0.0 for c in ground}
     for c in ground:
         pressed[c.link] += c.normal_force
@@ -131,6 +138,7 @@ def _sample(engine: Any, body: Body, servo: ServoModel, goal: np.ndarray, rot0: 
     track.torque.append(servo.motor_torque(goal, q, dq))
     track.available.append(servo.available(dq))
     track.cop.append(cop)
+    track.feet.append(feet)
     track.ground.append({link for link, f in pressed.items() if f > CONTACT_FORCE_N})
     track.self_pairs.append({pair for pair, f in self_force.items() if f > CONTACT_FORCE_N and pair[0] != pair[1]})
     track.states.append(state)
@@ -208,7 +216,8 @@ def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, g
     if i is not None:
         j = int(np.argmax(at_stop[i]))
         failures.append(Failure("joint_limit", times[i], f"{spec.joint_names[j]} lies on its stop at "
-                                                         f"{math.degrees(q[i, j]):.1f}° (goal {math.degrees(goal[j]):.1f}°)"))
+                                                         f"{math.degrees(q[i, j]):.1f}° "
+                                                         f"(goal {math.degrees(goal[j]):.1f}°)"))
     slip = max(float(np.hypot(*(s[side][:2] - start.soles[side][0][:2]))) for s in track.soles for side in supports)
     if slip > SLIP_LIMIT_M:
         k = next(k for k, s in enumerate(track.soles)
@@ -223,6 +232,7 @@ def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, g
     load_state = track.states[loaded]
     margin_load = float(polygon_margin(load_state.com[:2], support_polygon_of(load_state, support))[0])
     cops = [c for c, s in zip(track.cop, steady) if s and c is not None]
+    feet = _feet_report(track, steady, last)
     reasons = list(dict.fromkeys(f.reason for f in failures))
     return Validation(
         engine=engine_name, servo=servo.describe(), time_step_s=dt, seconds=seconds, stable=not failures,
@@ -239,5 +249,24 @@ def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, g
         max_torque_nm=round(float(mean_torque[worst]), 4),
         torque_ratio=round(float(mean_torque[worst] / max(available[steady][:, worst].mean(), 1e-9)), 4),
         worst_joint=spec.joint_names[worst], peak_torque_nm=round(float(torque.max()), 4),
-        sag_deg={n: round(float(math.degrees(v)), 3) for n, v in zip(spec.joint_names, (q[steady] - goal).mean(axis=0))},
-        swing_foot_min_z_m=None if swing is None else round(float(last.corners[swing][:, 2].min()), 5))
+        sag_deg={n: round(float(math.degrees(v)), 3)
+                 for n, v in zip(spec.joint_names, (q[steady] - goal).mean(axis=0))},
+        swing_foot_min_z_m=None if swing is None else round(float(last.corners[swing][:, 2].min()), 5),
+        feet=feet)
+
+
+def _feet_report(track: _Track, steady: np.ndarray, last: BodyState) -> dict[str, dict[str, Any]]:
+    """Each foot's share of the load and its own centre of pressure over the steady window, with the CoP's margin
+    to that foot's sole [m] (a foot tips when its own CoP reaches its edge, whatever the other foot carries)."""
+    out = {}
+    samples = [f for f, s in zip(track.feet, steady) if s]
+    total = sum(sum(w for w, _ in f.values()) for f in samples)
+    for side in ("left", "right"):
+        weights = np.array([f[side][0] for f in samples if side in f])
+        if total <= 0.0 or weights.sum() <= 0.0:
+            continue
+        cop = sum(f[side][0] * f[side][1] for f in samples if side in f) / weights.sum()
+        margin = float(polygon_margin(cop, convex_hull(last.corners[side][:, :2]))[0])
+        out[side] = {"load_share": round(float(weights.sum() / total), 4),
+                     "cop_xy": [round(float(v), 5) for v in cop], "cop_margin_m": round(margin, 5)}
+    return out

@@ -90,6 +90,7 @@ class Validation:
     peak_torque_nm: float
     sag_deg: dict[str, float]        # steady-window joint angle minus goal
     swing_foot_min_z_m: float | None = None   # single support: the swing foot's lowest corner at the end [m]
+    feet: dict[str, dict[str, Any]] = field(default_factory=dict)   # per foot on the floor: load share, own CoP
     pushes: list[PushResult] = field(default_factory=list)
     snapshot_png: bytes | None = field(default=None, repr=False, compare=False)
 
@@ -118,7 +119,11 @@ class Validation:
         verdict = "STABLE" if self.stable else "NOT STABLE (" + ", ".join(self.reasons) + ")"
         pushes = "; ".join(f"{p.force_n:g} N {p.direction}: {'ok' if p.stable else ', '.join(p.reasons)}"
                            for p in self.pushes)
+        feet = "; ".join(f"{side} {f['load_share'] * 100:.0f} % of the load, its CoP "
+                         f"{f['cop_margin_m'] * 1000:+.1f} mm from its edge" for side, f in self.feet.items())
         return (f"{self.engine}, {self.seconds:g} s at {1 / self.time_step_s:.0f} Hz: {verdict}\n"
-                f"  margin {self.support_margin_m * 1000:+.1f} mm (settled full-inertia CoM to the sole edge), "
+                f"  margin {self.support_margin_m * 1000:+.1f} mm "
+                f"(settled full-inertia CoM to the support polygon's edge), "
                 f"tilt max {self.max_tilt_deg:.1f}°, torque {self.max_torque_nm:.2f} N·m at {self.worst_joint} "
-                f"({self.torque_ratio * 100:.0f} % of available)" + (f"\n  pushes: {pushes}" if pushes else ""))
+                f"({self.torque_ratio * 100:.0f} % of available)" + (f"\n  pushes: {pushes}" if pushes else "")
+                + (f"\n  feet: {feet}" if len(self.feet) > 1 else ""))

@@ -36,6 +36,7 @@ from ..kinematics.points import row_of
 from ..servo import ServoModel
 from ..spec import GRAVITY_M_S2, Spec, swing_of
 
+
 @dataclass(frozen=True)
 class Settled:
     """Predicted settled centre of mass (2, N) [m] in the support frame and the sag-induced torso turn (N,) [rad];
