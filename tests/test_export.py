@@ -15,18 +15,9 @@ from helpers import DATA, page_last_step_ticks, run_cli
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from op2motion.actionfile import FILE_SIZE, PAGE_SIZE, checksum_ok, reset_file, reset_page
 from op2motion.errors import InputError, PoseFileError
-from op2motion.export.action import (
-    FILE_SIZE,
-    PAGE_SIZE,
-    checksum_ok,
-    encode_poses,
-    list_pages,
-    page_to_pose,
-    requested_page,
-    reset_file,
-    reset_page,
-)
+from op2motion.export.action import encode_poses, list_pages, page_to_pose, requested_page
 from op2motion.export.posefile import read_pose
 from op2motion.export.tables import csv_table, webots_motion
 from op2motion.joints import servo_to_ticks
@@ -87,7 +78,7 @@ def test_reexport_is_byte_identical_and_pages_round_trip(capsys, spec, stock_act
 def test_invalid_pages_of_the_base_are_kept(spec, stock_action_bytes, tmp_path):
     base = bytearray(stock_action_bytes)
     base[30 * PAGE_SIZE + 5] ^= 0xFF                      # break page 30's checksum
-    out = encode_poses([read_pose(os.path.join(POSES, "standing.json"), spec)], spec, 100, base=bytes(base))
+    out, _ = encode_poses([read_pose(os.path.join(POSES, "standing.json"), spec)], spec, 100, base=bytes(base))
     assert out[30 * PAGE_SIZE:31 * PAGE_SIZE] == bytes(base[30 * PAGE_SIZE:31 * PAGE_SIZE])
     with pytest.raises(InputError, match="checksum"):
         requested_page(bytes(base), 30, spec, "base")
@@ -101,6 +92,10 @@ def test_invalid_pages_of_the_base_are_kept(spec, stock_action_bytes, tmp_path):
     (["import-action", STOCK, "--out", "x.json"], "--page"),
     (["export", "--format", "webots", "-o", "x.motion"], "at least one pose"),
     (["export", "--format", "action", "--time", "9", os.path.join(POSES, "standing.json"), "-o", "x.bin"], "--time"),
+    (["export", "--format", "action", "--time", "0.016", os.path.join(POSES, "standing.json"), "-o", "x.bin"],
+     "24 ms"),
+    (["export", "--format", "action", "--base", STOCK, "--page", "9", os.path.join(POSES, "standing.json"), "-o",
+      "x.bin"], "--force"),
 ])
 def test_bad_action_input(capsys, tmp_path, monkeypatch, argv, needle):
     monkeypatch.chdir(tmp_path)
@@ -286,3 +281,27 @@ def test_ctrl_c_stops_a_build_fast_with_a_complete_index_and_it_resumes(tmp_path
     for row in rows:
         assert row["hand"] == "left" and row["support"] == "left" and row["br"] == 0.7
         assert row["x"] is not None and row["y"] is not None and row["z"] == 0.07
+
+
+def test_action_export_finds_an_empty_page_and_never_overwrites_unasked(capsys, spec, stock_action_bytes, tmp_path):
+    """Without --page the poses go to the first run of empty pages (the stock file's first empty page is 5), the
+    result names the pages; an occupied page is written only with --force."""
+    stand = os.path.join(POSES, "standing.json")
+    out = tmp_path / "out.bin"
+    code, text, _ = run_cli(capsys, "export", "--format", "action", stand, stand, "--base", STOCK, "-o", str(out),
+                            "--json")
+    first = next(i for i in range(1, 255) if requested_page_or_none(stock_action_bytes, i, spec) is None
+                 and requested_page_or_none(stock_action_bytes, i + 1, spec) is None)
+    assert code == 0 and json.loads(text)["pages"] == [first, first + 1]
+    assert requested_page(out.read_bytes(), first, spec, "out").name == "standing"
+    forced = tmp_path / "forced.bin"
+    assert run_cli(capsys, "export", "--format", "action", stand, "--base", STOCK, "--page", "9", "--force", "-o",
+                   str(forced))[0] == 0
+    assert requested_page(forced.read_bytes(), 9, spec, "out").name == "standing"
+
+
+def requested_page_or_none(data, index, spec):
+    try:
+        return requested_page(data, index, spec, "data")
+    except InputError:
+        return None

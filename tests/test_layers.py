@@ -14,7 +14,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "op2motion"
 #: Layers, lowest first. A module may import modules of lower layers and of its own package; never higher ones.
 LAYERS = [
     {"errors", "version"},
-    {"book", "trig", "tablereader", "fileio"},
+    {"book", "trig", "tablereader", "fileio", "actionfile"},
     {"spec"},
     {"joints", "specfile"},
     {"pose", "kinematics", "model"},

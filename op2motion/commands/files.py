@@ -6,8 +6,8 @@ import argparse
 import json
 from typing import Any
 
+from ..actionfile import NUM_PAGES
 from ..errors import InputError
-from ..export.action import NUM_PAGES
 from ..export.tables import MAX_TIME_S
 from ..spec import Spec
 from .common import add_command, cable_warnings, emit, number, output_path, pose_name, warn, whole
@@ -21,7 +21,9 @@ def register(sub: Any) -> None:
     p.add_argument("poses", nargs="*", metavar="POSE", help="pose files, in order")
     p.add_argument("--format", choices=("action", "webots", "csv"), required=True, help="output format")
     p.add_argument("--base", metavar="FILE", help="action file to start from (default: reset pages)")
-    p.add_argument("--page", type=PAGE, default=1, help="first page to write (action format, default 1)")
+    p.add_argument("--page", type=PAGE, help="first page to write (action format; default: the first run of empty "
+                                              "pages of the base)")
+    p.add_argument("--force", action="store_true", help="overwrite pages of the base that hold actions")
     p.add_argument("--time", type=number(0.0, MAX_TIME_S, "s", open_low=True), default=1.0,
                    help="seconds per pose (default 1.0)")
     p.add_argument("-o", "--output", type=output_path, required=True, metavar="OUT", help="file to write (atomically)")
@@ -45,8 +47,9 @@ def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
     poses = [read_pose(p, spec) for p in args.poses]
     if args.format == "action":
         base = read_action(args.base) if args.base else None
-        outputs.put("output", encode_poses(poses, spec, args.page, args.time, base))
-        text = (f"{len(poses)} pose(s) in pages {args.page}..{args.page + len(poses) - 1}" if poses
+        data, first = encode_poses(poses, spec, args.page, args.time, base, args.force)
+        outputs.put("output", data)
+        text = (f"{len(poses)} pose(s) in pages {first}..{first + len(poses) - 1}" if poses
                 else "the base, unchanged")
     else:
         if not poses:
@@ -56,6 +59,8 @@ def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
         text = f"{len(poses)} pose(s)"
     out = outputs.commit()["output"]
     result = {"path": str(out), "format": args.format, "poses": [p.name for p in poses]}
+    if args.format == "action" and poses:
+        result["pages"] = list(range(first, first + len(poses)))
     warn(result, cable_warnings(poses, spec))
     emit(args, result, f"wrote {out}: {text}")
     return 0

@@ -1,11 +1,5 @@
-"""ROBOTIS action files (``motion_4096.bin``), read and written byte-exactly.
-
-Layout (ROBOTIS DARwIn-OP framework v1.6.0, ``Framework/include/Action.h`` and
-``Framework/src/motion/modules/Action.cpp``; Action Editor ``Linux/project/action_editor/cmd_process.cpp``): 256
-pages of 512 bytes; a page is a 64-byte header and 7 steps of 64 bytes. A step holds 31 little-endian uint16 goal
-positions indexed by Dynamixel ID (0 and 21-30 unused; bit 0x4000 marks a joint not specified in the step), then
-``pause`` and ``time`` (8 ms units at the default page speed 32). A page is valid when its 512 bytes sum to 0xFF
-modulo 256.
+"""ROBOTIS action files as poses: pages decoded into goal ticks, poses written as pages (the bytes are
+:mod:`op2motion.actionfile`).
 
 Writing fills the named pages and keeps every other page byte-for-byte, valid or not. The default base is a file
 of reset pages exactly as the Action Editor makes them (the stock file's empty pages).
@@ -20,27 +14,25 @@ from typing import Sequence
 
 import numpy as np
 
+from ..actionfile import (
+    MAX_BYTE,
+    NUM_PAGES,
+    PAGE_SIZE,
+    TIME_UNIT_S,
+    StepBytes,
+    check_file,
+    encode_page,
+    is_empty,
+    parse_page,
+    reset_file,
+)
 from ..errors import InputError
 from ..fileio import read_bytes
 from ..joints import servo_to_ticks, ticks_to_servo
 from ..pose import Pose, safe_pose_name
 from ..spec import Spec
 
-PAGE_SIZE, NUM_PAGES, HEADER_SIZE, STEP_SIZE, MAX_STEPS, SLOTS = 512, 256, 64, 64, 7, 31
-FILE_SIZE = PAGE_SIZE * NUM_PAGES
-NAME_LEN = 14                  # 13 characters and a NUL
-OFF_REPEAT, OFF_SCHEDULE, OFF_STEPNUM, OFF_SPEED = 15, 16, 20, 22
-OFF_ACCEL, OFF_NEXT, OFF_EXIT, OFF_CHECKSUM, OFF_SLOPE = 24, 25, 26, 31, 32
-OFF_PAUSE, OFF_TIME = 62, 63   # in a step
-OFF_SLOPE_LAST = HEADER_SIZE - 1
-TIME_BASE_SCHEDULE = 0x0A
-DEFAULT_SPEED = DEFAULT_ACCEL = 32
-DEFAULT_SLOPE = 0x55
-TIME_UNIT_S = 0.008
-# The Action Editor's reset page, as found in every empty page of the stock file: slopes 0x55 for IDs 0-25 and in
-# the last header byte, and goal words 0x4200 (not specified) in slots 0-25 of every step.
-_RESET_SLOTS = 26
-_RESET_WORD = 0x4200
+MIN_STEP_UNITS = 3             # the framework moves a step only when time x speed / 32 >= 3 ticks (24 ms)
 
 
 @dataclass(frozen=True)
@@ -66,61 +58,14 @@ class Page:
     steps: tuple[Step, ...]
 
 
-def step_offset(step: int) -> int:
-    """Byte offset of step ``step`` (0-based) within its page."""
-    return HEADER_SIZE + step * STEP_SIZE
-
-
-def checksum_ok(page: bytes) -> bool:
-    """True when the page's bytes sum to 0xFF modulo 256."""
-    return sum(page) & 0xFF == 0xFF
-
-
-def with_checksum(page: bytearray) -> bytearray:
-    """Set the checksum byte so the page sums to 0xFF."""
-    page[OFF_CHECKSUM] = 0
-    page[OFF_CHECKSUM] = (0xFF - sum(page)) & 0xFF
-    return page
-
-
-def reset_page() -> bytes:
-    """An empty page as the Action Editor writes it."""
-    page = bytearray(PAGE_SIZE)
-    page[OFF_REPEAT], page[OFF_SCHEDULE] = 1, TIME_BASE_SCHEDULE
-    page[OFF_SPEED], page[OFF_ACCEL] = DEFAULT_SPEED, DEFAULT_ACCEL
-    page[OFF_SLOPE:OFF_SLOPE + _RESET_SLOTS] = bytes([DEFAULT_SLOPE]) * _RESET_SLOTS
-    page[OFF_SLOPE_LAST] = DEFAULT_SLOPE
-    for step in range(MAX_STEPS):
-        base = step_offset(step)
-        page[base:base + 2 * _RESET_SLOTS] = _RESET_WORD.to_bytes(2, "little") * _RESET_SLOTS
-    return bytes(with_checksum(page))
-
-
-def reset_file() -> bytes:
-    """A whole file of reset pages (page 0, never played, all zeros as in the stock file)."""
-    return bytes(PAGE_SIZE) + reset_page() * (NUM_PAGES - 1)
-
-
-def check_file(data: bytes, where: str) -> None:
-    """Reject anything that is not exactly 256 pages of 512 bytes."""
-    if len(data) != FILE_SIZE:
-        kind = "truncated" if len(data) < FILE_SIZE else "too long"
-        raise InputError(f"not a ROBOTIS action file ({kind}): expected {FILE_SIZE} bytes, got {len(data)}", where)
-
-
 def decode_page(data: bytes, index: int, spec: Spec) -> Page:
-    """Decode page ``index`` of a checked file."""
-    raw = data[index * PAGE_SIZE:(index + 1) * PAGE_SIZE]
-    name = raw[:NAME_LEN].split(b"\0", 1)[0].decode("latin-1")
-    steps = []
+    """Decode page ``index`` of a checked file (goal ticks by ID; None where not specified)."""
+    raw = parse_page(data, index)
     invalid = spec.servo.invalid_bit
-    for s in range(min(raw[OFF_STEPNUM], MAX_STEPS)):
-        base = step_offset(s)
-        words = np.frombuffer(raw[base:base + 2 * SLOTS], dtype="<u2")
-        ticks = {j.id: (None if int(words[j.id]) & invalid else int(words[j.id]) & 0x0FFF) for j in spec.joints}
-        steps.append(Step(ticks, raw[base + OFF_PAUSE], raw[base + OFF_TIME]))
-    return Page(index, name, checksum_ok(raw), raw[OFF_REPEAT], raw[OFF_SPEED], raw[OFF_NEXT], raw[OFF_EXIT],
-                tuple(steps))
+    steps = tuple(Step({j.id: (None if int(raw.words[s, j.id]) & invalid else int(raw.words[s, j.id]) & 0x0FFF)
+                        for j in spec.joints}, raw.pause[s], raw.time[s])
+                  for s in range(min(raw.stepnum, len(raw.words))))
+    return Page(index, raw.name, raw.valid, raw.repeat, raw.speed, raw.next, raw.exit, steps)
 
 
 def read_action(path: str | Path) -> bytes:
@@ -163,34 +108,58 @@ def page_to_pose(page: Page, spec: Spec, name: str | None = None) -> Pose:
                 {"source": f"action file page {page.index} ({page.name}), last step"})
 
 
+def step_units(seconds: float, what: str = "time") -> int:
+    """A step time [s] in 8 ms units at speed 32: at least 3 (24 ms, the shortest step the framework moves) and at
+    most 255 (2.04 s)."""
+    lo, hi = MIN_STEP_UNITS * TIME_UNIT_S, MAX_BYTE * TIME_UNIT_S
+    if not (math.isfinite(seconds) and lo - 1e-9 <= seconds <= hi + 1e-9):
+        raise InputError(f"expected {lo:.3f} to {hi:.2f} s (the robot does not move a step shorter than 24 ms), "
+                         f"got {seconds}", what)
+    return int(round(seconds / TIME_UNIT_S))
+
+
+def pose_words(pose: Pose, spec: Spec) -> dict[int, int]:
+    """Goal words by Dynamixel ID of a pose."""
+    return {j.id: int(t) for j, t in zip(spec.joints, servo_to_ticks(pose.servo, spec))}
+
+
 def encode_pose_page(pose: Pose, spec: Spec, seconds: float, base: bytes | None = None) -> bytes:
     """A one-step page for a pose: name, goal ticks, ``seconds`` of motion, reset defaults elsewhere."""
-    if not (math.isfinite(seconds) and TIME_UNIT_S <= seconds <= 255 * TIME_UNIT_S):
-        raise InputError(f"expected {TIME_UNIT_S} to {255 * TIME_UNIT_S:.2f} s, got {seconds}", "time")
-    name = pose.name.encode("ascii", "replace")[:NAME_LEN - 1]
-    page = bytearray(base if base is not None else reset_page())
-    page[:NAME_LEN] = name.ljust(NAME_LEN, b"\0")
-    page[OFF_REPEAT], page[OFF_SCHEDULE], page[OFF_STEPNUM] = 1, TIME_BASE_SCHEDULE, 1
-    page[OFF_SPEED], page[OFF_ACCEL], page[OFF_NEXT], page[OFF_EXIT] = DEFAULT_SPEED, DEFAULT_ACCEL, 0, 0
-    first = step_offset(0)
-    words = np.frombuffer(bytes(page[first:first + 2 * SLOTS]), dtype="<u2").copy()
-    for joint, tick in zip(spec.joints, servo_to_ticks(pose.servo, spec)):
-        words[joint.id] = tick
-    page[first:first + 2 * SLOTS] = words.astype("<u2").tobytes()
-    page[first + OFF_PAUSE], page[first + OFF_TIME] = 0, int(round(seconds / TIME_UNIT_S))
-    return bytes(with_checksum(page))
+    return encode_page(pose.name, [StepBytes(pose_words(pose, spec), 0, step_units(seconds))], base=base)
 
 
-def encode_poses(poses: Sequence[Pose], spec: Spec, first_page: int = 1, seconds: float = 1.0,
-                 base: bytes | None = None) -> bytes:
-    """A whole action file with each pose in its own page from ``first_page`` on; every other page of ``base``
-    (default: reset pages) is kept byte for byte."""
+def first_empty_run(data: bytes, count: int, start: int = 1) -> int:
+    """The first page from ``start`` on that begins ``count`` consecutive empty pages."""
+    for first in range(start, NUM_PAGES - count + 1):
+        if all(is_empty(data, i) for i in range(first, first + count)):
+            return first
+    raise InputError(f"no {count} consecutive empty pages in the file", "page")
+
+
+def check_pages_free(data: bytes, first: int, count: int, force: bool) -> None:
+    """Refuse to overwrite pages that hold an action (unless ``force``), or to run past the last page."""
+    if not (1 <= first and first + count - 1 < NUM_PAGES):
+        raise InputError(f"{count} page(s) from page {first} do not fit in pages 1..{NUM_PAGES - 1}", "page")
+    taken = [i for i in range(first, first + count) if not is_empty(data, i)]
+    if taken and not force:
+        raise InputError(f"page(s) {', '.join(map(str, taken))} of the base hold actions; choose empty pages or "
+                         f"give --force to overwrite them", "page")
+
+
+def encode_poses(poses: Sequence[Pose], spec: Spec, first_page: int | None = None, seconds: float = 1.0,
+                 base: bytes | None = None, force: bool = False) -> tuple[bytes, int]:
+    """A whole action file with each pose in its own one-step page from ``first_page`` on (default: the first run
+    of empty pages), and that first page; every other page of ``base`` (default: reset pages) is kept byte for
+    byte."""
     data = bytearray(base if base is not None else reset_file())
     check_file(bytes(data), "base")
-    if poses and not (1 <= first_page and first_page + len(poses) - 1 < NUM_PAGES):
-        raise InputError(f"{len(poses)} pose(s) from page {first_page} do not fit in pages 1..{NUM_PAGES - 1}",
-                         "page")
+    if not poses:
+        return bytes(data), 0
+    units = step_units(seconds)
+    first = first_empty_run(bytes(data), len(poses)) if first_page is None else first_page
+    check_pages_free(bytes(data), first, len(poses), force)
     for k, pose in enumerate(poses):
-        i = first_page + k
-        data[i * PAGE_SIZE:(i + 1) * PAGE_SIZE] = encode_pose_page(pose, spec, seconds)
-    return bytes(data)
+        i = first + k
+        page = encode_page(pose.name, [StepBytes(pose_words(pose, spec), 0, units)])
+        data[i * PAGE_SIZE:(i + 1) * PAGE_SIZE] = page
+    return bytes(data), first
