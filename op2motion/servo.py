@@ -81,13 +81,15 @@ class ServoModel:
         """Total viscous damping at the joint [N·m·s/rad]: back-EMF plus viscous friction."""
         return self.kd_emf + self.viscous
 
-    def active_torque(self, goal: np.ndarray, q: np.ndarray) -> np.ndarray:
-        """The torque the PWM drives [N·m] (before damping and friction): clip(Kp (goal - q), ±torque_max)."""
-        return np.clip(self.kp * (goal - q), -self.torque_max, self.torque_max)
+    def active_torque(self, goal: np.ndarray, q: np.ndarray, kp: np.ndarray | None = None) -> np.ndarray:
+        """The torque the PWM drives [N·m] (before damping and friction): clip(Kp (goal - q), ±torque_max), with
+        this model's Kp or the given one (a motion's P gains)."""
+        return np.clip((self.kp if kp is None else kp) * (goal - q), -self.torque_max, self.torque_max)
 
-    def motor_torque(self, goal: np.ndarray, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
+    def motor_torque(self, goal: np.ndarray, q: np.ndarray, dq: np.ndarray, kp: np.ndarray | None = None
+                     ) -> np.ndarray:
         """The torque the motor delivers to the joint [N·m]: active torque minus back-EMF and viscous damping."""
-        return self.active_torque(goal, q) - self.damping * dq
+        return self.active_torque(goal, q, kp) - self.damping * dq
 
     def available(self, dq: np.ndarray) -> np.ndarray:
         """Torque available in the direction of motion [N·m]: max_duty x stall - Kd_emf |dq|, not below 0."""

@@ -63,6 +63,7 @@ class Joint:
     safe: tuple[float, float]
     mechanical: tuple[float, float]
     book: Mapping[str, BookMap]
+    webots_range: tuple[float, float]     # the Webots model's motor stops [rad]
 
     @property
     def lower(self) -> float:

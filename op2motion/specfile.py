@@ -91,6 +91,14 @@ def _range(r: TableReader, key: str, name: str) -> tuple[float, float]:
     return math.radians(lower), math.radians(upper)
 
 
+def _webots_range(r: TableReader, name: str) -> tuple[float, float]:
+    lower, upper = r.vector("webots_range_rad", 2)
+    if not lower < upper:
+        raise SpecError(f"({name}): expected lower < upper, got [{lower}, {upper}]",
+                        f"{r.path}: {r.where}.webots_range_rad")
+    return float(lower), float(upper)
+
+
 def _joint(r: TableReader) -> Joint:
     name = r.get("name", str)
     safe, mech = _range(r, "cable_safe_deg", name), _range(r, "mechanical_deg", name)
@@ -118,7 +126,7 @@ def _joint(r: TableReader) -> Joint:
     joint = Joint(name, r.get("id", int), r.get("framework", str), r.get("webots", str), r.get("parent", str),
                   r.get("child", str), r.vector("origin_xyz_m"),  # type: ignore[arg-type]
                   tuple(math.radians(v) for v in r.vector("origin_rpy_deg")), axis,  # type: ignore[arg-type]
-                  safe, mech, book)
+                  safe, mech, book, _webots_range(r, name))
     r.done()
     return joint
 

@@ -305,3 +305,22 @@ def requested_page_or_none(data, index, spec):
         return requested_page(data, index, spec, "data")
     except InputError:
         return None
+
+
+def test_webots_export_sanitises_names_and_warns_outside_the_webots_ranges(capsys, spec, tmp_path):
+    """A pose name with a comma and a line break cannot break the motion file; a knee beyond the Webots model's
+    stop (LegLowerR 128.9°) is written (Webots clamps it) with a warning naming the motor."""
+    from op2motion.pose import Pose
+
+    servo = read_pose(os.path.join(POSES, "standing.json"), spec).servo.copy()
+    servo[spec.joint_names.index("r_knee")] = np.radians(130.0)
+    odd = Pose("deep,knee", "double", servo, {}, {})
+    text = webots_motion([odd, odd], spec, times=[0.0, 0.5])
+    lines = text.splitlines()
+    assert len(lines) == 3 and lines[1].split(",")[1] == "deep_knee" and lines[2].startswith("00:00:500,")
+    with pytest.raises(InputError, match="strictly increasing"):
+        webots_motion([odd, odd], spec, times=[0.0, 0.0])
+    from op2motion.export.tables import webots_warnings
+
+    warnings = webots_warnings([odd], spec)
+    assert len(warnings) == 1 and "LegLowerR (r_knee) 130.0°" in warnings[0] and "128.9" in warnings[0]

@@ -19,6 +19,7 @@ LAYERS = [
     {"joints", "specfile"},
     {"pose", "kinematics", "model"},
     {"balance", "servo", "arm_ik"},
+    {"compliance"},
     {"summary", "posture", "physics", "export", "plot", "motion"},
     {"workflow", "gait"},
     {"bench", "library", "figures"},

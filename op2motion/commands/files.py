@@ -40,7 +40,7 @@ def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion export``."""
     from ..export.action import encode_poses, read_action
     from ..export.posefile import read_pose
-    from ..export.tables import csv_table, webots_motion
+    from ..export.tables import csv_table, webots_motion, webots_warnings
     from ..fileio import OutputSet
 
     outputs = OutputSet({"output": args.output})
@@ -61,7 +61,7 @@ def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
     result = {"path": str(out), "format": args.format, "poses": [p.name for p in poses]}
     if args.format == "action" and poses:
         result["pages"] = list(range(first, first + len(poses)))
-    warn(result, cable_warnings(poses, spec))
+    warn(result, cable_warnings(poses, spec) + (webots_warnings(poses, spec) if args.format == "webots" else []))
     emit(args, result, f"wrote {out}: {text}")
     return 0
 

@@ -11,7 +11,10 @@ from __future__ import annotations
 import csv
 import io
 import math
+import re
 from typing import Sequence
+
+import numpy as np
 
 from ..errors import InputError
 from ..joints import servo_to_ticks
@@ -31,13 +34,41 @@ def _stamp(t: float) -> str:
     return f"{ms // 60000:02d}:{(ms // 1000) % 60:02d}:{ms % 1000:03d}"
 
 
-def webots_motion(poses: Sequence[Pose], spec: Spec, seconds: float = 1.0) -> str:
-    """Webots motion text: pose k is reached at k x ``seconds`` (the first at time 0)."""
-    _check_time(seconds)
+def webots_name(name: str) -> str:
+    """A pose name as a Webots motion line can carry it: letters, digits, ``_``, ``-`` and ``.`` (no commas, no
+    line breaks)."""
+    return re.sub(r"[^A-Za-z0-9_.-]", "_", name) or "pose"
+
+
+def webots_motion(poses: Sequence[Pose], spec: Spec, seconds: float = 1.0,
+                  times: Sequence[float] | None = None) -> str:
+    """Webots motion text: pose k is reached at k x ``seconds`` (the first at time 0), or at ``times`` [s]
+    (strictly increasing on the file's millisecond clock)."""
+    if times is None:
+        _check_time(seconds)
+        times = [k * seconds for k in range(len(poses))]
+    stamps = [int(round(t * 1000)) for t in times]
+    if len(stamps) != len(poses) or any(b <= a for a, b in zip(stamps, stamps[1:])) or (stamps and stamps[0] < 0):
+        raise InputError(f"expected {len(poses)} strictly increasing times from 0 (ms resolution), got "
+                         f"{list(times)}", "time")
     lines = ["#WEBOTS_MOTION,V1.0," + ",".join(j.webots for j in spec.joints)]
-    for k, pose in enumerate(poses):
-        lines.append(f"{_stamp(k * seconds)},{pose.name}," + ",".join(f"{q:.6f}" for q in pose.servo))
+    for ms, pose in zip(stamps, poses):
+        lines.append(f"{_stamp(ms / 1000)},{webots_name(pose.name)}," + ",".join(f"{q:.6f}" for q in pose.servo))
     return "\n".join(lines) + "\n"
+
+
+def webots_warnings(poses: Sequence[Pose], spec: Spec) -> list[str]:
+    """One line per pose with values outside the Webots model's motor stops (Webots clamps them)."""
+    lo = np.array([j.webots_range[0] for j in spec.joints])
+    hi = np.array([j.webots_range[1] for j in spec.joints])
+    out = []
+    for pose in poses:
+        bad = [(j, q) for j, q, a, b in zip(spec.joints, pose.servo, lo, hi) if not a - 1e-9 <= q <= b + 1e-9]
+        if bad:
+            out.append(f"{pose.name}: outside the Webots robot's joint range (Webots clamps them): " + ", ".join(
+                f"{j.webots} ({j.name}) {math.degrees(q):.1f}° not in [{math.degrees(j.webots_range[0]):.1f}, "
+                f"{math.degrees(j.webots_range[1]):.1f}]°" for j, q in bad))
+    return out
 
 
 def csv_table(poses: Sequence[Pose], spec: Spec, seconds: float = 1.0) -> str:

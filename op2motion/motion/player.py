@@ -63,6 +63,29 @@ def _ramp(last: int, speed_step: int, c: int) -> int:
     return _tdiv((last + (speed_step >> 1)) * c * 144, 15) >> 9
 
 
+def step_timing(time: int, pause: int, speed: int, accel: int) -> tuple[int, int, int]:
+    """A time-base step's movement T, ramp A and pause P in calls: T = max(1, time x speed >> 5), A = accel or
+    (T - 1) >> 1 when T <= 2 accel (a step whose A is then 0 does not move: T = 0), P = (pause << 5) / speed."""
+    if speed == 0:
+        raise InputError("a page has speed 0 (the robot's firmware divides by it)", "page")
+    total = ((time * speed) >> 5) & 0xFFFF or 1
+    return (*_ramps(total, accel), _tdiv(pause << 5, speed) & 0xFFFF)
+
+
+def _ramps(total: int, accel: int) -> tuple[int, int]:
+    if total <= 2 * accel:
+        accel = 0 if total == 0 else (total - 1) >> 1
+        if accel == 0:
+            total = 0                          # shorter than 3 ticks: the step does not move
+    return total, accel
+
+
+def step_calls(time: int, pause: int, speed: int = 32, accel: int = 32) -> int:
+    """``Process()`` calls a time-base step takes: T + 3, plus P + 1 with a pause."""
+    total, _, pause_ticks = step_timing(time, pause, speed, accel)
+    return total + 3 + (pause_ticks + 1 if pause_ticks else 0)
+
+
 def p_gain(compliance: int) -> int:
     """The servo P gain a page's compliance byte sets: (256 >> high nibble) << 2 (0x55 -> 32)."""
     return (256 >> (compliance >> 4)) << 2
@@ -246,10 +269,7 @@ class ActionPlayer:
         if last_step:
             self._choose_follower(page)
         k = self.step_index - 1
-        if page.speed == 0:
-            raise InputError(f"page {self.page_index} has speed 0 (the robot's firmware divides by it)", "page")
-        self.pause_ticks = _tdiv(page.pause[k] << 5, page.speed) & 0xFFFF
-        ticks = ((page.time[k] * page.speed) >> 5) & 0xFFFF or 1
+        ticks, _, self.pause_ticks = step_timing(page.time[k], page.pause[k], page.speed, page.accel)
         largest = 0
         for j, ident in enumerate(IDS):
             self.accel_angle[j] = 0
@@ -268,12 +288,7 @@ class ActionPlayer:
             if page.schedule == SPEED_BASE_SCHEDULE:
                 largest = max(largest, abs(self.moving[j]))
         total = ticks if page.schedule == TIME_BASE_SCHEDULE else _tdiv(largest * 40, ticks * 3) & 0xFFFF
-        accel = page.accel
-        if total <= 2 * accel:
-            accel = 0 if total == 0 else (total - 1) >> 1
-            if accel == 0:
-                total = 0                          # shorter than 3 ticks: the step does not move
-        self.total, self.accel = total, accel
+        self.total, self.accel = total, accel = _ramps(total, page.accel)
         whole, ramps = 2 * total, 2 * accel
         keep = (ramps + 2 * (whole - ramps)) or 1
         stop = 2 * (whole - ramps) or 1

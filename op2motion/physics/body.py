@@ -85,7 +85,7 @@ class Body:
         return BodyState(com, soles, corners)
 
 
-def _sole_flat(body: Body, q: np.ndarray, side: str) -> tuple[np.ndarray, np.ndarray]:
+def sole_flat(body: Body, q: np.ndarray, side: str) -> tuple[np.ndarray, np.ndarray]:
     """Torso pose (position, rotation) that puts the ``side`` sole at the origin, level, facing +X."""
     state = body.state(np.zeros(3), np.eye(3), q)
     pos, rot = state.soles[side]
@@ -99,7 +99,7 @@ def placement(body: Body, q: np.ndarray, support: str) -> tuple[np.ndarray, np.n
     See the module docstring."""
     options = []
     for side in feet_of(support):
-        pos, rot = _sole_flat(body, q, side)
+        pos, rot = sole_flat(body, q, side)
         state = body.state(pos, rot, q)
         lift = max(0.0, -state.lowest_corner_z)      # nothing starts below the floor
         gap = max(float(state.corners[s][:, 2].min()) + lift for s in feet_of(support))

@@ -1,14 +1,18 @@
-"""The physics check, engine-independent: place the pose, ramp gravity in, hold it with the servo model, watch.
+"""The physics check, engine-independent: place the pose, ramp gravity in, hold or play the goals, watch.
 
 Every engine offers the same few operations (``reset``, ``set_gravity``, ``state``, ``step``, ``base``,
 ``contacts``); this module runs the loop and judges, so a verdict means the same in every engine:
 
-1. the pose is placed on the floor (:func:`.body.placement`), all joints at their goals and at rest;
+1. the first pose is placed on the floor (:func:`.body.placement`), all joints at their goals and at rest;
 2. gravity rises from zero to full strength over :data:`RAMP_S`, so the robot sags into its loaded posture
    without an impact;
-3. the servos hold the goals for the rest of ``seconds`` (optionally with a push at the torso's centre of mass);
+3. the servos hold the goals of the :class:`.schedule.Schedule` (one pose, or a motion's goals every 8 ms) for
+   the rest of ``seconds``, optionally with a push at the torso's centre of mass;
 4. every :data:`SAMPLE_S` the torso attitude, the centre of mass, the soles, the contacts and the servo torques
    are recorded; the last :data:`STEADY_S` is the steady window for torques, sag and centre of pressure.
+
+Tilt and centre-of-mass drop are measured against the plan (where rigid servos would put the robot at that
+moment), so a motion that turns the torso or crouches on purpose has not tilted or dropped.
 """
 
 from __future__ import annotations
@@ -22,7 +26,8 @@ import numpy as np
 from ..balance import convex_hull, polygon_margin
 from ..servo import ServoModel
 from ..spec import Spec, feet_of, swing_of
-from .body import Body, BodyState, placement
+from .body import Body, BodyState
+from .schedule import Planned, Schedule, plan_rows
 from .verdict import (
     COM_DROP_FRACTION,
     CONTACT_FORCE_N,
@@ -31,7 +36,7 @@ from .verdict import (
     LIMIT_HOLD_S,
     LOADING_TILT_LIMIT_DEG,
     SATURATION_FRACTION,
-    SATURATION_HOLD_S,
+    SATURATION_SHARE,
     SLIP_LIMIT_M,
     TILT_LIMIT_DEG,
     Failure,
@@ -57,7 +62,6 @@ class _Track:
     """What the loop records at each sample."""
 
     times: list = field(default_factory=list)
-    tilt: list = field(default_factory=list)          # from the start (unloaded) attitude [deg]
     rot: list = field(default_factory=list)
     com: list = field(default_factory=list)
     soles: list = field(default_factory=list)
@@ -69,10 +73,7 @@ class _Track:
     ground: list = field(default_factory=list)
     self_pairs: list = field(default_factory=list)
     states: list = field(default_factory=list)
-
-
-def _tilt_deg(r0: np.ndarray, r1: np.ndarray) -> float:
-    return math.degrees(math.acos(float(np.clip(r0[:, 2] @ r1[:, 2], -1.0, 1.0))))
+    rows: list = field(default_factory=list)          # the schedule row the servos held
 
 
 def support_polygon_of(state: BodyState, support: str) -> np.ndarray:
@@ -80,33 +81,36 @@ def support_polygon_of(state: BodyState, support: str) -> np.ndarray:
     return convex_hull(np.vstack([state.corners[side][:, :2] for side in feet_of(support)]))
 
 
-def simulate(engine: Any, spec: Spec, servo: ServoModel, goal: np.ndarray, support: str, seconds: float,
+def simulate(engine: Any, spec: Spec, servo: ServoModel, schedule: Schedule, seconds: float,
              push: Push | None = None, on_step: Callable[[], Any] | None = None) -> tuple[_Track, dict[str, Any]]:
     """Run one check (see the module docstring); returns the samples and the start facts."""
     body = Body(spec)
-    base_pos, base_rot, flat_foot, gap = placement(body, goal, support)
-    engine.reset(base_pos, base_rot, goal)
+    base_pos, base_rot, planned = plan_rows(body, schedule)
+    engine.reset(base_pos, base_rot, schedule.goals[0])
     dt = engine.time_step
     steps = int(round(seconds / dt))
     every = max(1, int(round(SAMPLE_S / dt)))
     track = _Track()
-    start = body.state(base_pos, base_rot, goal)
+    start = body.state(base_pos, base_rot, schedule.goals[0])
     push_steps = (range(0) if push is None else
                   range(int(round(push.start_s / dt)), int(round((push.start_s + push.duration_s) / dt))))
     for k in range(steps):
         t = k * dt
         if t <= RAMP_S + dt:
             engine.set_gravity(min(1.0, t / RAMP_S))
+        row = schedule.row(t)
         q, dq = engine.state()
-        engine.step(servo.active_torque(goal, q), push.force if k in push_steps else None)
+        engine.step(servo.active_torque(schedule.goals[row], q, schedule.kp[row]),
+                    push.force if k in push_steps else None)
         if k % every == every - 1 or k == steps - 1:
-            _sample(engine, body, servo, goal, base_rot, track, (k + 1) * dt)
+            _sample(engine, body, servo, schedule, row, track, (k + 1) * dt)
         if on_step is not None:
             on_step()
-    return track, {"start": start, "flat_foot": flat_foot, "gap": gap, "base_rot": base_rot}
+    return track, {"start": start, "flat_foot": planned.flat_foot, "gap": planned.gap, "base_rot": base_rot,
+                   "planned": planned}
 
 
-def _sample(engine: Any, body: Body, servo: ServoModel, goal: np.ndarray, rot0: np.ndarray, track: _Track,
+def _sample(engine: Any, body: Body, servo: ServoModel, schedule: Schedule, row: int, track: _Track,
             t: float) -> None:
     q, dq = engine.state()
     pos, rot = engine.base()
@@ -130,12 +134,12 @@ def _sample(engine: Any, body: Body, servo: ServoModel, goal: np.ndarray, rot0: 
             pair = tuple(sorted((c.link, c.other)))
             self_force[pair] = self_force.get(pair, 0.0) + c.normal_force
     track.times.append(t)
-    track.tilt.append(_tilt_deg(rot0, rot))
     track.rot.append(rot)
+    track.rows.append(row)
     track.com.append(state.com)
     track.soles.append({side: p for side, (p, _) in state.soles.items()})
     track.q.append(q)
-    track.torque.append(servo.motor_torque(goal, q, dq))
+    track.torque.append(servo.motor_torque(schedule.goals[row], q, dq, schedule.kp[row]))
     track.available.append(servo.available(dq))
     track.cop.append(cop)
     track.feet.append(feet)
@@ -164,38 +168,71 @@ def first(mask: np.ndarray) -> int | None:
     return int(hits[0]) if hits.size else None
 
 
-def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, goal: np.ndarray, support: str,
+def _error_tilt_deg(planned_rot: np.ndarray, rot: np.ndarray, reference: np.ndarray) -> float:
+    """How far the torso's up axis has turned [deg] from ``reference`` (an up axis in the planned torso frame),
+    seen in the planned torso frame (a planned turn is not a tilt)."""
+    up = planned_rot.T @ rot[:, 2]
+    return math.degrees(math.acos(float(np.clip(up @ reference, -1.0, 1.0))))
+
+
+def _slip(track: _Track, schedule: Schedule, start: BodyState, times: np.ndarray) -> tuple[float, int | None]:
+    """The largest horizontal slide [m] of a foot while it supports, from where it stood when that support began
+    (the start pose's soles for a support from the start), and the first sample beyond the limit."""
+    worst, first_bad = 0.0, None
+    for side in ("left", "right"):
+        anchor = None
+        for k, row in enumerate(track.rows):
+            if side not in feet_of(schedule.supports[row]):
+                anchor = None
+                continue
+            if anchor is None:
+                anchor = start.soles[side][0][:2] if k == 0 else track.soles[k][side][:2]
+            slide = float(np.hypot(*(track.soles[k][side][:2] - anchor)))
+            worst = max(worst, slide)
+            if slide > SLIP_LIMIT_M and (first_bad is None or k < first_bad):
+                first_bad = k
+    return worst, first_bad
+
+
+def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, schedule: Schedule,
           engine_name: str, dt: float, seconds: float) -> Validation:
     """The verdict and measurements of a recorded run (see :mod:`.verdict` for the reasons)."""
     times = np.asarray(track.times)
+    rows = np.asarray(track.rows)
+    planned: Planned = facts["planned"]
     loaded = int(min(np.searchsorted(times, RAMP_S), len(times) - 1))
+    plan_rot = planned.rot[rows]
     # tilt counts from the loaded attitude (gravity at full strength): the sag while loading is not a fall; while
-    # loading, a turn beyond LOADING_TILT_LIMIT_DEG from the start is.
-    tilt = np.array([_tilt_deg(track.rot[loaded], r) if k >= loaded else 0.0 for k, r in enumerate(track.rot)])
-    load_tilt = float(track.tilt[loaded])
-    loading_fall = first(np.asarray(track.tilt[:loaded]) > LOADING_TILT_LIMIT_DEG)
+    # loading, a turn beyond LOADING_TILT_LIMIT_DEG from the start is. Both are seen from the plan.
+    z = np.array([0.0, 0.0, 1.0])
+    from_start = np.array([_error_tilt_deg(plan_rot[k], r, z) for k, r in enumerate(track.rot)])
+    loaded_up = plan_rot[loaded].T @ track.rot[loaded][:, 2]
+    tilt = np.array([_error_tilt_deg(plan_rot[k], r, loaded_up) if k >= loaded else 0.0
+                     for k, r in enumerate(track.rot)])
+    load_tilt = float(from_start[loaded])
+    loading_fall = first(from_start[:loaded] > LOADING_TILT_LIMIT_DEG)
     com = np.asarray(track.com)
     q, torque, available = np.asarray(track.q), np.abs(np.asarray(track.torque)), np.asarray(track.available)
+    goals = schedule.goals[rows]
     start: BodyState = facts["start"]
     failures: list[Failure] = []
-
-    supports = set(feet_of(support))
     foot_links = {spec.joint(f"{s[0]}_ank_roll").child: s for s in ("left", "right")}
     i = first(tilt > TILT_LIMIT_DEG)
     if loading_fall is not None:
         i = loading_fall
     if i is not None:
-        turned = max(float(tilt.max()), float(np.max(track.tilt)) - load_tilt)
+        turned = max(float(tilt.max()), float(np.max(from_start)) - load_tilt)
         failures.append(Failure("tilt", times[i], f"the torso tilted {turned:.0f}° (limit {TILT_LIMIT_DEG:g}° after "
                                                   f"loading)"))
-    i = first(com[:, 2] < (1.0 - COM_DROP_FRACTION) * start.com[2])
+    planned_com_z = np.array([planned.states[r].com[2] for r in rows])
+    i = first(com[:, 2] < (1.0 - COM_DROP_FRACTION) * planned_com_z)
     if i is not None:
-        failures.append(Failure("com_drop", times[i], f"the centre of mass sank from {start.com[2]:.3f} m to "
-                                                      f"{com[:, 2].min():.3f} m"))
-    swing = swing_of(support) if support != "double" else None
-    for reason, wanted in (("swing_foot_contact", lambda link: swing is not None and foot_links.get(link) == swing),
-                           ("ground_contact", lambda link: link not in foot_links)):
-        hits = [(k, sorted(link for link in g if wanted(link))) for k, g in enumerate(track.ground)]
+        failures.append(Failure("com_drop", times[i], f"the centre of mass sank to {com[i, 2]:.3f} m (planned "
+                                                      f"{planned_com_z[i]:.3f} m)"))
+    swing = [set(("left", "right")) - set(feet_of(schedule.supports[r])) for r in rows]
+    for reason, wanted in (("swing_foot_contact", lambda link, k: foot_links.get(link) in swing[k]),
+                           ("ground_contact", lambda link, k: link not in foot_links)):
+        hits = [(k, sorted(link for link in g if wanted(link, k))) for k, g in enumerate(track.ground)]
         hits = [(k, links) for k, links in hits if links]
         if hits:
             failures.append(Failure(reason, times[hits[0][0]], f"{', '.join(hits[0][1])} pressed on the floor"))
@@ -203,44 +240,44 @@ def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, g
     if hits:
         failures.append(Failure("self_collision", times[hits[0][0]],
                                 "; ".join(" against ".join(p) for p in hits[0][1])))
-    ratio = torque / np.maximum(available, 1e-9)
-    i = _first_held(np.any(ratio >= SATURATION_FRACTION, axis=1), times, SATURATION_HOLD_S)
-    if i is not None:
-        j = int(np.argmax(ratio[i]))
-        failures.append(Failure("torque_saturation", times[i], f"{spec.joint_names[j]} needs {torque[i, j]:.2f} N·m "
-                                                               f"of {available[i, j]:.2f} N·m available"))
+    steady = times >= times[-1] - STEADY_S + 1e-9
+    saturated = (torque / np.maximum(available, 1e-9) >= SATURATION_FRACTION)[steady].mean(axis=0)
+    if saturated.max() >= SATURATION_SHARE:
+        j = int(np.argmax(saturated))
+        i = int(np.flatnonzero(steady)[0])
+        failures.append(Failure("torque_saturation", times[i], f"{spec.joint_names[j]} needs "
+                                                               f"{torque[steady][:, j].mean():.2f} N·m of "
+                                                               f"{available[steady][:, j].mean():.2f} N·m available"))
     lower = np.array([j.mechanical[0] for j in spec.joints])
     upper = np.array([j.mechanical[1] for j in spec.joints])
-    at_stop = ((q - lower < LIMIT_AT_RAD) | (upper - q < LIMIT_AT_RAD)) & (np.abs(q - goal) > LIMIT_AWAY_RAD)
+    at_stop = ((q - lower < LIMIT_AT_RAD) | (upper - q < LIMIT_AT_RAD)) & (np.abs(q - goals) > LIMIT_AWAY_RAD)
     i = _first_held(np.any(at_stop, axis=1), times, LIMIT_HOLD_S)
     if i is not None:
         j = int(np.argmax(at_stop[i]))
         failures.append(Failure("joint_limit", times[i], f"{spec.joint_names[j]} lies on its stop at "
                                                          f"{math.degrees(q[i, j]):.1f}° "
-                                                         f"(goal {math.degrees(goal[j]):.1f}°)"))
-    slip = max(float(np.hypot(*(s[side][:2] - start.soles[side][0][:2]))) for s in track.soles for side in supports)
-    if slip > SLIP_LIMIT_M:
-        k = next(k for k, s in enumerate(track.soles)
-                 if max(np.hypot(*(s[side][:2] - start.soles[side][0][:2])) for side in supports) > SLIP_LIMIT_M)
+                                                         f"(goal {math.degrees(goals[i, j]):.1f}°)"))
+    slip, k = _slip(track, schedule, start, times)
+    if k is not None:
         failures.append(Failure("slip", times[k], f"a supporting sole slid {slip * 1000:.0f} mm"))
     failures.sort(key=lambda f: f.time_s)
-    steady = times >= times[-1] - STEADY_S + 1e-9
     mean_torque = torque[steady].mean(axis=0)
     worst = int(np.argmax(mean_torque / np.maximum(available[steady].mean(axis=0), 1e-9)))
     last = track.states[-1]
-    margin = float(polygon_margin(com[-1, :2], support_polygon_of(last, support))[0])
+    final_support = schedule.supports[-1]
+    margin = float(polygon_margin(com[-1, :2], support_polygon_of(last, final_support))[0])
     load_state = track.states[loaded]
-    margin_load = float(polygon_margin(load_state.com[:2], support_polygon_of(load_state, support))[0])
+    margin_load = float(polygon_margin(load_state.com[:2], support_polygon_of(load_state, schedule.supports[0]))[0])
     cops = [c for c, s in zip(track.cop, steady) if s and c is not None]
-    feet = _feet_report(track, steady, last)
     reasons = list(dict.fromkeys(f.reason for f in failures))
+    swing_side = swing_of(final_support) if final_support != "double" else None
     return Validation(
         engine=engine_name, servo=servo.describe(), time_step_s=dt, seconds=seconds, stable=not failures,
         reasons=reasons, failures=failures, support_margin_m=round(margin, 5), margin_at_load_m=round(margin_load, 5),
         cop_xy=None if not cops else [round(float(v), 5) for v in np.mean(cops, axis=0)],
         com_settled=[round(float(v), 5) for v in com[-1]], com_start=[round(float(v), 5) for v in start.com],
-        max_tilt_deg=round(float(tilt.max() if loading_fall is None else max(track.tilt)), 3),
-        settled_tilt_deg=round(float(track.tilt[-1]), 3),
+        max_tilt_deg=round(float(tilt.max() if loading_fall is None else max(from_start)), 3),
+        settled_tilt_deg=round(float(from_start[-1]), 3),
         load_tilt_deg=round(load_tilt, 3),
         com_drift_m=round(float(np.max(np.hypot(*(com[:, :2] - start.com[:2]).T))), 5), feet_slip_m=round(slip, 5),
         start_gap_m=round(facts["gap"], 5), flat_foot=facts["flat_foot"],
@@ -250,9 +287,32 @@ def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, g
         torque_ratio=round(float(mean_torque[worst] / max(available[steady][:, worst].mean(), 1e-9)), 4),
         worst_joint=spec.joint_names[worst], peak_torque_nm=round(float(torque.max()), 4),
         sag_deg={n: round(float(math.degrees(v)), 3)
-                 for n, v in zip(spec.joint_names, (q[steady] - goal).mean(axis=0))},
-        swing_foot_min_z_m=None if swing is None else round(float(last.corners[swing][:, 2].min()), 5),
-        feet=feet)
+                 for n, v in zip(spec.joint_names, (q[steady] - goals[steady]).mean(axis=0))},
+        swing_foot_min_z_m=None if swing_side is None else round(float(last.corners[swing_side][:, 2].min()), 5),
+        feet=_feet_report(track, steady, last),
+        **_motion_report(track, schedule, spec, times, q, goals, torque, available))
+
+
+def _motion_report(track: _Track, schedule: Schedule, spec: Spec, times: np.ndarray, q: np.ndarray,
+                   goals: np.ndarray, torque: np.ndarray, available: np.ndarray) -> dict[str, Any]:
+    """A motion's extras: tracking error per joint (goal - measured) while it plays and half a second after,
+    the worst torque against what was available then, and the centre-of-pressure track."""
+    if not schedule.is_motion:
+        return {}
+    playing = (times >= schedule.start_s) & (times <= schedule.end_s + 0.5)
+    error = np.degrees(np.abs(goals[playing] - q[playing]))
+    ratio = torque[playing] / np.maximum(available[playing], 1e-9)
+    k, j = np.unravel_index(int(np.argmax(ratio)), ratio.shape)
+    return {
+        "tracking_max_deg": {n: round(float(v), 3) for n, v in zip(spec.joint_names, error.max(axis=0))},
+        "tracking_rms_deg": {n: round(float(v), 3) for n, v in zip(spec.joint_names,
+                                                                    np.sqrt((error ** 2).mean(axis=0)))},
+        "motion_worst_torque": {"joint": spec.joint_names[j], "torque_nm": round(float(torque[playing][k, j]), 4),
+                                "available_nm": round(float(available[playing][k, j]), 4),
+                                "time_s": round(float(times[playing][k]), 3)},
+        "cop_track": [[round(float(t), 3), round(float(c[0]), 5), round(float(c[1]), 5)]
+                      for t, c in zip(times, track.cop) if c is not None],
+    }
 
 
 def _feet_report(track: _Track, steady: np.ndarray, last: BodyState) -> dict[str, dict[str, Any]]:

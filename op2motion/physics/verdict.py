@@ -4,14 +4,16 @@ Reasons (a fixed vocabulary; ``stable`` is true only when there is none), listed
 
 * ``tilt``: the torso turned more than :data:`TILT_LIMIT_DEG` from its loaded attitude (when gravity reached full
   strength: the servos' sag while the pose takes its weight is reported as ``load_tilt_deg``, not counted), or more
-  than :data:`LOADING_TILT_LIMIT_DEG` from the start while gravity ramped in (a fall during loading).
-* ``com_drop``: the centre of mass sank below (1 - :data:`COM_DROP_FRACTION`) of its starting height.
+  than :data:`LOADING_TILT_LIMIT_DEG` from the start while gravity ramped in (a fall during loading); in a motion,
+  turns are measured against the planned attitude of that moment.
+* ``com_drop``: the centre of mass sank below (1 - :data:`COM_DROP_FRACTION`) of its planned height.
 * ``ground_contact``: a link other than a supporting foot pressed on the floor.
 * ``swing_foot_contact``: in a single-support pose, the swing foot pressed on the floor (the robot is then on two
   feet: the pose did not hold as a one-legged pose).
 * ``self_collision``: two links that are not parent and child pressed on each other.
-* ``torque_saturation``: a servo delivered at least :data:`SATURATION_FRACTION` of its available torque for
-  :data:`SATURATION_HOLD_S` or more.
+* ``torque_saturation``: over the steady window (the last second, the pose held), a servo delivered at least
+  :data:`SATURATION_FRACTION` of its available torque in at least :data:`SATURATION_SHARE` of the samples: it
+  cannot hold the pose. (While a motion plays, a servo at its limit only lags: that is the tracking error.)
 * ``joint_limit``: a joint lay on its mechanical stop, away from its goal, for :data:`LIMIT_HOLD_S` or more.
 * ``slip``: a supporting sole slid more than :data:`SLIP_LIMIT_M` over the floor.
 
@@ -30,7 +32,7 @@ LOADING_TILT_LIMIT_DEG = 20.0   # while gravity ramps in, a turn this large from
 COM_DROP_FRACTION = 0.25
 CONTACT_FORCE_N = 0.5
 SATURATION_FRACTION = 0.95
-SATURATION_HOLD_S = 0.1
+SATURATION_SHARE = 0.5
 LIMIT_AT_RAD = 0.0175           # 1°: a joint this close to its stop lies on it
 LIMIT_AWAY_RAD = 0.035          # 2°: ...and is held there away from its goal
 LIMIT_HOLD_S = 0.2
@@ -91,6 +93,12 @@ class Validation:
     sag_deg: dict[str, float]        # steady-window joint angle minus goal
     swing_foot_min_z_m: float | None = None   # single support: the swing foot's lowest corner at the end [m]
     feet: dict[str, dict[str, Any]] = field(default_factory=dict)   # per foot on the floor: load share, own CoP
+    # a motion's extras (empty for a held pose): tracking error per joint [deg] while it plays, the worst torque
+    # against what was available, the centre-of-pressure track [[t s, x m, y m], ...]
+    tracking_max_deg: dict[str, float] = field(default_factory=dict)
+    tracking_rms_deg: dict[str, float] = field(default_factory=dict)
+    motion_worst_torque: dict[str, Any] = field(default_factory=dict)
+    cop_track: list[list[float]] = field(default_factory=list, repr=False)
     pushes: list[PushResult] = field(default_factory=list)
     snapshot_png: bytes | None = field(default=None, repr=False, compare=False)
 

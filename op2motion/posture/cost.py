@@ -31,6 +31,7 @@ from ..balance import (
     rectangle_margin,
     support_extents,
 )
+from ..compliance import Compliance, SwingLegSag
 from ..errors import InputError
 from ..joints import BookAngles, check_support
 from ..kinematics import MODELS, BodyPoints, forward
@@ -39,7 +40,6 @@ from ..kinematics.dh_chain import matrix_frames
 from ..kinematics.points import ROW, row_of
 from ..kinematics.shapes import clearances, shape_set
 from ..spec import Spec, swing_of
-from .compliance import Compliance, SwingLegSag
 
 W_VIOLATION = 10.0     # cost per metre by which a violated constraint is violated, on top of the book's 100
 W_MARGIN = 0.02        # cost per metre of stability margin below MARGIN_CAP

@@ -30,11 +30,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..kinematics import BodyPoints
-from ..kinematics.links import attachments
-from ..kinematics.points import row_of
-from ..servo import ServoModel
-from ..spec import GRAVITY_M_S2, Spec, swing_of
+from .kinematics import BodyPoints
+from .kinematics.links import attachments
+from .kinematics.points import row_of
+from .servo import ServoModel
+from .spec import GRAVITY_M_S2, Spec, swing_of
 
 
 @dataclass(frozen=True)
