@@ -63,6 +63,20 @@ def foot_link(spec: Spec, side: str) -> str:
     return spec.joint(f"{side[0]}_ank_roll").child
 
 
+def foot_box_corners(spec: Spec, side: str) -> np.ndarray:
+    """The 4 bottom corners (4, 3) [m] of a foot's collision box in its ankle-roll link frame (the sole)."""
+    link = foot_link(spec, side)
+    boxes = spec.collisions_of(link, "box")
+    if not boxes:
+        raise InputError(f"the spec has no box collision shape on {link}: the foot's sole is unknown", "spec")
+    box = boxes[0]
+    if any(abs(a) > 1e-12 for a in box.origin_rpy):
+        raise InputError(f"the foot box on {link} must not be rotated", "spec")
+    (sx, sy, sz), (ox, oy, oz) = box.size, box.origin_xyz
+    return np.array([[ox + dx * sx / 2, oy + dy * sy / 2, oz - sz / 2]
+                     for dx, dy in ((1, 1), (1, -1), (-1, -1), (-1, 1))])
+
+
 def frame_points(spec: Spec) -> dict[str, tuple[str, str, tuple[float, float, float]]]:
     """Named frames: ``{point name: (frame link, parent link, xyz [m])}`` for the spec's points and both soles."""
     frames = {name: (p.frame, p.link, p.xyz) for name, p in spec.points.items()}

@@ -24,14 +24,11 @@ from typing import Sequence
 import numpy as np
 
 from ..actionfile import MAX_BYTE, MAX_STEPS, NUM_PAGES, TIME_UNIT_S, StepBytes, encode_page, reset_file
-from ..compliance import Compliance, SwingLegSag
 from ..errors import InputError
-from ..joints import servo_to_book, servo_to_ticks
-from ..kinematics.dh import MATRIX_BELOW, forward_dh_frames
-from ..kinematics.points import ROW
+from ..joints import servo_to_ticks
 from ..spec import Spec
 from .player import IDS, play, step_calls
-from .shift import with_weight_shifts
+from .shift import balanced, settled_swing_heights, with_weight_shifts
 from .trajectory import Trajectory, from_playback
 from .waypoint import Waypoint, check_waypoints
 
@@ -185,22 +182,6 @@ def _robot_rows(waypoints: Sequence[Waypoint], spec: Spec, v_max: float) -> tupl
     return played.goals, segment, notes, played.p_gains
 
 
-def settled_swing_heights(goals: np.ndarray, side: str, spec: Spec) -> np.ndarray:
-    """The lowest corner [m] (K,) of the other foot for poses standing on ``side``, after the servos' sag (the
-    support leg's and the swing leg's own, :mod:`op2motion.compliance`); rigid where no equilibrium exists."""
-    model, swing = Compliance(spec), SwingLegSag(spec, side)
-    heights = []
-    for start in range(0, len(goals), MATRIX_BELOW - 1):       # swarm-sized batches keep the chain frames
-        points, frames = forward_dh_frames(servo_to_book(goals[start:start + MATRIX_BELOW - 1], side, spec), spec,
-                                           full_com=True)
-        first = ROW[f"{points.swing}_foot_0"]
-        corners = points.data[first:first + 4]
-        settled = model.settle(points, points.com_full)
-        lowered = (model.settled_heights(points, settled, corners) + swing.heights(frames, corners)).min(axis=0)
-        heights.append(np.where(np.isfinite(lowered), lowered, points.swing_foot_min_z))
-    return np.concatenate(heights)
-
-
 def row_supports(goals: np.ndarray, segment: np.ndarray, waypoints: Sequence[Waypoint],
                  spec: Spec) -> tuple[str, ...]:
     """The support of each row: a single-support segment end's foot stands; the other foot supports too while
@@ -231,6 +212,7 @@ def plan(waypoints: Sequence[Waypoint], spec: Spec, profile: str = "quintic",
     v_max = SPEED_FRACTION * spec.servo.no_load_speed_rad_s
     if profile == "quintic":
         goals, segment, notes = _quintic_rows(waypoints, v_max)
+        goals = balanced(goals, segment, waypoints, spec)
         gains = np.full(goals.shape, float(p_gain))
     else:
         goals, segment, notes, gains = _robot_rows(waypoints, spec, v_max)

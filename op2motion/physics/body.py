@@ -17,26 +17,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
 from ..model.dynamics import dynamics_for
-from ..model.urdf import foot_link
+from ..model.urdf import foot_box_corners, foot_link
 from ..spec import SUPPORTS, Spec, feet_of
 
 GROUND_TOLERANCE_M = 1e-9
-
-
-def foot_box_corners(spec: Spec, side: str) -> np.ndarray:
-    """The 4 bottom corners (4, 3) [m] of a foot's collision box in its ankle-roll link frame (the sole)."""
-    link = foot_link(spec, side)
-    boxes = spec.collisions_of(link, "box")
-    if not boxes:
-        raise InputError(f"the spec has no box collision shape on {link}: the foot's sole is unknown", "spec")
-    box = boxes[0]
-    if any(abs(a) > 1e-12 for a in box.origin_rpy):
-        raise InputError(f"the foot box on {link} must not be rotated", "spec")
-    (sx, sy, sz), (ox, oy, oz) = box.size, box.origin_xyz
-    return np.array([[ox + dx * sx / 2, oy + dy * sy / 2, oz - sz / 2]
-                     for dx, dy in ((1, 1), (1, -1), (-1, -1), (-1, 1))])
 
 
 @dataclass(frozen=True)

@@ -38,6 +38,8 @@ from .verdict import (
     SATURATION_FRACTION,
     SATURATION_SHARE,
     SLIP_LIMIT_M,
+    SLIP_LOAD_SHARE,
+    SUPPORT_SETTLE_S,
     TILT_LIMIT_DEG,
     Failure,
     Validation,
@@ -176,13 +178,16 @@ def _error_tilt_deg(planned_rot: np.ndarray, rot: np.ndarray, reference: np.ndar
 
 
 def _slip(track: _Track, schedule: Schedule, start: BodyState, times: np.ndarray) -> tuple[float, int | None]:
-    """The largest horizontal slide [m] of a foot while it supports, from where it stood when that support began
-    (the start pose's soles for a support from the start), and the first sample beyond the limit."""
+    """The largest horizontal slide [m] of a foot while it supports and carries at least
+    :data:`SLIP_LOAD_SHARE` of the load, from where it stood when that began (the start pose's soles for a support
+    from the start), and the first sample beyond the limit."""
     worst, first_bad = 0.0, None
     for side in ("left", "right"):
         anchor = None
         for k, row in enumerate(track.rows):
-            if side not in feet_of(schedule.supports[row]):
+            total = sum(w for w, _ in track.feet[k].values())
+            carries = side in track.feet[k] and track.feet[k][side][0] >= SLIP_LOAD_SHARE * total
+            if side not in feet_of(schedule.supports[row]) or (schedule.is_motion and not carries):
                 anchor = None
                 continue
             if anchor is None:
@@ -192,6 +197,41 @@ def _slip(track: _Track, schedule: Schedule, start: BodyState, times: np.ndarray
             if slide > SLIP_LIMIT_M and (first_bad is None or k < first_bad):
                 first_bad = k
     return worst, first_bad
+
+
+def _motion_tilt(track: _Track, schedule: Schedule, plan_rot: np.ndarray, times: np.ndarray, loaded: int,
+                 loaded_up: np.ndarray) -> np.ndarray:
+    """Tilt [deg] of each sample from the plan, counted from the loaded attitude and again
+    :data:`SUPPORT_SETTLE_S` after every change of support."""
+    ups = np.array([plan_rot[k].T @ r[:, 2] for k, r in enumerate(track.rot)])
+    reference, pending, out = loaded_up, None, np.zeros(len(times))
+    for k in range(loaded, len(times)):
+        if k > loaded and schedule.supports[track.rows[k]] != schedule.supports[track.rows[k - 1]]:
+            pending = times[k] + SUPPORT_SETTLE_S
+        if pending is not None and times[k] >= pending - 1e-9:
+            reference, pending = ups[k], None
+        out[k] = math.degrees(math.acos(float(np.clip(ups[k] @ reference, -1.0, 1.0))))
+    return out
+
+
+def sag_allowance_deg(schedule: Schedule, spec: Spec) -> float:
+    """For a motion with single-support rows: the largest torso turn [deg] the compliance model predicts from the
+    servos' sag on one leg (:mod:`op2motion.compliance`), by which a motion's tilt limit grows (its plan is rigid);
+    0 for a held pose or a motion on two feet."""
+    if not schedule.is_motion:
+        return 0.0
+    from ..compliance import Compliance
+    from ..joints import servo_to_book
+    from ..kinematics import forward
+
+    model, worst = Compliance(spec), 0.0
+    for side in ("left", "right"):
+        rows = [k for k, s in enumerate(schedule.supports) if s == side]
+        if rows:
+            points = forward(servo_to_book(schedule.goals[rows], side, spec), spec, "dh", full_com=True)
+            tilt = model.settle(points, points.com_full).tilt
+            worst = max(worst, float(np.degrees(np.max(np.where(np.isfinite(tilt), tilt, 0.0)))))
+    return worst
 
 
 def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, schedule: Schedule,
@@ -207,8 +247,7 @@ def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, s
     z = np.array([0.0, 0.0, 1.0])
     from_start = np.array([_error_tilt_deg(plan_rot[k], r, z) for k, r in enumerate(track.rot)])
     loaded_up = plan_rot[loaded].T @ track.rot[loaded][:, 2]
-    tilt = np.array([_error_tilt_deg(plan_rot[k], r, loaded_up) if k >= loaded else 0.0
-                     for k, r in enumerate(track.rot)])
+    tilt = _motion_tilt(track, schedule, plan_rot, times, loaded, loaded_up)
     load_tilt = float(from_start[loaded])
     loading_fall = first(from_start[:loaded] > LOADING_TILT_LIMIT_DEG)
     com = np.asarray(track.com)
@@ -217,12 +256,13 @@ def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, s
     start: BodyState = facts["start"]
     failures: list[Failure] = []
     foot_links = {spec.joint(f"{s[0]}_ank_roll").child: s for s in ("left", "right")}
-    i = first(tilt > TILT_LIMIT_DEG)
+    limit = TILT_LIMIT_DEG + sag_allowance_deg(schedule, spec)
+    i = first(tilt > limit)
     if loading_fall is not None:
         i = loading_fall
     if i is not None:
         turned = max(float(tilt.max()), float(np.max(from_start)) - load_tilt)
-        failures.append(Failure("tilt", times[i], f"the torso tilted {turned:.0f}° (limit {TILT_LIMIT_DEG:g}° after "
+        failures.append(Failure("tilt", times[i], f"the torso tilted {turned:.0f}° (limit {limit:.1f}° after "
                                                   f"loading)"))
     planned_com_z = np.array([planned.states[r].com[2] for r in rows])
     i = first(com[:, 2] < (1.0 - COM_DROP_FRACTION) * planned_com_z)

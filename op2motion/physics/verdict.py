@@ -5,7 +5,10 @@ Reasons (a fixed vocabulary; ``stable`` is true only when there is none), listed
 * ``tilt``: the torso turned more than :data:`TILT_LIMIT_DEG` from its loaded attitude (when gravity reached full
   strength: the servos' sag while the pose takes its weight is reported as ``load_tilt_deg``, not counted), or more
   than :data:`LOADING_TILT_LIMIT_DEG` from the start while gravity ramped in (a fall during loading); in a motion,
-  turns are measured against the planned attitude of that moment.
+  turns are measured against the planned attitude of that moment, counted afresh :data:`SUPPORT_SETTLE_S` after
+  each change of support (a foot taking or giving up the load changes the servos' sag by several degrees; a fall
+  keeps turning); the limit of a motion that stands on one foot grows by the largest torso turn the compliance
+  model predicts for its single-support rows (the plan is rigid; the servos sag).
 * ``com_drop``: the centre of mass sank below (1 - :data:`COM_DROP_FRACTION`) of its planned height.
 * ``ground_contact``: a link other than a supporting foot pressed on the floor.
 * ``swing_foot_contact``: in a single-support pose, the swing foot pressed on the floor (the robot is then on two
@@ -15,7 +18,9 @@ Reasons (a fixed vocabulary; ``stable`` is true only when there is none), listed
   :data:`SATURATION_FRACTION` of its available torque in at least :data:`SATURATION_SHARE` of the samples: it
   cannot hold the pose. (While a motion plays, a servo at its limit only lags: that is the tracking error.)
 * ``joint_limit``: a joint lay on its mechanical stop, away from its goal, for :data:`LIMIT_HOLD_S` or more.
-* ``slip``: a supporting sole slid more than :data:`SLIP_LIMIT_M` over the floor.
+* ``slip``: a supporting sole slid more than :data:`SLIP_LIMIT_M` over the floor while it carried at least
+  :data:`SLIP_LOAD_SHARE` of the load (a foot sliding as it unloads before lifting, or after touching down, only
+  scuffs).
 
 "Pressed" means a contact force above :data:`CONTACT_FORCE_N` [N].
 """
@@ -37,6 +42,8 @@ LIMIT_AT_RAD = 0.0175           # 1°: a joint this close to its stop lies on it
 LIMIT_AWAY_RAD = 0.035          # 2°: ...and is held there away from its goal
 LIMIT_HOLD_S = 0.2
 SLIP_LIMIT_M = 0.01
+SLIP_LOAD_SHARE = 0.2
+SUPPORT_SETTLE_S = 0.3
 PUSH_DIRECTIONS = {"forward": (1.0, 0.0), "backward": (-1.0, 0.0), "left": (0.0, 1.0), "right": (0.0, -1.0)}
 
 

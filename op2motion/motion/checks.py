@@ -1,0 +1,150 @@
+"""Checks along a trajectory before any physics: links apart, the ZMP over the feet, torques within the servos.
+
+* **Self-clearance**: the spec's collision shapes on the D-H chain (:mod:`op2motion.kinematics.shapes`) at every
+  row; :func:`require_clear` refuses a trajectory whose links overlap by more than :data:`OVERLAP_TOL_M` (the shapes'
+  approximation error) and names the segment, the time and the two links.
+* **Centre of mass and ZMP** with pinocchio on the generated URDF: the fixed foot (the one that stays down
+  throughout) is laid level at the origin, velocities and accelerations are differences of the 8 ms rows, and the
+  zero-moment point of the whole body is
+
+      p = c_xy - c_z c''_xy / (g + c''_z) + (-L'_y, L'_x) / (m (g + c''_z))
+
+  with L the centroidal angular momentum (pinocchio's ``computeCentroidalMomentum``); its margin to the support
+  polygon of the row (the real sole box, or the hull of both soles) is reported.
+* **Torques** from RNEA with those velocities and accelerations, the contact wrench on the supporting sole(s)
+  taken out through the floating base's six rows (least norm over both soles in double support), against the
+  MX-28's available torque at the joint speed (:mod:`op2motion.servo`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..balance import convex_hull, polygon_margin
+from ..errors import CheckFailed
+from ..joints import servo_to_book
+from ..kinematics.dh import MATRIX_BELOW, forward_dh_frames
+from ..kinematics.shapes import self_clearance, shape_set
+from ..model.dynamics import dynamics_for
+from ..model.urdf import foot_box_corners, foot_link
+from ..servo import ServoModel
+from ..spec import GRAVITY_M_S2, Spec, feet_of
+from .trajectory import Trajectory
+
+OVERLAP_TOL_M = 0.003     # the shapes on the chain match the engines' to 2.8 mm: deeper overlaps are real
+
+
+@dataclass(frozen=True)
+class MotionChecks:
+    """Per row: least self-clearance [m] and its links, CoM (K, 3) and ZMP (K, 2) [m] in the fixed-foot frame,
+    the ZMP's margin to the row's support polygon [m] (negative outside), and the worst joint's torque ratio
+    (needed / available) with its torque [N·m]."""
+
+    fixed_foot: str
+    clearance_m: np.ndarray
+    clearance_links: tuple[tuple[str, str], ...]
+    com: np.ndarray
+    zmp: np.ndarray
+    zmp_margin_m: np.ndarray
+    polygons: tuple[np.ndarray, ...]
+    torque_ratio: np.ndarray
+    torque_nm: np.ndarray
+    torque_joint: tuple[str, ...]
+
+    def summary(self) -> dict[str, object]:
+        """The worst of each check, for reports."""
+        c, z, t = int(np.argmin(self.clearance_m)), int(np.argmin(self.zmp_margin_m)), int(np.argmax(self.torque_ratio))
+        return {"min_clearance_m": round(float(self.clearance_m[c]), 5), "min_clearance_links": self.clearance_links[c],
+                "zmp_margin_min_m": round(float(self.zmp_margin_m[z]), 5),
+                "zmp_inside_fraction": round(float(np.mean(self.zmp_margin_m >= 0.0)), 4),
+                "torque_ratio_max": round(float(self.torque_ratio[t]), 4),
+                "torque_max_nm": round(float(self.torque_nm[t]), 4),
+                "torque_joint": self.torque_joint[t], "fixed_foot": self.fixed_foot}
+
+
+def fixed_foot(supports: tuple[str, ...]) -> str:
+    """The foot on the floor in every row (the left when both are, or none is)."""
+    common = set.intersection(*(set(feet_of(s)) for s in supports))
+    return "left" if "left" in common or not common else "right"
+
+
+def clearance(goals: np.ndarray, spec: Spec, side: str = "left") -> tuple[np.ndarray, list[tuple[str, str]]]:
+    """Least clearance [m] (K,) between the spec's collision shapes for each row of goals (K, 20) [rad], and the
+    links of the closest pair."""
+    shapes = shape_set(spec, side)
+    names = shapes.pair_names()
+    values, links = [], []
+    for start in range(0, len(goals), MATRIX_BELOW - 1):
+        _, frames = forward_dh_frames(servo_to_book(goals[start:start + MATRIX_BELOW - 1], side, spec), spec)
+        least, pair = self_clearance(frames, shapes)
+        values.append(least)
+        links += [names[p] for p in pair]
+    return np.concatenate(values), links
+
+
+def require_clear(trajectory: Trajectory, spec: Spec) -> None:
+    """Refuse a trajectory whose links pass through each other, naming the segment, time and links."""
+    least, links = clearance(trajectory.goals, spec)
+    bad = np.flatnonzero(least < -OVERLAP_TOL_M)
+    if bad.size:
+        k = int(bad[0])
+        deepest = int(bad[np.argmin(least[bad])])
+        raise CheckFailed(f"segment {trajectory.segment_of(k)} passes {links[deepest][0]} through "
+                          f"{links[deepest][1]} from {k * trajectory.dt:.2f} s (overlap {-least[deepest] * 1000:.0f} "
+                          f"mm): add a pose in between that keeps them apart, or change the order of the moves")
+
+
+def _polygon(dyn, data, side_list: tuple[str, ...], spec: Spec) -> np.ndarray:  # type: ignore[no-untyped-def]
+    points = []
+    for side in side_list:
+        foot = data.oMf[dyn.model.getFrameId(foot_link(spec, side))]
+        points.append(foot_box_corners(spec, side) @ foot.rotation.T + foot.translation)
+    return convex_hull(np.vstack(points)[:, :2])
+
+
+def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | None = None) -> MotionChecks:
+    """All checks of the module docstring on every row of ``trajectory``."""
+    dyn = dynamics_for(spec)
+    pin, model, data = dyn.pin, dyn.model, dyn.data
+    servo = servo or ServoModel.of(spec)
+    dt, goals = trajectory.dt, trajectory.goals
+    side = fixed_foot(trajectory.supports)
+    configs = np.array([dyn.level_configuration(g, side) for g in goals])
+    k = len(goals)
+    v = np.zeros((k, model.nv))
+    if k > 1:
+        steps = np.array([pin.difference(model, configs[i], configs[i + 1]) / dt for i in range(k - 1)])
+        v[1:-1] = 0.5 * (steps[1:] + steps[:-1])
+        v[0], v[-1] = steps[0], steps[-1]
+    a = np.gradient(v, dt, axis=0) if k > 1 else np.zeros_like(v)
+    com, momentum, polygons = np.zeros((k, 3)), np.zeros((k, 3)), []
+    ratio, torque, joint = np.zeros(k), np.zeros(k), []
+    joint_speed = np.gradient(goals, dt, axis=0) if k > 1 else np.zeros_like(goals)
+    available = servo.available(joint_speed)
+    for i in range(k):
+        q = configs[i]
+        com[i] = pin.centerOfMass(model, data, q)
+        momentum[i] = np.asarray(pin.computeCentroidalMomentum(model, data, q, v[i]).angular)
+        pin.framesForwardKinematics(model, data, q)
+        polygons.append(_polygon(dyn, data, feet_of(trajectory.supports[i]), spec))
+        tau = pin.rnea(model, data, q, v[i], a[i])
+        pin.computeJointJacobians(model, data, q)
+        jac = np.vstack([pin.getFrameJacobian(model, data, dyn.sole_ids[s], pin.ReferenceFrame.LOCAL)
+                         for s in feet_of(trajectory.supports[i])])
+        wrench = np.linalg.lstsq(jac[:, :6].T, tau[:6], rcond=None)[0]
+        joints = np.abs((tau - jac.T @ wrench)[dyn.v_index])
+        share = joints / np.maximum(available[i], 1e-9)
+        w = int(np.argmax(share))
+        ratio[i], torque[i] = share[w], joints[w]
+        joint.append(spec.joint_names[w])
+    ddc = np.gradient(np.gradient(com, dt, axis=0), dt, axis=0) if k > 2 else np.zeros_like(com)
+    dl = np.gradient(momentum, dt, axis=0) if k > 2 else np.zeros_like(momentum)
+    vertical = GRAVITY_M_S2 + ddc[:, 2]
+    mass = dyn.total_mass
+    zmp = com[:, :2] - com[:, 2:3] / vertical[:, None] * ddc[:, :2] + np.column_stack([-dl[:, 1], dl[:, 0]]) / (
+        mass * vertical[:, None])
+    margin = np.array([polygon_margin(zmp[i], polygons[i])[0] for i in range(k)])
+    least, links = clearance(goals, spec)
+    return MotionChecks(side, least, tuple(links), com, zmp, margin, tuple(polygons), ratio, torque, tuple(joint))
