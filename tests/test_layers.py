@@ -22,7 +22,7 @@ LAYERS = [
     {"compliance"},
     {"summary", "posture", "physics", "export", "plot", "motion"},
     {"workflow", "gait"},
-    {"bench", "library", "figures"},
+    {"bench", "library", "figures", "motionplot"},
     {"commands"},
     {"cli"},
     {"__main__", "__init__"},

@@ -83,3 +83,15 @@ def csv_table(poses: Sequence[Pose], spec: Spec, seconds: float = 1.0) -> str:
         writer.writerow([pose.name, f"{k * seconds:.3f}", pose.support] + [f"{math.degrees(q):.4f}" for q in pose.servo]
                         + [str(int(t)) for t in ticks])
     return buf.getvalue()
+
+
+def goals_csv(times: np.ndarray, goals: np.ndarray, supports: Sequence[str], spec: Spec) -> str:
+    """CSV of a trajectory: one row per control tick with its time [s], support, goal angles [deg] and ticks."""
+    names = spec.joint_names
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(["time_s", "support"] + [f"{n}_deg" for n in names] + [f"{n}_tick" for n in names])
+    for t, support, row in zip(times, supports, goals):
+        writer.writerow([f"{t:.3f}", support] + [f"{math.degrees(q):.4f}" for q in row]
+                        + [str(int(k)) for k in servo_to_ticks(row, spec)])
+    return buf.getvalue()

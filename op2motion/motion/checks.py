@@ -33,6 +33,7 @@ from ..servo import ServoModel
 from ..spec import GRAVITY_M_S2, Spec, feet_of
 from .trajectory import Trajectory
 
+SMOOTH_ROWS = 5           # 40 ms: the goals' derivatives are taken after this moving average
 OVERLAP_TOL_M = 0.003     # the shapes on the chain match the engines' to 2.8 mm: deeper overlaps are real
 
 
@@ -104,14 +105,31 @@ def _polygon(dyn, data, side_list: tuple[str, ...], spec: Spec) -> np.ndarray:  
     return convex_hull(np.vstack(points)[:, :2])
 
 
-def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | None = None) -> MotionChecks:
-    """All checks of the module docstring on every row of ``trajectory``."""
+def _smoothed(values: np.ndarray, width: int) -> np.ndarray:
+    """A centred moving average over ``width`` rows (ends held), per column."""
+    if len(values) < width or width < 2:
+        return values
+    pad = np.concatenate([np.repeat(values[:1], width // 2, axis=0), values,
+                          np.repeat(values[-1:], width - 1 - width // 2, axis=0)])
+    kernel = np.ones(width) / width
+    return np.apply_along_axis(lambda c: np.convolve(c, kernel, mode="valid"), 0, pad)
+
+
+def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | None = None,
+                     foot: str | None = None) -> MotionChecks:
+    """All checks of the module docstring on every row of ``trajectory``; ``foot`` picks the floor frame when both
+    feet stay down throughout (default: the left). Velocities and accelerations are taken from the goals smoothed
+    over :data:`SMOOTH_ROWS` rows: goals come in whole ticks (0.088°), and the servos follow them through their
+    own lag, so raw second differences of the steps would be noise."""
     dyn = dynamics_for(spec)
     pin, model, data = dyn.pin, dyn.model, dyn.data
     servo = servo or ServoModel.of(spec)
     dt, goals = trajectory.dt, trajectory.goals
     side = fixed_foot(trajectory.supports)
-    configs = np.array([dyn.level_configuration(g, side) for g in goals])
+    if foot is not None and all(s == "double" for s in trajectory.supports):
+        side = foot
+    smooth = _smoothed(goals, SMOOTH_ROWS)
+    configs = np.array([dyn.level_configuration(g, side) for g in smooth])
     k = len(goals)
     v = np.zeros((k, model.nv))
     if k > 1:
@@ -121,7 +139,7 @@ def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | Non
     a = np.gradient(v, dt, axis=0) if k > 1 else np.zeros_like(v)
     com, momentum, polygons = np.zeros((k, 3)), np.zeros((k, 3)), []
     ratio, torque, joint = np.zeros(k), np.zeros(k), []
-    joint_speed = np.gradient(goals, dt, axis=0) if k > 1 else np.zeros_like(goals)
+    joint_speed = np.gradient(smooth, dt, axis=0) if k > 1 else np.zeros_like(goals)
     available = servo.available(joint_speed)
     for i in range(k):
         q = configs[i]

@@ -220,3 +220,25 @@ def plan(waypoints: Sequence[Waypoint], spec: Spec, profile: str = "quintic",
     return Trajectory(goals, gains, row_supports(goals, segment, waypoints, spec), segment, names,
                       notes=tuple(shift_notes + notes))
 
+
+
+def slope_of(p_gain: int) -> int:
+    """The compliance byte whose P gain is ``p_gain`` (P = (256 >> n) << 2 on both nibbles: 32 -> 0x55)."""
+    for n in range(1, 8):
+        if (256 >> n) << 2 == p_gain:
+            return n << 4 | n
+    raise InputError(f"expected a P gain an action page can carry (256, 128, 64, 32, 16, 8 or 4), got {p_gain}",
+                     "p_gain")
+
+
+def action_pages(waypoints: Sequence[Waypoint], spec: Spec, name: str, first_page: int,
+                 p_gain: int = DEFAULT_P_GAIN, shift_weight: bool = True) -> tuple[list[bytes], list[str]]:
+    """The motion as chained action pages from ``first_page`` on (the robot's profile: what the robot plays),
+    weight shifts inserted as :func:`plan` does, every joint's slope set for ``p_gain``; and the notes."""
+    check_waypoints(waypoints)
+    notes: list[str] = []
+    if shift_weight:
+        waypoints, notes = with_weight_shifts(waypoints, spec)
+    steps, timing, _ = robot_steps(waypoints, spec, SPEED_FRACTION * spec.servo.no_load_speed_rad_s)
+    slopes = {j.id: slope_of(p_gain) for j in spec.joints} if p_gain != DEFAULT_P_GAIN else None
+    return robot_pages(name, steps, first_page, slopes), notes + timing
