@@ -62,9 +62,38 @@ def _full_com_vs_pinocchio_m(spec: Spec, poses: BookAngles) -> float:
     return max(float(np.linalg.norm(full[:, i] - dyn.com(servo[i], poses.support))) for i in range(n))
 
 
-def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0) -> dict[str, Any]:
-    """Time batched forward kinematics + CoM for ``n`` poses with each model, one physics validation and one PSO
-    solve; figures in milliseconds (scaled to 40 000 poses), with their correctness checks."""
+BENCH_PAGE = 4            # the stock "hi" page: 464 ticks from the init pose, three pages chained
+
+
+def _motion_figures(spec: Spec, action: bytes | None, repeat: int) -> dict[str, Any]:
+    """``motion_play_ms``: the page player on one stock page (emulation only); ``motion_validate_ms``: that
+    page's goals played into the servo model in PyBullet (plus settling and the final hold). None without a file."""
+    if action is None:
+        return {"motion_play_ms": None, "motion_validate_ms": None, "check_motion_ticks": None}
+    from .export.action import page_to_pose, requested_page
+    from .joints import servo_to_ticks
+    from .motion.player import IDS, play
+    from .motion.trajectory import from_playback
+    from .physics import validate_motion
+
+    start = page_to_pose(requested_page(action, 1, spec, "action"), spec)
+    by_id = {j.id: int(t) for j, t in zip(spec.joints, servo_to_ticks(start.servo, spec))}
+    ticks = [by_id[i] for i in IDS]
+    out: dict[str, Any] = {}
+    play_ms = _best_ms(lambda: out.update(p=play(action, BENCH_PAGE, ticks)), repeat)
+    trajectory = from_playback(out["p"], spec)
+    validate_ms = _best_ms(lambda: out.update(v=validate_motion(trajectory.goals, trajectory.p_gains,
+                                                                 trajectory.supports, spec)), 1)
+    return {"motion_play_ms": round(play_ms, 2), "motion_validate_ms": round(validate_ms, 1),
+            "motion_page": BENCH_PAGE, "check_motion_ticks": out["p"].calls,
+            "check_motion_stands": bool(out["v"].stable)}
+
+
+def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
+              action: bytes | None = None) -> dict[str, Any]:
+    """Time batched forward kinematics + CoM for ``n`` poses with each model, one physics validation, one PSO
+    solve and (given an action file's bytes) one page played and validated; figures in milliseconds (scaled to
+    40 000 poses), with their correctness checks."""
     rng = np.random.default_rng(seed)
     poses_dh = BookAngles.random(n, rng, "left", psi=True)
     poses_pb = BookAngles(poses_dh.th, poses_dh.phi, np.zeros_like(poses_dh.psi), "left")
@@ -104,4 +133,5 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0) 
         "check_standing_clearance_m": float(clearances(standing, shapes).min()),
         "check_pso_hand_error_m": float(evaluate_cost(BookAngles.from_vector(pso["r"].x), problem,
                                                       spec).hand_error[0]),
+        **_motion_figures(spec, action, repeat),
     }

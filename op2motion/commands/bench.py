@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 from typing import Any
 
 from .. import book
 from ..bench import BENCH_POSES
 from ..spec import Spec
 from .common import add_command, emit, whole
+
+STOCK_ACTION = Path(__file__).resolve().parents[2] / "tests" / "data" / "motion_4096.bin"
 
 
 def register(sub: Any) -> None:
@@ -17,13 +20,17 @@ def register(sub: Any) -> None:
     p.add_argument("--poses", type=whole(100, 1_000_000), default=BENCH_POSES,
                    help=f"batch size; figures are scaled to {BENCH_POSES} (default {BENCH_POSES})")
     p.add_argument("--repeat", type=whole(1, 100), default=9, help="runs per figure; the best is reported (default 9)")
+    p.add_argument("--action", metavar="FILE", default=str(STOCK_ACTION) if STOCK_ACTION.exists() else None,
+                   help="action file for motion_play_ms / motion_validate_ms (default: the stock file in the "
+                        "repository's tests/data, when present)")
 
 
 def cmd_bench(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion bench``."""
     from ..bench import run_bench
+    from ..export.action import read_action
 
-    r = run_bench(spec, args.poses, args.repeat)
+    r = run_bench(spec, args.poses, args.repeat, action=read_action(args.action) if args.action else None)
     lines = [f"{r['poses']} poses, best of {r['repeat']}, scaled to {BENCH_POSES} full-body evaluations:",
              f"  projection model  {r['fk_pb_40k_ms']:8.2f} ms   (book MATLAB: {book.MATLAB_40K_MS['pb']:.0f} ms)",
              f"  D-H model         {r['fk_dh_40k_ms']:8.2f} ms   (book MATLAB: {book.MATLAB_40K_MS['dh']:.0f} ms)",
@@ -33,5 +40,8 @@ def cmd_bench(args: argparse.Namespace, spec: Spec) -> int:
              f"{r['validate_ms']:.0f} ms",
              f"one PSO posture solve ({book.PSO_PARTICLES} particles x {book.PSO_ITERATIONS} iterations, D-H): "
              f"{r['pso_solve_ms']:.0f} ms (target <= 150 ms)"]
+    if r["motion_play_ms"] is not None:
+        lines += [f"page {r['motion_page']} played tick for tick ({r['check_motion_ticks']} ticks): "
+                  f"{r['motion_play_ms']:.2f} ms; validated in PyBullet: {r['motion_validate_ms']:.0f} ms"]
     emit(args, r, "\n".join(lines))
     return 0
