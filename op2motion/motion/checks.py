@@ -33,6 +33,7 @@ from ..servo import ServoModel
 from ..spec import GRAVITY_M_S2, Spec, feet_of
 from .trajectory import Trajectory
 
+MAX_RATIO = 99.0          # a torque ratio is reported up to this (a goal faster than the no-load speed has none)
 SMOOTH_ROWS = 5           # 40 ms: the goals' derivatives are taken after this moving average
 OVERLAP_TOL_M = 0.003     # the shapes on the chain match the engines' to 2.8 mm: deeper overlaps are real
 
@@ -153,7 +154,7 @@ def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | Non
                          for s in feet_of(trajectory.supports[i])])
         wrench = np.linalg.lstsq(jac[:, :6].T, tau[:6], rcond=None)[0]
         joints = np.abs((tau - jac.T @ wrench)[dyn.v_index])
-        share = joints / np.maximum(available[i], 1e-9)
+        share = np.minimum(joints / np.maximum(available[i], 1e-9), MAX_RATIO)
         w = int(np.argmax(share))
         ratio[i], torque[i] = share[w], joints[w]
         joint.append(spec.joint_names[w])

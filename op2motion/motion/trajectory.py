@@ -62,12 +62,27 @@ class Trajectory:
         return "the start" if k < 0 else self.segment_names[k]
 
 
+SWING_CLEAR_M = 0.005      # a foot whose lowest corner is this high above the other sole's plane is lifted
+
+
+def goal_supports(goals: np.ndarray, spec: Spec) -> tuple[str, ...]:
+    """The support of each row of goals (K, 20) [rad]: standing on one sole laid flat, the other foot is lifted
+    when its lowest corner is more than :data:`SWING_CLEAR_M` above the floor after the servos' sag
+    (:func:`.shift.settled_swing_heights`: a kick, a step); otherwise both feet stand."""
+    from .shift import settled_swing_heights
+
+    lifted = {}
+    for stance, swing in (("left", "right"), ("right", "left")):
+        lifted[swing] = settled_swing_heights(np.atleast_2d(goals), stance, spec) > SWING_CLEAR_M
+    return tuple("left" if r else "right" if le else "double" for r, le in zip(lifted["right"], lifted["left"]))
+
+
 def from_playback(playback: Playback, spec: Spec, name: str = "page") -> Trajectory:
-    """The goals an action page sent (IDs 1-20 in spec order), in double support (stock pages are played
-    standing)."""
+    """The goals an action page sent (IDs 1-20 in spec order), each row on the support its goals give
+    (:func:`goal_supports`)."""
     order = [IDS.index(j.id) for j in spec.joints]
     goals = np.array([ticks_to_servo(row[order], spec) for row in playback.goals])
     gains = playback.p_gains[:, order].astype(float)
     segment = np.zeros(len(goals), dtype=int)
     segment[0] = -1
-    return Trajectory(goals, gains, ("double",) * len(goals), segment, (name,))
+    return Trajectory(goals, gains, goal_supports(goals, spec), segment, (name,))
