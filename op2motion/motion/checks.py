@@ -118,17 +118,15 @@ def _smoothed(values: np.ndarray, width: int) -> np.ndarray:
 
 def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | None = None,
                      foot: str | None = None) -> MotionChecks:
-    """All checks of the module docstring on every row of ``trajectory``; ``foot`` picks the floor frame when both
-    feet stay down throughout (default: the left). Velocities and accelerations are taken from the goals smoothed
-    over :data:`SMOOTH_ROWS` rows: goals come in whole ticks (0.088°), and the servos follow them through their
-    own lag, so raw second differences of the steps would be noise."""
+    """All checks of the module docstring on every row of ``trajectory``. ``foot`` picks the frame of the report:
+    that sole where it stood at the start, as the physics world has it (default: the fixed foot's). Velocities and
+    accelerations are taken from the goals smoothed over :data:`SMOOTH_ROWS` rows: goals come in whole ticks
+    (0.088°), and the servos follow them through their own lag, so raw second differences would be noise."""
     dyn = dynamics_for(spec)
     pin, model, data = dyn.pin, dyn.model, dyn.data
     servo = servo or ServoModel.of(spec)
     dt, goals = trajectory.dt, trajectory.goals
     side = fixed_foot(trajectory.supports)
-    if foot is not None and all(s == "double" for s in trajectory.supports):
-        side = foot
     smooth = _smoothed(goals, SMOOTH_ROWS)
     configs = np.array([dyn.level_configuration(g, side) for g in smooth])
     k = len(goals)
@@ -164,6 +162,16 @@ def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | Non
     mass = dyn.total_mass
     zmp = com[:, :2] - com[:, 2:3] / vertical[:, None] * ddc[:, :2] + np.column_stack([-dl[:, 1], dl[:, 0]]) / (
         mass * vertical[:, None])
+    if foot is not None and foot != side:     # report in the ``foot`` sole's frame (where it stood at the start)
+        pin.framesForwardKinematics(model, data, configs[0])
+        rel = data.oMf[dyn.sole_ids[foot]].inverse() * data.oMf[dyn.sole_ids[side]]
+        yaw = np.arctan2(rel.rotation[1, 0], rel.rotation[0, 0])
+        turn = np.array([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])
+        shift = rel.translation[:2]
+        zmp = zmp @ turn.T + shift
+        com[:, :2] = com[:, :2] @ turn.T + shift
+        polygons = [p @ turn.T + shift for p in polygons]
+        side = foot
     margin = np.array([polygon_margin(zmp[i], polygons[i])[0] for i in range(k)])
     least, links = clearance(goals, spec)
     return MotionChecks(side, least, tuple(links), com, zmp, margin, tuple(polygons), ratio, torque, tuple(joint))
