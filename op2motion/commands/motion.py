@@ -32,7 +32,8 @@ def register(sub: Any) -> None:
     top = sub.add_parser("motion", help="play action pages, plan pose-to-pose motions, export them",
                          description="Motions: action pages played as the robot plays them, planned pose "
                                      "sequences, both checked along the way and in physics.")
-    inner = top.add_subparsers(dest="motion_command", metavar="ACTION", required=True, parser_class=Parser)
+    inner = top.add_subparsers(dest="motion_command", metavar="ACTION", required=True, parser_class=Parser,
+                               help="play, plan or export")
     p = add_command(inner, "play", cmd_play, "play an action page tick for tick (8 ms) as the OP2 framework does")
     p.add_argument("file", metavar="FILE", help="action file (motion_4096.bin)")
     p.add_argument("--page", type=PAGE, required=True, help="page to play")
