@@ -22,12 +22,12 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from ..errors import InputError, PoseFileError
-from ..fileio import read_text, write_atomic
+from ..fileio import write_atomic
 from ..joints import servo_dict, servo_from_mapping
 from ..pose import Pose, check_pose_support
 from ..spec import Spec
 from ..version import __version__
-from .posefile import read_pose
+from .posefile import read_json_file, read_pose
 
 SCHEMA = "op2motion.motion/1"
 PROFILES = ("quintic", "robot")
@@ -117,12 +117,7 @@ def parse_motion(doc: Any, spec: Spec, base: Path, where: str = "<motion>") -> M
 
 def read_motion(path: str | Path, spec: Spec) -> Motion:
     """Read and check a motion file."""
-    text = read_text(path, "motion file", PoseFileError)
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise PoseFileError(f"not JSON: {exc.msg} at line {exc.lineno}", str(path)) from None
-    return parse_motion(doc, spec, Path(path).parent, str(path))
+    return parse_motion(read_json_file(path, "motion file"), spec, Path(path).parent, str(path))
 
 
 def is_motion_file(path: str | Path) -> bool:

@@ -67,16 +67,20 @@ def parse_pose(doc: Any, spec: Spec, where: str = "<pose>") -> Pose:
     return pose
 
 
-def read_pose(path: str | Path, spec: Spec) -> Pose:
-    """Read and check a pose file."""
-    text = read_text(path, "pose file", PoseFileError)
+def read_json_file(path: str | Path, what: str) -> Any:
+    """The decoded JSON of a pose or motion file; unreadable files and bad JSON are :class:`PoseFileError`."""
+    text = read_text(path, what, PoseFileError)
     try:
-        doc = json.loads(text)
+        return json.loads(text)
     except json.JSONDecodeError as exc:
         raise PoseFileError(f"not valid JSON: {exc.msg} at line {exc.lineno}", str(path)) from None
     except RecursionError:
         raise PoseFileError("not valid JSON: nested too deeply", str(path)) from None
-    return parse_pose(doc, spec, str(path))
+
+
+def read_pose(path: str | Path, spec: Spec) -> Pose:
+    """Read and check a pose file."""
+    return parse_pose(read_json_file(path, "pose file"), spec, str(path))
 
 
 def _mapping(doc: Mapping[str, Any], key: str) -> Mapping[str, Any]:
