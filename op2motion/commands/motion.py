@@ -59,25 +59,26 @@ def register(sub: Any) -> None:
     p.add_argument("-o", "--output", type=output_path, required=True, metavar="OUT", help="file to write")
 
 
-def _validate(args: argparse.Namespace, trajectory: Any, spec: Spec, name: str) -> dict[str, Any] | None:
+def _validate(args: argparse.Namespace, trajectory: Any, spec: Spec) -> tuple[dict[str, Any] | None, dict[str, Any]]:
+    """With ``--validate``: the physics result for the JSON and the verdict of each engine."""
     from tqdm import tqdm
 
-    from ..physics import validate_motion
+    from ..physics import MOTION_HOLD_S, MOTION_SETTLE_S, RAMP_S, TIME_STEP_S, validate_motion
 
     if not args.validate:
-        return None
+        return None, {}
     engines = ENGINES if args.engine == "both" else (args.engine,)
+    seconds = RAMP_S + MOTION_SETTLE_S + trajectory.duration_s + MOTION_HOLD_S
+    steps = int(round(seconds / TIME_STEP_S)) * len(engines) * (1 + 4 * (args.push > 0))
     verdicts = {}
-    rows = int((trajectory.duration_s + 3.5) / 0.001) * len(engines) * (1 + 4 * (args.push > 0))
-    with tqdm(total=rows, desc="physics", unit="step", leave=False, disable=not progress_enabled(args)) as bar:
+    with tqdm(total=steps, desc="physics", unit="step", leave=False, disable=not progress_enabled(args)) as bar:
         for engine in engines:
             verdicts[engine] = validate_motion(trajectory.goals, trajectory.p_gains, trajectory.supports, spec,
                                                trajectory.dt, engine, args.push, on_step=bar.update)
     agree = len({v.stable for v in verdicts.values()}) == 1
     first = next(iter(verdicts.values()))
     return {"engines": {e: v.as_dict() for e, v in verdicts.items()}, "agree": agree,
-            "stable": agree and first.stable and all(p.stable for v in verdicts.values() for p in v.pushes),
-            "_verdicts": verdicts, "_name": name}
+            "stable": agree and first.stable and all(p.stable for v in verdicts.values() for p in v.pushes)}, verdicts
 
 
 def _finish(args: argparse.Namespace, spec: Spec, trajectory: Any, title: str, result: dict[str, Any],
@@ -89,13 +90,11 @@ def _finish(args: argparse.Namespace, spec: Spec, trajectory: Any, title: str, r
     from ..motionplot import render_motion
 
     outputs = OutputSet({k: getattr(args, k) for k in ("plot", "csv") if getattr(args, k)})
-    physics = _validate(args, trajectory, spec, title)
-    verdicts = physics.pop("_verdicts") if physics else {}
+    physics, verdicts = _validate(args, trajectory, spec)
     flat = next(iter(verdicts.values())).flat_foot if verdicts else None      # the physics world's floor frame
     checks = check_trajectory(trajectory, spec, foot=flat)
     result["checks"] = checks.summary()
     if physics:
-        physics.pop("_name")
         result["physics"] = physics
     if args.plot:
         first = next(iter(verdicts.values()), None)

@@ -121,9 +121,9 @@ def read_motion(path: str | Path, spec: Spec) -> Motion:
 
 
 def is_motion_file(path: str | Path) -> bool:
-    """Whether ``path`` holds a motion document (by its schema), not a pose."""
+    """Whether ``path`` holds a motion document (its schema names a motion, of any version), not a pose."""
     try:
-        return json.loads(Path(path).read_text(encoding="utf-8")).get("schema") == SCHEMA
+        return str(json.loads(Path(path).read_text(encoding="utf-8")).get("schema")).startswith("op2motion.motion/")
     except (OSError, ValueError, AttributeError):
         return False
 

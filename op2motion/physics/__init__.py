@@ -23,8 +23,8 @@ from .scene import ENGINES, TIME_STEP_S
 from .schedule import Schedule
 from .verdict import PUSH_DIRECTIONS, REASONS, PushResult, Validation
 
-__all__ = ["DEFAULT_SECONDS", "ENGINES", "MAX_SECONDS", "MIN_SECONDS", "REASONS", "Validation", "make_engine",
-           "steps_for", "validate", "validate_motion"]
+__all__ = ["DEFAULT_SECONDS", "ENGINES", "MAX_SECONDS", "MIN_SECONDS", "MOTION_HOLD_S", "MOTION_SETTLE_S", "RAMP_S",
+           "REASONS", "TIME_STEP_S", "Validation", "make_engine", "steps_for", "validate", "validate_motion"]
 
 MIN_SECONDS, MAX_SECONDS = RAMP_S + STEADY_S + 0.5, 60.0
 DEFAULT_SECONDS = 5.0
