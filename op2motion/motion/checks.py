@@ -19,6 +19,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -106,7 +107,7 @@ def _polygon(dyn, data, side_list: tuple[str, ...], spec: Spec) -> np.ndarray:  
     return convex_hull(np.vstack(points)[:, :2])
 
 
-def _smoothed(values: np.ndarray, width: int) -> np.ndarray:
+def smoothed(values: np.ndarray, width: int) -> np.ndarray:
     """A centred moving average over ``width`` rows (ends held), per column."""
     if len(values) < width or width < 2:
         return values
@@ -114,6 +115,51 @@ def _smoothed(values: np.ndarray, width: int) -> np.ndarray:
                           np.repeat(values[-1:], width - 1 - width // 2, axis=0)])
     kernel = np.ones(width) / width
     return np.apply_along_axis(lambda c: np.convolve(c, kernel, mode="valid"), 0, pad)
+
+
+def multibody_zmp(dyn: Any, configs: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                                      np.ndarray]:
+    """The whole body's centre of mass (K, 3) [m] and ZMP (K, 2) [m] (world frame, floor at z = 0) of pinocchio
+    configurations (K, nq) one ``dt`` [s] apart, from the CoM's acceleration and the rate of the centroidal
+    angular momentum; also the velocities and accelerations (K, nv) taken by differences."""
+    pin, model, data = dyn.pin, dyn.model, dyn.data
+    k = len(configs)
+    v = np.zeros((k, model.nv))
+    if k > 1:
+        steps = np.array([pin.difference(model, configs[i], configs[i + 1]) / dt for i in range(k - 1)])
+        v[1:-1] = 0.5 * (steps[1:] + steps[:-1])
+        v[0], v[-1] = steps[0], steps[-1]
+    a = np.gradient(v, dt, axis=0) if k > 1 else np.zeros_like(v)
+    com, momentum = np.zeros((k, 3)), np.zeros((k, 3))
+    for i in range(k):
+        com[i] = pin.centerOfMass(model, data, configs[i])
+        momentum[i] = np.asarray(pin.computeCentroidalMomentum(model, data, configs[i], v[i]).angular)
+    ddc = np.gradient(np.gradient(com, dt, axis=0), dt, axis=0) if k > 2 else np.zeros_like(com)
+    dl = np.gradient(momentum, dt, axis=0) if k > 2 else np.zeros_like(momentum)
+    vertical = GRAVITY_M_S2 + ddc[:, 2]
+    mass = dyn.total_mass
+    zmp = com[:, :2] - com[:, 2:3] / vertical[:, None] * ddc[:, :2] + np.column_stack([-dl[:, 1], dl[:, 0]]) / (
+        mass * vertical[:, None])
+    return com, zmp, v, a
+
+
+def contact_torques(dyn: Any, configs: np.ndarray, v: np.ndarray, a: np.ndarray,
+                    supports: tuple[str, ...]) -> np.ndarray:
+    """Joint torques (K, 20) [N·m] about the spec's joint axes that move pinocchio configurations (K, nq) with
+    velocities and accelerations (K, nv) while the soles of each row's support carry the robot: inverse dynamics
+    (RNEA) less the contact wrenches, the smallest (least-squares) wrenches at the soles that balance the floating
+    base."""
+    pin, model, data = dyn.pin, dyn.model, dyn.data
+    out = np.empty((len(configs), len(dyn.v_index)))
+    for i, q in enumerate(configs):
+        tau = pin.rnea(model, data, q, v[i], a[i])
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        jac = np.vstack([pin.getFrameJacobian(model, data, dyn.sole_ids[s], pin.ReferenceFrame.LOCAL)
+                         for s in feet_of(supports[i])])
+        wrench = np.linalg.lstsq(jac[:, :6].T, tau[:6], rcond=None)[0]
+        out[i] = (tau - jac.T @ wrench)[dyn.v_index]
+    return out
 
 
 def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | None = None,
@@ -127,41 +173,21 @@ def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | Non
     servo = servo or ServoModel.of(spec)
     dt, goals = trajectory.dt, trajectory.goals
     side = fixed_foot(trajectory.supports)
-    smooth = _smoothed(goals, SMOOTH_ROWS)
+    smooth = smoothed(goals, SMOOTH_ROWS)
     configs = np.array([dyn.level_configuration(g, side) for g in smooth])
     k = len(goals)
-    v = np.zeros((k, model.nv))
-    if k > 1:
-        steps = np.array([pin.difference(model, configs[i], configs[i + 1]) / dt for i in range(k - 1)])
-        v[1:-1] = 0.5 * (steps[1:] + steps[:-1])
-        v[0], v[-1] = steps[0], steps[-1]
-    a = np.gradient(v, dt, axis=0) if k > 1 else np.zeros_like(v)
-    com, momentum, polygons = np.zeros((k, 3)), np.zeros((k, 3)), []
-    ratio, torque, joint = np.zeros(k), np.zeros(k), []
+    com, zmp, v, a = multibody_zmp(dyn, configs, dt)
+    polygons: list[np.ndarray] = []
     joint_speed = np.gradient(smooth, dt, axis=0) if k > 1 else np.zeros_like(goals)
     available = servo.available(joint_speed)
+    torques = contact_torques(dyn, configs, v, a, trajectory.supports)
     for i in range(k):
-        q = configs[i]
-        com[i] = pin.centerOfMass(model, data, q)
-        momentum[i] = np.asarray(pin.computeCentroidalMomentum(model, data, q, v[i]).angular)
-        pin.framesForwardKinematics(model, data, q)
+        pin.framesForwardKinematics(model, data, configs[i])
         polygons.append(_polygon(dyn, data, feet_of(trajectory.supports[i]), spec))
-        tau = pin.rnea(model, data, q, v[i], a[i])
-        pin.computeJointJacobians(model, data, q)
-        jac = np.vstack([pin.getFrameJacobian(model, data, dyn.sole_ids[s], pin.ReferenceFrame.LOCAL)
-                         for s in feet_of(trajectory.supports[i])])
-        wrench = np.linalg.lstsq(jac[:, :6].T, tau[:6], rcond=None)[0]
-        joints = np.abs((tau - jac.T @ wrench)[dyn.v_index])
-        share = np.minimum(joints / np.maximum(available[i], 1e-9), MAX_RATIO)
-        w = int(np.argmax(share))
-        ratio[i], torque[i] = share[w], joints[w]
-        joint.append(spec.joint_names[w])
-    ddc = np.gradient(np.gradient(com, dt, axis=0), dt, axis=0) if k > 2 else np.zeros_like(com)
-    dl = np.gradient(momentum, dt, axis=0) if k > 2 else np.zeros_like(momentum)
-    vertical = GRAVITY_M_S2 + ddc[:, 2]
-    mass = dyn.total_mass
-    zmp = com[:, :2] - com[:, 2:3] / vertical[:, None] * ddc[:, :2] + np.column_stack([-dl[:, 1], dl[:, 0]]) / (
-        mass * vertical[:, None])
+    share = np.minimum(np.abs(torques) / np.maximum(available, 1e-9), MAX_RATIO)
+    worst = np.argmax(share, axis=1)
+    ratio, torque = share[np.arange(k), worst], np.abs(torques)[np.arange(k), worst]
+    joint = [spec.joint_names[w] for w in worst]
     if foot is not None and foot != side:     # report in the ``foot`` sole's frame (where it stood at the start)
         pin.framesForwardKinematics(model, data, configs[0])
         rel = data.oMf[dyn.sole_ids[foot]].inverse() * data.oMf[dyn.sole_ids[side]]

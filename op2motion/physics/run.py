@@ -84,11 +84,13 @@ def support_polygon_of(state: BodyState, support: str) -> np.ndarray:
 
 
 def simulate(engine: Any, spec: Spec, servo: ServoModel, schedule: Schedule, seconds: float,
-             push: Push | None = None, on_step: Callable[[], Any] | None = None) -> tuple[_Track, dict[str, Any]]:
-    """Run one check (see the module docstring); returns the samples and the start facts."""
+             push: Push | None = None, on_step: Callable[[], Any] | None = None,
+             start_offset: np.ndarray | None = None) -> tuple[_Track, dict[str, Any]]:
+    """Run one check (see the module docstring); returns the samples and the start facts. ``start_offset``
+    (20,) [rad] starts the joints that far from their first goals (a perturbed start)."""
     body = Body(spec)
     base_pos, base_rot, planned = plan_rows(body, schedule)
-    engine.reset(base_pos, base_rot, schedule.goals[0])
+    engine.reset(base_pos, base_rot, schedule.goals[0] + (0.0 if start_offset is None else start_offset))
     dt = engine.time_step
     steps = int(round(seconds / dt))
     every = max(1, int(round(SAMPLE_S / dt)))

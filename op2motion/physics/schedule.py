@@ -31,6 +31,7 @@ class Schedule:
     supports: tuple[str, ...]
     dt: float
     start_s: float
+    base: tuple[np.ndarray, np.ndarray] | None = None
 
     @classmethod
     def hold(cls, goal: np.ndarray, support: str, servo: ServoModel) -> "Schedule":
@@ -51,6 +52,17 @@ class Schedule:
             check_pose_support(s)
         kp = spec.servo.duty_per_p_rad * p_gains * servo.stall_torque * servo.stiffness_scale
         return cls(goals, kp, tuple(supports), float(dt), float(start_s))
+
+    def with_base(self, positions: np.ndarray, rotations: np.ndarray) -> "Schedule":
+        """This schedule with a planned torso pose for every row (a walk: no foot stays where it started):
+        positions (K, 3) [m] and rotations (K, 3, 3) in the world frame; the robot starts at row 0's."""
+        from dataclasses import replace
+
+        positions, rotations = np.asarray(positions, dtype=float), np.asarray(rotations, dtype=float)
+        if positions.shape != (len(self.goals), 3) or rotations.shape != (len(self.goals), 3, 3):
+            raise InputError(f"expected a torso pose per row ({len(self.goals)}), got {positions.shape} and "
+                             f"{rotations.shape}", "motion")
+        return replace(self, base=(positions, rotations))
 
     @property
     def is_motion(self) -> bool:
@@ -87,7 +99,12 @@ class Planned:
 def plan_rows(body: Body, schedule: Schedule) -> tuple[np.ndarray, np.ndarray, Planned]:
     """The start placement (torso position, rotation) and every row's planned state. The start follows
     :func:`.body.placement` (nothing below the floor, the lower more level sole flat); a motion's rows keep its
-    fixed foot where it started."""
+    fixed foot where it started; a schedule with planned torso poses (a walk) starts at, and plans, those."""
+    if schedule.base is not None:
+        positions, rotations = schedule.base
+        states = tuple(body.state(p, r, g) for p, r, g in zip(positions, rotations, schedule.goals))
+        gap = max(0.0, max(float(states[0].corners[s][:, 2].min()) for s in feet_of(schedule.supports[0])))
+        return positions[0], rotations[0], Planned(rotations, states, "left", gap)
     pos0, rot0, flat, gap = placement(body, schedule.goals[0], schedule.supports[0])
     if not schedule.is_motion:
         return pos0, rot0, Planned(rot0[None], (body.state(pos0, rot0, schedule.goals[0]),), flat, gap)

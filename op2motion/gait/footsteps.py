@@ -1,0 +1,156 @@
+"""Footstep planning: where each foot lands, in the world frame of the start (X forward, Y left, Z up).
+
+The body follows a path of poses ``c_0, c_1, ...`` (x [m], y [m], yaw [rad]), ``c_0`` at the origin between the
+feet; step k puts its foot at ``c_k`` moved half the step width to its side, so each foot advances twice the
+per-step displacement when it swings, and the last step closes the feet side by side. The first swing foot is the
+one on the side the walk goes to (left for a left turn or a step to the left, else left for straight walking): the
+leading foot opens the gap, the trailing one closes it, so the feet never cross.
+
+Every swing is checked against the standing foot: the two sole rectangles, grown by :data:`FOOT_GAP_M`, must not
+overlap anywhere along the swing's path seen from above (start, landing and the straight line between). A plan
+that would let the feet touch is an error naming the step.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..spec import Spec
+from .params import GaitParams
+
+FOOT_GAP_M = 0.005          # soles closer than this from above count as colliding
+PATH_SAMPLES = 9            # poses checked along each swing (start and landing included)
+
+
+@dataclass(frozen=True)
+class Footstep:
+    """A foot placement: ``side`` (left/right), sole centre (x, y) [m] and yaw [rad] in the world frame."""
+
+    side: str
+    x: float
+    y: float
+    yaw: float
+
+    @property
+    def pose(self) -> np.ndarray:
+        """(x, y, yaw) [m, m, rad]."""
+        return np.array([self.x, self.y, self.yaw])
+
+
+@dataclass(frozen=True)
+class FootPlan:
+    """The start placements of both feet and the steps, in order: step k moves ``steps[k].side`` from where that
+    foot stood to ``steps[k]``."""
+
+    start: dict[str, Footstep]
+    steps: tuple[Footstep, ...]
+
+    def stance_before(self, k: int) -> tuple[Footstep, Footstep]:
+        """(standing foot, swing foot's previous placement) for step ``k``."""
+        where = dict(self.start)
+        for step in self.steps[:k]:
+            where[step.side] = step
+        side = self.steps[k].side
+        other = "right" if side == "left" else "left"
+        return where[other], where[side]
+
+
+def _moved(pose: np.ndarray, dx: float, dy: float, dyaw: float) -> np.ndarray:
+    """``pose`` (x, y, yaw) moved by (dx, dy) in its own frame and turned by ``dyaw``."""
+    c, s = math.cos(pose[2]), math.sin(pose[2])
+    return np.array([pose[0] + c * dx - s * dy, pose[1] + s * dx + c * dy, pose[2] + dyaw])
+
+
+def _foot_at(side: str, centre: np.ndarray, width: float) -> Footstep:
+    half = width / 2.0 if side == "left" else -width / 2.0
+    x, y, yaw = _moved(centre, 0.0, half, 0.0)
+    return Footstep(side, float(x), float(y), float(yaw))
+
+
+def first_side(params: GaitParams) -> str:
+    """The foot that swings first (see the module docstring)."""
+    if params.turn_deg < 0.0 or (params.turn_deg == 0.0 and params.step_side_m < 0.0):
+        return "right"
+    return "left"
+
+
+def plan_footsteps(params: GaitParams, spec: Spec, target: tuple[float, float, float] | None = None) -> FootPlan:
+    """The footsteps of ``params.steps`` steps; with ``target`` (x [m], y [m], yaw [rad]) the body walks there
+    instead, in as few steps as the per-step advance allows (the step length, side and turn of ``params`` are the
+    largest per step), the last step closing the feet."""
+    width = params.step_width_m
+    centre = np.zeros(3)
+    start = {side: _foot_at(side, centre, width) for side in ("left", "right")}
+    moves = _target_moves(params, target) if target is not None else (
+        [(params.step_length_m, params.step_side_m, params.turn_rad)] * (params.steps - 1))
+    side = first_side(params) if target is None else _target_side(moves)
+    steps = []
+    for dx, dy, dyaw in list(moves) + [(0.0, 0.0, 0.0)]:
+        centre = _moved(centre, dx, dy, dyaw)
+        steps.append(_foot_at(side, centre, width))
+        side = "right" if side == "left" else "left"
+    plan = FootPlan(start, tuple(steps))
+    check_clear(plan, spec)
+    return plan
+
+
+def _target_moves(params: GaitParams, target: tuple[float, float, float]) -> list[tuple[float, float, float]]:
+    """Equal moves (dx, dy, dyaw) per step reaching ``target`` in the body's start frame, each within the
+    preset's per-step advance (at least 1 mm forward/sideways and 1° of turn per step allowed)."""
+    x, y, yaw = (float(v) for v in target)
+    if not all(math.isfinite(v) for v in (x, y, yaw)):
+        raise InputError(f"expected a finite target (x, y, yaw), got {target}", "target")
+    limits = (max(abs(params.step_length_m), 1e-3), max(abs(params.step_side_m), 1e-3),
+              max(abs(params.turn_rad), math.radians(1.0)))
+    n = max(1, *(math.ceil(abs(v) / lim - 1e-9) for v, lim in zip((x, y, yaw), limits)))
+    # the body path is a straight line in the start frame with the heading turning evenly
+    moves, pose = [], np.zeros(3)
+    for k in range(1, n + 1):
+        goal = np.array([x * k / n, y * k / n, yaw * k / n])
+        c, s = math.cos(pose[2]), math.sin(pose[2])
+        d = goal[:2] - pose[:2]
+        moves.append((c * d[0] + s * d[1], -s * d[0] + c * d[1], goal[2] - pose[2]))
+        pose = goal
+    return moves
+
+
+def _target_side(moves: list[tuple[float, float, float]]) -> str:
+    dx, dy, dyaw = moves[0]
+    return "right" if dyaw < 0.0 or (dyaw == 0.0 and dy < 0.0) else "left"
+
+
+def sole_rectangle(spec: Spec, step: Footstep, grow: float = 0.0) -> np.ndarray:
+    """Corners (4, 2) [m] of the sole under ``step``, seen from above, grown by ``grow`` [m] on every side."""
+    front, back, left, right = spec.sole_extents(step.side)
+    local = np.array([[front + grow, left + grow], [-back - grow, left + grow], [-back - grow, -right - grow],
+                      [front + grow, -right - grow]])
+    c, s = math.cos(step.yaw), math.sin(step.yaw)
+    return local @ np.array([[c, s], [-s, c]]) + np.array([step.x, step.y])
+
+
+def _overlap(a: np.ndarray, b: np.ndarray) -> bool:
+    """Do two convex polygons (n, 2) overlap (separating-axis test)?"""
+    for poly in (a, b):
+        edges = np.roll(poly, -1, axis=0) - poly
+        for nx, ny in np.column_stack([-edges[:, 1], edges[:, 0]]):
+            pa, pb = a @ (nx, ny), b @ (nx, ny)
+            if pa.max() < pb.min() or pb.max() < pa.min():
+                return False
+    return True
+
+
+def check_clear(plan: FootPlan, spec: Spec) -> None:
+    """Raise :class:`InputError` if a swing foot comes within :data:`FOOT_GAP_M` of the standing foot."""
+    for k, step in enumerate(plan.steps):
+        stand, before = plan.stance_before(k)
+        fixed = sole_rectangle(spec, stand, FOOT_GAP_M / 2.0)
+        for u in np.linspace(0.0, 1.0, PATH_SAMPLES):
+            moving = Footstep(step.side, *(before.pose + u * (step.pose - before.pose)))
+            if _overlap(sole_rectangle(spec, moving, FOOT_GAP_M / 2.0), fixed):
+                raise InputError(f"expected the feet to stay {FOOT_GAP_M * 1000:.0f} mm apart, got step {k + 1} "
+                                 f"({step.side} foot to x {step.x:.3f} m, y {step.y:.3f} m, yaw "
+                                 f"{math.degrees(step.yaw):.1f}°) touching the {stand.side} foot", "footsteps")

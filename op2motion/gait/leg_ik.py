@@ -1,0 +1,138 @@
+"""The OP2 leg in closed form: sole pose in the torso frame <-> the six leg servo angles, batched over rows.
+
+Each OP2 leg is hip yaw (about Z), hip roll (X) and hip pitch (Y) meeting in one point, the thigh (93 mm) to the
+knee (Y), the calf (93 mm) to the ankle pitch (Y) and roll (X), which meet in one point 33.5 mm above the sole
+(the framework's ``Kinematics.h``). The lengths, the hip positions and the axis signs are read from the spec, so
+a robot with other links or mirrored servos gets its own IK.
+
+The solution works in "natural" angles (positive about +Z, +X, +Y of the torso frame at servo zero) and maps them
+to servo angles through each joint's axis sign. With the hip at the origin and the foot rotation ``R``, the hip
+seen from the ankle in the foot frame, ``r = Rᵀ (hip - ankle)``, gives the knee from the law of cosines and the
+ankle pitch and roll from the direction of ``r``; the hip's yaw, roll and pitch follow from
+``Rz(yaw) Rx(roll) Ry(pitch) = R Rx(-ankle_roll) Ry(-knee - ankle_pitch)``. The knee bends forward (>= 0).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError, ModelError
+from ..spec import Spec
+
+LEG_JOINTS = ("hip_yaw", "hip_roll", "hip_pitch", "knee", "ank_pitch", "ank_roll")
+_AXES = (2, 0, 1, 1, 1, 0)          # the principal axis of each leg joint: Z, X, Y, Y, Y, X
+REACH_TOL_M = 1e-9                  # a target this far beyond the straight leg still counts as reachable
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One leg's geometry from the spec: hip centre [m] in the torso frame, thigh and calf [m], ankle to sole [m],
+    servo index and axis sign of each leg joint (natural angle x sign = servo angle)."""
+
+    side: str
+    hip: np.ndarray
+    thigh: float
+    calf: float
+    ankle_to_sole: float
+    index: tuple[int, ...]
+    sign: np.ndarray
+
+
+def leg_of(spec: Spec, side: str) -> Leg:
+    """The ``side`` leg of the spec. Raises :class:`ModelError` if the leg is not the OP2's structure (principal
+    axes, hip roll and pitch in one point, knee and ankle straight below)."""
+    p = side[0]
+    joints = [spec.joint(f"{p}_{n}") for n in LEG_JOINTS]
+    signs = []
+    for joint, axis in zip(joints, _AXES):
+        a = np.asarray(joint.axis, dtype=float)
+        others = np.delete(a, axis)
+        if abs(abs(a[axis]) - 1.0) > 1e-9 or np.any(np.abs(others) > 1e-9) or any(joint.origin_rpy):
+            raise ModelError(f"expected {joint.name} to turn about a principal axis with no origin rotation, got axis "
+                             f"{joint.axis} and rpy {joint.origin_rpy}", "spec")
+        signs.append(float(np.sign(a[axis])))
+    yaw, roll, pitch, knee, ankle, ankle_roll = joints
+    offsets = [np.asarray(j.origin_xyz, dtype=float) for j in joints]
+    if (np.any(np.abs(offsets[1][:2]) > 1e-9) or np.any(np.abs(offsets[2]) > 1e-9) or np.any(np.abs(offsets[5]) > 1e-9)
+            or np.any(np.abs(offsets[3][:2]) > 1e-9) or np.any(np.abs(offsets[4][:2]) > 1e-9)):
+        raise ModelError(f"expected the {side} hip roll and pitch in one point and the knee and ankle straight below "
+                         "the hip at servo zero", "spec")
+    hip = offsets[0] + offsets[1]
+    return Leg(side, hip, -offsets[3][2], -offsets[4][2], spec.foot.sole_below_ankle,
+               tuple(spec.joint_names.index(j.name) for j in joints), np.array(signs))
+
+
+def _rx(a: np.ndarray) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    o, z = np.ones_like(a), np.zeros_like(a)
+    return np.stack([np.stack([o, z, z], -1), np.stack([z, c, -s], -1), np.stack([z, s, c], -1)], -2)
+
+
+def _ry(a: np.ndarray) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    o, z = np.ones_like(a), np.zeros_like(a)
+    return np.stack([np.stack([c, z, s], -1), np.stack([z, o, z], -1), np.stack([-s, z, c], -1)], -2)
+
+
+def _rz(a: np.ndarray) -> np.ndarray:
+    c, s = np.cos(a), np.sin(a)
+    o, z = np.ones_like(a), np.zeros_like(a)
+    return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)], -2)
+
+
+def leg_fk(leg: Leg, servo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Sole centre (N, 3) [m] and sole rotation (N, 3, 3) in the torso frame for leg servo angles (N, 6) [rad]
+    (the order of :data:`LEG_JOINTS`)."""
+    n = np.asarray(servo, dtype=float).reshape(-1, 6) * leg.sign
+    yaw, roll, pitch, knee, ank, ank_roll = n.T
+    hip_rot = _rz(yaw) @ _rx(roll) @ _ry(pitch)
+    down = np.array([0.0, 0.0, -1.0])
+    knee_pos = leg.hip + hip_rot @ (down * leg.thigh)
+    shin_rot = hip_rot @ _ry(knee)
+    ankle_pos = knee_pos + shin_rot @ (down * leg.calf)
+    rot = shin_rot @ _ry(ank) @ _rx(ank_roll)
+    return ankle_pos + rot @ (down * leg.ankle_to_sole), rot
+
+
+def leg_ik(leg: Leg, sole: np.ndarray, rot: np.ndarray) -> np.ndarray:
+    """Leg servo angles (N, 6) [rad] that put the sole centre at ``sole`` (N, 3) [m] with rotation ``rot``
+    (N, 3, 3), both in the torso frame. Raises :class:`InputError` naming the first row beyond the leg's reach."""
+    sole = np.asarray(sole, dtype=float).reshape(-1, 3)
+    rot = np.asarray(rot, dtype=float).reshape(-1, 3, 3)
+    ankle = sole + rot @ np.array([0.0, 0.0, leg.ankle_to_sole])
+    r = np.einsum("nji,nj->ni", rot, leg.hip - ankle)           # the hip seen from the ankle, foot frame
+    c = np.linalg.norm(r, axis=1)
+    a, b = leg.thigh, leg.calf
+    cos_knee = (c ** 2 - a ** 2 - b ** 2) / (2.0 * a * b)
+    bad = np.flatnonzero((c > a + b + REACH_TOL_M) | (c < abs(a - b) + 1e-6))
+    if bad.size:
+        i = int(bad[0])
+        raise InputError(f"expected the {leg.side} ankle within {a + b:.4f} m of the hip, got {c[i]:.4f} m at row "
+                         f"{i}", "leg")
+    below = np.flatnonzero(r[:, 2] <= 0.0)
+    if below.size:
+        raise InputError(f"expected the {leg.side} hip above the ankle in the foot frame, got {r[below[0], 2]:.4f} m "
+                         f"at row {int(below[0])}", "leg")
+    knee = np.arccos(np.clip(cos_knee, -1.0, 1.0))
+    ank_roll = np.arctan2(r[:, 1], r[:, 2])
+    # v: the hip from the ankle in the shin frame before the ankle pitch; its direction less r's gives the pitch
+    vx, vz = -a * np.sin(knee), a * np.cos(knee) + b
+    ank = np.arctan2(vx, vz) - np.arctan2(r[:, 0], np.hypot(r[:, 1], r[:, 2]))
+    m = rot @ _rx(-ank_roll) @ _ry(-(knee + ank))
+    yaw = np.arctan2(-m[:, 0, 1], m[:, 1, 1])
+    roll = np.arctan2(m[:, 2, 1], np.hypot(m[:, 2, 0], m[:, 2, 2]))
+    pitch = np.arctan2(-m[:, 2, 0], m[:, 2, 2])
+    return np.column_stack([yaw, roll, pitch, knee, ank, ank_roll]) * leg.sign
+
+
+def legs_ik(spec: Spec, soles: dict[str, tuple[np.ndarray, np.ndarray]], base: np.ndarray) -> np.ndarray:
+    """Full servo rows (N, 20) [rad]: ``base`` (N, 20) or (20,) with both legs replaced by the IK of ``soles``
+    (side -> (positions (N, 3) [m], rotations (N, 3, 3)) in the torso frame)."""
+    n = len(next(iter(soles.values()))[0])
+    out = np.array(np.broadcast_to(np.asarray(base, dtype=float), (n, len(spec.joints))))
+    for side, (pos, rot) in soles.items():
+        leg = leg_of(spec, side)
+        out[:, list(leg.index)] = leg_ik(leg, pos, rot)
+    return out
