@@ -19,14 +19,14 @@ from .version import __version__
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand (each command module registers its own)."""
-    from .commands import bench, common, files, kinematics, library, motion, physics, posture
+    from .commands import bench, common, files, kinematics, library, motion, physics, posture, walk
 
     parser = common.Parser(prog="op2motion", description="Whole-body motion for the ROBOTIS OP2, checked in physics.")
     parser.add_argument("--version", action="version", version=f"op2motion {__version__}")
     parser.add_argument("--spec", metavar="FILE", help="robot spec TOML (default: the shipped specs/op2.toml)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=common.Parser,
                                 title="commands", help="run 'op2motion COMMAND --help' for its options")
-    for module in (kinematics, posture, library, files, physics, motion, bench):
+    for module in (kinematics, posture, library, files, physics, motion, walk, bench):
         module.register(sub)
     return parser
 

@@ -22,7 +22,7 @@ LAYERS = [
     {"compliance"},
     {"summary", "posture", "physics", "export", "plot", "motion"},
     {"workflow", "gait"},
-    {"bench", "library", "figures", "motionplot"},
+    {"bench", "library", "figures", "motionplot", "gaitplot"},
     {"commands"},
     {"cli"},
     {"__main__", "__init__"},

@@ -47,13 +47,20 @@ def webots_motion(poses: Sequence[Pose], spec: Spec, seconds: float = 1.0,
     if times is None:
         _check_time(seconds)
         times = [k * seconds for k in range(len(poses))]
+    return webots_rows(times, np.array([p.servo for p in poses]).reshape(len(poses), len(spec.joints)), spec,
+                       [p.name for p in poses])
+
+
+def webots_rows(times: Sequence[float], goals: np.ndarray, spec: Spec, names: Sequence[str]) -> str:
+    """Webots motion text of servo rows (K, 20) [rad] reached at ``times`` [s] (strictly increasing on the file's
+    millisecond clock, from 0), each line named by ``names``."""
     stamps = [int(round(t * 1000)) for t in times]
-    if len(stamps) != len(poses) or any(b <= a for a, b in zip(stamps, stamps[1:])) or (stamps and stamps[0] < 0):
-        raise InputError(f"expected {len(poses)} strictly increasing times from 0 (ms resolution), got "
-                         f"{list(times)}", "time")
+    if len(stamps) != len(goals) or any(b <= a for a, b in zip(stamps, stamps[1:])) or (stamps and stamps[0] < 0):
+        raise InputError(f"expected {len(goals)} strictly increasing times from 0 (ms resolution), got "
+                         f"{len(stamps)} times", "time")
     lines = ["#WEBOTS_MOTION,V1.0," + ",".join(j.webots for j in spec.joints)]
-    for ms, pose in zip(stamps, poses):
-        lines.append(f"{_stamp(ms / 1000)},{webots_name(pose.name)}," + ",".join(f"{q:.6f}" for q in pose.servo))
+    for ms, name, row in zip(stamps, names, goals):
+        lines.append(f"{_stamp(ms / 1000)},{webots_name(name)}," + ",".join(f"{q:.6f}" for q in row))
     return "\n".join(lines) + "\n"
 
 

@@ -1,0 +1,15 @@
+"""Walking: footsteps, ZMP preview control, swing trajectories, the closed-form leg IK and the gait generator.
+
+:func:`plan_gait` turns :class:`GaitParams` (or a preset, :func:`read_preset`) into a :class:`Gait`: joint goals
+every 8 ms with the planned CoM, ZMP and feet; :func:`walk_physics` plays it in PyBullet and/or MuJoCo.
+"""
+
+from __future__ import annotations
+
+from .generator import Gait, plan_gait
+from .params import CONTROL_DT_S, GaitParams, read_preset
+from .presets import PRESETS, preset_path
+from .report import gait_csv, gait_summary, gait_webots, walk_physics
+
+__all__ = ["CONTROL_DT_S", "PRESETS", "Gait", "GaitParams", "gait_csv", "gait_summary", "gait_webots", "plan_gait",
+           "preset_path", "read_preset", "walk_physics"]

@@ -101,21 +101,32 @@ def validate_walk(goals: np.ndarray, p_gains: np.ndarray, supports: tuple[str, .
                   spec: Spec,
                   dt: float = 0.008, engine: str = "pybullet", push_n: float = 0.0, push_at_s: float | None = None,
                   start_offset: np.ndarray | None = None, voltage: float | None = None,
-                  on_step: Callable[[], Any] | None = None) -> WalkRun:
+                  start_joints: np.ndarray | None = None, on_step: Callable[[], Any] | None = None) -> WalkRun:
     """Play a walk: goals (K, 20) [rad] with P gains (K, 20) every ``dt`` [s], the physics support and the
     planned contact of every row, the planned torso poses (K, 3) [m] and (K, 3, 3), ``walking_s`` [s] of stepping
     (for the mean speed). ``push_n`` [N] pushes the torso for 0.1 s at ``push_at_s`` into the walk (default
-    halfway) from the left and from the right, in separate runs; ``start_offset`` (20,) [rad] perturbs the start."""
+    halfway) from the left and from the right, in separate runs; ``start_offset`` (20,) [rad] perturbs the start.
+    ``start_joints`` (20,) [rad]: the planned joint angles of row 0 when the goals lead them (a servo feed-forward):
+    the robot starts there and the goals move from them to row 0's as gravity ramps in."""
     if len(contact) != len(goals):
         raise InputError(f"expected one planned contact per row ({len(goals)}), got {len(contact)}", "walk")
     if not (math.isfinite(push_n) and 0.0 <= push_n <= 100.0):
         raise InputError(f"expected a push from 0 to 100 N, got {push_n!r}", "push")
     servo = ServoModel.of(spec, None, 1.0, voltage)
     start = RAMP_S + WALK_SETTLE_S
-    schedule = Schedule.motion(goals, p_gains, tuple(supports), dt, start, servo, spec).with_base(torso_pos, torso_rot)
+    lead = int(round(start / dt))
+    first = np.asarray(goals[0], dtype=float)
+    begin = first if start_joints is None else np.asarray(start_joints, dtype=float)
+    ramp = np.minimum(1.0, np.arange(lead) * dt / RAMP_S)[:, None]
+    rows = np.vstack([begin + ramp * (first - begin), goals])
+    schedule = Schedule.motion(rows, np.vstack([np.repeat(p_gains[:1], lead, axis=0), p_gains]),
+                               (supports[0],) * lead + tuple(supports), dt, 0.0, servo, spec).with_base(
+        np.vstack([np.repeat(torso_pos[:1], lead, axis=0), torso_pos]),
+        np.concatenate([np.repeat(torso_rot[:1], lead, axis=0), torso_rot]))
+    contact = (contact[0],) * lead + tuple(contact)
     seconds = schedule.end_s + WALK_HOLD_S
     validation, track, facts = _run(engine, schedule, spec, servo, seconds, None, start_offset, on_step)
-    run = _measure(validation, track, facts, schedule, contact, (walking_s, *steady), spec, servo.torque_max)
+    run = _measure(validation, track, facts, schedule, contact, (start, walking_s, *steady), spec, servo.torque_max)
     if push_n > 0.0:
         at = start + (0.5 * (schedule.end_s - start) if push_at_s is None else push_at_s)
         pushes = []
@@ -131,10 +142,11 @@ def validate_walk(goals: np.ndarray, p_gains: np.ndarray, supports: tuple[str, .
 
 
 def _measure(validation: Validation, track: Any, facts: dict[str, Any], schedule: Schedule,
-             contact: tuple[str, ...], clock: tuple[float, float, float], spec: Spec, servo_max: float) -> WalkRun:
-    walking_s, steady_from, steady_to = clock
+             contact: tuple[str, ...], clock: tuple[float, float, float, float], spec: Spec,
+             servo_max: float) -> WalkRun:
+    start, walking_s, steady_from, steady_to = clock
     times = np.asarray(track.times)
-    first = int(np.searchsorted(times, schedule.start_s))
+    first = int(np.searchsorted(times, start))
     com = np.asarray(track.com)
     planned = facts["planned"].states
     start_c, end_c = com[first, :2], com[-1, :2]
@@ -161,15 +173,15 @@ def _measure(validation: Validation, track: Any, facts: dict[str, Any], schedule
         state = track.states[k]
         hull = convex_hull(np.vstack([state.corners[s][:, :2] for s in feet_of(contact[track.rows[k]])]))
         inside += polygon_margin(np.asarray(cop), hull)[0] >= -COP_TOLERANCE_M
-    walking = (times >= schedule.start_s) & (times <= schedule.end_s)
+    walking = (times >= start) & (times <= schedule.end_s)
     torque = np.abs(np.asarray(track.torque))[walking]
     k, j = np.unravel_index(int(np.argmax(torque)), torque.shape)
     limited = (torque >= LIMITED_FRACTION * np.asarray(track.available)[walking]).any(axis=1)
     worst = {"joint": spec.joint_names[j], "torque_nm": round(float(torque[k, j]), 4),
              "available_nm": round(servo_max, 4), "ratio": round(float(torque[k, j]) / servo_max, 4),
-             "time_s": round(float(times[walking][k] - schedule.start_s), 3),
+             "time_s": round(float(times[walking][k] - start), 3),
              "limited_share": round(float(limited.mean()), 4)}
-    a, b = (int(min(np.searchsorted(times, schedule.start_s + t), len(times) - 1)) for t in (steady_from, steady_to))
+    a, b = (int(min(np.searchsorted(times, start + t), len(times) - 1)) for t in (steady_from, steady_to))
     steady_s = max(float(times[b] - times[a]), 1e-9)
     steady_speed = float(np.hypot(*(com[b, :2] - com[a, :2]))) / steady_s
     return WalkRun(validation, bool(set(validation.reasons) & set(FALL_REASONS)), distance, steady_speed,

@@ -1,0 +1,124 @@
+"""CLI command ``op2motion walk``: plan a ZMP preview-control gait from a preset, check it in physics, export it."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Any
+
+from ..errors import CheckFailed, InputError
+from ..physics import ENGINES, MAX_PUSH_N
+from ..spec import Spec
+from .common import add_command, emit, number, output_path, progress_enabled, whole
+
+OUT_FORMATS = {".csv": "csv", ".motion": "webots"}
+
+
+def register(sub: Any) -> None:
+    """Add ``walk``."""
+    p = add_command(sub, "walk", cmd_walk, "plan a walk (ZMP preview control) and check it in physics",
+                    "Plan a walk from a gait preset: footsteps, ZMP preview control with the multibody "
+                    "correction, leg IK, goals every 8 ms; with --validate play them into the servo model in "
+                    "physics.")
+    p.add_argument("--preset", metavar="TOML", help="gait preset file or shipped name (forward, backward, "
+                                                    "sideways, turn_left, turn_right; default forward)")
+    p.add_argument("--steps", type=whole(1, 200), help="number of steps (default: the preset's)")
+    p.add_argument("--target", type=float, nargs=3, metavar=("X", "Y", "YAW"),
+                   help="walk to this pose instead: x [m], y [m], heading [deg] from the start")
+    p.add_argument("--validate", action="store_true", help="play the walk in physics")
+    p.add_argument("--engine", choices=(*ENGINES, "both"), default="pybullet", help="physics engine (default "
+                                                                                     "pybullet)")
+    p.add_argument("--push", type=number(0.0, MAX_PUSH_N, "N"), default=0.0, metavar="N",
+                   help="with --validate: also push the torso N newtons for 0.1 s halfway, from each side")
+    p.add_argument("--trials", type=whole(0, 100), default=0, metavar="N",
+                   help="with --validate: N more runs from randomly perturbed starts (seeded)")
+    p.add_argument("--perturb-deg", type=number(0.0, 5.0, "deg"), default=0.5, metavar="DEG",
+                   help="standard deviation of the trials' start offsets per joint (default 0.5°)")
+    p.add_argument("--seed", type=whole(0, 2 ** 31 - 1), default=0, help="seed of the trials' offsets")
+    p.add_argument("--plot", type=output_path, metavar="PNG", help="footsteps, ZMP and CoM from above and in time")
+    p.add_argument("--out", type=output_path, nargs="+", metavar="FILE",
+                   help="write the goals every 8 ms: .csv (CSV) and/or .motion (Webots)")
+
+
+def _outputs(args: argparse.Namespace) -> dict[str, str]:
+    paths = {}
+    for path in args.out or ():
+        suffix = "." + path.rsplit(".", 1)[-1].lower() if "." in path else ""
+        if suffix not in OUT_FORMATS:
+            raise InputError(f"expected a file ending in .csv or .motion, got {path!r}", "out")
+        paths[f"out{len(paths)}"] = path
+    if args.plot:
+        paths["plot"] = args.plot
+    return paths
+
+
+def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion walk``."""
+    from tqdm import tqdm
+
+    from ..fileio import OutputSet
+    from ..gait import gait_csv, gait_summary, gait_webots, plan_gait, preset_path, read_preset, walk_physics
+    from ..gaitplot import render_gait
+    from ..physics import RAMP_S, TIME_STEP_S
+    from ..physics.walk import WALK_HOLD_S, WALK_SETTLE_S
+
+    if not args.validate and (args.push or args.trials):
+        raise InputError("expected --validate with --push or --trials", "validate")
+    outputs = OutputSet(_outputs(args))
+    params = read_preset(preset_path(args.preset)).with_steps(args.steps)
+    target = None if args.target is None else (args.target[0], args.target[1], math.radians(args.target[2]))
+    with tqdm(total=params.zmp_passes + 1, desc="plan", unit="pass", leave=False,
+              disable=not progress_enabled(args)) as bar:
+        gait = plan_gait(params, spec, target, on_pass=bar.update)
+    result: dict[str, Any] = gait_summary(gait)
+    lines = [f"walk '{params.name}': {result['steps']} steps in {result['walking_s']:.2f} s, "
+             f"{result['distance_m']:.3f} m planned ({result['planned_speed_mps']:.3f} m/s steady), ZMP margin >= "
+             f"{result['zmp_margin_min_m'] * 1000:.1f} mm, CoM height {result['com_height_m']:.3f} m"]
+    runs: dict[str, Any] = {}
+    if args.validate:
+        engines = ENGINES if args.engine == "both" else (args.engine,)
+        seconds = RAMP_S + WALK_SETTLE_S + gait.duration_s + WALK_HOLD_S
+        total = int(round(seconds / TIME_STEP_S)) * len(engines) * (1 + 2 * (args.push > 0) + args.trials)
+        with tqdm(total=total, desc="physics", unit="step", leave=False, disable=not progress_enabled(args)) as bar:
+            physics, runs = walk_physics(gait, spec, engines, args.push, args.trials, args.perturb_deg, args.seed,
+                                         on_step=bar.update)
+        result["physics"] = physics
+        main = physics["engines"][engines[0]]
+        for key in ("fell", "reasons", "mean_speed_mps", "lateral_drift_m", "heading_error_deg", "turn_rate_deg_s",
+                    "cop_inside_fraction", "worst_torque"):
+            result[key] = main[key]
+        result["mean_speed_mps"] = min(s["mean_speed_mps"] for s in physics["engines"].values())
+        result["fell"] = physics["fell"]
+        for engine, s in physics["engines"].items():
+            w = s["worst_torque"]
+            line = (f"  {engine}: {'FELL' if s['fell'] else 'walked'}"
+                    f"{' (' + ', '.join(s['reasons']) + ')' if s['reasons'] else ''}, {s['distance_m']:.3f} m, "
+                    f"{s['mean_speed_mps']:.3f} m/s steady, drift {s['lateral_drift_m'] * 1000:.0f} mm, heading "
+                    f"{s['heading_error_deg']:+.1f}°, turn {s['turn_rate_deg_s']:.1f}°/s, CoP inside "
+                    f"{s['cop_inside_fraction']:.1%}, worst torque {w['torque_nm']:.2f} N·m at {w['joint']} "
+                    f"({w['ratio']:.0%} of {w['available_nm']:.2f})")
+            if s["pushes"]:
+                line += "; pushes: " + ", ".join(f"from {p['from']} {'FELL' if p['fell'] else 'ok'}"
+                                                 for p in s["pushes"])
+            if "trials" in s:
+                line += f"; trials: {s['trials']['walked']}/{s['trials']['runs']} walked"
+            lines.append(line)
+    for key, path in outputs.paths.items():
+        if key == "plot":
+            first = next(iter(runs.values()), None)
+            verdict = "not checked in physics" if first is None else " | ".join(
+                f"{e}: {'fell' if r.fell else 'walked'} {r.mean_speed_mps:.3f} m/s" for e, r in runs.items())
+            outputs.put(key, render_gait(gait, spec, f"walk '{params.name}'",
+                                         first.validation.cop_track if first else None, RAMP_S + WALK_SETTLE_S,
+                                         verdict))
+        else:
+            fmt = OUT_FORMATS[path.suffix.lower()]
+            outputs.put(key, gait_csv(gait, spec) if fmt == "csv" else gait_webots(gait, spec))
+    written = outputs.commit()
+    result["files"] = {k: str(v) for k, v in written.items()}
+    lines += [f"  wrote {p}" for p in written.values()]
+    emit(args, result, "\n".join(lines))
+    if args.validate and result["fell"]:
+        raise CheckFailed(f"walk '{params.name}' fell in physics: " + "; ".join(
+            f"{e}: {', '.join(s['reasons'])}" for e, s in result["physics"]["engines"].items() if s["fell"]))
+    return 0
