@@ -89,6 +89,20 @@ def _motion_figures(spec: Spec, action: bytes | None, repeat: int) -> dict[str, 
             "check_motion_stands": bool(out["v"].stable)}
 
 
+def _walk_figures(spec: Spec, repeat: int) -> dict[str, Any]:
+    """``walk_plan_ms``: planning the shipped ``forward`` gait (20 steps: footsteps, preview control, multibody
+    correction passes, IK); ``walk_validate_ms``: playing it into the servo model in PyBullet."""
+    from .gait import plan_gait, preset_path, read_preset, walk_physics
+
+    params = read_preset(preset_path("forward")).with_steps(20)
+    out: dict[str, Any] = {}
+    plan_ms = _best_ms(lambda: out.update(g=plan_gait(params, spec)), min(repeat, 3))
+    walk_ms = _best_ms(lambda: out.update(w=walk_physics(out["g"], spec, ("pybullet",))[0]), 1)
+    run = out["w"]["engines"]["pybullet"]
+    return {"walk_plan_ms": round(plan_ms, 1), "walk_validate_ms": round(walk_ms, 1), "walk_steps": 20,
+            "check_walk_fell": bool(run["fell"]), "check_walk_speed_mps": run["mean_speed_mps"]}
+
+
 def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
               action: bytes | None = None) -> dict[str, Any]:
     """Time batched forward kinematics + CoM for ``n`` poses with each model, one physics validation, one PSO
@@ -134,4 +148,5 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
         "check_pso_hand_error_m": float(evaluate_cost(BookAngles.from_vector(pso["r"].x), problem,
                                                       spec).hand_error[0]),
         **_motion_figures(spec, action, repeat),
+        **_walk_figures(spec, repeat),
     }

@@ -8,6 +8,7 @@ from op2motion.bench import run_bench
 DH_VS_PINOCCHIO_M = 1e-9      # the D-H joint centres equal pinocchio's on the generated URDF
 PSO_REACH_M = 0.01            # the default problem's swarm lands the hand within a centimetre
 STANDING_CLEARANCE_M = 0.010   # standing, the forearms hang 8 mm beside the thighs
+WALK_SPEED_MPS = 0.20        # the forward preset's steady speed in PyBullet (issue "Walking": >= 0.20 m/s)
 FULL_COM_VS_PINOCCHIO_M = 1e-5  # the URDF's six 10-mg frame links are the only difference (2 µm)
 
 
@@ -15,7 +16,8 @@ def test_bench_reports_every_figure_and_its_work_is_right(spec):
     result = run_bench(spec, n=500, repeat=1, action=STOCK.read_bytes())
     assert result["poses"] == 500 and result["repeat"] == 1
     for key in ("fk_pb_40k_ms", "fk_dh_40k_ms", "fk_dh_full_com_40k_ms", "pinocchio_com_40k_ms", "validate_ms",
-                "pso_solve_ms", "self_clearance_swarm_ms", "motion_play_ms", "motion_validate_ms"):
+                "pso_solve_ms", "self_clearance_swarm_ms", "motion_play_ms", "motion_validate_ms",
+                "walk_plan_ms", "walk_validate_ms"):
         assert result[key] > 0, key
     assert result["check_dh_vs_pinocchio_m"] < DH_VS_PINOCCHIO_M
     assert result["check_full_com_vs_pinocchio_m"] < FULL_COM_VS_PINOCCHIO_M
@@ -23,4 +25,5 @@ def test_bench_reports_every_figure_and_its_work_is_right(spec):
     assert 0.0 < result["check_standing_clearance_m"] < STANDING_CLEARANCE_M
     assert result["check_pso_hand_error_m"] < PSO_REACH_M
     assert result["check_motion_ticks"] == 464 and result["check_motion_stands"] is True
+    assert result["check_walk_fell"] is False and result["check_walk_speed_mps"] > WALK_SPEED_MPS
     assert result["book_matlab_dh_40k_ms"] == 3350.0 and result["book_matlab_pb_40k_ms"] == 780.0

@@ -43,5 +43,7 @@ def cmd_bench(args: argparse.Namespace, spec: Spec) -> int:
     if r["motion_play_ms"] is not None:
         lines += [f"page {r['motion_page']} played tick for tick ({r['check_motion_ticks']} ticks): "
                   f"{r['motion_play_ms']:.2f} ms; validated in PyBullet: {r['motion_validate_ms']:.0f} ms"]
+    lines += [f"walk planned ({r['walk_steps']} steps of the forward preset): {r['walk_plan_ms']:.0f} ms; walked in "
+              f"PyBullet: {r['walk_validate_ms']:.0f} ms ({r['check_walk_speed_mps']:.3f} m/s steady)"]
     emit(args, r, "\n".join(lines))
     return 0
