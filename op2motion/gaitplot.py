@@ -14,7 +14,8 @@ import numpy as np
 
 from .gait.footsteps import sole_rectangle
 from .gait.generator import Gait
-from .plot import _png, _pyplot
+from .motionplot import margin_panel_png
+from .plot import _pyplot
 from .spec import Spec
 
 SIDE_COLOUR = {"left": "tab:blue", "right": "tab:red"}
@@ -60,11 +61,4 @@ def render_gait(gait: Gait, spec: Spec, title: str, cop: Sequence[Sequence[float
         ax.grid(alpha=0.3)
         if row == 0:
             ax.legend(loc="best", fontsize=8)
-    ax = fig.add_subplot(grid[3])
-    ax.plot(t, gait.zmp_margin * 1000.0, color="tab:green", lw=0.9)
-    ax.axhline(0.0, color="k", lw=0.6)
-    ax.set_ylabel("ZMP margin [mm]")
-    ax.set_xlabel("time [s]")
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    return _png(fig)
+    return margin_panel_png(fig, fig.add_subplot(grid[3]), t, gait.zmp_margin, "tab:green")

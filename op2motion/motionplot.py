@@ -69,8 +69,12 @@ def render_motion(trajectory: Trajectory, checks: MotionChecks, spec: Spec, titl
     ax.set_ylabel("y [mm] (left)")
     ax.legend(loc="upper right", fontsize=8)
     ax.grid(alpha=0.3)
-    ax = fig.add_subplot(grid[4])
-    ax.plot(t, checks.zmp_margin_m * 1000, color="tab:red", lw=1.0)
+    return margin_panel_png(fig, fig.add_subplot(grid[4]), t, checks.zmp_margin_m, "tab:red")
+
+
+def margin_panel_png(fig, ax, t: np.ndarray, margin_m: np.ndarray, colour: str) -> bytes:  # type: ignore[no-untyped-def]
+    """Draw the ZMP margin [m] against time [s] (in mm) on ``ax`` as the last panel, and the figure's PNG."""
+    ax.plot(t, margin_m * 1000, color=colour, lw=1.0)
     ax.axhline(0.0, color="k", lw=0.6)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("ZMP margin [mm]")
