@@ -14,8 +14,7 @@ import numpy as np
 
 from .gait.footsteps import sole_rectangle
 from .gait.generator import Gait
-from .motionplot import margin_panel_png
-from .plot import _pyplot
+from .plot import _pyplot, margin_panel_png
 from .spec import Spec
 
 SIDE_COLOUR = {"left": "tab:blue", "right": "tab:red"}

@@ -14,7 +14,7 @@ import numpy as np
 
 from .motion.checks import MotionChecks
 from .motion.trajectory import Trajectory
-from .plot import _png, _pyplot
+from .plot import _pyplot, margin_panel_png
 from .spec import Spec
 
 
@@ -71,13 +71,3 @@ def render_motion(trajectory: Trajectory, checks: MotionChecks, spec: Spec, titl
     ax.grid(alpha=0.3)
     return margin_panel_png(fig, fig.add_subplot(grid[4]), t, checks.zmp_margin_m, "tab:red")
 
-
-def margin_panel_png(fig, ax, t: np.ndarray, margin_m: np.ndarray, colour: str) -> bytes:  # type: ignore[no-untyped-def]
-    """Draw the ZMP margin [m] against time [s] (in mm) on ``ax`` as the last panel, and the figure's PNG."""
-    ax.plot(t, margin_m * 1000, color=colour, lw=1.0)
-    ax.axhline(0.0, color="k", lw=0.6)
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("ZMP margin [mm]")
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    return _png(fig)

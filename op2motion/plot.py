@@ -235,3 +235,14 @@ def render_cost_curve(attempts: Sequence[Sequence[float]], hand_errors: Sequence
     fig.suptitle(title)
     fig.tight_layout()
     return _png(fig)
+
+
+def margin_panel_png(fig, ax, t: np.ndarray, margin_m: np.ndarray, colour: str) -> bytes:  # type: ignore[no-untyped-def]
+    """Draw the ZMP margin [m] against time [s] (in mm) on ``ax`` as the last panel, and the figure's PNG."""
+    ax.plot(t, margin_m * 1000, color=colour, lw=1.0)
+    ax.axhline(0.0, color="k", lw=0.6)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("ZMP margin [mm]")
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    return _png(fig)
