@@ -97,7 +97,7 @@ def test_footsteps_alternate_and_close_the_feet(spec):
     plan = plan_footsteps(params, spec)
     assert [s.side for s in plan.steps] == ["left", "right"] * 3
     assert [round(s.x, 6) for s in plan.steps] == [0.05, 0.1, 0.15, 0.2, 0.25, 0.25]
-    assert all(abs(abs(s.y) - params.step_width_m / 2) < 1e-12 for s in plan.steps)
+    assert all(abs(abs(s.y) - spec.geometry.hip_half_width) < 1e-12 for s in plan.steps)   # width 0: the hips'
     right = plan_footsteps(GaitParams(steps=4, turn_deg=-10.0, step_width_m=0.08), spec)
     assert right.steps[0].side == "right" and right.steps[-1].yaw == pytest.approx(math.radians(-30.0))
 

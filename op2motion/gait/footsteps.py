@@ -71,6 +71,11 @@ def _foot_at(side: str, centre: np.ndarray, width: float) -> Footstep:
     return Footstep(side, float(x), float(y), float(yaw))
 
 
+def step_width(params: GaitParams, spec: Spec) -> float:
+    """Distance between the feet centres side by side [m]: the preset's, or the spec's hip width when it is 0."""
+    return params.step_width_m or 2.0 * spec.geometry.hip_half_width
+
+
 def first_side(params: GaitParams) -> str:
     """The foot that swings first (see the module docstring)."""
     if params.turn_deg < 0.0 or (params.turn_deg == 0.0 and params.step_side_m < 0.0):
@@ -82,7 +87,7 @@ def plan_footsteps(params: GaitParams, spec: Spec, target: tuple[float, float, f
     """The footsteps of ``params.steps`` steps; with ``target`` (x [m], y [m], yaw [rad]) the body walks there
     instead, in as few steps as the per-step advance allows (the step length, side and turn of ``params`` are the
     largest per step), the last step closing the feet."""
-    width = params.step_width_m
+    width = step_width(params, spec)
     centre = np.zeros(3)
     start = {side: _foot_at(side, centre, width) for side in ("left", "right")}
     moves = _target_moves(params, target) if target is not None else (

@@ -34,7 +34,6 @@ from .params import CONTROL_DT_S, GaitParams
 from .preview import preview_gains, track_reference
 from .timeline import Timeline, build_timeline
 
-MAX_OFFSET_RAD = 0.19      # 11°: the servo's linear range at P = 32 (its PWM saturates beyond)
 FRICTION_SMOOTH_RAD_S = 0.05   # the friction feed-forward's sign is smoothed over this speed
 REST_PAD = 4            # rows of rest around the walk when differentiating (the robot stands before and after)
 COM_PASSES = 3          # fixed-point passes placing the torso under the planned CoM (residual < 0.1 mm)
@@ -176,13 +175,15 @@ class _Body:
         """Goal offsets (K, 20) [rad] that make the servo model (:mod:`op2motion.servo`) drive the last planned
         motion: the joint torque it needs (inverse dynamics with the plan's contacts) plus the servo's own losses
         and rotor inertia (damping x speed, armature x acceleration, friction), over Kp; smoothed over
-        :data:`SMOOTH_ROWS` rows and clipped to :data:`MAX_OFFSET_RAD`."""
+        :data:`SMOOTH_ROWS` rows and clipped to the servo's linear range (its largest torque over Kp: 11° at
+        P = 32; the PWM saturates beyond)."""
         configs, v, a = self.last_motion
         torques = contact_torques(self.dyn, configs, v, a, self.timeline.contact)
         servo = ServoModel.of(self.spec, p_gains[0])
         dq, ddq = v[:, self.dyn.v_index], a[:, self.dyn.v_index]
         torques += servo.damping * dq + servo.armature * ddq + servo.friction * np.tanh(dq / FRICTION_SMOOTH_RAD_S)
-        return np.clip(smoothed(torques / servo.kp, SMOOTH_ROWS), -MAX_OFFSET_RAD, MAX_OFFSET_RAD)
+        linear = servo.torque_max / servo.kp
+        return np.clip(smoothed(torques / servo.kp, SMOOTH_ROWS), -linear, linear)
 
     def com(self, configs: np.ndarray) -> np.ndarray:
         pin, model, data = self.dyn.pin, self.dyn.model, self.dyn.data

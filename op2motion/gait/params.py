@@ -10,7 +10,7 @@ left), so the mean speed is about ``step_length_m / step_s``. Keys (defaults in 
 ``step_length_m``           forward advance of the body per step [m] (negative: backward)
 ``step_side_m``             sideways advance per step [m] (positive: left)
 ``turn_deg``                turn per step [deg] (positive: left, counter-clockwise seen from above)
-``step_width_m``            distance between the feet centres, side by side [m]
+``step_width_m``            distance between the feet centres, side by side [m]; 0: the spec's hip width
 ``step_s``                  time of one step [s]: single support then double support
 ``double_support_ratio``    share of ``step_s`` on both feet
 ``step_height_m``           swing foot's highest lift above the floor [m]
@@ -45,6 +45,7 @@ import tomllib
 from ..errors import InputError
 
 CONTROL_DT_S = 0.008        # the framework's motion timer: goals every 8 ms
+MIN_STEP_WIDTH_M = 0.06     # narrower side-by-side feet would overlap (the OP2's soles reach 23 mm inwards)
 
 
 @dataclass(frozen=True)
@@ -56,7 +57,7 @@ class GaitParams:
     step_length_m: float = 0.0
     step_side_m: float = 0.0
     turn_deg: float = 0.0
-    step_width_m: float = 0.074
+    step_width_m: float = 0.0
     step_s: float = 0.3
     double_support_ratio: float = 0.2
     step_height_m: float = 0.03
@@ -92,6 +93,9 @@ class GaitParams:
                 raise InputError(f"expected {'a whole number' if whole else 'a number'}, got {value!r}", f.name)
             if not (math.isfinite(value) and low <= value <= high):
                 raise InputError(f"expected {low:g} to {high:g}, got {value!r}", f.name)
+        if 0.0 < self.step_width_m < MIN_STEP_WIDTH_M:
+            raise InputError(f"expected 0 (the hip width) or {MIN_STEP_WIDTH_M:g} to 0.14 m, got "
+                             f"{self.step_width_m!r}", "step_width_m")
         if self.double_support_ratio * self.step_s < CONTROL_DT_S - 1e-12:
             raise InputError(f"expected at least one 8 ms tick of double support, got {self.double_support_ratio:g} "
                              f"x {self.step_s:g} s", "double_support_ratio")
@@ -119,7 +123,7 @@ class GaitParams:
 #: Allowed range of every numeric key (inclusive).
 RANGES: dict[str, tuple[float, float]] = {
     "steps": (1, 200), "step_length_m": (-0.1, 0.12), "step_side_m": (-0.05, 0.05), "turn_deg": (-30.0, 30.0),
-    "step_width_m": (0.06, 0.14), "step_s": (0.2, 2.0), "double_support_ratio": (0.0, 0.6),
+    "step_width_m": (0.0, 0.14), "step_s": (0.2, 2.0), "double_support_ratio": (0.0, 0.6),
     "step_height_m": (0.005, 0.06), "hip_lower_m": (0.0, 0.06), "com_height_m": (0.0, 0.4),
     "torso_pitch_deg": (-10.0, 30.0), "zmp_offset_x_m": (-0.03, 0.03), "zmp_offset_y_m": (-0.02, 0.02),
     "preview_s": (0.4, 3.0), "zmp_weight": (1e-6, 1e6), "jerk_weight": (1e-12, 1.0), "zmp_passes": (0, 5),
