@@ -56,17 +56,24 @@ def make_engine(name: str, spec: Spec, servo: ServoModel) -> Any:
     raise InputError(f"expected one of {', '.join(ENGINES)}, got {name!r}", "engine")
 
 
-def _run(engine_name: str, schedule: Schedule, spec: Spec, model: ServoModel, seconds: float,
-         push: Push | None, snapshot: bool, on_step: Callable[[], Any] | None) -> Validation:
+def judged_run(engine_name: str, schedule: Schedule, spec: Spec, model: ServoModel, seconds: float,
+               push: Push | None, on_step: Callable[[], Any] | None = None, start_offset: np.ndarray | None = None,
+               finish: Callable[[Validation, Any], Validation] | None = None) -> tuple[Validation, Any, dict[str, Any]]:
+    """One run in a fresh world of ``engine_name``: the verdict (passed through ``finish`` with the live engine
+    when given), the recorded samples and the start facts (:func:`.run.simulate`)."""
     engine = make_engine(engine_name, spec, model)
     try:
-        track, facts = simulate(engine, spec, model, schedule, seconds, push, on_step)
+        track, facts = simulate(engine, spec, model, schedule, seconds, push, on_step, start_offset)
         verdict = judge(track, facts, spec, model, schedule, engine_name, engine.time_step, seconds)
-        if snapshot:
-            verdict = _with_snapshot(verdict, engine, spec, model)
-        return verdict
+        return (verdict if finish is None else finish(verdict, engine)), track, facts
     finally:
         engine.close()
+
+
+def _run(engine_name: str, schedule: Schedule, spec: Spec, model: ServoModel, seconds: float,
+         push: Push | None, snapshot: bool, on_step: Callable[[], Any] | None) -> Validation:
+    finish = (lambda verdict, engine: _with_snapshot(verdict, engine, spec, model)) if snapshot else None
+    return judged_run(engine_name, schedule, spec, model, seconds, push, on_step, finish=finish)[0]
 
 
 def _with_snapshot(verdict: Validation, engine: Any, spec: Spec, model: ServoModel) -> Validation:

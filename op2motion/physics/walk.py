@@ -30,7 +30,7 @@ from ..balance import convex_hull, polygon_margin
 from ..errors import InputError
 from ..servo import ServoModel
 from ..spec import Spec, feet_of
-from .run import RAMP_S, Push, judge, simulate
+from .run import RAMP_S, Push
 from .scene import TIME_STEP_S
 from .schedule import Schedule
 from .verdict import Validation
@@ -80,20 +80,11 @@ def _yaw(rot: np.ndarray) -> float:
     return math.atan2(float(rot[1, 0]), float(rot[0, 0]))
 
 
-def _engine(name: str, spec: Spec, servo: ServoModel) -> Any:
-    from . import make_engine
-
-    return make_engine(name, spec, servo)
-
-
 def _run(engine_name: str, schedule: Schedule, spec: Spec, servo: ServoModel, seconds: float, push: Push | None,
          offset: np.ndarray | None, on_step: Callable[[], Any] | None) -> tuple[Validation, Any, dict[str, Any]]:
-    engine = _engine(engine_name, spec, servo)
-    try:
-        track, facts = simulate(engine, spec, servo, schedule, seconds, push, on_step, offset)
-        return judge(track, facts, spec, servo, schedule, engine_name, engine.time_step, seconds), track, facts
-    finally:
-        engine.close()
+    from . import judged_run
+
+    return judged_run(engine_name, schedule, spec, servo, seconds, push, on_step, offset)
 
 
 def validate_walk(goals: np.ndarray, p_gains: np.ndarray, supports: tuple[str, ...], contact: tuple[str, ...],
