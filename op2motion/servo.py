@@ -91,9 +91,13 @@ class ServoModel:
         """The torque the motor delivers to the joint [N·m]: active torque minus back-EMF and viscous damping."""
         return self.active_torque(goal, q, kp) - self.damping * dq
 
-    def available(self, dq: np.ndarray) -> np.ndarray:
-        """Torque available in the direction of motion [N·m]: max_duty x stall - Kd_emf |dq|, not below 0."""
-        return np.maximum(self.torque_max - self.kd_emf * np.abs(dq), 0.0)
+    def available(self, dq: np.ndarray, torque: np.ndarray | None = None) -> np.ndarray:
+        """Largest torque magnitude [N·m] the motor can deliver at joint speed ``dq`` [rad/s]: at full duty,
+        ``max_duty x stall - Kd_emf dq`` in the direction of ``torque`` (default: the direction of motion), so it
+        falls linearly to zero near the no-load speed when the torque drives the motion and grows when it brakes
+        it (the back-EMF then adds to the drive: a braking servo is not at its limit). Not below 0."""
+        along = np.abs(dq) if torque is None else np.sign(torque) * dq
+        return np.maximum(self.torque_max - self.kd_emf * along, 0.0)
 
     def describe(self) -> str:
         """One line naming the model and its numbers."""

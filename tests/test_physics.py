@@ -38,6 +38,9 @@ def test_servo_model_in_physical_units(spec):
     assert model.available(np.array([0.9625 * 5.76]))[0] == pytest.approx(0.0, abs=1e-12)  # zero near no-load
     half = model.available(np.array([0.5 * 0.9625 * 5.76]))[0]
     assert half == pytest.approx(0.5 * model.torque_max)                            # linear in between
+    speed = np.array([2.0])                                     # [rad/s]: a braking torque gets the back-EMF's help
+    assert model.available(speed, np.array([-1.0]))[0] == pytest.approx(model.torque_max + model.kd_emf * 2.0)
+    assert model.available(speed, np.array([1.0]))[0] == pytest.approx(model.available(speed)[0])
     goal, q = np.zeros(20), np.full(20, -0.5)
     assert model.active_torque(goal, q) == pytest.approx(np.full(20, model.torque_max))  # clipped
     low = ServoModel.of(spec, voltage=11.1)

@@ -179,8 +179,8 @@ def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | Non
     com, zmp, v, a = multibody_zmp(dyn, configs, dt)
     polygons: list[np.ndarray] = []
     joint_speed = np.gradient(smooth, dt, axis=0) if k > 1 else np.zeros_like(goals)
-    available = servo.available(joint_speed)
     torques = contact_torques(dyn, configs, v, a, trajectory.supports)
+    available = servo.available(joint_speed, torques)
     for i in range(k):
         pin.framesForwardKinematics(model, data, configs[i])
         polygons.append(_polygon(dyn, data, feet_of(trajectory.supports[i]), spec))
