@@ -15,7 +15,8 @@ floor. Measured on top:
 * ``cop_inside_fraction``: share of the walk's samples whose measured centre of pressure lies inside the soles
   that should be on the floor at that moment (where they really are), by :data:`COP_TOLERANCE_M`;
 * the largest servo torque of the walk against the servo's largest torque (at rest), and the share of samples
-  in which some servo delivered :data:`LIMITED_FRACTION` of the torque available at its speed (at its limit).
+  in which some servo delivered :data:`LIMITED_FRACTION` of the torque available at its speed in the direction of
+  that torque (at its limit; a braking servo has more, see :meth:`op2motion.servo.ServoModel.available`).
 """
 
 from __future__ import annotations
