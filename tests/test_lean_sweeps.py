@@ -5,15 +5,12 @@ pose whose margin is beyond ±5 mm, and the verdict must switch where the pose r
 full-inertia CoM reaches the edge of the support polygon, within 5 mm. The switch is measured as the margin halfway
 between the last standing pose and the next step (the last standing margin less half the margin lost per step).
 
-Two sweeps run out of support a little before their CoM reaches that edge, for reasons the engines agree on and the
-README explains:
-
-* on one leg leaning back, the compliant servos (P = 32) lose their equilibrium (the sag runs away) with the
-  settled CoM 3-6 mm inside the heel: bisecting the lean, MuJoCo's last standing pose settles 5.8 mm inside, and
-  falls 0.03° further; the switch is allowed :data:`FOLD_TOL_M`;
-* on two legs leaning sideways as a parallelogram, the loaded foot tips over its outer edge while the other still
-  carries 12 % of the weight, so the CoM is 10 mm inside the hull of both soles: there the switch is measured on
-  the loaded foot's own centre of pressure, which reaches its edge within 5 mm.
+One sweep runs out of support before its CoM reaches that edge, for a reason the engines agree on and the README
+explains: on two legs leaning sideways as a parallelogram, the compliant legs (P = 32) shear, the unloaded foot
+rolls onto its inner edge from about 10° of lean (the statically sagged solution with both soles flat would need
+its centre of pressure beyond that edge) and the loaded foot tips over its outer edge while the other still carries
+12 % of the weight, so the CoM is 10 mm inside the hull of both soles: there the switch is measured on the loaded
+foot's own centre of pressure, which reaches its edge within 5 mm.
 """
 
 from __future__ import annotations
@@ -29,11 +26,9 @@ FALLS_PAST_SWITCH = 3          # steps leaned on after the first fall, to see th
 MAX_STEPS = 70
 AGREE_BEYOND_M = 0.005         # the engines agree wherever the margin is beyond this
 SWITCH_TOL_M = 0.005           # the switch lies this close to the edge
-FOLD_TOL_M = 0.0065            # ... where the compliant servos lose their equilibrium first (see the docstring)
-SWEEPS = [  # support, kind, direction, what runs out (the CoM's polygon or a loaded foot's own sole), tolerance
-    ("left", "pitch", 1, "com", SWITCH_TOL_M), ("left", "pitch", -1, "com", FOLD_TOL_M),
-    ("left", "roll", 1, "com", SWITCH_TOL_M), ("double", "pitch", 1, "com", SWITCH_TOL_M),
-    ("double", "pitch", -1, "com", SWITCH_TOL_M), ("double", "roll", 1, "foot", SWITCH_TOL_M),
+SWEEPS = [  # support, kind, direction, what runs out (the CoM's polygon or a loaded foot's own sole)
+    ("left", "pitch", 1, "com"), ("left", "pitch", -1, "com"), ("left", "roll", 1, "com"),
+    ("double", "pitch", 1, "com"), ("double", "pitch", -1, "com"), ("double", "roll", 1, "foot"),
 ]
 
 
@@ -43,7 +38,7 @@ def sweeps():
     results = {}
     ctx = multiprocessing.get_context("spawn")
     with ctx.Pool(2) as pool:
-        for support, kind, direction, _, _ in SWEEPS:
+        for support, kind, direction, _ in SWEEPS:
             angles, mujoco, falls = [], [], 0
             while falls < 1 + FALLS_PAST_SWITCH and len(angles) < MAX_STEPS:
                 deg = direction * STEP_DEG * len(angles)
@@ -64,9 +59,9 @@ def _switch_margin(verdicts: list, index: int = 1) -> float:
     return verdicts[last][index] - 0.5 * step
 
 
-@pytest.mark.parametrize("support, kind, direction, criterion, tolerance", SWEEPS,
-                         ids=[f"{s}-{k}-{d:+d}" for s, k, d, _, _ in SWEEPS])
-def test_lean_sweep(sweeps, support, kind, direction, criterion, tolerance):
+@pytest.mark.parametrize("support, kind, direction, criterion", SWEEPS,
+                         ids=[f"{s}-{k}-{d:+d}" for s, k, d, _ in SWEEPS])
+def test_lean_sweep(sweeps, support, kind, direction, criterion):
     angles, by_engine = sweeps[(support, kind, direction)]
     assert any(not v[0] for v in by_engine["mujoco"]), "the sweep never fell"
     for engine, verdicts in by_engine.items():
@@ -74,7 +69,7 @@ def test_lean_sweep(sweeps, support, kind, direction, criterion, tolerance):
         first_fall = stable.index(False)
         assert not any(stable[first_fall:]), f"{engine}: stands again after falling at {angles[first_fall]}°"
         switch = _switch_margin(verdicts, 1 if criterion == "com" else 3)
-        assert abs(switch) <= tolerance, (engine, criterion, switch)
+        assert abs(switch) <= SWITCH_TOL_M, (engine, criterion, switch)
     for deg, mj, pb in zip(angles, by_engine["mujoco"], by_engine["pybullet"]):
         if min(abs(mj[1]), abs(pb[1])) > AGREE_BEYOND_M:
             assert mj[0] == pb[0], f"{deg}°: MuJoCo {mj}, PyBullet {pb}"

@@ -3,9 +3,12 @@
 Every engine offers the same few operations (``reset``, ``set_gravity``, ``state``, ``step``, ``base``,
 ``contacts``); this module runs the loop and judges, so a verdict means the same in every engine:
 
-1. the first pose is placed on the floor (:func:`.body.placement`), all joints at their goals and at rest;
-2. gravity rises from zero to full strength over :data:`RAMP_S`, so the robot sags into its loaded posture
-   without an impact;
+1. the first pose is placed on the floor (:func:`.body.placement`), at rest, with its joints where the servos'
+   springs hold it still against gravity (:func:`op2motion.model.equilibrium.sagged_angles`) and gravity at full
+   strength, so the start is neither an impact nor a transient; a walk (planned torso poses), a pose for which
+   no such equilibrium exists, and one whose sag would press a swing foot into the floor (it was not standing on
+   one leg) start at their goals instead while gravity rises from zero over :data:`RAMP_S`;
+2. the first :data:`RAMP_S` is the loading window: the attitude at its end is what tilt counts from;
 3. the servos hold the goals of the :class:`.schedule.Schedule` (one pose, or a motion's goals every 8 ms) for
    the rest of ``seconds``, optionally with a push at the torso's centre of mass;
 4. every :data:`SAMPLE_S` the torso attitude, the centre of mass, the soles, the contacts and the servo torques
@@ -18,15 +21,16 @@ moment), so a motion that turns the torso or crouches on purpose has not tilted 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable
 
 import numpy as np
 
 from ..balance import convex_hull, polygon_margin
+from ..model.equilibrium import sagged_angles
 from ..servo import ServoModel
 from ..spec import Spec, feet_of, swing_of
-from .body import Body, BodyState
+from .body import Body, BodyState, placement
 from .schedule import Planned, Schedule, plan_rows
 from .verdict import (
     COM_DROP_FRACTION,
@@ -46,6 +50,7 @@ from .verdict import (
 )
 
 RAMP_S = 1.0
+SAGGED_GAP_TOL_M = 1e-6    # the sagged start may leave a supporting foot this much higher than the rigid one
 SAMPLE_S = 0.01
 STEADY_S = 1.0
 
@@ -90,18 +95,29 @@ def simulate(engine: Any, spec: Spec, servo: ServoModel, schedule: Schedule, sec
     (20,) [rad] starts the joints that far from their first goals (a perturbed start)."""
     body = Body(spec)
     base_pos, base_rot, planned = plan_rows(body, schedule)
-    engine.reset(base_pos, base_rot, schedule.goals[0] + (0.0 if start_offset is None else start_offset))
+    q0 = None if schedule.base is not None else sagged_angles(schedule.goals[0], schedule.supports[0], spec,
+                                                              schedule.kp[0], servo.torque_max)
+    if q0 is not None:
+        sagged = placement(body, q0, schedule.supports[0])
+        if sagged[3] <= planned.gap + SAGGED_GAP_TOL_M:      # a foot meant to swing would not reach the floor
+            base_pos, base_rot, planned = sagged[0], sagged[1], replace(planned, gap=sagged[3])
+        else:
+            q0 = None
+    ramp = q0 is None
+    if ramp:
+        q0 = schedule.goals[0]
+    engine.reset(base_pos, base_rot, q0 + (0.0 if start_offset is None else start_offset))
     dt = engine.time_step
     steps = int(round(seconds / dt))
     every = max(1, int(round(SAMPLE_S / dt)))
     track = _Track()
-    start = body.state(base_pos, base_rot, schedule.goals[0])
+    start = body.state(base_pos, base_rot, q0)
     push_steps = (range(0) if push is None else
                   range(int(round(push.start_s / dt)), int(round((push.start_s + push.duration_s) / dt))))
     for k in range(steps):
         t = k * dt
         if t <= RAMP_S + dt:
-            engine.set_gravity(min(1.0, t / RAMP_S))
+            engine.set_gravity(min(1.0, t / RAMP_S) if ramp else 1.0)
         row = schedule.row(t)
         q, dq = engine.state()
         engine.step(servo.active_torque(schedule.goals[row], q, schedule.kp[row]),

@@ -1,0 +1,125 @@
+"""Where compliant servos hold a pose still: the statically sagged joint angles (full nonlinear model, pinocchio).
+
+Each servo is a spring about its goal, ``tau = Kp (q* - q)`` [N·m], and at rest it must supply the static torque
+that holds the body on its support (:meth:`.dynamics.Dynamics.static_torques`: gravity balanced by the contact
+wrench at the support sole). On one foot the sagged angles solve
+
+    Kp (q* - q) = tau_static(q)                                                  (20 equations, 20 unknowns).
+
+On two feet the load split is statically indeterminate: it follows from the legs' compliance. With the left sole
+held and the right sole's wrench w [N, N·m] (its own frame) as six more unknowns,
+
+    Kp (q* - q) = tau_left(q) - J_rel(q)^T w,    log6(T_rel(q*)^-1 T_rel(q)) = 0     (26 equations, 26 unknowns)
+
+where ``tau_left`` holds the body on the left sole alone, ``J_rel`` maps joint speeds to the right sole's twist
+with the left sole still, and ``T_rel`` is the right sole's placement seen from the left sole: friction keeps the
+feet where they were put down. Both are solved by Newton's method with a finite-difference Jacobian taken once at
+the goal (the chord method: the gravity stiffness changes little over a few degrees of sag). Gravity is a negative
+stiffness against the servos'; where it wins in some direction, or a servo would need more than its largest torque,
+no equilibrium exists and ``None`` is returned, as it is where a sole would have to pull on the floor or press
+outside itself (then the physics check starts from the goals and ramps gravity in).
+
+The physics check starts a held pose here with gravity at full strength (:mod:`op2motion.physics.run`), so the start
+is not an impact: a pose loaded by a gravity ramp overshoots its sag (the OP2 on one leg at P = 32 is a 1 Hz
+oscillator with about a quarter of critical damping), and near a foot's edge that overshoot alone tips it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..spec import Spec
+from .dynamics import dynamics_for
+
+TOLERANCE_NM = 1e-6          # largest torque imbalance [N·m] of a solution
+MAX_ITERATIONS = 30
+PROBE_RAD = 1e-6             # finite-difference step [rad]
+MAX_SAG_RAD = 0.6            # a solution farther than this from the goal is not the pose's equilibrium
+
+
+def sagged_angles(goal: np.ndarray, support: str, spec: Spec, kp: np.ndarray,
+                  torque_max: float) -> np.ndarray | None:
+    """The servo angles (20,) [rad] at which servos of stiffness ``kp`` (20,) [N·m/rad] holding ``goal`` (20,)
+    [rad] carry the body at rest on ``support``; ``None`` where no equilibrium exists within the servos'
+    ``torque_max`` [N·m] (see the module docstring)."""
+    dyn = dynamics_for(spec)
+    goal = np.asarray(goal, dtype=float)
+    kp = np.broadcast_to(np.asarray(kp, dtype=float), goal.shape)
+    n = goal.size
+    if support == "double":
+        rel_goal, _ = _right_from_left(dyn, goal)
+
+        def residual(x: np.ndarray) -> np.ndarray:
+            rel, jac_rel = _right_from_left(dyn, x[:n])
+            held = dyn.static_torques(x[:n], "left").torques - jac_rel.T @ x[n:]
+            return np.concatenate([kp * (goal - x[:n]) - held, dyn.pin.log6(rel_goal.actInv(rel)).vector])
+
+        x0 = np.concatenate([goal, np.zeros(6)])
+    else:
+        def residual(x: np.ndarray) -> np.ndarray:
+            return kp * (goal - x) - dyn.static_torques(x, support).torques
+
+        x0 = goal.copy()
+    r0 = residual(x0)
+    jac = np.empty((x0.size, x0.size))
+    for j in range(x0.size):
+        probe = x0.copy()
+        probe[j] += PROBE_RAD
+        jac[:, j] = (residual(probe) - r0) / PROBE_RAD
+    if support != "double" and np.max(np.linalg.eigvals(jac).real) >= 0.0:
+        return None                           # gravity is stiffer than the servos in some direction
+    x, r = x0, r0
+    for _ in range(MAX_ITERATIONS):
+        if np.max(np.abs(r)) < TOLERANCE_NM:
+            break
+        x = x - np.linalg.solve(jac, r)
+        if not np.all(np.isfinite(x)) or np.max(np.abs(x[:n] - goal)) > MAX_SAG_RAD:
+            return None
+        r = residual(x)
+    else:
+        return None
+    q = x[:n]
+    if np.max(np.abs(kp * (goal - q))) > torque_max:
+        return None
+    if support == "double" and not _both_press(dyn, q, x[n:]):
+        return None
+    return q
+
+
+def _right_from_left(dyn: Any, q: np.ndarray) -> tuple[Any, np.ndarray]:
+    """The right sole's placement in the left sole's frame (pinocchio SE3) and the Jacobian (6, 20) of its twist
+    (own frame: linear [m/rad], angular [rad/rad]) w.r.t. the servo angles with the left sole held still."""
+    pin, model, data = dyn.pin, dyn.model, dyn.data
+    config = dyn.level_configuration(q, "left")
+    pin.computeJointJacobians(model, data, config)
+    pin.framesForwardKinematics(model, data, config)
+    left, right = dyn.sole_ids["left"], dyn.sole_ids["right"]
+    jl = pin.getFrameJacobian(model, data, left, pin.ReferenceFrame.LOCAL)
+    jr = pin.getFrameJacobian(model, data, right, pin.ReferenceFrame.LOCAL)
+    joints = dyn.v_index
+    rel_jac = jr[:, joints] - jr[:, :6] @ np.linalg.solve(jl[:, :6], jl[:, joints])
+    return data.oMf[left].actInv(data.oMf[right]), rel_jac
+
+
+def _both_press(dyn: Any, q: np.ndarray, right_wrench: np.ndarray) -> bool:
+    """Do both soles press on the floor (positive normal force) with their centres of pressure inside the soles
+    when the right one carries ``right_wrench`` (own frame)? A sole cannot pull, nor press outside itself."""
+    pin, model, data = dyn.pin, dyn.model, dyn.data
+    config = dyn.level_configuration(q, "left")
+    zero = np.zeros(model.nv)
+    gravity = pin.rnea(model, data, config, zero, zero)
+    pin.computeJointJacobians(model, data, config)
+    pin.framesForwardKinematics(model, data, config)
+    jl, jr = (pin.getFrameJacobian(model, data, dyn.sole_ids[s], pin.ReferenceFrame.LOCAL) for s in ("left", "right"))
+    left_wrench = np.linalg.solve(jl[:, :6].T, gravity[:6] - jr[:, :6].T @ right_wrench)
+    for side, wrench in (("left", left_wrench), ("right", right_wrench)):
+        force, moment = wrench[:3], wrench[3:]
+        if force[2] <= 0.0:
+            return False
+        front, back, left, right = dyn.spec.sole_extents(side)
+        x, y = -moment[1] / force[2], moment[0] / force[2]
+        if not (-back <= x <= front and -right <= y <= left):
+            return False
+    return True

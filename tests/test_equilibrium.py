@@ -1,0 +1,68 @@
+"""The statically sagged start (op2motion.model.equilibrium): torque balance, symmetry, and agreement with physics."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from helpers import sweep_base
+
+from op2motion.model.dynamics import dynamics_for
+from op2motion.model.equilibrium import _right_from_left, sagged_angles
+from op2motion.physics import judged_run
+from op2motion.physics.schedule import Schedule
+from op2motion.servo import ServoModel
+from op2motion.specfile import default_spec
+
+BALANCE_TOL_NM = 1e-5          # torque imbalance left at a solution [N·m]
+MIRROR_TOL_RAD = 1e-4          # left and right sags of a symmetric pose differ by less
+SETTLED_TOL_DEG = 0.5          # physics started at the sagged angles moves them less than this (friction band
+                               # 0.03 N·m / 12.6 N·m/rad = 0.14°, and the contacts give; a ramped start overshoots
+                               # by degrees)
+SOLE_TOL_M = 1e-6              # the right sole stays where it was put down, seen from the left one
+
+
+@pytest.fixture(scope="module")
+def spec():
+    return default_spec()
+
+
+def test_one_leg_sag_balances_gravity(spec):
+    servo = ServoModel.of(spec)
+    goal = sweep_base(spec, "left")
+    q = sagged_angles(goal, "left", spec, servo.kp, servo.torque_max)
+    assert q is not None
+    held = dynamics_for(spec).static_torques(q, "left").torques
+    assert np.max(np.abs(servo.kp * (goal - q) - held)) < BALANCE_TOL_NM
+    assert np.max(np.abs(np.degrees(q - goal))) > 1.0           # an OP2 on one leg at P = 32 sags by degrees
+
+
+def test_two_leg_sag_is_mirror_symmetric_and_keeps_the_soles(spec):
+    servo = ServoModel.of(spec)
+    goal = sweep_base(spec, "double")
+    q = sagged_angles(goal, "double", spec, servo.kp, servo.torque_max)
+    assert q is not None
+    sag = q - goal
+    names = spec.joint_names
+    for name in names:
+        if name.startswith("l_"):
+            left, right = sag[names.index(name)], sag[names.index("r_" + name[2:])]
+            assert abs(abs(left) - abs(right)) < MIRROR_TOL_RAD, name
+    before, _ = _right_from_left(dynamics_for(spec), goal)
+    after, _ = _right_from_left(dynamics_for(spec), q)
+    assert np.linalg.norm(before.translation - after.translation) < SOLE_TOL_M
+
+
+def test_too_soft_servos_have_no_equilibrium(spec):
+    servo = ServoModel.of(spec, stiffness_scale=0.1)
+    assert sagged_angles(sweep_base(spec, "left"), "left", spec, servo.kp, servo.torque_max) is None
+
+
+@pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
+def test_physics_holds_the_sagged_angles(spec, engine):
+    servo = ServoModel.of(spec)
+    goal = sweep_base(spec, "left")
+    q = sagged_angles(goal, "left", spec, servo.kp, servo.torque_max)
+    verdict, track, _ = judged_run(engine, Schedule.hold(goal, "left", servo), spec, servo, 2.0, None)
+    assert verdict.stable, verdict.reasons
+    moved = np.degrees(np.max(np.abs(np.asarray(track.q) - q), axis=0))
+    assert moved.max() < SETTLED_TOL_DEG, dict(zip(spec.joint_names, np.round(moved, 2)))
