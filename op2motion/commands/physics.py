@@ -19,7 +19,8 @@ def register(sub: Any) -> None:
     p.add_argument("-o", "--output", type=output_path, metavar="FILE", help="write the URDF here (atomically)")
 
     p = add_command(sub, "validate", cmd_validate, "physics check: does a pose stand? (exit 0 yes, 1 no)",
-                    "Place the pose on the floor, ramp gravity in, hold it with the calibrated MX-28 servo model at "
+                    "Place the pose on the floor where its servos hold it against gravity (sagged; else ramp gravity "
+                    "in), hold it with the calibrated MX-28 servo model at "
                     "1 kHz and judge it: stable, or the reasons it is not (tilt, com_drop, ground_contact, "
                     "swing_foot_contact, self_collision, torque_saturation, joint_limit, slip).")
     p.add_argument("pose", metavar="POSE", help="pose file (schema op2motion.pose/1)")

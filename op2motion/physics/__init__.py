@@ -1,6 +1,7 @@
 """Physics checks of poses: one verdict, two engines (PyBullet, the default, and MuJoCo), one servo model.
 
-:func:`validate` places a pose on the floor, ramps gravity in, holds the pose with the calibrated MX-28 model
+:func:`validate` places a pose on the floor at rest where its servos hold it against gravity (statically sagged,
+:mod:`op2motion.model.equilibrium`; else at its goals with gravity ramped in), holds the pose with the MX-28 model
 (:mod:`op2motion.servo`) at 1 kHz and judges it with named reasons (:mod:`.verdict`); ``push_n`` adds separate runs
 with a push in four directions after settling; ``engine="both"`` runs PyBullet and MuJoCo and compares them.
 :func:`validate_motion` does the same for a motion: the goals played every 8 ms with the P gains they were sent
