@@ -74,7 +74,10 @@ def sagged_angles(goal: np.ndarray, support: str, spec: Spec, kp: np.ndarray,
     for _ in range(MAX_ITERATIONS):
         if np.max(np.abs(r)) < TOLERANCE_NM:
             break
-        x = x - np.linalg.solve(jac, r)
+        try:
+            x = x - np.linalg.solve(jac, r)
+        except np.linalg.LinAlgError:             # singular: the servos and gravity balance in some direction
+            return None
         if not np.all(np.isfinite(x)) or np.max(np.abs(x[:n] - goal)) > MAX_SAG_RAD:
             return None
         r = residual(x)
