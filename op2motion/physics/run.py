@@ -94,18 +94,7 @@ def simulate(engine: Any, spec: Spec, servo: ServoModel, schedule: Schedule, sec
     """Run one check (see the module docstring); returns the samples and the start facts. ``start_offset``
     (20,) [rad] starts the joints that far from their first goals (a perturbed start)."""
     body = Body(spec)
-    base_pos, base_rot, planned = plan_rows(body, schedule)
-    q0 = None if schedule.base is not None else sagged_angles(schedule.goals[0], schedule.supports[0], spec,
-                                                              schedule.kp[0], servo.torque_max)
-    if q0 is not None:
-        sagged = placement(body, q0, schedule.supports[0])
-        if sagged[3] <= planned.gap + SAGGED_GAP_TOL_M:      # a foot meant to swing would not reach the floor
-            base_pos, base_rot, planned = sagged[0], sagged[1], replace(planned, gap=sagged[3])
-        else:
-            q0 = None
-    ramp = q0 is None
-    if ramp:
-        q0 = schedule.goals[0]
+    q0, base_pos, base_rot, planned, ramp = _start(body, spec, servo, schedule)
     engine.reset(base_pos, base_rot, q0 + (0.0 if start_offset is None else start_offset))
     dt = engine.time_step
     steps = int(round(seconds / dt))
@@ -128,6 +117,21 @@ def simulate(engine: Any, spec: Spec, servo: ServoModel, schedule: Schedule, sec
             on_step()
     return track, {"start": start, "flat_foot": planned.flat_foot, "gap": planned.gap, "base_rot": base_rot,
                    "planned": planned}
+
+
+def _start(body: Body, spec: Spec, servo: ServoModel, schedule: Schedule
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, Planned, bool]:
+    """Where a run starts: joint angles (20,) [rad], torso position [m] and rotation, the plan (with the start's
+    flat foot and gap), and whether gravity must be ramped in. Statically sagged where an equilibrium exists and
+    its sag leaves every foot meant to swing off the floor (see the module docstring); else the first goals."""
+    base_pos, base_rot, planned = plan_rows(body, schedule)
+    if schedule.base is None:
+        q0 = sagged_angles(schedule.goals[0], schedule.supports[0], spec, schedule.kp[0], servo.torque_max)
+        if q0 is not None:
+            pos, rot, flat, gap = placement(body, q0, schedule.supports[0])
+            if gap <= planned.gap + SAGGED_GAP_TOL_M:
+                return q0, pos, rot, replace(planned, flat_foot=flat, gap=gap), False
+    return schedule.goals[0], base_pos, base_rot, planned, True
 
 
 def _sample(engine: Any, body: Body, servo: ServoModel, schedule: Schedule, row: int, track: _Track,
