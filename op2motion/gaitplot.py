@@ -18,6 +18,16 @@ from .plot import _pyplot, margin_panel_png
 from .spec import Spec
 
 SIDE_COLOUR = {"left": "tab:blue", "right": "tab:red"}
+PLOT_WIDTH_IN = 8.0        # the top view's drawing width [in] (of a 10 in figure)
+TIME_PANELS_IN = 7.5       # the three time panels' height [in]
+
+
+def _top_height_in(gait: Gait, spec: Spec) -> float:
+    """Height [in] of the top view that shows the footprints at equal scale across :data:`PLOT_WIDTH_IN`, plus
+    room for its legend and labels, within 2-7 in."""
+    corners = np.vstack([sole_rectangle(spec, f) for f in (*gait.plan.start.values(), *gait.plan.steps)])
+    span = np.ptp(corners, axis=0) + 0.02
+    return float(np.clip(PLOT_WIDTH_IN * span[1] / max(span[0], 1e-3) + 1.2, 2.0, 7.0))
 
 
 def render_gait(gait: Gait, spec: Spec, title: str, cop: Sequence[Sequence[float]] | None = None,
@@ -25,8 +35,9 @@ def render_gait(gait: Gait, spec: Spec, title: str, cop: Sequence[Sequence[float
     """The PNG (see the module docstring). ``cop``: rows of (time [s], x [m], y [m]) measured in physics, the
     walk starting at ``cop_start_s`` [s] of that clock."""
     plt = _pyplot()
-    fig = plt.figure(figsize=(10, 12))
-    grid = fig.add_gridspec(4, 1, height_ratios=[2.2, 1, 1, 0.7])
+    top_in = _top_height_in(gait, spec)
+    fig = plt.figure(figsize=(10, top_in + TIME_PANELS_IN))
+    grid = fig.add_gridspec(4, 1, height_ratios=[top_in, 2.4, 2.4, 1.7])
     top = fig.add_subplot(grid[0])
     for side, foot in gait.plan.start.items():
         box = sole_rectangle(spec, foot)
@@ -48,8 +59,8 @@ def render_gait(gait: Gait, spec: Spec, title: str, cop: Sequence[Sequence[float
     top.set_xlabel("x [m] (forward)")
     top.set_ylabel("y [m] (left)")
     top.grid(alpha=0.3)
-    top.legend(loc="upper center", bbox_to_anchor=(0.5, -0.18), ncol=4, fontsize=8)
-    top.set_title(f"{title}\n{verdict}", fontsize=10)
+    top.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=4, fontsize=8)
+    fig.suptitle(f"{title}\n{verdict}", fontsize=10)
     t = gait.times
     for row, (axis, name) in enumerate(((0, "x"), (1, "y"))):
         ax = fig.add_subplot(grid[1 + row])

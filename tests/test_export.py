@@ -257,7 +257,10 @@ def test_ctrl_c_stops_a_build_fast_with_a_complete_index_and_it_resumes(tmp_path
     cmd = [sys.executable, "-m", "op2motion", "library", "build", "--x", "0.06", "0.14", "5", "--y", "0", "0.04",
            "2", "--z", "0.07", "0.07", "1", "--hands", "left", "--supports", "left", "--workers", "2",
            "--iters", "150", "--out", str(tmp_path / "lib")]
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    # Ctrl-C as a terminal delivers it: a test run started in the background of a script has SIGINT ignored, and
+    # its children would inherit that
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.time() + 90
     while time.time() < deadline and len(list((tmp_path / "lib").glob("reach-*.json"))) < 2:
         time.sleep(0.02)

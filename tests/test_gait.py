@@ -31,6 +31,7 @@ FLAT_TOL_RAD = 1e-9         # planned soles parallel to the floor
 FOOT_TOL_M = 1e-6           # planned joints put the soles where the timeline wants them
 WALK_DISTANCE_SHARE = 0.85  # a 4-step walk in PyBullet covers at least this share of its planned distance
 COP_INSIDE = 0.95           # the issue: measured CoP inside the support polygon >= 95 % of the time
+TURN_RATE_DEG_S = 30.0      # the issue: turning in place at >= 30 deg/s
 
 
 def test_preview_tracks_a_zmp_step_as_the_lipm_predicts():
@@ -168,6 +169,19 @@ def test_a_short_walk_walks_in_pybullet(spec):
     assert run["cop_inside_fraction"] >= COP_INSIDE
     assert run["self_collisions"] == []
     assert runs["pybullet"].validation.engine == "pybullet"
+
+
+def test_turning_in_place_keeps_the_servos_below_their_limit_in_mujoco(spec):
+    """The turn preset (8 steps) in MuJoCo, the engine with the rotor inertia the feed-forward is computed for:
+    it turns at >= 30 deg/s with no servo at its available torque and the CoP inside the planned soles."""
+    gait = plan_gait(read_preset(preset_path("turn_left")).with_steps(8), spec)
+    physics, _ = walk_physics(gait, spec, ("mujoco",))
+    run = physics["engines"]["mujoco"]
+    assert run["fell"] is False and run["reasons"] == []
+    assert run["turn_rate_deg_s"] >= TURN_RATE_DEG_S
+    assert run["worst_torque"]["limited_share"] == 0.0
+    assert run["cop_inside_fraction"] >= COP_INSIDE
+    assert run["self_collisions"] == []
 
 
 def test_walk_cli_writes_csv_and_webots_and_refuses_bad_input(capsys, tmp_path, spec):
