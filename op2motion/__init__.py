@@ -15,26 +15,26 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from .version import __version__
+from op2motion.version import __version__
 
 #: Public name -> (module, attribute).
 _API = {
     "Op2MotionError": ("errors", "Op2MotionError"),
-    "load_spec": ("specfile", "load_spec"),
-    "BookAngles": ("joints", "BookAngles"),
-    "book_to_servo": ("joints", "book_to_servo"),
-    "servo_to_book": ("joints", "servo_to_book"),
-    "Pose": ("pose", "Pose"),
+    "load_spec": ("robot.specfile", "load_spec"),
+    "BookAngles": ("robot.joints", "BookAngles"),
+    "book_to_servo": ("robot.joints", "book_to_servo"),
+    "servo_to_book": ("robot.joints", "servo_to_book"),
+    "Pose": ("robot.pose", "Pose"),
     "forward": ("kinematics", "forward"),
-    "stability_margin": ("balance", "stability_margin"),
-    "solve_arm_ik": ("arm_ik", "solve_arm_ik"),
+    "stability_margin": ("robot.balance", "stability_margin"),
+    "solve_arm_ik": ("kinematics.arm_ik", "solve_arm_ik"),
     "PostureProblem": ("posture.cost", "PostureProblem"),
     "PSOSettings": ("posture.pso", "PSOSettings"),
     "optimize_posture": ("posture.solve", "optimize_posture"),
     "solve": ("workflow", "solve"),
     "validate": ("physics", "validate"),
-    "read_pose": ("export.posefile", "read_pose"),
-    "write_pose": ("export.posefile", "write_pose"),
+    "read_pose": ("formats.posefile", "read_pose"),
+    "write_pose": ("formats.posefile", "write_pose"),
     "build_urdf": ("model.urdf", "build_urdf"),
 }
 __all__ = sorted(_API) + ["__version__"]

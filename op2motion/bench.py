@@ -13,16 +13,16 @@ from typing import Any, Callable
 
 import numpy as np
 
-from . import book
-from .joints import BookAngles, book_to_servo
-from .kinematics import forward
-from .kinematics.dh_chain import matrix_frames
-from .kinematics.shapes import clearances, shape_set
-from .model.dynamics import dynamics_for
-from .physics import DEFAULT_SECONDS, validate
-from .posture.cost import CLEARANCE_EXACT_M, PostureProblem, evaluate_cost
-from .posture.pso import PSOSettings, run_pso
-from .spec import Spec
+from op2motion import book
+from op2motion.kinematics import forward
+from op2motion.kinematics.dh_chain import matrix_frames
+from op2motion.kinematics.shapes import clearances, shape_set
+from op2motion.model.dynamics import dynamics_for
+from op2motion.physics import DEFAULT_SECONDS, validate
+from op2motion.posture.cost import CLEARANCE_EXACT_M, PostureProblem, evaluate_cost
+from op2motion.posture.pso import PSOSettings, run_pso
+from op2motion.robot.joints import BookAngles, book_to_servo
+from op2motion.robot.spec import Spec
 
 BENCH_POSES = 40_000
 CHECK_POSES = 200   # poses compared against pinocchio one by one
@@ -70,11 +70,11 @@ def _motion_figures(spec: Spec, action: bytes | None, repeat: int) -> dict[str, 
     page's goals played into the servo model in PyBullet (plus settling and the final hold). None without a file."""
     if action is None:
         return {"motion_play_ms": None, "motion_validate_ms": None, "check_motion_ticks": None}
-    from .export.action import page_to_pose, requested_page
-    from .joints import servo_to_ticks
-    from .motion.player import IDS, play
-    from .motion.trajectory import from_playback
-    from .physics import validate_motion
+    from op2motion.formats.action import page_to_pose, requested_page
+    from op2motion.motion.player import IDS, play
+    from op2motion.motion.trajectory import from_playback
+    from op2motion.physics import validate_motion
+    from op2motion.robot.joints import servo_to_ticks
 
     start = page_to_pose(requested_page(action, 1, spec, "action"), spec)
     by_id = {j.id: int(t) for j, t in zip(spec.joints, servo_to_ticks(start.servo, spec))}
@@ -92,7 +92,7 @@ def _motion_figures(spec: Spec, action: bytes | None, repeat: int) -> dict[str, 
 def _walk_figures(spec: Spec, repeat: int) -> dict[str, Any]:
     """``walk_plan_ms``: planning the shipped ``forward`` gait (20 steps: footsteps, preview control, multibody
     correction passes, IK); ``walk_validate_ms``: playing it into the servo model in PyBullet."""
-    from .gait import plan_gait, preset_path, read_preset, walk_physics
+    from op2motion.gait import plan_gait, preset_path, read_preset, walk_physics
 
     params = read_preset(preset_path("forward")).with_steps(20)
     out: dict[str, Any] = {}

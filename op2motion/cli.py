@@ -12,14 +12,14 @@ import os
 import sys
 from typing import Sequence
 
-from .errors import Interrupted, Op2MotionError
-from .specfile import load_spec
-from .version import __version__
+from op2motion.errors import Interrupted, Op2MotionError
+from op2motion.robot.specfile import load_spec
+from op2motion.version import __version__
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand (each command module registers its own)."""
-    from .commands import bench, common, files, kinematics, library, motion, physics, posture, walk
+    from op2motion.commands import bench, common, files, kinematics, library, motion, physics, posture, walk
 
     parser = common.Parser(prog="op2motion", description="Whole-body motion for the ROBOTIS OP2, checked in physics.")
     parser.add_argument("--version", action="version", version=f"op2motion {__version__}")

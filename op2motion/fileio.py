@@ -15,7 +15,7 @@ import secrets
 from pathlib import Path
 from typing import Type
 
-from .errors import InputError, Op2MotionError, OutputError
+from op2motion.errors import InputError, Op2MotionError, OutputError
 
 
 def read_bytes(path: str | Path, what: str, error: Type[Op2MotionError] = InputError) -> bytes:

@@ -3,7 +3,7 @@
 One function decides what a solve is: PSO + refinement on the D-H model, retried on the next seeds (``restarts``)
 when a seed does not reach the target or, with ``validate``, when the reached pose does not stand in physics; so
 both commands retry the same way, simulate for the same time, and never write a pose that falls when validation
-was asked for. :class:`Outcome` is the typed result (its figures: :mod:`op2motion.figures`).
+was asked for. :class:`Outcome` is the typed result (its figures: :mod:`op2motion.figures.pose`).
 """
 
 from __future__ import annotations
@@ -11,13 +11,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from . import physics
-from .physics import DEFAULT_SECONDS, Validation
-from .pose import Pose
-from .posture.cost import PostureProblem
-from .posture.pso import PSOSettings
-from .posture.solve import PostureResult, optimize_posture
-from .spec import Spec
+from op2motion import physics
+from op2motion.physics import DEFAULT_SECONDS, Validation
+from op2motion.posture.cost import PostureProblem
+from op2motion.posture.pso import PSOSettings
+from op2motion.posture.solve import PostureResult, optimize_posture
+from op2motion.robot.pose import Pose
+from op2motion.robot.spec import Spec
 
 DEFAULT_RESTARTS = 2     # extra solves with the next seeds when one fails
 MAX_RESTARTS = 100

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from helpers import SEED, STOCK
 
-from op2motion.spec import Spec
-from op2motion.specfile import default_spec
+from op2motion.robot.spec import Spec
+from op2motion.robot.specfile import default_spec
 
 
 @pytest.fixture(scope="session")

@@ -38,7 +38,7 @@ def page_last_step_ticks(data: bytes, page: int) -> np.ndarray:
 
 def servo_pose(spec, support: str = "left", **degrees: float) -> np.ndarray:
     """Servo angles (20,) [rad]: the book's standing pose with some joints set to ``degrees``."""
-    from op2motion.joints import BookAngles, book_to_servo
+    from op2motion.robot.joints import BookAngles, book_to_servo
 
     servo = book_to_servo(BookAngles.standing("left" if support == "double" else support), spec)[0]
     for name, value in degrees.items():
@@ -146,7 +146,7 @@ def sweep_verdict(task: tuple) -> tuple[bool, float, list, float]:
     falling one; the foot margin is the least margin of a foot's own CoP to its sole among the feet carrying at least
     a tenth of the load (NaN for a falling pose)."""
     from op2motion.physics import validate
-    from op2motion.specfile import default_spec
+    from op2motion.robot.specfile import default_spec
 
     support, kind, degrees, engine, seconds = task
     spec = default_spec()
@@ -163,9 +163,9 @@ STATIC_TORQUE_CASES = (("init", "double"), ("walkready", "double"), ("sit_down",
 def static_torque_rows(spec=None) -> list[tuple[str, str, str, float, float]]:
     """The README's static torque table: (pose, support, worst joint, |torque| [N·m], share of stall) of the stock
     poses held still (pinocchio), on both feet as recorded and on the left foot alone."""
-    from op2motion.export.posefile import read_pose
+    from op2motion.formats.posefile import read_pose
     from op2motion.model.dynamics import dynamics_for
-    from op2motion.specfile import default_spec
+    from op2motion.robot.specfile import default_spec
 
     spec = spec or default_spec()
     rows = []

@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from op2motion.spec import Spec
+from op2motion.robot.spec import Spec
 
 
 def _rpy(r: float, p: float, y: float) -> np.ndarray:

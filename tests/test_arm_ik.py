@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from helpers import run_cli
 
-from op2motion.arm_ik import ARMS, _hands, _with_arm, book_step, pb_hand_jacobian, solve_arm_ik
 from op2motion.book import ARM_RUNS
 from op2motion.errors import ModelError
-from op2motion.joints import BookAngles
+from op2motion.kinematics.arm_ik import ARMS, _hands, _with_arm, book_step, pb_hand_jacobian, solve_arm_ik
+from op2motion.robot.joints import BookAngles
 
 BOOK_DEG = 0.01          # the book prints two decimals
 BOOK_EEP_M = 0.006       # the book prints eep_dif to 0.01 m

@@ -5,18 +5,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from op2motion.balance import (
+from op2motion.errors import InputError
+from op2motion.kinematics import forward
+from op2motion.kinematics.com import mass_weights
+from op2motion.robot.balance import (
     PENALTY,
-    com_lumped,
     penalty_stability,
     penalty_swing_foot_height,
     stability_margin,
     support_polygon,
 )
-from op2motion.errors import InputError
-from op2motion.joints import BookAngles
-from op2motion.kinematics import forward
-from op2motion.kinematics.com import mass_weights
+from op2motion.robot.joints import BookAngles
 
 EXACT_M = 1e-12
 
@@ -27,7 +26,7 @@ def test_com_weights_total_the_lumped_masses(spec):
 
 def test_standing_com_is_between_the_feet_at_mid_height(spec):
     pts = forward(BookAngles.standing("left"), spec, "dh")
-    com = com_lumped(pts)[0]
+    com = pts.com.T[0]
     assert com[1] == pytest.approx(-0.037, abs=EXACT_M)      # mid-plane of the feet
     assert 0.20 < com[2] < 0.25                               # about at the hips, as on the real robot
     assert 0.0 < com[0] < 0.01                                # the torso sits 5 mm ahead of the hips

@@ -8,10 +8,10 @@ from helpers import sweep_base
 
 from op2motion.model.dynamics import dynamics_for
 from op2motion.model.equilibrium import _right_from_left, sagged_angles
+from op2motion.model.servo import ServoModel
 from op2motion.physics import judged_run
 from op2motion.physics.schedule import Schedule
-from op2motion.servo import ServoModel
-from op2motion.specfile import default_spec
+from op2motion.robot.specfile import default_spec
 
 BALANCE_TOL_NM = 1e-5          # torque imbalance left at a solution [N·m]
 MIRROR_TOL_RAD = 1e-4          # left and right sags of a symmetric pose differ by less

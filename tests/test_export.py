@@ -15,16 +15,16 @@ from helpers import DATA, page_last_step_ticks, run_cli
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from op2motion.actionfile import FILE_SIZE, PAGE_SIZE, checksum_ok, reset_file, reset_page
 from op2motion.errors import InputError, PoseFileError
-from op2motion.export.action import encode_poses, list_pages, page_to_pose, requested_page
-from op2motion.export.posefile import read_pose
-from op2motion.export.tables import csv_table, webots_motion
-from op2motion.joints import servo_to_ticks
+from op2motion.formats.action import encode_poses, list_pages, page_to_pose, requested_page
+from op2motion.formats.actionlayout import FILE_SIZE, PAGE_SIZE, checksum_ok, reset_file, reset_page
+from op2motion.formats.posefile import read_pose
+from op2motion.formats.tables import csv_table, webots_motion
 from op2motion.library.build import BuildSettings, build_library
 from op2motion.library.grid import axis, grid_jobs
 from op2motion.posture.pso import PSOSettings
-from op2motion.specfile import default_spec
+from op2motion.robot.joints import servo_to_ticks
+from op2motion.robot.specfile import default_spec
 
 POSES = os.path.join(os.path.dirname(__file__), "..", "poses")
 STOCK = str(DATA / "motion_4096.bin")
@@ -313,7 +313,7 @@ def requested_page_or_none(data, index, spec):
 def test_webots_export_sanitises_names_and_warns_outside_the_webots_ranges(capsys, spec, tmp_path):
     """A pose name with a comma and a line break cannot break the motion file; a knee beyond the Webots model's
     stop (LegLowerR 128.9°) is written (Webots clamps it) with a warning naming the motor."""
-    from op2motion.pose import Pose
+    from op2motion.robot.pose import Pose
 
     servo = read_pose(os.path.join(POSES, "standing.json"), spec).servo.copy()
     servo[spec.joint_names.index("r_knee")] = np.radians(130.0)
@@ -323,7 +323,7 @@ def test_webots_export_sanitises_names_and_warns_outside_the_webots_ranges(capsy
     assert len(lines) == 3 and lines[1].split(",")[1] == "deep_knee" and lines[2].startswith("00:00:500,")
     with pytest.raises(InputError, match="strictly increasing"):
         webots_motion([odd, odd], spec, times=[0.0, 0.0])
-    from op2motion.export.tables import webots_warnings
+    from op2motion.formats.tables import webots_warnings
 
     warnings = webots_warnings([odd], spec)
     assert len(warnings) == 1 and "LegLowerR (r_knee) 130.0°" in warnings[0] and "128.9" in warnings[0]

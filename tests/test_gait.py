@@ -16,11 +16,11 @@ from op2motion.gait.footsteps import plan_footsteps
 from op2motion.gait.leg_ik import leg_fk, leg_ik, leg_of
 from op2motion.gait.preview import preview_gains, track_reference
 from op2motion.gait.timeline import build_timeline
-from op2motion.joints import servo_to_book
 from op2motion.kinematics.dh import forward_dh_frames
 from op2motion.kinematics.dh_chain import matrix_plan
 from op2motion.physics.body import Body
-from op2motion.spec import GRAVITY_M_S2
+from op2motion.robot.joints import servo_to_book
+from op2motion.robot.spec import GRAVITY_M_S2
 
 IK_TOL_M = 1e-4             # the 0.1 mm
 IK_ANGLE_TOL_RAD = 1e-9     # the closed form recovers the angles exactly in the hip-above-ankle domain

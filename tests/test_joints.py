@@ -10,9 +10,10 @@ from helpers import page_last_step_ticks
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from op2motion.balance import com_lumped, stability_margin
 from op2motion.errors import InputError
-from op2motion.joints import (
+from op2motion.kinematics import forward
+from op2motion.robot.balance import stability_margin
+from op2motion.robot.joints import (
     BookAngles,
     book_to_servo,
     servo_dict,
@@ -21,8 +22,7 @@ from op2motion.joints import (
     servo_to_ticks,
     ticks_to_servo,
 )
-from op2motion.kinematics import forward
-from op2motion.specfile import default_spec
+from op2motion.robot.specfile import default_spec
 
 EXACT_RAD = 1e-12            # book -> servo -> book is a linear map and its inverse
 HALF_TICK_RAD = math.pi / 4096
@@ -114,7 +114,7 @@ def test_init_page_is_a_balanced_double_support_stance(spec, stock_action_bytes)
     servo = ticks_to_servo(page_last_step_ticks(stock_action_bytes, 1), spec)
     book = servo_to_book(servo, "left", spec)
     pts = forward(book, spec, "dh")
-    com = com_lumped(pts)[0]
+    com = pts.com.T[0]
     # The CoM lies between the feet (double support): on neither foot alone, but inside both feet's hull.
     assert stability_margin(com[None, :2], spec, "left")[0] < 0
     assert -0.074 < com[1] < 0.0 and -0.052 < com[0] < 0.052

@@ -10,12 +10,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from official_fk import official_points
 
-from op2motion.balance import com_lumped
 from op2motion.book import STANDING_PHI_DEG, STANDING_TH_DEG
 from op2motion.errors import InputError, ModelError
-from op2motion.joints import BookAngles, book_to_servo, servo_to_book
 from op2motion.kinematics import POINT_NAMES, forward
-from op2motion.specfile import default_spec
+from op2motion.robot.joints import BookAngles, book_to_servo, servo_to_book
+from op2motion.robot.specfile import default_spec
 
 EXACT_M = 1e-9          # D-H vs the official description: the same rigid geometry, rounding only
 LENGTH_M = 1e-9         # link lengths preserved by the D-H chain
@@ -184,7 +183,7 @@ def test_symmetric_pose_has_its_com_on_the_mid_plane(values, tilt, model):
     for support in SUPPORTS:
         pts = forward(servo_to_book(_mirrored(values, SAGITTAL, tilt), support, spec), spec, model)
         mid = 0.5 * (pts.point("left_sole")[0] + pts.point("right_sole")[0])
-        assert abs(com_lumped(pts)[0][1] - mid[1]) < 1e-9
+        assert abs(pts.com.T[0][1] - mid[1]) < 1e-9
         assert abs(pts.point("neck")[0][1] - mid[1]) < 1e-9
 
 
@@ -198,7 +197,7 @@ def test_any_mirrored_pose_has_its_com_on_the_body_mirror_plane(values, tilt):
         a, b = pts.point("l_sho_pitch")[0], pts.point("r_sho_pitch")[0]
         normal = (a - b) / np.linalg.norm(a - b)
         mid = 0.5 * (a + b)
-        assert abs(np.dot(com_lumped(pts)[0] - mid, normal)) < 1e-9
+        assert abs(np.dot(pts.com.T[0] - mid, normal)) < 1e-9
         hips = 0.5 * (pts.point("l_hip_yaw")[0] + pts.point("r_hip_yaw")[0])
         assert abs(np.dot(hips - mid, normal)) < 1e-9
 

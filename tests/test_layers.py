@@ -14,15 +14,15 @@ PACKAGE = Path(__file__).resolve().parents[1] / "op2motion"
 #: Layers, lowest first. A module may import modules of lower layers and of its own package; never higher ones.
 LAYERS = [
     {"errors", "version"},
-    {"book", "trig", "tablereader", "fileio", "actionfile"},
-    {"spec"},
-    {"joints", "specfile"},
-    {"pose", "kinematics", "model"},
-    {"balance", "servo", "arm_ik"},
-    {"compliance"},
-    {"summary", "posture", "physics", "export", "plot", "motion"},
-    {"workflow", "gait"},
-    {"bench", "library", "figures", "motionplot", "gaitplot"},
+    {"book", "fileio"},
+    {"robot"},
+    {"kinematics", "formats"},
+    {"model"},
+    {"posture", "physics"},
+    {"motion"},
+    {"gait"},
+    {"workflow"},
+    {"figures", "library", "bench"},
     {"commands"},
     {"cli"},
     {"__main__", "__init__"},
@@ -51,7 +51,10 @@ def _imports(path: Path) -> set[str]:
                     candidate = ".".join(target + [alias.name])
                     found.add(candidate if _exists(candidate) else ".".join(target))
             elif node.module and node.module.startswith("op2motion"):
-                found.add(node.module.removeprefix("op2motion").lstrip("."))
+                target = node.module.removeprefix("op2motion").lstrip(".")
+                for alias in node.names:   # `from op2motion.x import y` may name a module
+                    candidate = f"{target}.{alias.name}" if target else alias.name
+                    found.add(candidate if _exists(candidate) else target)
         elif isinstance(node, ast.Import):
             found |= {a.name.removeprefix("op2motion").lstrip(".") for a in node.names
                       if a.name.startswith("op2motion")}

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from helpers import page_last_step_ticks
 
-from op2motion.joints import BookAngles, book_to_servo, ticks_to_servo
 from op2motion.kinematics import POINT_NAMES, forward
 from op2motion.model.dynamics import dynamics_for
 from op2motion.model.urdf import build_urdf, link_inertial
+from op2motion.robot.joints import BookAngles, book_to_servo, ticks_to_servo
 
 DH_VS_PINOCCHIO_M = 0.5e-3   # the acceptance bound; measured 4e-10 m
 GRAVITY = 9.81
@@ -111,7 +111,7 @@ def test_stock_standing_pages_are_within_the_servo_torque(spec, stock_action_byt
 
 @pytest.mark.parametrize("support", ["left", "right"])
 def test_frame_jacobian_matches_finite_differences_of_dh(spec, rng, support):
-    from op2motion.joints import servo_to_book
+    from op2motion.robot.joints import servo_to_book
 
     dyn = dynamics_for(spec)
     servo = book_to_servo(BookAngles.random(1, rng, support, psi=True), spec)[0]

@@ -9,18 +9,18 @@ import numpy as np
 import pytest
 from helpers import POSES, STOCK, pose_path, run_cli
 
-from op2motion.actionfile import PAGE_SIZE, TIME_UNIT_S, is_empty, reset_file
 from op2motion.errors import CheckFailed, PoseFileError
-from op2motion.export.action import list_pages
-from op2motion.export.motionfile import read_motion
-from op2motion.export.posefile import read_pose
-from op2motion.joints import servo_to_ticks
+from op2motion.formats.action import list_pages
+from op2motion.formats.actionlayout import PAGE_SIZE, TIME_UNIT_S, is_empty, reset_file
+from op2motion.formats.motionfile import read_motion
+from op2motion.formats.posefile import read_pose
 from op2motion.motion.checks import check_trajectory, require_clear
 from op2motion.motion.planner import SPEED_FRACTION, action_pages, plan, robot_steps
 from op2motion.motion.player import IDS, play
 from op2motion.motion.shift import settled_coms, with_weight_shifts
 from op2motion.motion.trajectory import from_playback
 from op2motion.motion.waypoint import Waypoint
+from op2motion.robot.joints import servo_to_ticks
 
 SETTLED_COM_TOL_M = 2e-4      # the balanced rows' settled CoM against its straight-line target
 SPEED_TOL = 1e-6              # relative, on the stretched peak speed
@@ -168,7 +168,7 @@ def test_stand_to_a_one_leg_pose_and_back_in_physics(spec):
 
 
 def test_stock_page_played_in_physics(spec):
-    from op2motion.export.action import page_to_pose, requested_page
+    from op2motion.formats.action import page_to_pose, requested_page
     from op2motion.physics import validate_motion
 
     data = STOCK.read_bytes()

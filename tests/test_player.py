@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from helpers import DATA
 
-from op2motion.actionfile import PAGE_SIZE, StepBytes, encode_page, parse_page, reset_file
 from op2motion.errors import InputError
+from op2motion.formats.actionlayout import PAGE_SIZE, StepBytes, encode_page, parse_page, reset_file
 from op2motion.motion.player import play
 
 STOCK = (DATA / "motion_4096.bin").read_bytes()

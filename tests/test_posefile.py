@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from op2motion.errors import LimitError, PoseFileError
-from op2motion.export.posefile import read_pose, write_pose
-from op2motion.joints import BookAngles
-from op2motion.pose import Pose
+from op2motion.formats.posefile import read_pose, write_pose
+from op2motion.robot.joints import BookAngles
+from op2motion.robot.pose import Pose
 
 
 def _pose(spec, name="test") -> Pose:

@@ -10,18 +10,18 @@ import numpy as np
 import pytest
 from helpers import run_cli
 
-from op2motion.balance import COM_MODEL_LUMPED, penalty_stability, rectangle_margin, stability_margin
 from op2motion.book import DEFAULT_PROBLEM, SCENARIOS
-from op2motion.compliance import Compliance, SwingLegSag
-from op2motion.export.posefile import read_pose
-from op2motion.joints import BookAngles, book_to_servo
+from op2motion.formats.posefile import read_pose
 from op2motion.kinematics import forward
 from op2motion.kinematics.dh_chain import matrix_frames
 from op2motion.kinematics.points import ROW
+from op2motion.model.compliance import Compliance, SwingLegSag
 from op2motion.physics import ENGINES, validate
 from op2motion.posture.cost import SAG_TILT_LIMIT_RAD, CostModel, PostureProblem, evaluate_cost
 from op2motion.posture.pso import PSOSettings, run_pso, variable_bounds
 from op2motion.posture.solve import optimize_posture
+from op2motion.robot.balance import COM_MODEL_LUMPED, penalty_stability, rectangle_margin, stability_margin
+from op2motion.robot.joints import BookAngles, book_to_servo
 
 POSES = os.path.join(os.path.dirname(__file__), "..", "poses")
 PSO_REACH_M = 5e-3

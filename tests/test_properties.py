@@ -13,11 +13,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from op2motion.errors import Op2MotionError, PoseFileError
-from op2motion.export.posefile import parse_pose
-from op2motion.joints import BookAngles
+from op2motion.formats.posefile import parse_pose
 from op2motion.kinematics import forward
 from op2motion.model.urdf import build_urdf
-from op2motion.specfile import default_spec, parse_spec
+from op2motion.robot.joints import BookAngles
+from op2motion.robot.specfile import default_spec, parse_spec
 
 SPEC_TEXT = (ROOT / "specs" / "op2.toml").read_text(encoding="utf-8")
 SPEC_LINES = SPEC_TEXT.splitlines()

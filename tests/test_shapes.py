@@ -12,8 +12,7 @@ import pytest
 from helpers import POSES
 from pybullet_utils import bullet_client
 
-from op2motion.export.posefile import read_pose
-from op2motion.joints import BookAngles, book_to_servo, servo_to_book
+from op2motion.formats.posefile import read_pose
 from op2motion.kinematics.dh_chain import matrix_frames
 from op2motion.kinematics.links import attachments
 from op2motion.kinematics.shapes import clearances, shape_set
@@ -21,6 +20,7 @@ from op2motion.kinematics.tree import link_frames
 from op2motion.model.urdf import build_urdf
 from op2motion.physics.pybullet_engine import load_robot
 from op2motion.posture.cost import SELF_CLEARANCE_M
+from op2motion.robot.joints import BookAngles, book_to_servo, servo_to_book
 
 POSES_CHECKED = 150
 NEAR_M = 0.025               # pairs compared where our clearance is below this

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from op2motion.errors import SpecError
-from op2motion.specfile import load_spec, parse_spec
+from op2motion.robot.specfile import load_spec, parse_spec
 
 SPEC_TEXT = (Path(__file__).parents[1] / "specs" / "op2.toml").read_text(encoding="utf-8")
 LENGTH_TOL_M = 1e-12
@@ -102,8 +102,8 @@ def test_mechanical_ranges_hold_every_goal_of_the_stock_file(spec, stock_action_
     beyond the cable-safe range (advice), so the cable-safe range must never be used as a hard limit."""
     import numpy as np
 
-    from op2motion.export.action import list_pages
-    from op2motion.joints import limit_violations, ticks_to_servo
+    from op2motion.formats.action import list_pages
+    from op2motion.robot.joints import limit_violations, ticks_to_servo
 
     beyond_safe = set()
     for page in list_pages(stock_action_bytes, spec):

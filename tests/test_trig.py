@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from op2motion.trig import sincos
+from op2motion.kinematics.trig import sincos
 
 DOUBLE_TOL = 2e-15
 

@@ -8,15 +8,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from op2motion.export.action import page_to_pose, requested_page
-from op2motion.export.motionfile import read_motion
-from op2motion.joints import servo_to_ticks
+from op2motion.formats.action import page_to_pose, requested_page
+from op2motion.formats.motionfile import read_motion
 from op2motion.motion.planner import plan
 from op2motion.motion.player import IDS, play
 from op2motion.motion.trajectory import from_playback
 from op2motion.motion.waypoint import Waypoint
 from op2motion.physics import validate_motion
-from op2motion.specfile import default_spec
+from op2motion.robot.joints import servo_to_ticks
+from op2motion.robot.specfile import default_spec
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = ((1, 1), (4, 1), (9, 1), (15, 1), (16, 1), (12, 9), (13, 9))   # (page, the page whose last step it starts from)

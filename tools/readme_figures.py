@@ -18,9 +18,9 @@ PUSH_N = 2.0
 
 
 def _verdict(task: tuple[str, str, float, float]) -> tuple[tuple[str, str, float, float], dict]:
-    from op2motion.export.posefile import read_pose
+    from op2motion.formats.posefile import read_pose
     from op2motion.physics import validate
-    from op2motion.specfile import default_spec
+    from op2motion.robot.specfile import default_spec
 
     name, engine, stiffness, push = task
     spec = default_spec()

@@ -6,10 +6,10 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from .. import book
-from ..bench import BENCH_POSES
-from ..spec import Spec
-from .common import add_command, emit, whole
+from op2motion import book
+from op2motion.bench import BENCH_POSES
+from op2motion.commands.common import add_command, emit, whole
+from op2motion.robot.spec import Spec
 
 STOCK_ACTION = Path(__file__).resolve().parents[2] / "tests" / "data" / "motion_4096.bin"
 
@@ -27,8 +27,8 @@ def register(sub: Any) -> None:
 
 def cmd_bench(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion bench``."""
-    from ..bench import run_bench
-    from ..export.action import read_action
+    from op2motion.bench import run_bench
+    from op2motion.formats.action import read_action
 
     r = run_bench(spec, args.poses, args.repeat, action=read_action(args.action) if args.action else None)
     lines = [f"{r['poses']} poses, best of {r['repeat']}, scaled to {BENCH_POSES} full-body evaluations:",

@@ -12,8 +12,8 @@ import math
 import sys
 from typing import Any, Callable, Sequence
 
-from ..errors import InputError
-from ..spec import Spec
+from op2motion.errors import InputError
+from op2motion.robot.spec import Spec
 
 Handler = Callable[[argparse.Namespace, Spec], int]
 #: Library parameter names whose flag is spelled differently.
@@ -63,7 +63,7 @@ def warn(result: dict[str, Any], warnings: Sequence[str]) -> None:
 
 def cable_warnings(poses: Sequence[Any], spec: Spec) -> list[str]:
     """Advice for poses with joints outside their cable-safe range (inside the mechanical range: still valid)."""
-    from ..joints import limit_violations
+    from op2motion.robot.joints import limit_violations
 
     return [f"{pose.name}: {v.describe()} (the robot can do it, but the cable may be strained)"
             for pose in poses for v in limit_violations(pose.servo, spec, "cable-safe")]
@@ -88,8 +88,8 @@ def book_args(p: argparse.ArgumentParser, pose_flag: bool = True) -> None:
 def angles_from(args: argparse.Namespace, spec: Spec, pose_path: str | None = None, default_standing: bool = False):
     """Book angles and a name from a pose file, or ``--th``/``--phi``[/``--psi``] ``--support``, or (when
     ``default_standing``) the book's standing pose. Returns ``(BookAngles, name, Pose | None)``."""
-    from ..export.posefile import read_pose
-    from ..joints import BookAngles
+    from op2motion.formats.posefile import read_pose
+    from op2motion.robot.joints import BookAngles
 
     pose_path = pose_path if pose_path is not None else getattr(args, "pose", None)
     if pose_path:
@@ -159,8 +159,8 @@ def output_path(text: str) -> str:
 
 
 def pose_name(text: str) -> str:
-    """An argparse type: a pose name (see :func:`op2motion.pose.check_pose_name`)."""
-    from ..pose import NAME_RULE, check_pose_name
+    """An argparse type: a pose name (see :func:`op2motion.robot.pose.check_pose_name`)."""
+    from op2motion.robot.pose import NAME_RULE, check_pose_name
 
     try:
         return check_pose_name(text)

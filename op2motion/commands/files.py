@@ -6,11 +6,11 @@ import argparse
 import json
 from typing import Any
 
-from ..actionfile import NUM_PAGES
-from ..errors import InputError
-from ..export.tables import MAX_TIME_S
-from ..spec import Spec
-from .common import add_command, cable_warnings, emit, number, output_path, pose_name, warn, whole
+from op2motion.commands.common import add_command, cable_warnings, emit, number, output_path, pose_name, warn, whole
+from op2motion.errors import InputError
+from op2motion.formats.actionlayout import NUM_PAGES
+from op2motion.formats.tables import MAX_TIME_S
+from op2motion.robot.spec import Spec
 
 PAGE = whole(1, NUM_PAGES - 1)
 
@@ -38,10 +38,10 @@ def register(sub: Any) -> None:
 
 def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion export``."""
-    from ..export.action import encode_poses, read_action
-    from ..export.posefile import read_pose
-    from ..export.tables import csv_table, webots_motion, webots_warnings
-    from ..fileio import OutputSet
+    from op2motion.fileio import OutputSet
+    from op2motion.formats.action import encode_poses, read_action
+    from op2motion.formats.posefile import read_pose
+    from op2motion.formats.tables import csv_table, webots_motion, webots_warnings
 
     outputs = OutputSet({"output": args.output})
     poses = [read_pose(p, spec) for p in args.poses]
@@ -68,9 +68,9 @@ def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
 
 def cmd_import_action(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion import-action``."""
-    from ..export.action import list_pages, page_to_pose, read_action, requested_page
-    from ..export.posefile import pose_to_json
-    from ..fileio import OutputSet
+    from op2motion.fileio import OutputSet
+    from op2motion.formats.action import list_pages, page_to_pose, read_action, requested_page
+    from op2motion.formats.posefile import pose_to_json
 
     if args.out and args.page is None:
         raise InputError("expected --page N with --out")

@@ -7,10 +7,7 @@ import json
 import math
 from typing import Any
 
-from ..errors import InputError
-from ..physics import DEFAULT_SECONDS, MAX_SECONDS, MIN_SECONDS
-from ..spec import Spec
-from .common import (
+from op2motion.commands.common import (
     BOUNDARY_RATIO,
     DELTA_M,
     HEADING_DEG,
@@ -24,6 +21,9 @@ from .common import (
     output_path,
     vec3,
 )
+from op2motion.errors import InputError
+from op2motion.physics import DEFAULT_SECONDS, MAX_SECONDS, MIN_SECONDS
+from op2motion.robot.spec import Spec
 
 TOL_MM = number(0.0, 100.0, "mm", open_low=True)
 SECONDS = number(MIN_SECONDS, MAX_SECONDS, "s")
@@ -72,7 +72,7 @@ def register(sub: Any) -> None:
 
 def cmd_fk(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion fk``."""
-    from ..summary import evaluate
+    from op2motion.kinematics.report import evaluate
 
     angles, _, _ = angles_from(args, spec)
     sp = vec3(args.sp, "sp") or (0.0, 0.0, 0.0)
@@ -83,7 +83,7 @@ def cmd_fk(args: argparse.Namespace, spec: Spec) -> int:
 
 def _servo_mapping(text: str) -> dict:
     """``--servo-deg``: JSON text, a JSON file of {joint: deg}, or a pose file (its ``servo_deg``)."""
-    from ..fileio import read_text
+    from op2motion.fileio import read_text
 
     if not text.lstrip().startswith(("{", "[")):
         text = read_text(text, "JSON file", InputError)
@@ -98,7 +98,7 @@ def _servo_mapping(text: str) -> dict:
 
 def cmd_convert(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion convert``."""
-    from ..joints import (
+    from op2motion.robot.joints import (
         book_to_servo,
         servo_from_mapping,
         servo_to_book,
@@ -132,9 +132,9 @@ def cmd_convert(args: argparse.Namespace, spec: Spec) -> int:
 
 def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion plot``: the figure, with the physics verdict when asked (or recorded in the pose file)."""
-    from ..figures import PB_PSI_NOTE, pose_figure
-    from ..fileio import OutputSet
-    from ..joints import book_to_servo
+    from op2motion.figures.pose import PB_PSI_NOTE, pose_figure
+    from op2motion.fileio import OutputSet
+    from op2motion.robot.joints import book_to_servo
 
     outputs = OutputSet({"output": args.output})
     angles, name, pose = angles_from(args, spec, args.pose_positional, default_standing=True)
@@ -143,7 +143,7 @@ def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
     support = pose.support if pose is not None else angles.support
     validation = None
     if args.validate:
-        from ..physics import validate
+        from op2motion.physics import validate
 
         servo = pose.servo if pose is not None else book_to_servo(angles, spec)[0]
         validation = validate(servo, support, spec, args.seconds)
@@ -163,12 +163,12 @@ def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
 
 def cmd_arm_ik(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion arm-ik``."""
-    from ..arm_ik import ARMS, solve_arm_ik
-    from ..errors import CheckFailed, Unreachable
-    from ..figures import pose_figure
-    from ..fileio import OutputSet
-    from ..joints import book_to_servo, servo_dict
-    from ..summary import evaluate
+    from op2motion.errors import CheckFailed, Unreachable
+    from op2motion.figures.pose import pose_figure
+    from op2motion.fileio import OutputSet
+    from op2motion.kinematics.arm_ik import ARMS, solve_arm_ik
+    from op2motion.kinematics.report import evaluate
+    from op2motion.robot.joints import book_to_servo, servo_dict
 
     outputs = OutputSet({"plot": args.plot} if args.plot else {})
     angles, name, _ = angles_from(args, spec)

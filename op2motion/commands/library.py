@@ -5,11 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from .. import book
-from ..library.build import MAX_WORKERS
-from ..library.grid import MAX_AXIS
-from ..spec import Spec
-from .common import (
+from op2motion import book
+from op2motion.commands.common import (
     BOUNDARY_RATIO,
     Parser,
     add_command,
@@ -19,7 +16,10 @@ from .common import (
     progress_enabled,
     whole,
 )
-from .posture import com_model_arg, solver_args
+from op2motion.commands.posture import com_model_arg, solver_args
+from op2motion.library.build import MAX_WORKERS
+from op2motion.library.grid import MAX_AXIS
+from op2motion.robot.spec import Spec
 
 AXIS_VALUE = number(-1e6, 1e6)   # START, STOP and COUNT of a grid axis; the library checks the real ranges
 
@@ -58,9 +58,9 @@ def cmd_library_build(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion library build``."""
     from tqdm import tqdm
 
-    from ..library.build import BuildSettings, build_library, check_workers
-    from ..library.grid import axis, grid_jobs
-    from ..posture.pso import PSOSettings
+    from op2motion.library.build import BuildSettings, build_library, check_workers
+    from op2motion.library.grid import axis, grid_jobs
+    from op2motion.posture.pso import PSOSettings
 
     check_workers(args.workers)
     jobs = grid_jobs(args.hands, args.supports, args.br, axis(*args.x, "x"), axis(*args.y, "y"), axis(*args.z, "z"),

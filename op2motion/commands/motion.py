@@ -5,11 +5,11 @@ from __future__ import annotations
 import argparse
 from typing import Any, Sequence
 
-from ..actionfile import NUM_PAGES
-from ..errors import CheckFailed, InputError
-from ..physics import ENGINES, MAX_PUSH_N
-from ..spec import SUPPORTS, Spec
-from .common import add_command, emit, number, output_path, progress_enabled, warn, whole
+from op2motion.commands.common import add_command, emit, number, output_path, progress_enabled, warn, whole
+from op2motion.errors import CheckFailed, InputError
+from op2motion.formats.actionlayout import NUM_PAGES
+from op2motion.physics import ENGINES, MAX_PUSH_N
+from op2motion.robot.spec import SUPPORTS, Spec
 
 PAGE = whole(1, NUM_PAGES - 1)
 SECONDS = number(0.0, 60.0, "s")
@@ -27,7 +27,7 @@ def _physics_args(p: argparse.ArgumentParser) -> None:
 
 def register(sub: Any) -> None:
     """Add ``motion play|plan|export``."""
-    from .common import Parser
+    from op2motion.commands.common import Parser
 
     top = sub.add_parser("motion", help="play action pages, plan pose-to-pose motions, export them",
                          description="Motions: action pages played as the robot plays them, planned pose "
@@ -63,7 +63,7 @@ def _validate(args: argparse.Namespace, trajectory: Any, spec: Spec) -> tuple[di
     """With ``--validate``: the physics result for the JSON and the verdict of each engine."""
     from tqdm import tqdm
 
-    from ..physics import MOTION_HOLD_S, MOTION_SETTLE_S, RAMP_S, TIME_STEP_S, validate_motion
+    from op2motion.physics import MOTION_HOLD_S, MOTION_SETTLE_S, RAMP_S, TIME_STEP_S, validate_motion
 
     if not args.validate:
         return None, {}
@@ -84,10 +84,10 @@ def _validate(args: argparse.Namespace, trajectory: Any, spec: Spec) -> tuple[di
 def _finish(args: argparse.Namespace, spec: Spec, trajectory: Any, title: str, result: dict[str, Any],
             lines: list[str]) -> int:
     """Checks, physics, plot and CSV common to play and plan; raises CheckFailed (exit 1) when physics says no."""
-    from ..export.tables import goals_csv
-    from ..fileio import OutputSet
-    from ..motion.checks import check_trajectory
-    from ..motionplot import render_motion
+    from op2motion.figures.motion import render_motion
+    from op2motion.fileio import OutputSet
+    from op2motion.formats.tables import goals_csv
+    from op2motion.motion.checks import check_trajectory
 
     outputs = OutputSet({k: getattr(args, k) for k in ("plot", "csv") if getattr(args, k)})
     physics, verdicts = _validate(args, trajectory, spec)
@@ -128,11 +128,11 @@ def _finish(args: argparse.Namespace, spec: Spec, trajectory: Any, title: str, r
 
 def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion motion play``."""
-    from ..export.action import page_to_pose, read_action, requested_page
-    from ..export.posefile import read_pose
-    from ..joints import servo_to_ticks
-    from ..motion.player import IDS, play
-    from ..motion.trajectory import from_playback
+    from op2motion.formats.action import page_to_pose, read_action, requested_page
+    from op2motion.formats.posefile import read_pose
+    from op2motion.motion.player import IDS, play
+    from op2motion.motion.trajectory import from_playback
+    from op2motion.robot.joints import servo_to_ticks
 
     data = read_action(args.file)
     page = requested_page(data, args.page, spec, args.file)
@@ -165,9 +165,9 @@ def _broadcast(values: Sequence[float] | None, n: int, default: float | None, fl
 def _motion_from_args(args: argparse.Namespace, spec: Spec) -> Any:
     from pathlib import Path
 
-    from ..export.motionfile import is_motion_file, motion_of, read_motion, relative_source
-    from ..export.posefile import read_pose
-    from ..pose import Pose
+    from op2motion.formats.motionfile import is_motion_file, motion_of, read_motion, relative_source
+    from op2motion.formats.posefile import read_pose
+    from op2motion.robot.pose import Pose
 
     if len(args.poses) == 1 and is_motion_file(args.poses[0]):
         if args.durations or args.pauses or args.support:
@@ -191,17 +191,17 @@ def _motion_from_args(args: argparse.Namespace, spec: Spec) -> Any:
 
 def waypoints_of(motion: Any) -> list[Any]:
     """The planner's waypoints of a motion file's steps."""
-    from ..motion.waypoint import Waypoint
+    from op2motion.motion.waypoint import Waypoint
 
     return [Waypoint(s.pose.name, s.pose.servo, s.duration_s, s.pause_s, s.pose.support) for s in motion.steps]
 
 
 def cmd_plan(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion motion plan``."""
-    from ..export.motionfile import motion_to_json
-    from ..fileio import OutputSet
-    from ..motion.checks import require_clear
-    from ..motion.planner import plan
+    from op2motion.fileio import OutputSet
+    from op2motion.formats.motionfile import motion_to_json
+    from op2motion.motion.checks import require_clear
+    from op2motion.motion.planner import plan
 
     motion = _motion_from_args(args, spec)
     trajectory = plan(waypoints_of(motion), spec, motion.profile, motion.p_gain)
@@ -221,14 +221,14 @@ def cmd_plan(args: argparse.Namespace, spec: Spec) -> int:
 
 def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion motion export``."""
-    from ..actionfile import PAGE_SIZE, check_file, reset_file
-    from ..export.action import check_pages_free, first_empty_run, read_action
-    from ..export.motionfile import read_motion
-    from ..export.tables import goals_csv, webots_motion, webots_warnings
-    from ..fileio import OutputSet
-    from ..motion.checks import require_clear
-    from ..motion.planner import action_pages, plan
-    from ..pose import Pose
+    from op2motion.fileio import OutputSet
+    from op2motion.formats.action import check_pages_free, first_empty_run, read_action
+    from op2motion.formats.actionlayout import PAGE_SIZE, check_file, reset_file
+    from op2motion.formats.motionfile import read_motion
+    from op2motion.formats.tables import goals_csv, webots_motion, webots_warnings
+    from op2motion.motion.checks import require_clear
+    from op2motion.motion.planner import action_pages, plan
+    from op2motion.robot.pose import Pose
 
     motion = read_motion(args.motion, spec)
     waypoints = waypoints_of(motion)

@@ -6,9 +6,9 @@ import argparse
 import sys
 from typing import Any
 
-from ..physics import DEFAULT_SECONDS, ENGINES, MAX_PUSH_N, MAX_SECONDS, MIN_SECONDS
-from ..servo import MAX_STIFFNESS_SCALE
-from .common import add_command, emit, number, output_path, progress_enabled
+from op2motion.commands.common import add_command, emit, number, output_path, progress_enabled
+from op2motion.model.servo import MAX_STIFFNESS_SCALE
+from op2motion.physics import DEFAULT_SECONDS, ENGINES, MAX_PUSH_N, MAX_SECONDS, MIN_SECONDS
 
 SECONDS = number(MIN_SECONDS, MAX_SECONDS, "s")
 
@@ -39,8 +39,8 @@ def register(sub: Any) -> None:
 
 def cmd_urdf(args: argparse.Namespace, spec: Any) -> int:
     """``op2motion urdf``."""
-    from ..fileio import OutputSet
-    from ..model.urdf import build_urdf, total_mass
+    from op2motion.fileio import OutputSet
+    from op2motion.model.urdf import build_urdf, total_mass
 
     text = build_urdf(spec)
     facts = {"joints": len(spec.joints), "mass_kg": round(total_mass(spec), 6)}
@@ -60,11 +60,11 @@ def cmd_validate(args: argparse.Namespace, spec: Any) -> int:
     """``op2motion validate``: one engine, or both compared."""
     from tqdm import tqdm
 
-    from ..errors import CheckFailed
-    from ..export.posefile import read_pose
-    from ..fileio import OutputSet
-    from ..model.dynamics import dynamics_for
-    from ..physics import steps_for, validate
+    from op2motion.errors import CheckFailed
+    from op2motion.fileio import OutputSet
+    from op2motion.formats.posefile import read_pose
+    from op2motion.model.dynamics import dynamics_for
+    from op2motion.physics import steps_for, validate
 
     outputs = OutputSet({"gui_png": args.gui_png} if args.gui_png else {})
     pose = read_pose(args.pose, spec)

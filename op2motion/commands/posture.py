@@ -8,13 +8,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from .. import book
-from ..balance import COM_MODEL_FULL, COM_MODELS
-from ..physics import DEFAULT_SECONDS, ENGINES, MAX_SECONDS, MIN_SECONDS
-from ..posture.pso import MAX_ITERATIONS, MAX_PARTICLES, MAX_SEED, PSOSettings
-from ..spec import Spec
-from ..workflow import DEFAULT_RESTARTS, MAX_RESTARTS
-from .common import (
+from op2motion import book
+from op2motion.commands.common import (
     BOUNDARY_RATIO,
     TARGET_M,
     add_command,
@@ -27,6 +22,11 @@ from .common import (
     warn,
     whole,
 )
+from op2motion.physics import DEFAULT_SECONDS, ENGINES, MAX_SECONDS, MIN_SECONDS
+from op2motion.posture.pso import MAX_ITERATIONS, MAX_PARTICLES, MAX_SEED, PSOSettings
+from op2motion.robot.balance import COM_MODEL_FULL, COM_MODELS
+from op2motion.robot.spec import Spec
+from op2motion.workflow import DEFAULT_RESTARTS, MAX_RESTARTS
 
 SECONDS = number(MIN_SECONDS, MAX_SECONDS, "s")
 
@@ -82,12 +82,12 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion optimize``: solve, optionally validate, then write pose, figure and cost curve together."""
     from tqdm import tqdm
 
-    from ..errors import CheckFailed
-    from ..export.posefile import pose_to_json
-    from ..figures import outcome_figures
-    from ..fileio import OutputSet
-    from ..posture.cost import PostureProblem
-    from ..workflow import solve
+    from op2motion.errors import CheckFailed
+    from op2motion.figures.pose import outcome_figures
+    from op2motion.fileio import OutputSet
+    from op2motion.formats.posefile import pose_to_json
+    from op2motion.posture.cost import PostureProblem
+    from op2motion.workflow import solve
 
     target = vec3(args.target, "target")
     problem = PostureProblem(args.support, args.hand, target, args.br, args.model, args.com_model).validated()

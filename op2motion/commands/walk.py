@@ -6,10 +6,10 @@ import argparse
 import math
 from typing import Any
 
-from ..errors import CheckFailed, InputError
-from ..physics import ENGINES, MAX_PUSH_N
-from ..spec import Spec
-from .common import add_command, emit, number, output_path, progress_enabled, whole
+from op2motion.commands.common import add_command, emit, number, output_path, progress_enabled, whole
+from op2motion.errors import CheckFailed, InputError
+from op2motion.physics import ENGINES, MAX_PUSH_N
+from op2motion.robot.spec import Spec
 
 OUT_FORMATS = {".csv": "csv", ".motion": "webots"}
 
@@ -56,11 +56,11 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion walk``."""
     from tqdm import tqdm
 
-    from ..fileio import OutputSet
-    from ..gait import gait_csv, gait_summary, gait_webots, plan_gait, preset_path, read_preset, walk_physics
-    from ..gaitplot import render_gait
-    from ..physics import RAMP_S, TIME_STEP_S
-    from ..physics.walk import WALK_HOLD_S, WALK_SETTLE_S
+    from op2motion.figures.gait import render_gait
+    from op2motion.fileio import OutputSet
+    from op2motion.gait import gait_csv, gait_summary, gait_webots, plan_gait, preset_path, read_preset, walk_physics
+    from op2motion.physics import RAMP_S, TIME_STEP_S
+    from op2motion.physics.walk import WALK_HOLD_S, WALK_SETTLE_S
 
     if not args.validate and (args.push or args.trials):
         raise InputError("expected --validate with --push or --trials", "validate")

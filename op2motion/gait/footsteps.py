@@ -18,9 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
-from ..spec import Spec
-from .params import GaitParams
+from op2motion.errors import InputError
+from op2motion.gait.params import GaitParams
+from op2motion.robot.spec import Spec
 
 FOOT_GAP_M = 0.005          # soles closer than this from above count as colliding
 PATH_SAMPLES = 9            # poses checked along each swing (start and landing included)

@@ -23,16 +23,16 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..balance import convex_hull, polygon_margin
-from ..model.dynamics import dynamics_for
-from ..motion.checks import SMOOTH_ROWS, contact_torques, multibody_zmp, smoothed
-from ..servo import ServoModel
-from ..spec import Spec, feet_of
-from .footsteps import FootPlan, Footstep, plan_footsteps, sole_rectangle
-from .leg_ik import leg_ik, leg_of
-from .params import CONTROL_DT_S, GaitParams
-from .preview import preview_gains, track_reference
-from .timeline import Timeline, build_timeline
+from op2motion.gait.footsteps import FootPlan, Footstep, plan_footsteps, sole_rectangle
+from op2motion.gait.leg_ik import leg_ik, leg_of
+from op2motion.gait.params import CONTROL_DT_S, GaitParams
+from op2motion.gait.preview import preview_gains, track_reference
+from op2motion.gait.timeline import Timeline, build_timeline
+from op2motion.model.dynamics import dynamics_for
+from op2motion.model.servo import ServoModel
+from op2motion.motion.checks import SMOOTH_ROWS, contact_torques, multibody_zmp, smoothed
+from op2motion.robot.balance import convex_hull, polygon_margin
+from op2motion.robot.spec import Spec, feet_of
 
 FRICTION_SMOOTH_RAD_S = 0.05   # the friction feed-forward's sign is smoothed over this speed
 REST_PAD = 4            # rows of rest around the walk when differentiating (the robot stands before and after)
@@ -172,7 +172,7 @@ class _Body:
         return com[inner], zmp[inner]
 
     def feedforward(self, p_gains: np.ndarray) -> np.ndarray:
-        """Goal offsets (K, 20) [rad] that make the servo model (:mod:`op2motion.servo`) drive the last planned
+        """Goal offsets (K, 20) [rad] that make the servo model (:mod:`op2motion.model.servo`) drive the last planned
         motion: the joint torque it needs (inverse dynamics with the plan's contacts) plus the servo's own losses
         and rotor inertia (damping x speed, armature x acceleration, friction), over Kp; smoothed over
         :data:`SMOOTH_ROWS` rows and clipped to the servo's linear range (its largest torque over Kp: 11° at

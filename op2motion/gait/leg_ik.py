@@ -18,8 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, ModelError
-from ..spec import Spec
+from op2motion.errors import InputError, ModelError
+from op2motion.robot.spec import Spec
 
 LEG_JOINTS = ("hip_yaw", "hip_roll", "hip_pitch", "knee", "ank_pitch", "ank_roll")
 _AXES = (2, 0, 1, 1, 1, 0)          # the principal axis of each leg joint: Z, X, Y, Y, Y, X

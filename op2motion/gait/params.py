@@ -42,7 +42,7 @@ from typing import Any
 
 import tomllib
 
-from ..errors import InputError
+from op2motion.errors import InputError
 
 CONTROL_DT_S = 0.008        # the framework's motion timer: goals every 8 ms
 MIN_STEP_WIDTH_M = 0.06     # narrower side-by-side feet would overlap (the OP2's soles reach 23 mm inwards)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..errors import InputError
+from op2motion.errors import InputError
 
 PRESETS = ("forward", "backward", "sideways", "turn_left", "turn_right")
 DEFAULT_PRESET = "forward"

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
-from ..spec import GRAVITY_M_S2
+from op2motion.errors import InputError
+from op2motion.robot.spec import GRAVITY_M_S2
 
 
 @dataclass(frozen=True)

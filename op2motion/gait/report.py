@@ -12,10 +12,10 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from ..export.tables import goals_csv, webots_rows
-from ..physics.walk import validate_walk
-from ..spec import Spec
-from .generator import Gait
+from op2motion.formats.tables import goals_csv, webots_rows
+from op2motion.gait.generator import Gait
+from op2motion.physics.walk import validate_walk
+from op2motion.robot.spec import Spec
 
 
 def gait_summary(gait: Gait) -> dict[str, Any]:

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .footsteps import FootPlan, Footstep
-from .params import CONTROL_DT_S, GaitParams
+from op2motion.gait.footsteps import FootPlan, Footstep
+from op2motion.gait.params import CONTROL_DT_S, GaitParams
 
 LEAD_S = 0.5             # standing still before the start ramp: the preview moves the CoM ahead of the reference
 CRUISE_RAMP = 0.3        # share of the swing spent speeding up (and again slowing down), see cruise_blend

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 from typing import Iterable
 
-from ..errors import InputError, ModelError
-from ..joints import BookAngles
-from ..spec import Spec
-from .dh import forward_dh
-from .points import POINT_NAMES, BodyPoints
-from .projection import forward_pb
+from op2motion.errors import InputError, ModelError
+from op2motion.kinematics.dh import forward_dh
+from op2motion.kinematics.points import POINT_NAMES, BodyPoints
+from op2motion.kinematics.projection import forward_pb
+from op2motion.robot.joints import BookAngles
+from op2motion.robot.spec import Spec
 
 MODELS = ("dh", "pb")
 

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import SpecError
-from ..spec import Spec
-from .points import ALL_ROWS, row_of
+from op2motion.errors import SpecError
+from op2motion.kinematics.points import ALL_ROWS, row_of
+from op2motion.robot.spec import Spec
 
 _WEIGHTS: dict[str, np.ndarray] = {}
 

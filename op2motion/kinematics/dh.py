@@ -6,7 +6,7 @@ on the support ankle, B1-B6 up the support leg to the swing hip, B7-B12 down the
 support feet and the transverse angles psi are supported. Lengths are the real robot's (spec geometry), and the
 chain adds the fixed transforms the book leaves out: the hip-yaw axes 5 mm behind the torso origin and the
 0.016 m forward elbow offset; the shoulder-roll offset is 0.0245 m (book 0.024). With these the joint centres
-coincide with the official ROBOTIS description for the servo angles of :func:`op2motion.joints.book_to_servo`.
+coincide with the official ROBOTIS description for the servo angles of :func:`op2motion.robot.joints.book_to_servo`.
 
 The chain is one table (:func:`chain`). Two evaluators read it: column arithmetic for large batches (few, long
 NumPy calls; chunked on all cores) and 4x4 matrix products for small ones such as a PSO swarm, where the number of
@@ -19,15 +19,15 @@ import math
 
 import numpy as np
 
-from ..joints import BookAngles
-from ..spec import Spec
-from ..trig import sincos
-from .batch import run_chunked
-from .com import slab_com
-from .dh_chain import W0, chain, chain_points, matrix_frames, matrix_plan, point_layout
-from .frames import Frame
-from .links import full_com_plan
-from .points import ROW, BodyPoints, fill_support_foot, new_slab
+from op2motion.kinematics.batch import run_chunked
+from op2motion.kinematics.com import slab_com
+from op2motion.kinematics.dh_chain import W0, chain, chain_points, matrix_frames, matrix_plan, point_layout
+from op2motion.kinematics.frames import Frame
+from op2motion.kinematics.links import full_com_plan
+from op2motion.kinematics.points import ROW, BodyPoints, fill_support_foot, new_slab
+from op2motion.kinematics.trig import sincos
+from op2motion.robot.joints import BookAngles
+from op2motion.robot.spec import Spec
 
 MATRIX_BELOW = 64  # batches smaller than this (a PSO swarm) use the 4x4 matrix evaluator
 _HALF_PI = math.pi / 2

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..spec import BOOK_VARS, Spec, swing_of
-from .points import ROW
+from op2motion.kinematics.points import ROW
+from op2motion.robot.spec import BOOK_VARS, Spec, swing_of
 
 _HALF_PI = math.pi / 2
 # World axes of frame 0 (book W with gamma = 0): x0 = +Y, y0 = +Z, z0 = +X.

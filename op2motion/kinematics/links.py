@@ -13,11 +13,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import SpecError
-from ..joints import BookAngles, book_to_servo
-from ..spec import Spec
-from .dh_chain import cached, matrix_frames, matrix_plan
-from .tree import link_frames
+from op2motion.errors import SpecError
+from op2motion.kinematics.dh_chain import cached, matrix_frames, matrix_plan
+from op2motion.kinematics.tree import link_frames
+from op2motion.robot.joints import BookAngles, book_to_servo
+from op2motion.robot.spec import Spec
 
 CALIBRATION_POSES = 3
 ATTACHED_M = 1e-9   # a link rides on a chain frame when its frame keeps its place in that frame to this [m or rad]

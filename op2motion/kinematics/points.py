@@ -13,7 +13,7 @@ from typing import Iterable
 
 import numpy as np
 
-from ..spec import Foot, swing_of
+from op2motion.robot.spec import Foot, swing_of
 
 #: Unique point rows, in storage order.
 ROWS: tuple[str, ...] = (

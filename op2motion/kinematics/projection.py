@@ -25,13 +25,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import ModelError
-from ..joints import BookAngles
-from ..spec import Spec, swing_of
-from ..trig import sincos
-from .batch import run_chunked
-from .com import slab_com
-from .points import ROW, BodyPoints, fill_support_foot, new_slab
+from op2motion.errors import ModelError
+from op2motion.kinematics.batch import run_chunked
+from op2motion.kinematics.com import slab_com
+from op2motion.kinematics.points import ROW, BodyPoints, fill_support_foot, new_slab
+from op2motion.kinematics.trig import sincos
+from op2motion.robot.joints import BookAngles
+from op2motion.robot.spec import Spec, swing_of
 
 PSI_TOLERANCE_RAD = 1e-12  # psi must be zero for this model
 

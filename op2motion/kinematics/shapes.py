@@ -22,9 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..spec import Spec, rpy_matrix
-from .dh_chain import cached
-from .links import attachments
+from op2motion.kinematics.dh_chain import cached
+from op2motion.kinematics.links import attachments
+from op2motion.robot.spec import Spec, rpy_matrix
 
 BROAD_PHASE_M = 0.03        # default: clearances beyond this are reported as lower bounds, not exactly
 SAMPLES, ROUNDS = 9, 4      # samples along a segment per round; rounds (the bracket shrinks to (1/4)^4 = 4e-3)

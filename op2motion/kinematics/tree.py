@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from ..spec import Spec, rpy_matrix
+from op2motion.robot.spec import Spec, rpy_matrix
 
 
 def axis_rotation(axis: tuple[float, float, float], angle: float) -> np.ndarray:

@@ -22,16 +22,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
-from ..errors import InputError, Interrupted, Op2MotionError
-from ..export.posefile import pose_to_json
-from ..fileio import write_atomic
-from ..physics import DEFAULT_SECONDS
-from ..posture.pso import PSOSettings
-from ..spec import Spec
-from ..specfile import load_spec
-from ..workflow import DEFAULT_RESTARTS, solve
-from .grid import Job
-from .index import INDEX_JSON, IndexRow, load_index, reconcile, write_index
+from op2motion.errors import InputError, Interrupted, Op2MotionError
+from op2motion.fileio import write_atomic
+from op2motion.formats.posefile import pose_to_json
+from op2motion.library.grid import Job
+from op2motion.library.index import INDEX_JSON, IndexRow, load_index, reconcile, write_index
+from op2motion.physics import DEFAULT_SECONDS
+from op2motion.posture.pso import PSOSettings
+from op2motion.robot.spec import Spec
+from op2motion.robot.specfile import load_spec
+from op2motion.workflow import DEFAULT_RESTARTS, solve
 
 MAX_WORKERS = 64
 WATCHDOG_PERIOD_S = 0.5

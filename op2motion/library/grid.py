@@ -14,9 +14,9 @@ from typing import Sequence
 
 import numpy as np
 
-from ..balance import COM_MODEL_FULL
-from ..errors import InputError
-from ..posture.cost import PostureProblem
+from op2motion.errors import InputError
+from op2motion.posture.cost import PostureProblem
+from op2motion.robot.balance import COM_MODEL_FULL
 
 MAX_AXIS = 1000          # values per grid axis
 MAX_TARGETS = 10_000     # targets per build (about 1 s each on one core)

@@ -14,10 +14,10 @@ from dataclasses import asdict, dataclass, fields
 from pathlib import Path
 from typing import Any
 
-from ..errors import InputError, Op2MotionError
-from ..export.posefile import read_pose
-from ..fileio import write_atomic
-from ..spec import Spec
+from op2motion.errors import InputError, Op2MotionError
+from op2motion.fileio import write_atomic
+from op2motion.formats.posefile import read_pose
+from op2motion.robot.spec import Spec
 
 INDEX_JSON, INDEX_CSV = "index.json", "index.csv"
 POSE_GLOB = "reach-*.json"

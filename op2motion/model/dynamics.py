@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
-from ..spec import SUPPORTS, Spec, feet_of, stance_of
-from .urdf import build_urdf, frame_link, frame_points, sole_link
+from op2motion.errors import InputError
+from op2motion.model.urdf import build_urdf, frame_link, frame_points, sole_link
+from op2motion.robot.spec import SUPPORTS, Spec, feet_of, stance_of
 
 
 @dataclass(frozen=True)

@@ -30,8 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from ..spec import Spec
-from .dynamics import dynamics_for
+from op2motion.model.dynamics import dynamics_for
+from op2motion.robot.spec import Spec
 
 TOLERANCE_NM = 1e-6          # largest torque imbalance [N·m] of a solution
 MAX_ITERATIONS = 30

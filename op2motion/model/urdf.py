@@ -16,8 +16,8 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from ..errors import InputError
-from ..spec import Inertial, Spec
+from op2motion.errors import InputError
+from op2motion.robot.spec import Inertial, Spec
 
 FRAME_LINK_MASS_KG = 1e-5      # named frames (hands, soles, ...): tiny mass so no tool invents 1 kg for them
 FRAME_LINK_INERTIA = 1e-10     # [kg·m²]

@@ -13,7 +13,7 @@
   polygon of the row (the real sole box, or the hull of both soles) is reported.
 * **Torques** from RNEA with those velocities and accelerations, the contact wrench on the supporting sole(s)
   taken out through the floating base's six rows (least norm over both soles in double support), against the
-  MX-28's available torque at the joint speed (:mod:`op2motion.servo`).
+  MX-28's available torque at the joint speed (:mod:`op2motion.model.servo`).
 """
 
 from __future__ import annotations
@@ -23,16 +23,16 @@ from typing import Any
 
 import numpy as np
 
-from ..balance import convex_hull, polygon_margin
-from ..errors import CheckFailed
-from ..joints import servo_to_book
-from ..kinematics.dh import MATRIX_BELOW, forward_dh_frames
-from ..kinematics.shapes import self_clearance, shape_set
-from ..model.dynamics import dynamics_for
-from ..model.urdf import foot_box_corners, foot_link
-from ..servo import ServoModel
-from ..spec import GRAVITY_M_S2, Spec, feet_of
-from .trajectory import Trajectory
+from op2motion.errors import CheckFailed
+from op2motion.kinematics.dh import MATRIX_BELOW, forward_dh_frames
+from op2motion.kinematics.shapes import self_clearance, shape_set
+from op2motion.model.dynamics import dynamics_for
+from op2motion.model.servo import ServoModel
+from op2motion.model.urdf import foot_box_corners, foot_link
+from op2motion.motion.trajectory import Trajectory
+from op2motion.robot.balance import convex_hull, polygon_margin
+from op2motion.robot.joints import servo_to_book
+from op2motion.robot.spec import GRAVITY_M_S2, Spec, feet_of
 
 MAX_RATIO = 99.0          # a torque ratio is reported up to this (a goal faster than the no-load speed has none)
 SMOOTH_ROWS = 5           # 40 ms: the goals' derivatives are taken after this moving average

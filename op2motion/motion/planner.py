@@ -23,14 +23,22 @@ from typing import Sequence
 
 import numpy as np
 
-from ..actionfile import MAX_BYTE, MAX_STEPS, NUM_PAGES, TIME_UNIT_S, StepBytes, encode_page, reset_file
-from ..errors import InputError
-from ..joints import servo_to_ticks
-from ..spec import Spec
-from .player import IDS, play, step_calls
-from .shift import balanced, settled_swing_heights, with_weight_shifts
-from .trajectory import Trajectory, from_playback
-from .waypoint import Waypoint, check_waypoints
+from op2motion.errors import InputError
+from op2motion.formats.actionlayout import (
+    MAX_BYTE,
+    MAX_STEPS,
+    NUM_PAGES,
+    TIME_UNIT_S,
+    StepBytes,
+    encode_page,
+    reset_file,
+)
+from op2motion.motion.player import IDS, play, step_calls
+from op2motion.motion.shift import balanced, settled_swing_heights, with_weight_shifts
+from op2motion.motion.trajectory import Trajectory, from_playback
+from op2motion.motion.waypoint import Waypoint, check_waypoints
+from op2motion.robot.joints import servo_to_ticks
+from op2motion.robot.spec import Spec
 
 PROFILES = ("quintic", "robot")
 SPEED_FRACTION = 0.5       # of the no-load speed: at the peak speed half the stall torque is still available

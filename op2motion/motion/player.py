@@ -25,7 +25,8 @@ from typing import Sequence
 
 import numpy as np
 
-from ..actionfile import (
+from op2motion.errors import InputError
+from op2motion.formats.actionlayout import (
     NUM_PAGES,
     SPEED_BASE_SCHEDULE,
     TIME_BASE_SCHEDULE,
@@ -35,7 +36,6 @@ from ..actionfile import (
     parse_page,
     reset_page,
 )
-from ..errors import InputError
 
 INVALID_BIT = 0x4000
 MAX_TICK = 4095                    # the 4096 build clamps every goal to 0..4095

@@ -3,8 +3,8 @@
 :func:`weight_shift` leans a double-support pose at the ankles, both legs together (sideways as a parallelogram,
 with the hip rolls turning back by the same angle so the torso stays level and the feet flat), until the
 full-inertia centre of mass it would settle at on that one foot (the compliant servos sag as the other foot
-unloads: :mod:`op2motion.compliance`) stands over a chosen point of the sole. :func:`with_weight_shifts` inserts such
-a pose wherever a sequence goes from two feet to one or back, aiming at the settled centre of mass of the
+unloads: :mod:`op2motion.model.compliance`) stands over a chosen point of the sole. :func:`with_weight_shifts`
+inserts such a pose wherever a sequence goes from two feet to one or back, aiming at the settled centre of mass of the
 single-support pose, so the lifting (or landing) happens over the standing foot.
 """
 
@@ -15,14 +15,14 @@ from typing import Sequence
 
 import numpy as np
 
-from ..compliance import Compliance, SwingLegSag
-from ..errors import CheckFailed
-from ..joints import servo_to_book
-from ..kinematics import forward
-from ..kinematics.dh import MATRIX_BELOW, forward_dh_frames
-from ..kinematics.points import ROW
-from ..spec import Spec
-from .waypoint import Waypoint
+from op2motion.errors import CheckFailed
+from op2motion.kinematics import forward
+from op2motion.kinematics.dh import MATRIX_BELOW, forward_dh_frames
+from op2motion.kinematics.points import ROW
+from op2motion.model.compliance import Compliance, SwingLegSag
+from op2motion.motion.waypoint import Waypoint
+from op2motion.robot.joints import servo_to_book
+from op2motion.robot.spec import Spec
 
 SHIFT_S = 1.0                  # the time a weight shift takes [s]
 SHIFT_TOL_M = 1e-4             # the centre of mass lands this close to its target
@@ -94,7 +94,7 @@ def weight_shift(servo: np.ndarray, side: str, spec: Spec, target_xy: Sequence[f
 
 def settled_swing_heights(goals: np.ndarray, side: str, spec: Spec) -> np.ndarray:
     """The lowest corner [m] (K,) of the other foot for poses standing on ``side``, after the servos' sag (the
-    support leg's and the swing leg's own, :mod:`op2motion.compliance`); rigid where no equilibrium exists."""
+    support leg's and the swing leg's own, :mod:`op2motion.model.compliance`); rigid where no equilibrium exists."""
     model, swing = Compliance(spec), SwingLegSag(spec, side)
     heights = []
     for start in range(0, len(goals), MATRIX_BELOW - 1):       # swarm-sized batches keep the chain frames

@@ -11,11 +11,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..actionfile import TIME_UNIT_S
-from ..errors import InputError
-from ..joints import ticks_to_servo
-from ..spec import Spec
-from .player import IDS, Playback
+from op2motion.errors import InputError
+from op2motion.formats.actionlayout import TIME_UNIT_S
+from op2motion.motion.player import IDS, Playback
+from op2motion.robot.joints import ticks_to_servo
+from op2motion.robot.spec import Spec
 
 
 @dataclass(frozen=True)
@@ -69,7 +69,7 @@ def goal_supports(goals: np.ndarray, spec: Spec) -> tuple[str, ...]:
     """The support of each row of goals (K, 20) [rad]: standing on one sole laid flat, the other foot is lifted
     when its lowest corner is more than :data:`SWING_CLEAR_M` above the floor after the servos' sag
     (:func:`.shift.settled_swing_heights`: a kick, a step); otherwise both feet stand."""
-    from .shift import settled_swing_heights
+    from op2motion.motion.shift import settled_swing_heights
 
     lifted = {}
     for stance, swing in (("left", "right"), ("right", "left")):

@@ -8,9 +8,9 @@ from typing import Sequence
 
 import numpy as np
 
-from ..actionfile import TIME_UNIT_S
-from ..errors import InputError
-from ..pose import check_pose_support
+from op2motion.errors import InputError
+from op2motion.formats.actionlayout import TIME_UNIT_S
+from op2motion.robot.pose import check_pose_support
 
 MIN_SEGMENT_S = 3 * TIME_UNIT_S   # the shortest step the robot moves (24 ms)
 MAX_SEGMENT_S = 60.0

@@ -2,8 +2,8 @@
 
 :func:`validate` places a pose on the floor at rest where its servos hold it against gravity (statically sagged,
 :mod:`op2motion.model.equilibrium`; else at its goals with gravity ramped in), holds the pose with the MX-28 model
-(:mod:`op2motion.servo`) at 1 kHz and judges it with named reasons (:mod:`.verdict`); ``push_n`` adds separate runs
-with a push in four directions after settling; ``engine="both"`` runs PyBullet and MuJoCo and compares them.
+(:mod:`op2motion.model.servo`) at 1 kHz and judges it with named reasons (:mod:`.verdict`); ``push_n`` adds separate
+runs with a push in four directions after settling; ``engine="both"`` runs PyBullet and MuJoCo and compares them.
 :func:`validate_motion` does the same for a motion: the goals played every 8 ms with the P gains they were sent
 with, judged against the plan, with the tracking error per joint.
 """
@@ -15,14 +15,14 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..errors import InputError
-from ..pose import check_pose_support
-from ..servo import ServoModel
-from ..spec import Spec
-from .run import RAMP_S, STEADY_S, Push, judge, simulate
-from .scene import ENGINES, TIME_STEP_S
-from .schedule import Schedule
-from .verdict import PUSH_DIRECTIONS, REASONS, PushResult, Validation
+from op2motion.errors import InputError
+from op2motion.model.servo import ServoModel
+from op2motion.physics.run import RAMP_S, STEADY_S, Push, judge, simulate
+from op2motion.physics.scene import ENGINES, TIME_STEP_S
+from op2motion.physics.schedule import Schedule
+from op2motion.physics.verdict import PUSH_DIRECTIONS, REASONS, PushResult, Validation
+from op2motion.robot.pose import check_pose_support
+from op2motion.robot.spec import Spec
 
 __all__ = ["DEFAULT_SECONDS", "ENGINES", "MAX_SECONDS", "MIN_SECONDS", "MOTION_HOLD_S", "MOTION_SETTLE_S", "RAMP_S",
            "REASONS", "TIME_STEP_S", "Validation", "make_engine", "steps_for", "validate", "validate_motion"]
@@ -47,11 +47,11 @@ def steps_for(seconds: float) -> int:
 def make_engine(name: str, spec: Spec, servo: ServoModel) -> Any:
     """A fresh world of engine ``name`` (``pybullet`` or ``mujoco``) with the robot and the floor."""
     if name == "pybullet":
-        from .pybullet_engine import PyBulletEngine
+        from op2motion.physics.pybullet_engine import PyBulletEngine
 
         return PyBulletEngine(spec, servo, TIME_STEP_S)
     if name == "mujoco":
-        from .mujoco_engine import MuJoCoEngine
+        from op2motion.physics.mujoco_engine import MuJoCoEngine
 
         return MuJoCoEngine(spec, servo, TIME_STEP_S)
     raise InputError(f"expected one of {', '.join(ENGINES)}, got {name!r}", "engine")
@@ -81,7 +81,7 @@ def _with_snapshot(verdict: Validation, engine: Any, spec: Spec, model: ServoMod
     """The verdict with a TinyRenderer picture of the final state (PyBullet renders for both engines)."""
     from dataclasses import replace
 
-    from .pybullet_engine import PyBulletEngine
+    from op2motion.physics.pybullet_engine import PyBulletEngine
 
     if isinstance(engine, PyBulletEngine):
         return replace(verdict, snapshot_png=engine.snapshot())

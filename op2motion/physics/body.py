@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model.dynamics import dynamics_for
-from ..model.urdf import foot_box_corners, foot_link
-from ..spec import SUPPORTS, Spec, feet_of
+from op2motion.model.dynamics import dynamics_for
+from op2motion.model.urdf import foot_box_corners, foot_link
+from op2motion.robot.spec import SUPPORTS, Spec, feet_of
 
 GROUND_TOLERANCE_M = 1e-9
 

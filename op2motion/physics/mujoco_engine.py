@@ -12,10 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model.urdf import URDF_ROOT, build_urdf, frame_points
-from ..servo import ServoModel
-from ..spec import Spec
-from .scene import FLOOR_FRICTION, GRAVITY_M_S2, Contact
+from op2motion.model.servo import ServoModel
+from op2motion.model.urdf import URDF_ROOT, build_urdf, frame_points
+from op2motion.physics.scene import FLOOR_FRICTION, GRAVITY_M_S2, Contact
+from op2motion.robot.spec import Spec
 
 SOLREF = (0.005, 1.0)                    # contact time constant [s] and damping ratio
 SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)   # contact impedance: stiff, little penetration

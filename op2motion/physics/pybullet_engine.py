@@ -23,10 +23,10 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from ..model.urdf import URDF_ROOT, build_urdf
-from ..servo import ServoModel
-from ..spec import Spec
-from .scene import FLOOR_FRICTION, GRAVITY_M_S2, Contact
+from op2motion.model.servo import ServoModel
+from op2motion.model.urdf import URDF_ROOT, build_urdf
+from op2motion.physics.scene import FLOOR_FRICTION, GRAVITY_M_S2, Contact
+from op2motion.robot.spec import Spec
 
 SOLVER_ITERATIONS = 20   # PyBullet's default 50 gives the same verdicts and margins (within 0.4 mm), 25 % slower
 

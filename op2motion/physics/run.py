@@ -26,13 +26,11 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..balance import convex_hull, polygon_margin
-from ..model.equilibrium import sagged_angles
-from ..servo import ServoModel
-from ..spec import Spec, feet_of, swing_of
-from .body import Body, BodyState, placement
-from .schedule import Planned, Schedule, plan_rows
-from .verdict import (
+from op2motion.model.equilibrium import sagged_angles
+from op2motion.model.servo import ServoModel
+from op2motion.physics.body import Body, BodyState, placement
+from op2motion.physics.schedule import Planned, Schedule, plan_rows
+from op2motion.physics.verdict import (
     COM_DROP_FRACTION,
     CONTACT_FORCE_N,
     LIMIT_AT_RAD,
@@ -48,6 +46,8 @@ from .verdict import (
     Failure,
     Validation,
 )
+from op2motion.robot.balance import convex_hull, polygon_margin
+from op2motion.robot.spec import Spec, feet_of, swing_of
 
 RAMP_S = 1.0
 SAGGED_GAP_TOL_M = 1e-6    # the sagged start may leave a supporting foot this much higher than the rigid one
@@ -239,13 +239,13 @@ def _motion_tilt(track: _Track, schedule: Schedule, plan_rot: np.ndarray, times:
 
 def sag_allowance_deg(schedule: Schedule, spec: Spec) -> float:
     """For a motion with single-support rows: the largest torso turn [deg] the compliance model predicts from the
-    servos' sag on one leg (:mod:`op2motion.compliance`), by which a motion's tilt limit grows (its plan is rigid);
-    0 for a held pose or a motion on two feet."""
+    servos' sag on one leg (:mod:`op2motion.model.compliance`), by which a motion's tilt limit grows (its plan is
+rigid);     0 for a held pose or a motion on two feet."""
     if not schedule.is_motion:
         return 0.0
-    from ..compliance import Compliance
-    from ..joints import servo_to_book
-    from ..kinematics import forward
+    from op2motion.kinematics import forward
+    from op2motion.model.compliance import Compliance
+    from op2motion.robot.joints import servo_to_book
 
     model, worst = Compliance(spec), 0.0
     for side in ("left", "right"):

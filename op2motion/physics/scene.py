@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..spec import GRAVITY_M_S2  # noqa: F401  (re-exported for the engines)
+from op2motion.robot.spec import GRAVITY_M_S2  # noqa: F401  (re-exported for the engines)
 
 FLOOR_FRICTION = 0.8
 TIME_STEP_S = 0.001

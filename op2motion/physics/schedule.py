@@ -13,11 +13,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
-from ..pose import check_pose_support
-from ..servo import ServoModel
-from ..spec import Spec, feet_of
-from .body import Body, BodyState, placement, sole_flat
+from op2motion.errors import InputError
+from op2motion.model.servo import ServoModel
+from op2motion.physics.body import Body, BodyState, placement, sole_flat
+from op2motion.robot.pose import check_pose_support
+from op2motion.robot.spec import Spec, feet_of
 
 SWING_CLEAR_M = 0.005      # a foot whose planned lowest corner is this far above the floor is swinging
 

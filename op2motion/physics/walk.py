@@ -16,7 +16,7 @@ floor. Measured on top:
   that should be on the floor at that moment (where they really are), by :data:`COP_TOLERANCE_M`;
 * the largest servo torque of the walk against the servo's largest torque (at rest), and the share of samples
   in which some servo delivered :data:`LIMITED_FRACTION` of the torque available at its speed in the direction of
-  that torque (at its limit; a braking servo has more, see :meth:`op2motion.servo.ServoModel.available`).
+  that torque (at its limit; a braking servo has more, see :meth:`op2motion.model.servo.ServoModel.available`).
 """
 
 from __future__ import annotations
@@ -27,14 +27,14 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..balance import convex_hull, polygon_margin
-from ..errors import InputError
-from ..servo import ServoModel
-from ..spec import Spec, feet_of
-from .run import RAMP_S, Push
-from .scene import TIME_STEP_S
-from .schedule import Schedule
-from .verdict import Validation
+from op2motion.errors import InputError
+from op2motion.model.servo import ServoModel
+from op2motion.physics.run import RAMP_S, Push
+from op2motion.physics.scene import TIME_STEP_S
+from op2motion.physics.schedule import Schedule
+from op2motion.physics.verdict import Validation
+from op2motion.robot.balance import convex_hull, polygon_margin
+from op2motion.robot.spec import Spec, feet_of
 
 WALK_SETTLE_S = 0.5            # after gravity reached full strength, before the first goal moves
 WALK_HOLD_S = 1.5              # the last goal held after the walk (the last second is the steady window)
@@ -83,7 +83,7 @@ def _yaw(rot: np.ndarray) -> float:
 
 def _run(engine_name: str, schedule: Schedule, spec: Spec, servo: ServoModel, seconds: float, push: Push | None,
          offset: np.ndarray | None, on_step: Callable[[], Any] | None) -> tuple[Validation, Any, dict[str, Any]]:
-    from . import judged_run
+    from op2motion.physics import judged_run
 
     return judged_run(engine_name, schedule, spec, servo, seconds, push, on_step, offset)
 

@@ -21,8 +21,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import book
-from ..balance import (
+from op2motion import book
+from op2motion.errors import InputError
+from op2motion.kinematics import MODELS, BodyPoints, forward
+from op2motion.kinematics.dh import MATRIX_BELOW, forward_dh_frames
+from op2motion.kinematics.dh_chain import matrix_frames
+from op2motion.kinematics.points import ROW, row_of
+from op2motion.kinematics.shapes import clearances, shape_set
+from op2motion.model.compliance import Compliance, SwingLegSag
+from op2motion.robot.balance import (
     COM_MODEL_FULL,
     COM_MODELS,
     FLOOR_TOLERANCE_M,
@@ -31,15 +38,8 @@ from ..balance import (
     rectangle_margin,
     support_extents,
 )
-from ..compliance import Compliance, SwingLegSag
-from ..errors import InputError
-from ..joints import BookAngles, check_support
-from ..kinematics import MODELS, BodyPoints, forward
-from ..kinematics.dh import MATRIX_BELOW, forward_dh_frames
-from ..kinematics.dh_chain import matrix_frames
-from ..kinematics.points import ROW, row_of
-from ..kinematics.shapes import clearances, shape_set
-from ..spec import Spec, swing_of
+from op2motion.robot.joints import BookAngles, check_support
+from op2motion.robot.spec import Spec, swing_of
 
 W_VIOLATION = 10.0     # cost per metre by which a violated constraint is violated, on top of the book's 100
 W_MARGIN = 0.02        # cost per metre of stability margin below MARGIN_CAP

@@ -24,11 +24,11 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from .. import book
-from ..errors import InputError
-from ..joints import N_PHI, N_TH, BookAngles, book_bounds
-from ..spec import BOOK_VARS, Spec
-from .cost import CostModel, PostureProblem
+from op2motion import book
+from op2motion.errors import InputError
+from op2motion.posture.cost import CostModel, PostureProblem
+from op2motion.robot.joints import N_PHI, N_TH, BookAngles, book_bounds
+from op2motion.robot.spec import BOOK_VARS, Spec
 
 MAX_PARTICLES = 10_000
 MAX_ITERATIONS = 100_000

@@ -16,12 +16,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.optimize import minimize
 
-from ..arm_ik import solve_arm_ik
-from ..errors import Op2MotionError
-from ..joints import BookAngles
-from ..kinematics import forward
-from ..spec import Spec
-from .cost import SAG_TILT_LIMIT_RAD, SELF_CLEARANCE_M, CostModel, CostTerms, PostureProblem
+from op2motion.errors import Op2MotionError
+from op2motion.kinematics import forward
+from op2motion.kinematics.arm_ik import solve_arm_ik
+from op2motion.posture.cost import SAG_TILT_LIMIT_RAD, SELF_CLEARANCE_M, CostModel, CostTerms, PostureProblem
+from op2motion.robot.joints import BookAngles
+from op2motion.robot.spec import Spec
 
 REFINE_TOL_M = 1e-3          # hand within 1 mm after refinement
 FD_STEP_RAD = 1e-6

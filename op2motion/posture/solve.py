@@ -9,14 +9,14 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..balance import COM_MODEL_FULL, COM_MODEL_LUMPED, rectangle_margin
-from ..joints import BookAngles
-from ..kinematics import forward
-from ..pose import Pose
-from ..spec import Spec
-from .cost import SAG_TILT_LIMIT_RAD, CostModel, CostTerms, PostureProblem
-from .pso import PSOResult, PSOSettings, run_pso, variable_bounds
-from .refine import REFINE_TOL_M, feasible, refine
+from op2motion.kinematics import forward
+from op2motion.posture.cost import SAG_TILT_LIMIT_RAD, CostModel, CostTerms, PostureProblem
+from op2motion.posture.pso import PSOResult, PSOSettings, run_pso, variable_bounds
+from op2motion.posture.refine import REFINE_TOL_M, feasible, refine
+from op2motion.robot.balance import COM_MODEL_FULL, COM_MODEL_LUMPED, rectangle_margin
+from op2motion.robot.joints import BookAngles
+from op2motion.robot.pose import Pose
+from op2motion.robot.spec import Spec
 
 PSO_TOL_M = 5e-3   # without refinement a hand within 5 mm counts as reaching
 

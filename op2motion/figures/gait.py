@@ -12,10 +12,10 @@ from typing import Sequence
 
 import numpy as np
 
-from .gait.footsteps import sole_rectangle
-from .gait.generator import Gait
-from .plot import _pyplot, margin_panel_png
-from .spec import Spec
+from op2motion.figures.draw import _pyplot, margin_panel_png
+from op2motion.gait.footsteps import sole_rectangle
+from op2motion.gait.generator import Gait
+from op2motion.robot.spec import Spec
 
 SIDE_COLOUR = {"left": "tab:blue", "right": "tab:red"}
 PLOT_WIDTH_IN = 8.0        # the top view's drawing width [in] (of a 10 in figure)

@@ -16,9 +16,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .balance import COM_MODEL_FULL, convex_hull, support_polygon
-from .kinematics.points import BodyPoints
-from .spec import Spec
+from op2motion.kinematics.points import BodyPoints
+from op2motion.robot.balance import COM_MODEL_FULL, convex_hull, support_polygon
+from op2motion.robot.spec import Spec
 
 LEFT_COLOUR, RIGHT_COLOUR, BODY_COLOUR = "tab:blue", "tab:red", "black"
 LUMPED_COLOUR, FULL_COLOUR, TARGET_COLOUR = "green", "tab:purple", "gold"

@@ -1,4 +1,4 @@
-"""Read and check a spec file (``specs/op2.toml``) into a :class:`op2motion.spec.Spec`.
+"""Read and check a spec file (``specs/op2.toml``) into a :class:`op2motion.robot.spec.Spec`.
 
 Everything that is not a sound description of a robot is a :class:`SpecError` naming the file and the key, before
 any model is built from it: a file that is not UTF-8 TOML, a missing or unknown key, a wrong type, a number that is
@@ -20,9 +20,9 @@ from typing import Mapping
 
 import numpy as np
 
-from .errors import SpecError
-from .fileio import read_text
-from .spec import (
+from op2motion.errors import SpecError
+from op2motion.fileio import read_text
+from op2motion.robot.spec import (
     BOOK_VARS,
     COLLISION_SIZES,
     SCHEMA,
@@ -39,7 +39,7 @@ from .spec import (
     Servo,
     Spec,
 )
-from .tablereader import TableReader
+from op2motion.robot.tablereader import TableReader
 
 try:  # Python >= 3.11
     import tomllib
@@ -309,7 +309,7 @@ def load_spec(path: str | Path | None = None) -> Spec:
 
 def _shipped_spec_text() -> str:
     """``specs/op2.toml``: installed as package data ``op2motion.specs``, or beside the package in a source tree."""
-    source_tree = Path(__file__).resolve().parents[1] / "specs" / "op2.toml"
+    source_tree = Path(__file__).resolve().parents[2] / "specs" / "op2.toml"
     if source_tree.is_file():
         return source_tree.read_text(encoding="utf-8")
     try:

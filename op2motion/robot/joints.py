@@ -15,9 +15,9 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from . import book
-from .errors import InputError, LimitViolation
-from .spec import BOOK_VARS, SUPPORTS, Joint, Spec
+from op2motion import book
+from op2motion.errors import InputError, LimitViolation
+from op2motion.robot.spec import BOOK_VARS, SUPPORTS, Joint, Spec
 
 N_TH, N_PHI, N_PSI = 11, 6, 3
 LIMIT_SLACK_RAD = 1e-9   # angles this close outside a limit count as on it (rounding of degrees in files)

@@ -1,6 +1,6 @@
 """The OP2 spec as frozen dataclasses: the single source of every robot number.
 
-:mod:`op2motion.specfile` reads and checks ``specs/op2.toml`` into a :class:`Spec`. :class:`Geometry` holds the
+:mod:`op2motion.robot.specfile` reads and checks ``specs/op2.toml`` into a :class:`Spec`. :class:`Geometry` holds the
 lengths the kinematic models use, derived from the official joint table so that no length is written twice.
 Angles [rad], lengths [m], masses [kg], torques [N·m].
 """
@@ -13,7 +13,7 @@ from typing import Mapping
 
 import numpy as np
 
-from .errors import SpecError
+from op2motion.errors import SpecError
 
 SCHEMA = "op2motion.spec/2"
 GRAVITY_M_S2 = 9.81          # standard gravity, for every model of the robot
@@ -87,7 +87,7 @@ class Rating:
 
 @dataclass(frozen=True)
 class Servo:
-    """Dynamixel MX-28 facts and the parameters of its physical model (see :mod:`op2motion.servo`)."""
+    """Dynamixel MX-28 facts and the parameters of its physical model (see :mod:`op2motion.model.servo`)."""
 
     model: str
     ticks_per_rev: int

@@ -1,5 +1,5 @@
 """ROBOTIS action files as poses: pages decoded into goal ticks, poses written as pages (the bytes are
-:mod:`op2motion.actionfile`).
+:mod:`op2motion.formats.actionlayout`).
 
 Writing fills the named pages and keeps every other page byte-for-byte, valid or not. The default base is a file
 of reset pages exactly as the Action Editor makes them (the stock file's empty pages).
@@ -14,7 +14,9 @@ from typing import Sequence
 
 import numpy as np
 
-from ..actionfile import (
+from op2motion.errors import InputError
+from op2motion.fileio import read_bytes
+from op2motion.formats.actionlayout import (
     MAX_BYTE,
     NUM_PAGES,
     PAGE_SIZE,
@@ -26,11 +28,9 @@ from ..actionfile import (
     parse_page,
     reset_file,
 )
-from ..errors import InputError
-from ..fileio import read_bytes
-from ..joints import servo_to_ticks, ticks_to_servo
-from ..pose import Pose, safe_pose_name
-from ..spec import Spec
+from op2motion.robot.joints import servo_to_ticks, ticks_to_servo
+from op2motion.robot.pose import Pose, safe_pose_name
+from op2motion.robot.spec import Spec
 
 MIN_STEP_UNITS = 3             # the framework moves a step only when time x speed / 32 >= 3 ticks (24 ms)
 

@@ -12,10 +12,10 @@ from typing import Sequence
 
 import numpy as np
 
-from .motion.checks import MotionChecks
-from .motion.trajectory import Trajectory
-from .plot import _pyplot, margin_panel_png
-from .spec import Spec
+from op2motion.figures.draw import _pyplot, margin_panel_png
+from op2motion.motion.checks import MotionChecks
+from op2motion.motion.trajectory import Trajectory
+from op2motion.robot.spec import Spec
 
 
 def _joint_panel(ax, t: np.ndarray, values: np.ndarray, spec: Spec, label: str) -> None:  # type: ignore[no-untyped-def]

@@ -15,9 +15,9 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .errors import InputError, LimitError
-from .joints import BookAngles, book_to_servo, limit_violations, servo_to_book
-from .spec import POSE_SUPPORTS, Spec, stance_of
+from op2motion.errors import InputError, LimitError
+from op2motion.robot.joints import BookAngles, book_to_servo, limit_violations, servo_to_book
+from op2motion.robot.spec import POSE_SUPPORTS, Spec, stance_of
 
 MAX_NAME_LEN = 100
 _NAME = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9_.-]*")

@@ -23,8 +23,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .errors import InputError
-from .spec import Spec
+from op2motion.errors import InputError
+from op2motion.robot.spec import Spec
 
 MAX_STIFFNESS_SCALE = 10.0
 

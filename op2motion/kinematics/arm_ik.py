@@ -21,10 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError, LimitViolation, ModelError
-from .joints import BookAngles, book_bounds, book_to_servo, limit_violations
-from .kinematics import forward
-from .spec import Spec
+from op2motion.errors import InputError, LimitViolation, ModelError
+from op2motion.kinematics import forward
+from op2motion.robot.joints import BookAngles, book_bounds, book_to_servo, limit_violations
+from op2motion.robot.spec import Spec
 
 TOL_M = 1e-4                # iterated mode: stop when the hand is this close to the target [m]
 MAX_ITER = 50

@@ -16,10 +16,10 @@ from typing import Sequence
 
 import numpy as np
 
-from ..errors import InputError
-from ..joints import servo_to_ticks
-from ..pose import Pose
-from ..spec import Spec
+from op2motion.errors import InputError
+from op2motion.robot.joints import servo_to_ticks
+from op2motion.robot.pose import Pose
+from op2motion.robot.spec import Spec
 
 MAX_TIME_S = 3600.0   # one pose per hour is the slowest sequence a table holds
 

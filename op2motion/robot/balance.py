@@ -12,9 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import InputError
-from .kinematics.points import BodyPoints
-from .spec import Spec
+from op2motion.errors import InputError
+from op2motion.robot.spec import Spec
 
 PENALTY = 100.0  # the book's penalty value (code 2.8, 2.9)
 FLOOR_TOLERANCE_M = 1e-9  # a swing foot this close to the floor counts as on it (rounding of a flat foot)
@@ -30,11 +29,6 @@ def check_br(br: float) -> float:
     if not (isinstance(br, (int, float)) and np.isfinite(br) and 0.0 < br <= 1.0):
         raise InputError(f"expected a boundary ratio in (0, 1], got {br!r}", "br")
     return float(br)
-
-
-def com_lumped(points: BodyPoints) -> np.ndarray:
-    """Lumped-mass centre of mass of each pose, (N, 3) [m] in the world frame (computed by the models)."""
-    return points.com.T
 
 
 def support_extents(spec: Spec, support: str, br: float = 1.0,

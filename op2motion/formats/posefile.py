@@ -14,12 +14,12 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..errors import InputError, PoseFileError
-from ..fileio import read_text, write_atomic
-from ..joints import BookAngles, servo_dict, servo_from_mapping
-from ..pose import Pose
-from ..spec import Spec
-from ..version import __version__
+from op2motion.errors import InputError, PoseFileError
+from op2motion.fileio import read_text, write_atomic
+from op2motion.robot.joints import BookAngles, servo_dict, servo_from_mapping
+from op2motion.robot.pose import Pose
+from op2motion.robot.spec import Spec
+from op2motion.version import __version__
 
 SCHEMA = "op2motion.pose/1"
 BOOK_AGREEMENT_DEG = 1e-6  # book_deg and servo_deg of one file must agree to this [deg]

@@ -1,7 +1,7 @@
 """Where a single-support pose settles on compliant servos: the optimiser's model of the body physics simulates.
 
-An MX-28 at P = 32 is a 12.6 N·m/rad spring (:mod:`op2motion.servo`). Standing on one foot, each pitch joint of the
-support leg (ankle, knee, hip, from the floor up) holds the mass above it: it turns by
+An MX-28 at P = 32 is a 12.6 N·m/rad spring (:mod:`op2motion.model.servo`). Standing on one foot, each pitch
+joint of the support leg (ankle, knee, hip, from the floor up) holds the mass above it: it turns by
 
     theta_j = g / Kp_j * (M x' - sum_{b below j} m_b x_b' - M_above_j x_j')          [rad, small angles]
 
@@ -30,11 +30,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .kinematics import BodyPoints
-from .kinematics.links import attachments
-from .kinematics.points import row_of
-from .servo import ServoModel
-from .spec import GRAVITY_M_S2, Spec, swing_of
+from op2motion.kinematics import BodyPoints
+from op2motion.kinematics.links import attachments
+from op2motion.kinematics.points import row_of
+from op2motion.model.servo import ServoModel
+from op2motion.robot.spec import GRAVITY_M_S2, Spec, swing_of
 
 
 @dataclass(frozen=True)

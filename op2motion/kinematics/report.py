@@ -7,17 +7,17 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .balance import COM_MODEL_FULL, check_br, stability_margin
-from .errors import InputError, LimitViolation
-from .joints import (
+from op2motion.errors import InputError, LimitViolation
+from op2motion.kinematics import BodyPoints, forward
+from op2motion.robot.balance import COM_MODEL_FULL, check_br, stability_margin
+from op2motion.robot.joints import (
     BookAngles,
     book_to_servo,
     limit_violations,
     servo_dict,
     servo_to_ticks,
 )
-from .kinematics import BodyPoints, forward
-from .spec import Spec
+from op2motion.robot.spec import Spec
 
 
 def _vec(v: np.ndarray) -> list[float]:

@@ -13,14 +13,14 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from .balance import convex_hull, polygon_margin
-from .joints import BookAngles
-from .kinematics import forward
-from .physics import Validation
-from .plot import PoseFigure, TitleBlock, render_cost_curve, render_poses
-from .spec import Spec
-from .summary import PoseReport, evaluate
-from .workflow import Outcome
+from op2motion.figures.draw import PoseFigure, TitleBlock, render_cost_curve, render_poses
+from op2motion.kinematics import forward
+from op2motion.kinematics.report import PoseReport, evaluate
+from op2motion.physics import Validation
+from op2motion.robot.balance import convex_hull, polygon_margin
+from op2motion.robot.joints import BookAngles
+from op2motion.robot.spec import Spec
+from op2motion.workflow import Outcome
 
 PB_PSI_NOTE = "projection model drawn with psi = 0 (it has no transverse rotation)"
 

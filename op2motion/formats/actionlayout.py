@@ -9,7 +9,7 @@ pages of 512 bytes; a page is a 64-byte header and 7 steps of 64 bytes. The head
 not specified), then ``pause`` (byte 62) and ``time`` (63), both in 8 ms units at speed 32. A page is valid when its
 512 bytes sum to 0xFF modulo 256.
 
-This module knows bytes only: what the words mean (ticks, joints, poses) is :mod:`op2motion.export.action` and the
+This module knows bytes only: what the words mean (ticks, joints, poses) is :mod:`op2motion.formats.action` and the
 player :mod:`op2motion.motion.player`.
 """
 
@@ -20,7 +20,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from .errors import InputError
+from op2motion.errors import InputError
 
 PAGE_SIZE, NUM_PAGES, HEADER_SIZE, STEP_SIZE, MAX_STEPS, SLOTS = 512, 256, 64, 64, 7, 31
 FILE_SIZE = PAGE_SIZE * NUM_PAGES

@@ -21,13 +21,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
-from ..errors import InputError, PoseFileError
-from ..fileio import write_atomic
-from ..joints import servo_dict, servo_from_mapping
-from ..pose import Pose, check_pose_support
-from ..spec import Spec
-from ..version import __version__
-from .posefile import read_json_file, read_pose
+from op2motion.errors import InputError, PoseFileError
+from op2motion.fileio import write_atomic
+from op2motion.formats.posefile import read_json_file, read_pose
+from op2motion.robot.joints import servo_dict, servo_from_mapping
+from op2motion.robot.pose import Pose, check_pose_support
+from op2motion.robot.spec import Spec
+from op2motion.version import __version__
 
 SCHEMA = "op2motion.motion/1"
 PROFILES = ("quintic", "robot")

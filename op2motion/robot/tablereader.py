@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from .errors import SpecError
+from op2motion.errors import SpecError
 
 
 class TableReader:
