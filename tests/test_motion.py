@@ -11,7 +11,7 @@ from helpers import POSES, STOCK, pose_path, run_cli
 
 from op2motion.errors import CheckFailed, PoseFileError
 from op2motion.formats.action import list_pages
-from op2motion.formats.actionlayout import PAGE_SIZE, TIME_UNIT_S, is_empty, reset_file
+from op2motion.formats.actionlayout import PAGE_SIZE, is_empty, reset_file
 from op2motion.formats.motionfile import read_motion
 from op2motion.formats.posefile import read_pose
 from op2motion.motion.checks import check_trajectory, require_clear
@@ -20,6 +20,7 @@ from op2motion.motion.player import IDS, play
 from op2motion.motion.shift import settled_coms, with_weight_shifts
 from op2motion.motion.trajectory import from_playback
 from op2motion.motion.waypoint import Waypoint
+from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.joints import servo_to_ticks
 
 SETTLED_COM_TOL_M = 2e-4      # the balanced rows' settled CoM against its straight-line target
@@ -41,7 +42,7 @@ def test_quintic_starts_and_ends_at_rest_on_the_poses(spec):
     traj = plan(_waypoints(spec, ["standing", "walkready"]), spec)
     assert np.allclose(traj.goals[0], _pose(spec, "standing").servo)
     assert np.allclose(traj.goals[-1], _pose(spec, "walkready").servo)
-    assert traj.duration_s == pytest.approx(np.ceil(1.5 / TIME_UNIT_S) * TIME_UNIT_S)   # whole 8 ms units
+    assert traj.duration_s == pytest.approx(np.ceil(1.5 / CONTROL_PERIOD_S) * CONTROL_PERIOD_S)   # whole 8 ms units
     v = np.diff(traj.goals, axis=0) / traj.dt
     assert np.abs(v[0]).max() < 0.02 and np.abs(v[-1]).max() < 0.02      # [rad/s]: a quintic leaves and lands at rest
 
@@ -127,7 +128,7 @@ def test_cli_play_reports_ticks_and_goals(capsys):
     code, out, _ = run_cli(capsys, "motion", "play", STOCK, "--page", "9", "--json")
     assert code == 0
     doc = json.loads(out)
-    assert doc["ticks"] == 129 and doc["duration_s"] == pytest.approx(129 * TIME_UNIT_S)
+    assert doc["ticks"] == 129 and doc["duration_s"] == pytest.approx(129 * CONTROL_PERIOD_S)
     assert doc["pages_played"] == [9] and len(doc["goals"]) == 130 and len(doc["goals"][0]) == 20
 
 

@@ -13,11 +13,12 @@ from helpers import balanced, pose_path, servo_pose
 
 from op2motion.errors import InputError
 from op2motion.formats.posefile import read_pose
-from op2motion.model.servo import ServoModel, p_gain_of_slope
+from op2motion.model.servo import ServoModel
 from op2motion.model.urdf import FRAME_LINK_MASS_KG, link_inertial
 from op2motion.physics import ENGINES, make_engine, validate
 from op2motion.physics.body import Body, placement
 from op2motion.physics.pybullet_engine import PyBulletEngine, load_robot, quiet_c_output
+from op2motion.robot.framework import p_gain_of_slope
 
 STOCK_STANDING = ["init", "walkready", "sit_down", "stand_up"]
 PUSH_N = 2.0

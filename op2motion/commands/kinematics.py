@@ -24,6 +24,7 @@ from op2motion.commands.common import (
 from op2motion.errors import InputError
 from op2motion.physics import DEFAULT_SECONDS, MAX_SECONDS, MIN_SECONDS
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
 
 TOL_MM = number(0.0, 100.0, "mm", open_low=True)
 SECONDS = number(MIN_SECONDS, MAX_SECONDS, "s")
@@ -148,7 +149,7 @@ def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
         servo = pose.servo if pose is not None else book_to_servo(angles, spec)[0]
         validation = validate(servo, support, spec, args.seconds)
     png, drawn, reports = pose_figure(name, angles, spec, models, args.br, target, validation,
-                                      None if pose is None else pose.metrics, double=support == "double")
+                                      None if pose is None else pose.metrics, double=Support.of(support).is_double)
     outputs.put("output", png)
     out = outputs.commit()["output"]
     summary = {"png": str(out), "support": support, "drawn": drawn,

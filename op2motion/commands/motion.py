@@ -8,8 +8,10 @@ from typing import Any, Sequence
 from op2motion.commands.common import add_command, emit, number, output_path, progress_enabled, warn, whole
 from op2motion.errors import CheckFailed, InputError
 from op2motion.formats.actionlayout import NUM_PAGES
+from op2motion.formats.motionfile import PROFILES
 from op2motion.physics import ENGINES, MAX_PUSH_N
-from op2motion.robot.spec import SUPPORTS, Spec
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
 
 PAGE = whole(1, NUM_PAGES - 1)
 SECONDS = number(0.0, 60.0, "s")
@@ -44,8 +46,9 @@ def register(sub: Any) -> None:
     p.add_argument("--durations", type=SECONDS, nargs="+", metavar="S",
                    help="seconds to reach each pose after the first (one value: for all)")
     p.add_argument("--pauses", type=SECONDS, nargs="+", metavar="S", help="seconds to hold each pose (default 0)")
-    p.add_argument("--support", choices=SUPPORTS, nargs="+", help="support of each pose (default: the pose files')")
-    p.add_argument("--profile", choices=("quintic", "robot"), default=None, help="quintic (default) or the "
+    p.add_argument("--support", choices=[s.value for s in Support], nargs="+",
+                   help="support of each pose (default: the pose files')")
+    p.add_argument("--profile", choices=PROFILES, default=None, help="quintic (default) or the "
                                                                                  "robot's trapezoid")
     p.add_argument("--name", help="motion name (default: the output file's stem)")
     p.add_argument("--out", type=output_path, metavar="MOTION", help="write the motion file (atomically)")

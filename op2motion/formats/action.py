@@ -20,7 +20,6 @@ from op2motion.formats.actionlayout import (
     MAX_BYTE,
     NUM_PAGES,
     PAGE_SIZE,
-    TIME_UNIT_S,
     StepBytes,
     check_file,
     encode_page,
@@ -28,6 +27,7 @@ from op2motion.formats.actionlayout import (
     parse_page,
     reset_file,
 )
+from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.joints import servo_to_ticks, ticks_to_servo
 from op2motion.robot.pose import Pose, safe_pose_name
 from op2motion.robot.spec import Spec
@@ -111,11 +111,11 @@ def page_to_pose(page: Page, spec: Spec, name: str | None = None) -> Pose:
 def step_units(seconds: float, what: str = "time") -> int:
     """A step time [s] in 8 ms units at speed 32: at least 3 (24 ms, the shortest step the framework moves) and at
     most 255 (2.04 s)."""
-    lo, hi = MIN_STEP_UNITS * TIME_UNIT_S, MAX_BYTE * TIME_UNIT_S
+    lo, hi = MIN_STEP_UNITS * CONTROL_PERIOD_S, MAX_BYTE * CONTROL_PERIOD_S
     if not (math.isfinite(seconds) and lo - 1e-9 <= seconds <= hi + 1e-9):
         raise InputError(f"expected {lo:.3f} to {hi:.2f} s (the robot does not move a step shorter than 24 ms), "
                          f"got {seconds}", what)
-    return int(round(seconds / TIME_UNIT_S))
+    return int(round(seconds / CONTROL_PERIOD_S))
 
 
 def pose_words(pose: Pose, spec: Spec) -> dict[int, int]:

@@ -21,6 +21,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from op2motion.errors import InputError
+from op2motion.robot.framework import DEFAULT_COMPLIANCE as DEFAULT_SLOPE
 
 PAGE_SIZE, NUM_PAGES, HEADER_SIZE, STEP_SIZE, MAX_STEPS, SLOTS = 512, 256, 64, 64, 7, 31
 FILE_SIZE = PAGE_SIZE * NUM_PAGES
@@ -32,8 +33,6 @@ OFF_SLOPE_LAST = HEADER_SIZE - 1
 TIME_BASE_SCHEDULE = 0x0A
 SPEED_BASE_SCHEDULE = 0x00
 DEFAULT_SPEED = DEFAULT_ACCEL = 32
-DEFAULT_SLOPE = 0x55
-TIME_UNIT_S = 0.008            # one Process() call of the framework's motion timer
 MAX_BYTE = 255
 # The Action Editor's reset page, as found in every empty page of the stock file: slopes 0x55 for IDs 0-25 and in
 # the last header byte, and goal words 0x4200 (not specified) in slots 0-25 of every step.

@@ -24,9 +24,11 @@ from typing import Any, Sequence
 from op2motion.errors import InputError, PoseFileError
 from op2motion.fileio import write_atomic
 from op2motion.formats.posefile import read_json_file, read_pose
+from op2motion.robot.framework import DEFAULT_P_GAIN
 from op2motion.robot.joints import servo_dict, servo_from_mapping
-from op2motion.robot.pose import Pose, check_pose_support
+from op2motion.robot.pose import Pose
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
 from op2motion.version import __version__
 
 SCHEMA = "op2motion.motion/1"
@@ -53,7 +55,7 @@ class Motion:
     name: str
     steps: tuple[MotionStep, ...]
     profile: str = "quintic"
-    p_gain: int = 32
+    p_gain: int = DEFAULT_P_GAIN
 
 
 def _number(value: Any, what: str, where: str) -> float:
@@ -78,12 +80,12 @@ def _step(doc: Any, k: int, base: Path, spec: Spec, where: str) -> MotionStep:
         source: str | None = doc["pose"]
     else:
         support = doc.get("support", "double")
-        check_pose_support(support)
+        Support.of(support)
         pose = Pose(doc.get("name", f"step{k}"), support, servo_from_mapping(doc["servo_deg"], spec), {},
                     {"source": f"{where} step {k}"}).checked(spec, at)
         source = None
     if "support" in doc and "pose" in doc:
-        check_pose_support(doc["support"])
+        Support.of(doc["support"])
         pose = Pose(pose.name, doc["support"], pose.servo, pose.metrics, pose.provenance)
     if k == 0 and "duration_s" in doc:
         raise PoseFileError("duration_s: the first step is where the motion starts (no duration)", at)
@@ -169,7 +171,8 @@ def write_motion(motion: Motion, path: str | Path, spec: Spec) -> Path:
 
 
 def motion_of(poses: Sequence[Pose], sources: Sequence[str | None], durations: Sequence[float],
-              pauses: Sequence[float], name: str, profile: str = "quintic", p_gain: int = 32) -> Motion:
+              pauses: Sequence[float], name: str, profile: str = "quintic",
+              p_gain: int = DEFAULT_P_GAIN) -> Motion:
     """A motion from poses with their sources, the durations of the steps after the first and the pauses."""
     if len(durations) != len(poses) - 1 or len(pauses) != len(poses):
         raise InputError(f"expected {len(poses) - 1} durations and {len(poses)} pauses for {len(poses)} poses, got "

@@ -7,9 +7,9 @@ every 8 ms with the planned CoM, ZMP and feet; :func:`walk_physics` plays it in 
 from __future__ import annotations
 
 from op2motion.gait.generator import Gait, plan_gait
-from op2motion.gait.params import CONTROL_DT_S, GaitParams, read_preset
+from op2motion.gait.params import GaitParams, read_preset
 from op2motion.gait.presets import PRESETS, preset_path
 from op2motion.gait.report import gait_csv, gait_summary, gait_webots, walk_physics
 
-__all__ = ["CONTROL_DT_S", "PRESETS", "Gait", "GaitParams", "gait_csv", "gait_summary", "gait_webots", "plan_gait",
+__all__ = ["PRESETS", "Gait", "GaitParams", "gait_csv", "gait_summary", "gait_webots", "plan_gait",
            "preset_path", "read_preset", "walk_physics"]

@@ -25,14 +25,16 @@ import numpy as np
 
 from op2motion.gait.footsteps import FootPlan, Footstep, plan_footsteps, sole_rectangle
 from op2motion.gait.leg_ik import leg_ik, leg_of
-from op2motion.gait.params import CONTROL_DT_S, GaitParams
+from op2motion.gait.params import GaitParams
 from op2motion.gait.preview import preview_gains, track_reference
 from op2motion.gait.timeline import Timeline, build_timeline
 from op2motion.model.dynamics import dynamics_for
 from op2motion.model.servo import ServoModel
 from op2motion.motion.checks import SMOOTH_ROWS, contact_torques, multibody_zmp, smoothed
 from op2motion.robot.balance import convex_hull, polygon_margin
-from op2motion.robot.spec import Spec, feet_of
+from op2motion.robot.framework import CONTROL_PERIOD_S
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
 
 FRICTION_SMOOTH_RAD_S = 0.05   # the friction feed-forward's sign is smoothed over this speed
 REST_PAD = 4            # rows of rest around the walk when differentiating (the robot stands before and after)
@@ -68,7 +70,7 @@ class Gait:
     @property
     def dt(self) -> float:
         """Control period [s]."""
-        return CONTROL_DT_S
+        return CONTROL_PERIOD_S
 
     @property
     def times(self) -> np.ndarray:
@@ -166,7 +168,7 @@ class _Body:
         """CoM (K, 3) and multibody ZMP (K, 2) [m]; the robot rests before the first row and after the last (the
         rows are padded with copies for the differences)."""
         pad = np.vstack([np.repeat(configs[:1], REST_PAD, axis=0), configs, np.repeat(configs[-1:], REST_PAD, axis=0)])
-        com, zmp, v, a = multibody_zmp(self.dyn, pad, CONTROL_DT_S)
+        com, zmp, v, a = multibody_zmp(self.dyn, pad, CONTROL_PERIOD_S)
         inner = slice(REST_PAD, -REST_PAD)
         self.last_motion = (configs, v[inner], a[inner])
         return com[inner], zmp[inner]
@@ -218,7 +220,7 @@ def plan_gait(params: GaitParams, spec: Spec, target: tuple[float, float, float]
     goals = body.goals(arms, pos, rot)
     com = body.com(body.configs(goals, pos, rot))
     com_height = params.com_height_m or float(com[0, 2])
-    gains = preview_gains(CONTROL_DT_S, com_height, params.preview_s, params.zmp_weight, params.jerk_weight)
+    gains = preview_gains(CONTROL_PERIOD_S, com_height, params.preview_s, params.zmp_weight, params.jerk_weight)
     cart = track_reference(gains, timeline.zmp_ref)
     target_com = cart.com.copy()
     for p in range(params.zmp_passes + 1):
@@ -244,6 +246,6 @@ def zmp_margins(zmp: np.ndarray, timeline: Timeline, plan: FootPlan, spec: Spec)
     out = np.empty(len(zmp))
     for i, contact in enumerate(timeline.contact):
         corners = [sole_rectangle(spec, Footstep(side, *timeline.feet[side][i, [0, 1, 3]]))
-                   for side in feet_of(contact)]
+                   for side in Support.of(contact).feet]
         out[i] = polygon_margin(zmp[i], convex_hull(np.vstack(corners)))[0]
     return out

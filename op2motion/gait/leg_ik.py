@@ -19,9 +19,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from op2motion.errors import InputError, ModelError
+from op2motion.robot.joints import LEG_JOINTS
 from op2motion.robot.spec import Spec
 
-LEG_JOINTS = ("hip_yaw", "hip_roll", "hip_pitch", "knee", "ank_pitch", "ank_roll")
 _AXES = (2, 0, 1, 1, 1, 0)          # the principal axis of each leg joint: Z, X, Y, Y, Y, X
 REACH_TOL_M = 1e-9                  # a target this far beyond the straight leg still counts as reachable
 
@@ -84,7 +84,7 @@ def _rz(a: np.ndarray) -> np.ndarray:
 
 def leg_fk(leg: Leg, servo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Sole centre (N, 3) [m] and sole rotation (N, 3, 3) in the torso frame for leg servo angles (N, 6) [rad]
-    (the order of :data:`LEG_JOINTS`)."""
+    (the order of :data:`op2motion.robot.joints.LEG_JOINTS`)."""
     n = np.asarray(servo, dtype=float).reshape(-1, 6) * leg.sign
     yaw, roll, pitch, knee, ank, ank_roll = n.T
     hip_rot = _rz(yaw) @ _rx(roll) @ _ry(pitch)

@@ -43,8 +43,8 @@ from typing import Any
 import tomllib
 
 from op2motion.errors import InputError
+from op2motion.robot.framework import CONTROL_PERIOD_S, DEFAULT_P_GAIN
 
-CONTROL_DT_S = 0.008        # the framework's motion timer: goals every 8 ms
 MIN_STEP_WIDTH_M = 0.06     # narrower side-by-side feet would overlap (the OP2's soles reach 23 mm inwards)
 
 
@@ -73,7 +73,7 @@ class GaitParams:
     arm_swing_deg: float = 0.0
     start_s: float = 0.8
     end_s: float = 0.8
-    p_gain: int = 32
+    p_gain: int = DEFAULT_P_GAIN
     servo_feedforward: bool = True
 
     def __post_init__(self) -> None:
@@ -96,7 +96,7 @@ class GaitParams:
         if 0.0 < self.step_width_m < MIN_STEP_WIDTH_M:
             raise InputError(f"expected 0 (the hip width) or {MIN_STEP_WIDTH_M:g} to 0.14 m, got "
                              f"{self.step_width_m!r}", "step_width_m")
-        if self.double_support_ratio * self.step_s < CONTROL_DT_S - 1e-12:
+        if self.double_support_ratio * self.step_s < CONTROL_PERIOD_S - 1e-12:
             raise InputError(f"expected at least one 8 ms tick of double support, got {self.double_support_ratio:g} "
                              f"x {self.step_s:g} s", "double_support_ratio")
 

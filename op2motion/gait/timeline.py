@@ -18,11 +18,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from op2motion.gait.footsteps import FootPlan, Footstep
-from op2motion.gait.params import CONTROL_DT_S, GaitParams
+from op2motion.gait.params import GaitParams
+from op2motion.robot.framework import CONTROL_PERIOD_S
+from op2motion.robot.support import LIFTED_M, other_side
 
 LEAD_S = 0.5             # standing still before the start ramp: the preview moves the CoM ahead of the reference
 CRUISE_RAMP = 0.3        # share of the swing spent speeding up (and again slowing down), see cruise_blend
-LIFTED_M = 0.005          # a swing foot this high is off the floor for the physics judge (motion's SWING_CLEAR_M)
 
 
 def quintic_blend(s: np.ndarray) -> np.ndarray:
@@ -69,7 +70,7 @@ class Timeline:
     @property
     def dt(self) -> float:
         """Control period [s]."""
-        return CONTROL_DT_S
+        return CONTROL_PERIOD_S
 
 
 def zmp_point(step: Footstep, params: GaitParams) -> np.ndarray:
@@ -81,11 +82,11 @@ def zmp_point(step: Footstep, params: GaitParams) -> np.ndarray:
 
 
 def _ticks(seconds: float) -> int:
-    return max(1, int(round(seconds / CONTROL_DT_S)))
+    return max(1, int(round(seconds / CONTROL_PERIOD_S)))
 
 
 def build_timeline(params: GaitParams, plan: FootPlan) -> Timeline:
-    """Rows every :data:`CONTROL_DT_S` for the whole walk (see the module docstring)."""
+    """Rows every :data:`CONTROL_PERIOD_S` for the whole walk (see the module docstring)."""
     n_start, n_single, n_double, n_end = (_ticks(params.start_s), _ticks(params.single_s), _ticks(params.double_s),
                                           _ticks(params.end_s))
     where = {side: np.array([f.x, f.y, 0.0, f.yaw]) for side, f in plan.start.items()}
@@ -126,8 +127,8 @@ def build_timeline(params: GaitParams, plan: FootPlan) -> Timeline:
     hold(n_end, len(plan.steps), np.repeat(refs[-1][-1:], n_end, axis=0))
     feet_rows = {side: np.vstack(v) for side, v in feet.items()}
     contact = tuple(rows_contact)
-    supports = tuple(c if c == "double" or feet_rows["left" if c == "right" else "right"][i, 2] >= LIFTED_M
+    supports = tuple(c if c == "double" or feet_rows[other_side(c)][i, 2] >= LIFTED_M
                      else "double" for i, c in enumerate(contact))
     k_rows = len(contact)
-    return Timeline(np.arange(k_rows) * CONTROL_DT_S, np.concatenate(rows_step), contact, supports,
+    return Timeline(np.arange(k_rows) * CONTROL_PERIOD_S, np.concatenate(rows_step), contact, supports,
                     np.vstack(refs), feet_rows)

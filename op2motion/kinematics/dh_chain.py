@@ -16,7 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from op2motion.kinematics.points import ROW
-from op2motion.robot.spec import BOOK_VARS, Spec, swing_of
+from op2motion.robot.spec import BOOK_VARS, Spec
+from op2motion.robot.support import other_side
 
 _HALF_PI = math.pi / 2
 # World axes of frame 0 (book W with gamma = 0): x0 = +Y, y0 = +Z, z0 = +X.
@@ -107,13 +108,13 @@ def chain_points(spec: Spec, support: str) -> tuple[tuple[str, str, tuple[float,
     o = (0.0, 0.0, 0.0)
     rows = [(f"{s}_ankle", "0", o), (f"{s}_knee", "2", o), (f"{s}_hip", "3", o), (f"{s}_hip_yaw", "5", o),
             (f"{w}_hip_yaw", "6", o), (f"{w}_hip", "7", o), (f"{w}_knee", "9", o), (f"{w}_ankle", "10", o),
-            (f"{swing_of(support)}_sole", "12", o),
+            (f"{other_side(support)}_sole", "12", o),
             ("neck", "21", o), ("head_pan", "21", (0.0, 0.0, g.head_pan_height)), ("head_tilt", "22", o),
             ("head_top", "23", o), ("l_sho_pitch", "13", o), ("l_sho_roll", "14", o), ("l_el", "15", o),
             ("left_hand", "16", o), ("r_sho_pitch", "17", o), ("r_sho_roll", "18", o), ("r_el", "19", o),
             ("right_hand", "20", o)]
-    rows += [(f"{swing_of(support)}_foot_{i}", "12", (0.0, dy, dx))        # frame 12: y left, z forward
-             for i, (dx, dy) in enumerate(spec.foot.corners(swing_of(support)))]
+    rows += [(f"{other_side(support)}_foot_{i}", "12", (0.0, dy, dx))        # frame 12: y left, z forward
+             for i, (dx, dy) in enumerate(spec.foot.corners(other_side(support)))]
     return tuple(rows)
 
 

@@ -13,7 +13,8 @@ from typing import Iterable
 
 import numpy as np
 
-from op2motion.robot.spec import Foot, swing_of
+from op2motion.robot.spec import Foot
+from op2motion.robot.support import other_side
 
 #: Unique point rows, in storage order.
 ROWS: tuple[str, ...] = (
@@ -68,7 +69,7 @@ class BodyPoints:
     @property
     def swing(self) -> str:
         """The swing side (``left`` or ``right``)."""
-        return swing_of(self.support)
+        return other_side(self.support)
 
     def point(self, name: str) -> np.ndarray:
         """Point ``name`` for every pose, (N, 3) [m]."""

@@ -31,7 +31,8 @@ from op2motion.kinematics.com import slab_com
 from op2motion.kinematics.points import ROW, BodyPoints, fill_support_foot, new_slab
 from op2motion.kinematics.trig import sincos
 from op2motion.robot.joints import BookAngles
-from op2motion.robot.spec import Spec, swing_of
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import other_side
 
 PSI_TOLERANCE_RAD = 1e-12  # psi must be zero for this model
 
@@ -111,7 +112,7 @@ def _chunk(th: np.ndarray, phi: np.ndarray, out: np.ndarray, spec: Spec, left: b
 
     s, w = ("l", "r") if left else ("r", "l")
     support_side = "left" if left else "right"
-    swing_side = swing_of(support_side)
+    swing_side = other_side(support_side)
     row = lambda name: out[ROW[name]]  # noqa: E731
     ankle = row(f"{s}_ankle")
     ankle[0], ankle[1], ankle[2] = 0.0, 0.0, g.ankle_to_sole

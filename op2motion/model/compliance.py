@@ -34,7 +34,9 @@ from op2motion.kinematics import BodyPoints
 from op2motion.kinematics.links import attachments
 from op2motion.kinematics.points import row_of
 from op2motion.model.servo import ServoModel
-from op2motion.robot.spec import GRAVITY_M_S2, Spec, swing_of
+from op2motion.robot.joints import LEG_JOINTS
+from op2motion.robot.spec import GRAVITY_M_S2, Spec
+from op2motion.robot.support import other_side
 
 
 @dataclass(frozen=True)
@@ -182,7 +184,6 @@ def pitch_root(points: BodyPoints) -> str:
     return f"{points.support[0]}_ankle"
 
 
-_SWING_JOINTS = ("hip_yaw", "hip_roll", "hip_pitch", "knee", "ank_pitch", "ank_roll")
 
 
 class SwingLegSag:
@@ -192,8 +193,8 @@ class SwingLegSag:
     def __init__(self, spec: Spec, support: str, servo: ServoModel | None = None):
         servo = servo or ServoModel.of(spec)
         attached = attachments(spec, support)
-        side = swing_of(support)[0]
-        joints = [spec.joint(f"{side}_{name}") for name in _SWING_JOINTS]
+        side = other_side(support)[0]
+        joints = [spec.joint(f"{side}_{name}") for name in LEG_JOINTS]
         inertial = {i.link: i for i in spec.inertials}
         index = {n: i for i, n in enumerate(spec.joint_names)}
         self.slots = np.array([attached[j.child].slot for j in joints])

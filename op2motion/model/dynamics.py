@@ -14,7 +14,8 @@ import numpy as np
 
 from op2motion.errors import InputError
 from op2motion.model.urdf import build_urdf, frame_link, frame_points, sole_link
-from op2motion.robot.spec import SUPPORTS, Spec, feet_of, stance_of
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import SIDES, Support
 
 
 @dataclass(frozen=True)
@@ -44,7 +45,7 @@ class Dynamics:
         self.q_index = np.array([self.model.joints[self.model.getJointId(n)].idx_q for n in spec.joint_names])
         self.v_index = np.array([self.model.joints[self.model.getJointId(n)].idx_v for n in spec.joint_names])
         self.joint_ids = [self.model.getJointId(n) for n in spec.joint_names]
-        self.sole_ids = {side: self.model.getFrameId(sole_link(side)) for side in SUPPORTS}
+        self.sole_ids = {side: self.model.getFrameId(sole_link(side)) for side in SIDES}
 
     @property
     def total_mass(self) -> float:
@@ -69,7 +70,7 @@ class Dynamics:
 
     def _sole_frame(self, q: np.ndarray, support: str) -> Any:
         self.pin.framesForwardKinematics(self.model, self.data, q)
-        return self.data.oMf[self.sole_ids[stance_of(support)]]
+        return self.data.oMf[self.sole_ids[Support.of(support).stance]]
 
     def joint_centres(self, servo: np.ndarray, support: str) -> dict[str, np.ndarray]:
         """Joint origins and named frames [m] in the support sole frame."""
@@ -92,7 +93,7 @@ class Dynamics:
             raise InputError(f"unknown frame {frame!r}", "frame")
         world = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
         jac = pin.getFrameJacobian(self.model, self.data, fid, world)
-        sole = pin.getFrameJacobian(self.model, self.data, self.sole_ids[stance_of(support)], world)
+        sole = pin.getFrameJacobian(self.model, self.data, self.sole_ids[Support.of(support).stance], world)
         # Hold the sole still: the free-flyer velocity is whatever cancels the sole's motion (J_sole v = 0).
         base = -np.linalg.solve(sole[:, :6], sole[:, 6:])
         return (jac[:, 6:] + jac[:, :6] @ base)[:, self.v_index - 6]
@@ -117,7 +118,7 @@ class Dynamics:
         pin.computeJointJacobians(self.model, self.data, q)
         pin.framesForwardKinematics(self.model, self.data, q)
         jac = np.vstack([pin.getFrameJacobian(self.model, self.data, self.sole_ids[s], pin.ReferenceFrame.LOCAL)
-                         for s in feet_of(support)])
+                         for s in Support.of(support).feet])
         wrench = np.linalg.lstsq(jac[:, :6].T, gravity[:6], rcond=None)[0]
         torques = (gravity - jac.T @ wrench)[self.v_index]
         worst = int(np.argmax(np.abs(torques)))

@@ -32,6 +32,7 @@ import numpy as np
 
 from op2motion.model.dynamics import dynamics_for
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
 
 TOLERANCE_NM = 1e-6          # largest torque imbalance [N·m] of a solution
 MAX_ITERATIONS = 30
@@ -39,16 +40,17 @@ PROBE_RAD = 1e-6             # finite-difference step [rad]
 MAX_SAG_RAD = 0.6            # a solution farther than this from the goal is not the pose's equilibrium
 
 
-def sagged_angles(goal: np.ndarray, support: str, spec: Spec, kp: np.ndarray,
+def sagged_angles(goal: np.ndarray, support: Support | str, spec: Spec, kp: np.ndarray,
                   torque_max: float) -> np.ndarray | None:
     """The servo angles (20,) [rad] at which servos of stiffness ``kp`` (20,) [N·m/rad] holding ``goal`` (20,)
     [rad] carry the body at rest on ``support``; ``None`` where no equilibrium exists within the servos'
     ``torque_max`` [N·m] (see the module docstring)."""
     dyn = dynamics_for(spec)
+    support = Support.of(support)
     goal = np.asarray(goal, dtype=float)
     kp = np.broadcast_to(np.asarray(kp, dtype=float), goal.shape)
     n = goal.size
-    if support == "double":
+    if support.is_double:
         rel_goal, _ = _right_from_left(dyn, goal)
 
         def residual(x: np.ndarray) -> np.ndarray:
@@ -68,7 +70,7 @@ def sagged_angles(goal: np.ndarray, support: str, spec: Spec, kp: np.ndarray,
         probe = x0.copy()
         probe[j] += PROBE_RAD
         jac[:, j] = (residual(probe) - r0) / PROBE_RAD
-    if support != "double" and np.max(np.linalg.eigvals(jac).real) >= 0.0:
+    if not support.is_double and np.max(np.linalg.eigvals(jac).real) >= 0.0:
         return None                           # gravity is stiffer than the servos in some direction
     x, r = x0, r0
     for _ in range(MAX_ITERATIONS):
@@ -86,7 +88,7 @@ def sagged_angles(goal: np.ndarray, support: str, spec: Spec, kp: np.ndarray,
     q = x[:n]
     if np.max(np.abs(kp * (goal - q))) > torque_max:
         return None
-    if support == "double" and not _both_press(dyn, q, x[n:]):
+    if support.is_double and not _both_press(dyn, q, x[n:]):
         return None
     return q
 

@@ -29,14 +29,6 @@ from op2motion.robot.spec import Spec
 MAX_STIFFNESS_SCALE = 10.0
 
 
-def p_gain_of_slope(slope: int) -> int:
-    """The MX-28 P gain an action page's compliance byte sets (the clockwise nibble; ROBOTIS writes both equal)."""
-    if not 0 <= slope <= 0xFF:
-        raise InputError(f"expected a compliance byte 0..255, got {slope!r}", "slope")
-    nibble = (slope >> 4) & 0x0F
-    return (256 >> nibble) << 2 if nibble < 9 else 0
-
-
 @dataclass(frozen=True)
 class ServoModel:
     """The servo model of one run: per-joint stiffness and the motor's limits and losses (SI units)."""

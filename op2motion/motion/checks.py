@@ -32,7 +32,8 @@ from op2motion.model.urdf import foot_box_corners, foot_link
 from op2motion.motion.trajectory import Trajectory
 from op2motion.robot.balance import convex_hull, polygon_margin
 from op2motion.robot.joints import servo_to_book
-from op2motion.robot.spec import GRAVITY_M_S2, Spec, feet_of
+from op2motion.robot.spec import GRAVITY_M_S2, Spec
+from op2motion.robot.support import Support, fixed_foot
 
 MAX_RATIO = 99.0          # a torque ratio is reported up to this (a goal faster than the no-load speed has none)
 SMOOTH_ROWS = 5           # 40 ms: the goals' derivatives are taken after this moving average
@@ -65,12 +66,6 @@ class MotionChecks:
                 "torque_ratio_max": round(float(self.torque_ratio[t]), 4),
                 "torque_max_nm": round(float(self.torque_nm[t]), 4),
                 "torque_joint": self.torque_joint[t], "fixed_foot": self.fixed_foot}
-
-
-def fixed_foot(supports: tuple[str, ...]) -> str:
-    """The foot on the floor in every row (the left when both are, or none is)."""
-    common = set.intersection(*(set(feet_of(s)) for s in supports))
-    return "left" if "left" in common or not common else "right"
 
 
 def clearance(goals: np.ndarray, spec: Spec, side: str = "left") -> tuple[np.ndarray, list[tuple[str, str]]]:
@@ -156,7 +151,7 @@ def contact_torques(dyn: Any, configs: np.ndarray, v: np.ndarray, a: np.ndarray,
         pin.computeJointJacobians(model, data, q)
         pin.updateFramePlacements(model, data)
         jac = np.vstack([pin.getFrameJacobian(model, data, dyn.sole_ids[s], pin.ReferenceFrame.LOCAL)
-                         for s in feet_of(supports[i])])
+                         for s in Support.of(supports[i]).feet])
         wrench = np.linalg.lstsq(jac[:, :6].T, tau[:6], rcond=None)[0]
         out[i] = (tau - jac.T @ wrench)[dyn.v_index]
     return out
@@ -183,7 +178,7 @@ def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | Non
     available = servo.available(joint_speed, torques)
     for i in range(k):
         pin.framesForwardKinematics(model, data, configs[i])
-        polygons.append(_polygon(dyn, data, feet_of(trajectory.supports[i]), spec))
+        polygons.append(_polygon(dyn, data, Support.of(trajectory.supports[i]).feet, spec))
     share = np.minimum(np.abs(torques) / np.maximum(available, 1e-9), MAX_RATIO)
     worst = np.argmax(share, axis=1)
     ratio, torque = share[np.arange(k), worst], np.abs(torques)[np.arange(k), worst]

@@ -13,7 +13,7 @@ Two profiles:
 The MX-28's speed is respected: a segment whose fastest joint would exceed :data:`SPEED_FRACTION` of the no-load
 speed is stretched until it does not, and a note says so (the robot's own profile also has the framework's speed
 clamp, 1023 units = 3.7 rad/s). Each row stands on the support its pose needs: a foot counts as supporting while
-its lowest corner is within :data:`SWING_CLEAR_M` of the floor, with the other foot's sole level on it.
+its lowest corner is within :data:`LIFTED_M` of the floor, with the other foot's sole level on it.
 """
 
 from __future__ import annotations
@@ -24,31 +24,23 @@ from typing import Sequence
 import numpy as np
 
 from op2motion.errors import InputError
-from op2motion.formats.actionlayout import (
-    MAX_BYTE,
-    MAX_STEPS,
-    NUM_PAGES,
-    TIME_UNIT_S,
-    StepBytes,
-    encode_page,
-    reset_file,
-)
+from op2motion.formats.actionlayout import MAX_BYTE, MAX_STEPS, NUM_PAGES, StepBytes, encode_page, reset_file
+from op2motion.formats.motionfile import PROFILES
 from op2motion.motion.player import IDS, play, step_calls
 from op2motion.motion.shift import balanced, settled_swing_heights, with_weight_shifts
 from op2motion.motion.trajectory import Trajectory, from_playback
 from op2motion.motion.waypoint import Waypoint, check_waypoints
+from op2motion.robot.framework import CONTROL_PERIOD_S, DEFAULT_P_GAIN, slope_of_p_gain
 from op2motion.robot.joints import servo_to_ticks
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import LIFTED_M
 
-PROFILES = ("quintic", "robot")
 SPEED_FRACTION = 0.5       # of the no-load speed: at the peak speed half the stall torque is still available
-SWING_CLEAR_M = 0.005      # a foot this far above the floor no longer supports
-DEFAULT_P_GAIN = 32
 _FIRST_PAGE = 1
 
 
 def _units(seconds: float) -> int:
-    return max(1, int(math.ceil(seconds / TIME_UNIT_S - 1e-9)))
+    return max(1, int(math.ceil(seconds / CONTROL_PERIOD_S - 1e-9)))
 
 
 def _through_velocities(q: np.ndarray, durations: np.ndarray, pauses: np.ndarray) -> np.ndarray:
@@ -82,14 +74,14 @@ def _peak_speed(q0: np.ndarray, q1: np.ndarray, v0: np.ndarray, v1: np.ndarray, 
 
 def _timed(waypoints: Sequence[Waypoint], v_max: float, peak) -> tuple[np.ndarray, list[str]]:  # type: ignore[no-untyped-def]
     """Durations [s] (n,) in whole 8 ms units, stretched until no joint exceeds ``v_max``; notes on each stretch."""
-    asked = np.array([0.0] + [_units(w.duration_s) * TIME_UNIT_S for w in waypoints[1:]])
+    asked = np.array([0.0] + [_units(w.duration_s) * CONTROL_PERIOD_S for w in waypoints[1:]])
     durations = asked.copy()
     for _ in range(8):
         speeds = peak(durations)                       # (n - 1, 20) peak speed of each segment per joint
         over = speeds.max(axis=1) > v_max * (1 + 1e-6)
         if not over.any():
             break
-        durations[1:] = np.where(over, _units_array(durations[1:] * speeds.max(axis=1) / v_max) * TIME_UNIT_S,
+        durations[1:] = np.where(over, _units_array(durations[1:] * speeds.max(axis=1) / v_max) * CONTROL_PERIOD_S,
                                  durations[1:])
     notes = []
     for i in np.flatnonzero(durations[1:] > asked[1:] + 1e-9) + 1:
@@ -100,7 +92,7 @@ def _timed(waypoints: Sequence[Waypoint], v_max: float, peak) -> tuple[np.ndarra
 
 
 def _units_array(seconds: np.ndarray) -> np.ndarray:
-    return np.maximum(1, np.ceil(seconds / TIME_UNIT_S - 1e-9))
+    return np.maximum(1, np.ceil(seconds / CONTROL_PERIOD_S - 1e-9))
 
 
 def _quintic_rows(waypoints: Sequence[Waypoint], v_max: float) -> tuple[np.ndarray, np.ndarray, list[str]]:
@@ -118,12 +110,12 @@ def _quintic_rows(waypoints: Sequence[Waypoint], v_max: float) -> tuple[np.ndarr
         rows.append(np.repeat(q[:1], _units(pauses[0]), axis=0))
         segment += [0] * _units(pauses[0])
     for i in range(len(q) - 1):
-        n = int(round(durations[i + 1] / TIME_UNIT_S))
-        t = np.arange(1, n + 1) * TIME_UNIT_S
+        n = int(round(durations[i + 1] / CONTROL_PERIOD_S))
+        t = np.arange(1, n + 1) * CONTROL_PERIOD_S
         part = _quintic(q[i], q[i + 1], v[i], v[i + 1], durations[i + 1], t)
         part[-1] = q[i + 1]                            # land exactly on the pose
         rows.append(part)
-        hold = int(round(pauses[i + 1] / TIME_UNIT_S)) if pauses[i + 1] > 0 else 0
+        hold = int(round(pauses[i + 1] / CONTROL_PERIOD_S)) if pauses[i + 1] > 0 else 0
         if hold:
             rows.append(np.repeat(q[i + 1:i + 2], hold, axis=0))
         segment += [i] * (n + hold)
@@ -143,7 +135,7 @@ def robot_steps(waypoints: Sequence[Waypoint], spec: Spec, v_max: float
     durations, notes = _timed(waypoints, v_max, peak)
     steps, owner = [], []
     for i in range(1, len(q)):
-        units = int(round(durations[i] / TIME_UNIT_S))
+        units = int(round(durations[i] / CONTROL_PERIOD_S))
         parts = int(math.ceil(units / MAX_BYTE))
         for k in range(1, parts + 1):
             ticks = servo_to_ticks(q[i - 1] + (q[i] - q[i - 1]) * k / parts, spec)
@@ -193,17 +185,17 @@ def _robot_rows(waypoints: Sequence[Waypoint], spec: Spec, v_max: float) -> tupl
 def row_supports(goals: np.ndarray, segment: np.ndarray, waypoints: Sequence[Waypoint],
                  spec: Spec) -> tuple[str, ...]:
     """The support of each row: a single-support segment end's foot stands; the other foot supports too while
-    its lowest corner, after the sag, is within :data:`SWING_CLEAR_M` of the floor."""
+    its lowest corner, after the sag, is within :data:`LIFTED_M` of the floor."""
     out = []
     heights = {side: settled_swing_heights(goals, side, spec) for side in ("left", "right")}
     for k, seg in enumerate(segment):
         ends = [waypoints[0]] if seg < 0 else [waypoints[seg], waypoints[seg + 1]]
-        singles = {w.support for w in ends if w.support != "double"}
+        singles = {w.support for w in ends if not w.support.is_double}
         if not singles:
             out.append("double")
             continue
         stand = sorted(singles)[0] if len(singles) == 1 else ends[0].support
-        out.append("double" if heights[stand][k] < SWING_CLEAR_M else stand)
+        out.append("double" if heights[stand][k] < LIFTED_M else stand)
     return tuple(out)
 
 
@@ -230,15 +222,6 @@ def plan(waypoints: Sequence[Waypoint], spec: Spec, profile: str = "quintic",
 
 
 
-def slope_of(p_gain: int) -> int:
-    """The compliance byte whose P gain is ``p_gain`` (P = (256 >> n) << 2 on both nibbles: 32 -> 0x55)."""
-    for n in range(1, 8):
-        if (256 >> n) << 2 == p_gain:
-            return n << 4 | n
-    raise InputError(f"expected a P gain an action page can carry (256, 128, 64, 32, 16, 8 or 4), got {p_gain}",
-                     "p_gain")
-
-
 def action_pages(waypoints: Sequence[Waypoint], spec: Spec, name: str, first_page: int,
                  p_gain: int = DEFAULT_P_GAIN, shift_weight: bool = True) -> tuple[list[bytes], list[str]]:
     """The motion as chained action pages from ``first_page`` on (the robot's profile: what the robot plays),
@@ -248,5 +231,5 @@ def action_pages(waypoints: Sequence[Waypoint], spec: Spec, name: str, first_pag
     if shift_weight:
         waypoints, notes = with_weight_shifts(waypoints, spec)
     steps, timing, _ = robot_steps(waypoints, spec, SPEED_FRACTION * spec.servo.no_load_speed_rad_s)
-    slopes = {j.id: slope_of(p_gain) for j in spec.joints} if p_gain != DEFAULT_P_GAIN else None
+    slopes = {j.id: slope_of_p_gain(p_gain) for j in spec.joints} if p_gain != DEFAULT_P_GAIN else None
     return robot_pages(name, steps, first_page, slopes), notes + timing

@@ -30,12 +30,12 @@ from op2motion.formats.actionlayout import (
     NUM_PAGES,
     SPEED_BASE_SCHEDULE,
     TIME_BASE_SCHEDULE,
-    TIME_UNIT_S,
     RawPage,
     check_file,
     parse_page,
     reset_page,
 )
+from op2motion.robot.framework import CONTROL_PERIOD_S, DEFAULT_P_GAIN, p_gain_of_slope
 
 INVALID_BIT = 0x4000
 MAX_TICK = 4095                    # the 4096 build clamps every goal to 0..4095
@@ -86,11 +86,6 @@ def step_calls(time: int, pause: int, speed: int = 32, accel: int = 32) -> int:
     return total + 3 + (pause_ticks + 1 if pause_ticks else 0)
 
 
-def p_gain(compliance: int) -> int:
-    """The servo P gain a page's compliance byte sets: (256 >> high nibble) << 2 (0x55 -> 32)."""
-    return (256 >> (compliance >> 4)) << 2
-
-
 @dataclass(frozen=True)
 class Playback:
     """What the player sent, one row per ``Process()`` call (row 0: the start): goal ticks (calls + 1, 20) and P
@@ -108,7 +103,7 @@ class Playback:
     @property
     def duration_s(self) -> float:
         """Playback time [s]: calls x 8 ms."""
-        return self.calls * TIME_UNIT_S
+        return self.calls * CONTROL_PERIOD_S
 
 
 class ActionPlayer:
@@ -121,7 +116,7 @@ class ActionPlayer:
         self.data = data
         n = len(IDS)
         self.value = [int(t) for t in start_ticks]     # the goals sent (the joint values)
-        self.gain = [p_gain(0x55)] * n
+        self.gain = [DEFAULT_P_GAIN] * n
         self.start = [0] * n
         self.target = [0] * n
         self.moving = [0] * n
@@ -209,7 +204,7 @@ class ActionPlayer:
                 out = start + _s16(_tdiv(self.main_angle[j] * c, n))
                 self.goal_speed[j] = self.main_speed[j]
             self.value[j] = min(max(out, 0), MAX_TICK)
-            self.gain[j] = p_gain(slopes[ident])
+            self.gain[j] = p_gain_of_slope(slopes[ident])
 
     def _next_section(self) -> None:
         self.count = 0

@@ -154,8 +154,8 @@ def with_weight_shifts(waypoints: Sequence[Waypoint], spec: Spec) -> tuple[list[
     model = Compliance(spec)
     out, notes = [waypoints[0]], []
     for prev, nxt in zip(waypoints, waypoints[1:]):
-        if (prev.support == "double") != (nxt.support == "double"):
-            double, single = (prev, nxt) if prev.support == "double" else (nxt, prev)
+        if prev.support.is_double != nxt.support.is_double:
+            double, single = (prev, nxt) if prev.support.is_double else (nxt, prev)
             target = settled_com(single.servo, single.support, spec, model)
             if not np.all(np.isfinite(target)):
                 raise CheckFailed(f"{single.name} cannot stand on the {single.support} foot: the servos would not "
@@ -163,7 +163,7 @@ def with_weight_shifts(waypoints: Sequence[Waypoint], spec: Spec) -> tuple[list[
             shifted = weight_shift(double.servo, single.support, spec, _inside(target, single.support, spec))
             lifted = lift_swing(shifted, single.support, spec)
             name = f"{double.name}@{single.support}"
-            if prev.support == "double":      # shift, lift, then move into the single-support pose
+            if prev.support.is_double:       # shift, lift, then move into the single-support pose
                 out += [Waypoint(name, shifted, SHIFT_S, 0.0, "double"),
                         Waypoint(f"{name}+lift", lifted, LIFT_S, 0.0, single.support), nxt]
             else:                             # come down over the standing foot, put the foot down, shift back
@@ -172,7 +172,7 @@ def with_weight_shifts(waypoints: Sequence[Waypoint], spec: Spec) -> tuple[list[
                         Waypoint(f"{name}+touch", touch, LIFT_S, 0.0, single.support),
                         replace(nxt, duration_s=SHIFT_S + LIFT_S)]
             notes.append(f"inserted a {SHIFT_S:g} s weight shift onto the {single.support} foot and a {LIFT_S:g} s "
-                         f"lift of the other ({'before' if prev.support == 'double' else 'after'} {single.name})")
+                         f"lift of the other ({'before' if prev.support.is_double else 'after'} {single.name})")
         else:
             out.append(nxt)
     return out, notes
@@ -180,7 +180,7 @@ def with_weight_shifts(waypoints: Sequence[Waypoint], spec: Spec) -> tuple[list[
 
 def _segment_side(a: Waypoint, b: Waypoint) -> str | None:
     """The foot a segment stands on when one of its ends is a single-support pose (None for two feet)."""
-    singles = [w.support for w in (a, b) if w.support != "double"]
+    singles = [w.support for w in (a, b) if not w.support.is_double]
     if len(set(singles)) > 1:
         raise CheckFailed(f"{a.name} -> {b.name} goes from the {a.support} foot straight to the {b.support} foot: "
                           f"put a double-support pose between them")

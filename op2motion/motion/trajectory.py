@@ -12,10 +12,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from op2motion.errors import InputError
-from op2motion.formats.actionlayout import TIME_UNIT_S
 from op2motion.motion.player import IDS, Playback
+from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.joints import ticks_to_servo
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import LIFTED_M
 
 
 @dataclass(frozen=True)
@@ -29,7 +30,7 @@ class Trajectory:
     supports: tuple[str, ...]
     segment: np.ndarray
     segment_names: tuple[str, ...]
-    dt: float = TIME_UNIT_S
+    dt: float = CONTROL_PERIOD_S
     notes: tuple[str, ...] = field(default=())
 
     def __post_init__(self) -> None:
@@ -62,18 +63,17 @@ class Trajectory:
         return "the start" if k < 0 else self.segment_names[k]
 
 
-SWING_CLEAR_M = 0.005      # a foot whose lowest corner is this high above the other sole's plane is lifted
 
 
 def goal_supports(goals: np.ndarray, spec: Spec) -> tuple[str, ...]:
     """The support of each row of goals (K, 20) [rad]: standing on one sole laid flat, the other foot is lifted
-    when its lowest corner is more than :data:`SWING_CLEAR_M` above the floor after the servos' sag
+    when its lowest corner is more than :data:`LIFTED_M` above the floor after the servos' sag
     (:func:`.shift.settled_swing_heights`: a kick, a step); otherwise both feet stand."""
     from op2motion.motion.shift import settled_swing_heights
 
     lifted = {}
     for stance, swing in (("left", "right"), ("right", "left")):
-        lifted[swing] = settled_swing_heights(np.atleast_2d(goals), stance, spec) > SWING_CLEAR_M
+        lifted[swing] = settled_swing_heights(np.atleast_2d(goals), stance, spec) > LIFTED_M
     return tuple("left" if r else "right" if le else "double" for r, le in zip(lifted["right"], lifted["left"]))
 
 

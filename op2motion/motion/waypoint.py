@@ -9,10 +9,10 @@ from typing import Sequence
 import numpy as np
 
 from op2motion.errors import InputError
-from op2motion.formats.actionlayout import TIME_UNIT_S
-from op2motion.robot.pose import check_pose_support
+from op2motion.robot.framework import CONTROL_PERIOD_S
+from op2motion.robot.support import Support
 
-MIN_SEGMENT_S = 3 * TIME_UNIT_S   # the shortest step the robot moves (24 ms)
+MIN_SEGMENT_S = 3 * CONTROL_PERIOD_S   # the shortest step the robot moves (24 ms)
 MAX_SEGMENT_S = 60.0
 
 
@@ -25,7 +25,10 @@ class Waypoint:
     servo: np.ndarray
     duration_s: float
     pause_s: float
-    support: str
+    support: Support
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "support", Support.of(self.support))
 
 
 def check_waypoints(waypoints: Sequence[Waypoint]) -> None:
@@ -33,7 +36,6 @@ def check_waypoints(waypoints: Sequence[Waypoint]) -> None:
     if len(waypoints) < 2:
         raise InputError(f"expected at least two poses, got {len(waypoints)}", "poses")
     for k, w in enumerate(waypoints):
-        check_pose_support(w.support)
         if k and not (math.isfinite(w.duration_s) and MIN_SEGMENT_S - 1e-9 <= w.duration_s <= MAX_SEGMENT_S):
             raise InputError(f"expected {MIN_SEGMENT_S:.3f} to {MAX_SEGMENT_S:g} s to reach {w.name!r}, got "
                              f"{w.duration_s}", "durations")

@@ -21,8 +21,8 @@ from op2motion.physics.run import RAMP_S, STEADY_S, Push, judge, simulate
 from op2motion.physics.scene import ENGINES, TIME_STEP_S
 from op2motion.physics.schedule import Schedule
 from op2motion.physics.verdict import PUSH_DIRECTIONS, REASONS, PushResult, Validation
-from op2motion.robot.pose import check_pose_support
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
 
 __all__ = ["DEFAULT_SECONDS", "ENGINES", "MAX_SECONDS", "MIN_SECONDS", "MOTION_HOLD_S", "MOTION_SETTLE_S", "RAMP_S",
            "REASONS", "TIME_STEP_S", "Validation", "make_engine", "steps_for", "validate", "validate_motion"]
@@ -102,7 +102,7 @@ def validate(servo_angles: np.ndarray, support: str, spec: Spec, seconds: float 
     """Does a pose (servo angles (20,) [rad], support left/right/double) stand on ``engine``? See the package
     docstring; ``stiffness`` scales the servos' Kp, ``p_gains`` sets each servo's P gain (default 32),
     ``voltage`` [V] picks the servo's rating (default: the spec's supply voltage)."""
-    check_pose_support(support)
+    Support.of(support)
     servo_angles = np.asarray(servo_angles, dtype=float)
     if servo_angles.shape != (len(spec.joints),) or not np.all(np.isfinite(servo_angles)):
         raise InputError(f"expected {len(spec.joints)} finite servo angles", "servo angles")

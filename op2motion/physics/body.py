@@ -19,7 +19,8 @@ import numpy as np
 
 from op2motion.model.dynamics import dynamics_for
 from op2motion.model.urdf import foot_box_corners, foot_link
-from op2motion.robot.spec import SUPPORTS, Spec, feet_of
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import SIDES, Support
 
 GROUND_TOLERANCE_M = 1e-9
 
@@ -45,9 +46,9 @@ class Body:
         self.spec = spec
         self.dyn = dynamics_for(spec)
         self.pin = self.dyn.pin
-        self.local_corners = {side: foot_box_corners(spec, side) for side in SUPPORTS}
-        self.foot_ids = {side: self.dyn.model.getFrameId(foot_link(spec, side)) for side in SUPPORTS}
-        self.foot_links = {side: foot_link(spec, side) for side in SUPPORTS}
+        self.local_corners = {side: foot_box_corners(spec, side) for side in SIDES}
+        self.foot_ids = {side: self.dyn.model.getFrameId(foot_link(spec, side)) for side in SIDES}
+        self.foot_links = {side: foot_link(spec, side) for side in SIDES}
 
     def _configuration(self, base_pos: np.ndarray, base_rot: np.ndarray, q: np.ndarray) -> np.ndarray:
         config = self.dyn.configuration(q)
@@ -62,7 +63,7 @@ class Body:
         com = pin.centerOfMass(model, data, config).copy()
         pin.updateFramePlacements(model, data)
         soles, corners = {}, {}
-        for side in SUPPORTS:
+        for side in SIDES:
             sole = data.oMf[self.dyn.sole_ids[side]]
             foot = data.oMf[self.foot_ids[side]]
             soles[side] = (sole.translation.copy(), sole.rotation.copy())
@@ -83,11 +84,11 @@ def placement(body: Body, q: np.ndarray, support: str) -> tuple[np.ndarray, np.n
     high the supporting foot that does not touch starts above the floor (0 when every supporting foot touches).
     See the module docstring."""
     options = []
-    for side in feet_of(support):
+    for side in Support.of(support).feet:
         pos, rot = sole_flat(body, q, side)
         state = body.state(pos, rot, q)
         lift = max(0.0, -state.lowest_corner_z)      # nothing starts below the floor
-        gap = max(float(state.corners[s][:, 2].min()) + lift for s in feet_of(support))
+        gap = max(float(state.corners[s][:, 2].min()) + lift for s in Support.of(support).feet)
         options.append((gap, side, pos + np.array([0.0, 0.0, lift]), rot))
     gap, side, pos, rot = min(options, key=lambda o: o[0])   # the lower, more level sole: the smallest gap
     return pos, rot, side, gap

@@ -47,7 +47,8 @@ from op2motion.physics.verdict import (
     Validation,
 )
 from op2motion.robot.balance import convex_hull, polygon_margin
-from op2motion.robot.spec import Spec, feet_of, swing_of
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support, other_side
 
 RAMP_S = 1.0
 SAGGED_GAP_TOL_M = 1e-6    # the sagged start may leave a supporting foot this much higher than the rigid one
@@ -85,7 +86,7 @@ class _Track:
 
 def support_polygon_of(state: BodyState, support: str) -> np.ndarray:
     """The real support polygon (m, 2) [m]: the sole box of the support foot, or the hull of both soles."""
-    return convex_hull(np.vstack([state.corners[side][:, :2] for side in feet_of(support)]))
+    return convex_hull(np.vstack([state.corners[side][:, :2] for side in Support.of(support).feet]))
 
 
 def simulate(engine: Any, spec: Spec, servo: ServoModel, schedule: Schedule, seconds: float,
@@ -210,7 +211,7 @@ def _slip(track: _Track, schedule: Schedule, start: BodyState, times: np.ndarray
         for k, row in enumerate(track.rows):
             total = sum(w for w, _ in track.feet[k].values())
             carries = side in track.feet[k] and track.feet[k][side][0] >= SLIP_LOAD_SHARE * total
-            if side not in feet_of(schedule.supports[row]) or (schedule.is_motion and not carries):
+            if side not in Support.of(schedule.supports[row]).feet or (schedule.is_motion and not carries):
                 anchor = None
                 continue
             if anchor is None:
@@ -292,7 +293,7 @@ def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, s
     if i is not None:
         failures.append(Failure("com_drop", times[i], f"the centre of mass sank to {com[i, 2]:.3f} m (planned "
                                                       f"{planned_com_z[i]:.3f} m)"))
-    swing = [set(("left", "right")) - set(feet_of(schedule.supports[r])) for r in rows]
+    swing = [set(("left", "right")) - set(Support.of(schedule.supports[r]).feet) for r in rows]
     for reason, wanted in (("swing_foot_contact", lambda link, k: foot_links.get(link) in swing[k]),
                            ("ground_contact", lambda link, k: link not in foot_links)):
         hits = [(k, sorted(link for link in g if wanted(link, k))) for k, g in enumerate(track.ground)]
@@ -333,7 +334,7 @@ def judge(track: _Track, facts: dict[str, Any], spec: Spec, servo: ServoModel, s
     margin_load = float(polygon_margin(load_state.com[:2], support_polygon_of(load_state, schedule.supports[0]))[0])
     cops = [c for c, s in zip(track.cop, steady) if s and c is not None]
     reasons = list(dict.fromkeys(f.reason for f in failures))
-    swing_side = swing_of(final_support) if final_support != "double" else None
+    swing_side = other_side(final_support) if final_support != "double" else None
     return Validation(
         engine=engine_name, servo=servo.describe(), time_step_s=dt, seconds=seconds, stable=not failures,
         reasons=reasons, failures=failures, support_margin_m=round(margin, 5), margin_at_load_m=round(margin_load, 5),

@@ -16,10 +16,8 @@ import numpy as np
 from op2motion.errors import InputError
 from op2motion.model.servo import ServoModel
 from op2motion.physics.body import Body, BodyState, placement, sole_flat
-from op2motion.robot.pose import check_pose_support
-from op2motion.robot.spec import Spec, feet_of
-
-SWING_CLEAR_M = 0.005      # a foot whose planned lowest corner is this far above the floor is swinging
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
 
 
 @dataclass(frozen=True)
@@ -49,7 +47,7 @@ class Schedule:
         if len(supports) != len(goals) or not np.all(np.isfinite(goals)):
             raise InputError("expected finite goals and one support per row", "motion")
         for s in set(supports):
-            check_pose_support(s)
+            Support.of(s)
         kp = spec.servo.duty_per_p_rad * p_gains * servo.stall_torque * servo.stiffness_scale
         return cls(goals, kp, tuple(supports), float(dt), float(start_s))
 
@@ -82,7 +80,7 @@ class Schedule:
 
     def fixed_side(self) -> str:
         """The foot that stays on the floor throughout (in every row's support), else the left."""
-        common = set.intersection(*(set(feet_of(s)) for s in self.supports))
+        common = set.intersection(*(set(Support.of(s).feet) for s in self.supports))
         return "left" if "left" in common or not common else "right"
 
 
@@ -103,7 +101,7 @@ def plan_rows(body: Body, schedule: Schedule) -> tuple[np.ndarray, np.ndarray, P
     if schedule.base is not None:
         positions, rotations = schedule.base
         states = tuple(body.state(p, r, g) for p, r, g in zip(positions, rotations, schedule.goals))
-        gap = max(0.0, max(float(states[0].corners[s][:, 2].min()) for s in feet_of(schedule.supports[0])))
+        gap = max(0.0, max(float(states[0].corners[s][:, 2].min()) for s in Support.of(schedule.supports[0]).feet))
         return positions[0], rotations[0], Planned(rotations, states, "left", gap)
     pos0, rot0, flat, gap = placement(body, schedule.goals[0], schedule.supports[0])
     if not schedule.is_motion:

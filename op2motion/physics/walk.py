@@ -34,7 +34,8 @@ from op2motion.physics.scene import TIME_STEP_S
 from op2motion.physics.schedule import Schedule
 from op2motion.physics.verdict import Validation
 from op2motion.robot.balance import convex_hull, polygon_margin
-from op2motion.robot.spec import Spec, feet_of
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
 
 WALK_SETTLE_S = 0.5            # after gravity reached full strength, before the first goal moves
 WALK_HOLD_S = 1.5              # the last goal held after the walk (the last second is the steady window)
@@ -163,7 +164,7 @@ def _measure(validation: Validation, track: Any, facts: dict[str, Any], schedule
         if cop is None:
             continue
         state = track.states[k]
-        hull = convex_hull(np.vstack([state.corners[s][:, :2] for s in feet_of(contact[track.rows[k]])]))
+        hull = convex_hull(np.vstack([state.corners[s][:, :2] for s in Support.of(contact[track.rows[k]]).feet]))
         inside += polygon_margin(np.asarray(cop), hull)[0] >= -COP_TOLERANCE_M
     walking = (times >= start) & (times <= schedule.end_s)
     torque = np.abs(np.asarray(track.torque))[walking]

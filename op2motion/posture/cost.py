@@ -38,15 +38,15 @@ from op2motion.robot.balance import (
     rectangle_margin,
     support_extents,
 )
-from op2motion.robot.joints import BookAngles, check_support
-from op2motion.robot.spec import Spec, swing_of
+from op2motion.robot.joints import BookAngles
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import LIFTED_M, Support, other_side
 
 W_VIOLATION = 10.0     # cost per metre by which a violated constraint is violated, on top of the book's 100
 W_MARGIN = 0.02        # cost per metre of stability margin below MARGIN_CAP
 MARGIN_CAP_M = 0.02    # margins beyond this earn nothing more
 W_UPRIGHT = 0.002      # cost per rad² of torso tilt from vertical
 SAG_TILT_LIMIT_RAD = 0.105   # 6°: the torso may turn this much as the servos take the load (physics calls 10° a fall)
-SWING_LIFT_M = 0.005       # full model: the swing foot's lowest corner this far above the floor after the sag
 SELF_CLEARANCE_M = 0.004   # least distance between collision shapes: covers the shape approximations (<= 3 mm)
 CLEARANCE_EXACT_M = 0.01   # clearances are computed exactly below this (above it, a lower bound is enough)
 TARGET_LIMIT_M = 1.0   # a target farther than this from the support foot is not a target for a 45 cm robot
@@ -72,7 +72,7 @@ class PostureProblem:
 
     def validated(self) -> "PostureProblem":
         """Check the fields; raise :class:`InputError` on bad values."""
-        check_support(self.support)
+        Support.single(self.support)
         if self.hand not in ("left", "right"):
             raise InputError(f"expected 'left' or 'right', got {self.hand!r}", "hand")
         if len(self.target) != 3 or not all(np.isfinite(self.target)):
@@ -112,7 +112,7 @@ class CostTerms:
     settled CoM for the full-inertia model), lowest swing-foot corner [m], torso tilt [rad], self-collision
     penalty, the torso turn as the servos take the load [rad] (0 for the book's rigid model) and the least
     clearance between collision shapes [m] (exact below :data:`CLEARANCE_EXACT_M`); ``swing_lift`` [m] is how far
-    the swing foot clears its limit (feasible at >= 0): the book's floor for its rigid model, :data:`SWING_LIFT_M`
+    the swing foot clears its limit (feasible at >= 0): the book's floor for its rigid model, :data:`LIFTED_M`
     above the floor after the sag on compliant servos."""
 
     total: np.ndarray
@@ -169,7 +169,7 @@ class CostModel:
         self.swing_sag = SwingLegSag(spec, problem.support) if self.full else None
         self.target = np.asarray(problem.target, dtype=float)[:, None]
         self.hand_row = row_of(problem.hand_point)
-        first = ROW[f"{swing_of(problem.support)}_foot_0"]
+        first = ROW[f"{other_side(problem.support)}_foot_0"]
         self.swing_rows = slice(first, first + 4)
 
     def __call__(self, angles: BookAngles, only_below: np.ndarray | None = None) -> CostTerms:
@@ -195,7 +195,7 @@ class CostModel:
             corners = data[self.swing_rows]
             lowered = (self.compliance.settled_heights(points, settled, corners)
                        + self.swing_sag.heights(frames, corners)).min(axis=0)
-            swing_lift = np.where(np.isfinite(lowered), lowered, swing_min_z) - SWING_LIFT_M
+            swing_lift = np.where(np.isfinite(lowered), lowered, swing_min_z) - LIFTED_M
         else:                             # the book's body: lumped masses on rigid joints
             com_xy, sag_tilt = points.com[:2], np.zeros(points.n)
             swing_lift = swing_min_z + FLOOR_TOLERANCE_M

@@ -17,17 +17,13 @@ import numpy as np
 
 from op2motion import book
 from op2motion.errors import InputError, LimitViolation
-from op2motion.robot.spec import BOOK_VARS, SUPPORTS, Joint, Spec
+from op2motion.robot.spec import BOOK_VARS, Joint, Spec
+from op2motion.robot.support import Support
 
 N_TH, N_PHI, N_PSI = 11, 6, 3
+#: The joints of one leg from the hip down, by official name without the side's ``l_``/``r_`` prefix.
+LEG_JOINTS = ("hip_yaw", "hip_roll", "hip_pitch", "knee", "ank_pitch", "ank_roll")
 LIMIT_SLACK_RAD = 1e-9   # angles this close outside a limit count as on it (rounding of degrees in files)
-
-
-def check_support(support: str) -> str:
-    """Return ``support`` if it is ``left`` or ``right``, else raise :class:`InputError`."""
-    if support not in SUPPORTS:
-        raise InputError(f"expected 'left' or 'right', got {support!r}", "support")
-    return support
 
 
 def _angles(name: str, values: object, n: int) -> np.ndarray:
@@ -52,7 +48,10 @@ class BookAngles:
     th: np.ndarray
     phi: np.ndarray
     psi: np.ndarray
-    support: str
+    support: Support
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "support", Support.single(self.support))
 
     @classmethod
     def make(cls, th: object, phi: object, psi: object = None, support: str = "left") -> "BookAngles":
@@ -62,7 +61,7 @@ class BookAngles:
         n = {th_a.shape[0], phi_a.shape[0], psi_a.shape[0]}
         if len(n) != 1:
             raise InputError(f"expected the same number of poses in th, phi and psi, got {sorted(n)}")
-        return cls(th_a, phi_a, psi_a, check_support(support))
+        return cls(th_a, phi_a, psi_a, Support.single(support))
 
     @classmethod
     def from_deg(cls, th: object, phi: object, psi: object = None, support: str = "left") -> "BookAngles":
@@ -83,7 +82,7 @@ class BookAngles:
         x = np.atleast_2d(np.asarray(x, dtype=float))
         if x.shape[1] != N_TH + N_PHI + N_PSI:
             raise InputError(f"expected 20 values per pose, got {x.shape[1]}", "book vector")
-        return cls(x[:, :N_TH], x[:, N_TH:N_TH + N_PHI], x[:, N_TH + N_PHI:], check_support(support))
+        return cls(x[:, :N_TH], x[:, N_TH:N_TH + N_PHI], x[:, N_TH + N_PHI:], Support.single(support))
 
     @classmethod
     def random(cls, n: int, rng: np.random.Generator, support: str = "left", psi: bool = True) -> "BookAngles":
@@ -128,7 +127,7 @@ def book_to_servo(angles: BookAngles, spec: Spec) -> np.ndarray:
 def servo_to_book(servo: np.ndarray, support: str, spec: Spec) -> BookAngles:
     """Book variables for servo angles (N,20) or (20,) [rad] in ID order, seen from ``support``."""
     servo = _angles("servo angles", servo, len(spec.joints))
-    idx, sign, offset = _map_arrays(spec, check_support(support))
+    idx, sign, offset = _map_arrays(spec, Support.single(support))
     vec = np.empty_like(servo)
     vec[:, idx] = (servo - offset) * sign
     return BookAngles.from_vector(vec, support)

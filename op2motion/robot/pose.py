@@ -17,7 +17,8 @@ import numpy as np
 
 from op2motion.errors import InputError, LimitError
 from op2motion.robot.joints import BookAngles, book_to_servo, limit_violations, servo_to_book
-from op2motion.robot.spec import POSE_SUPPORTS, Spec, stance_of
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
 
 MAX_NAME_LEN = 100
 _NAME = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9_.-]*")
@@ -37,27 +38,23 @@ def safe_pose_name(text: str, fallback: str) -> str:
     return name or fallback
 
 
-def check_pose_support(support: object) -> str:
-    """Return ``support`` if it is ``left``, ``right`` or ``double``, else raise :class:`InputError`."""
-    if support not in POSE_SUPPORTS:
-        raise InputError(f"expected one of {', '.join(POSE_SUPPORTS)}, got {support!r}", "support")
-    return str(support)
-
-
 @dataclass(frozen=True)
 class Pose:
     """One whole-body pose: servo angles (20,) [rad] in ID order, support, metrics and provenance."""
 
     name: str
-    support: str
+    support: Support
     servo: np.ndarray
     metrics: Mapping[str, Any] = field(default_factory=dict)
     provenance: Mapping[str, Any] = field(default_factory=dict)
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "support", Support.of(self.support))
+
     @property
     def stance(self) -> str:
         """The foot the world frame is rooted on (the left foot for double support)."""
-        return stance_of(self.support)
+        return self.support.stance
 
     def book(self, spec: Spec) -> BookAngles:
         """Book variables seen from :attr:`stance`."""
@@ -71,7 +68,6 @@ class Pose:
     def checked(self, spec: Spec, where: str = "") -> "Pose":
         """Check name, support, angle count, finiteness and joint limits; returns ``self``."""
         check_pose_name(self.name)
-        check_pose_support(self.support)
         servo = np.asarray(self.servo, dtype=float)
         if servo.shape != (len(spec.joints),) or not np.all(np.isfinite(servo)):
             raise InputError(f"expected {len(spec.joints)} finite servo angles, got shape {servo.shape}",

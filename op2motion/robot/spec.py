@@ -17,23 +17,6 @@ from op2motion.errors import SpecError
 
 SCHEMA = "op2motion.spec/2"
 GRAVITY_M_S2 = 9.81          # standard gravity, for every model of the robot
-SUPPORTS = ("left", "right")
-POSE_SUPPORTS = ("left", "right", "double")
-
-
-def swing_of(support: str) -> str:
-    """The swing side of a single-support pose (``left`` -> ``right`` and back)."""
-    return "right" if support == "left" else "left"
-
-
-def stance_of(support: str) -> str:
-    """The foot the world frame is rooted on: the support foot, the left one for ``double`` support."""
-    return "right" if support == "right" else "left"
-
-
-def feet_of(support: str) -> tuple[str, ...]:
-    """The feet that carry the robot: both for ``double`` support."""
-    return SUPPORTS if support == "double" else (stance_of(support),)
 BOOK_VARS = tuple([f"th{i}" for i in range(1, 12)] + [f"phi{i}" for i in range(1, 7)]
                   + [f"psi{i}" for i in range(1, 4)])
 

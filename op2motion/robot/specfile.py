@@ -26,7 +26,6 @@ from op2motion.robot.spec import (
     BOOK_VARS,
     COLLISION_SIZES,
     SCHEMA,
-    SUPPORTS,
     BookMap,
     Collision,
     Foot,
@@ -39,6 +38,7 @@ from op2motion.robot.spec import (
     Servo,
     Spec,
 )
+from op2motion.robot.support import SIDES
 from op2motion.robot.tablereader import TableReader
 
 try:  # Python >= 3.11
@@ -112,7 +112,7 @@ def _joint(r: TableReader) -> Joint:
         raise SpecError(f"({name}): expected a unit vector, got {list(axis)}", f"{r.path}: {r.where}.axis")
     books = r.sub("book")
     book: dict[str, BookMap] = {}
-    for support in SUPPORTS:
+    for support in SIDES:
         b = books.sub(support)
         var, sign = b.get("var", str), b.get("sign", int)
         if var not in BOOK_VARS:
@@ -152,7 +152,7 @@ def _check_joints(path: str, root: str, joints: list[Joint]) -> None:
                 raise SpecError(f"({j.name}): the links form a loop", f"{path}: joint.parent")
             seen.add(link)
             link = parent_of[link]
-    for support in SUPPORTS:
+    for support in SIDES:
         used = sorted(j.book[support].var for j in joints)
         if used != sorted(BOOK_VARS):
             raise SpecError(f"expected each book variable exactly once, got {used}", f"{path}: joint.book.{support}")
