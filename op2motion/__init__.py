@@ -3,11 +3,13 @@
 The public API (imported on first use, so ``import op2motion`` does no work)::
 
     import op2motion as op2
-    spec = op2.load_spec()                                   # the shipped OP2 spec
+    spec = op2.load_spec()                                        # the shipped OP2 spec
     pose = op2.read_pose("poses/walkready.json", spec)
-    points = op2.forward(pose.book(spec), spec)              # body points, lumped CoM
-    verdict = op2.validate(pose.servo, pose.support, spec)   # physics
+    points = op2.forward(pose.book(spec), spec)                   # body points, lumped CoM
+    report = op2.check(op2.Schedule.hold(pose.servo, pose.support, spec), spec)    # physics
     outcome = op2.solve(op2.PostureProblem("left", "left", (0.10, 0.05, 0.07)), spec)
+    played = op2.play_page(op2.ActionFile.read("motion_4096.bin"), 9, spec)        # an action page
+    gait = op2.plan_gait(op2.load_preset("forward"), spec)        # a walk; op2.gait_schedule(gait, spec) plays it
 """
 
 from __future__ import annotations
@@ -25,6 +27,7 @@ _API = {
     "book_to_servo": ("robot.joints", "book_to_servo"),
     "servo_to_book": ("robot.joints", "servo_to_book"),
     "Pose": ("robot.pose", "Pose"),
+    "Support": ("robot.support", "Support"),
     "forward": ("kinematics", "forward"),
     "stability_margin": ("robot.balance", "stability_margin"),
     "solve_arm_ik": ("kinematics.arm_ik", "solve_arm_ik"),
@@ -32,9 +35,24 @@ _API = {
     "PSOSettings": ("posture.pso", "PSOSettings"),
     "optimize_posture": ("posture.solve", "optimize_posture"),
     "solve": ("workflow", "solve"),
-    "validate": ("physics", "validate"),
+    "Validate": ("workflow", "Validate"),
+    "check": ("physics", "check"),
+    "Controller": ("physics", "Controller"),
+    "Schedule": ("physics", "Schedule"),
+    "Plan": ("physics", "Plan"),
+    "Pushes": ("physics", "Pushes"),
+    "Trials": ("physics", "Trials"),
+    "Setup": ("physics", "Setup"),
     "read_pose": ("formats.posefile", "read_pose"),
     "write_pose": ("formats.posefile", "write_pose"),
+    "ActionFile": ("formats.action", "ActionFile"),
+    "read_motion": ("formats.motionfile", "read_motion"),
+    "play_page": ("motion.pipeline", "play_page"),
+    "plan_motion": ("motion.pipeline", "plan_motion"),
+    "load_preset": ("gait", "load_preset"),
+    "plan_gait": ("gait", "plan_gait"),
+    "gait_schedule": ("gait", "gait_schedule"),
+    "build_library": ("library.build", "build_library"),
     "build_urdf": ("model.urdf", "build_urdf"),
 }
 __all__ = sorted(_API) + ["__version__"]
@@ -44,4 +62,4 @@ def __getattr__(name: str) -> Any:
     if name not in _API:
         raise AttributeError(f"module 'op2motion' has no attribute {name!r}")
     module, attr = _API[name]
-    return getattr(importlib.import_module(f".{module}", __name__), attr)
+    return getattr(importlib.import_module(f"op2motion.{module}"), attr)

@@ -14,11 +14,12 @@ from typing import Any, Callable
 import numpy as np
 
 from op2motion import book
+from op2motion.formats.action import ActionFile
 from op2motion.kinematics import forward
 from op2motion.kinematics.dh_chain import matrix_frames
 from op2motion.kinematics.shapes import clearances, shape_set
 from op2motion.model.dynamics import dynamics_for
-from op2motion.physics import DEFAULT_SECONDS, validate
+from op2motion.physics import DEFAULT_SECONDS, RunReport, Schedule, check
 from op2motion.posture.cost import CLEARANCE_EXACT_M, PostureProblem, evaluate_cost
 from op2motion.posture.pso import PSOSettings, run_pso
 from op2motion.robot.joints import BookAngles, book_to_servo
@@ -65,25 +66,20 @@ def _full_com_vs_pinocchio_m(spec: Spec, poses: BookAngles) -> float:
 BENCH_PAGE = 4            # the stock "hi" page: 464 ticks from the init pose, three pages chained
 
 
-def _motion_figures(spec: Spec, action: bytes | None, repeat: int) -> dict[str, Any]:
+def _motion_figures(spec: Spec, action: ActionFile | None, repeat: int) -> dict[str, Any]:
     """``motion_play_ms``: the page player on one stock page (emulation only); ``motion_validate_ms``: that
     page's goals played into the servo model in PyBullet (plus settling and the final hold). None without a file."""
     if action is None:
         return {"motion_play_ms": None, "motion_validate_ms": None, "check_motion_ticks": None}
-    from op2motion.formats.action import page_to_pose, requested_page
-    from op2motion.motion.player import IDS, play
+    from op2motion.motion.pipeline import START_PAGE
+    from op2motion.motion.player import play, start_ticks
     from op2motion.motion.trajectory import from_playback
-    from op2motion.physics import validate_motion
-    from op2motion.robot.joints import servo_to_ticks
 
-    start = page_to_pose(requested_page(action, 1, spec, "action"), spec)
-    by_id = {j.id: int(t) for j, t in zip(spec.joints, servo_to_ticks(start.servo, spec))}
-    ticks = [by_id[i] for i in IDS]
+    ticks = start_ticks(action.pose(START_PAGE, spec).servo, spec)
     out: dict[str, Any] = {}
     play_ms = _best_ms(lambda: out.update(p=play(action, BENCH_PAGE, ticks)), repeat)
-    trajectory = from_playback(out["p"], spec)
-    validate_ms = _best_ms(lambda: out.update(v=validate_motion(trajectory.goals, trajectory.p_gains,
-                                                                 trajectory.supports, spec)), 1)
+    schedule = from_playback(out["p"], spec).schedule(spec)
+    validate_ms = _best_ms(lambda: out.update(v=check(schedule, spec).run), 1)
     return {"motion_play_ms": round(play_ms, 2), "motion_validate_ms": round(validate_ms, 1),
             "motion_page": BENCH_PAGE, "check_motion_ticks": out["p"].calls,
             "check_motion_stands": bool(out["v"].stable)}
@@ -92,19 +88,20 @@ def _motion_figures(spec: Spec, action: bytes | None, repeat: int) -> dict[str, 
 def _walk_figures(spec: Spec, repeat: int) -> dict[str, Any]:
     """``walk_plan_ms``: planning the shipped ``forward`` gait (20 steps: footsteps, preview control, multibody
     correction passes, IK); ``walk_validate_ms``: playing it into the servo model in PyBullet."""
-    from op2motion.gait import plan_gait, preset_path, read_preset, walk_physics
+    from op2motion.gait import gait_schedule, plan_gait, preset_path, read_preset
 
     params = read_preset(preset_path("forward")).with_steps(20)
     out: dict[str, Any] = {}
     plan_ms = _best_ms(lambda: out.update(g=plan_gait(params, spec)), min(repeat, 3))
-    walk_ms = _best_ms(lambda: out.update(w=walk_physics(out["g"], spec, ("pybullet",))[0]), 1)
-    run = out["w"]["engines"]["pybullet"]
+    schedule = gait_schedule(out["g"], spec)
+    walk_ms = _best_ms(lambda: out.update(w=check(schedule, spec).run), 1)
+    run = out["w"]
     return {"walk_plan_ms": round(plan_ms, 1), "walk_validate_ms": round(walk_ms, 1), "walk_steps": 20,
-            "check_walk_fell": bool(run["fell"]), "check_walk_speed_mps": run["mean_speed_mps"]}
+            "check_walk_fell": bool(run.fell), "check_walk_speed_mps": round(run.walk.mean_speed_mps, 4)}
 
 
 def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
-              action: bytes | None = None) -> dict[str, Any]:
+              action: ActionFile | None = None) -> dict[str, Any]:
     """Time batched forward kinematics + CoM for ``n`` poses with each model, one physics validation, one PSO
     solve and (given an action file's bytes) one page played and validated; figures in milliseconds (scaled to
     40 000 poses), with their correctness checks."""
@@ -119,8 +116,9 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
     servo = book_to_servo(poses_dh, spec)
     pin_ms = _best_ms(lambda: dyn.com_loop(servo), 1) * scale
     stand = book_to_servo(BookAngles.standing("left"), spec)[0]
-    verdict = {}
-    validate_ms = _best_ms(lambda: verdict.update(v=validate(stand, "double", spec, DEFAULT_SECONDS)), 1)
+    verdict: dict[str, RunReport] = {}
+    hold = Schedule.hold(stand, "double", spec, DEFAULT_SECONDS)
+    validate_ms = _best_ms(lambda: verdict.update(v=check(hold, spec).run), 1)
     swarm = BookAngles.random(PSOSettings().particles, rng, "left")
     frames, shapes = matrix_frames(swarm.vector(), spec, "left"), shape_set(spec, "left")
     clearance_ms = _best_ms(lambda: clearances(frames, shapes, CLEARANCE_EXACT_M), repeat)

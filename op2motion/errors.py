@@ -2,15 +2,30 @@
 
 Every error a user can cause derives from :class:`Op2MotionError`. An error names the *parameter* it is about
 (``param``, a library name such as ``seconds`` or ``br``) separately from its message, so that the command line
-can show the flag the user typed (``--seconds``) while library users see the parameter name. Errors carry their
+can show the flag the user typed (``--seconds``) while library users see the parameter name; a message that points
+at another parameter does so with :func:`ref`, shown the same way. Errors carry their
 data as attributes (e.g. :class:`Unreachable` has ``residual_m`` and ``tolerance_m``). The CLI prints one line on
 stderr and exits with ``error.exit_code``: 2 for bad input, 1 for a check that ran and failed.
 """
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Any, Callable
+
+_REF = re.compile(r"\{param:(\w+)\}")
+
+
+def ref(param: str) -> str:
+    """A reference to library parameter ``param`` inside a message: shown as the parameter's name to library users
+    and as the flag that sets it on the command line (:func:`render_refs`)."""
+    return "{param:" + param + "}"
+
+
+def render_refs(text: str, name_of: Callable[[str], str] = lambda p: p) -> str:
+    """``text`` with each :func:`ref` shown through ``name_of``."""
+    return _REF.sub(lambda m: name_of(m.group(1)), text)
 
 
 class Op2MotionError(Exception):
@@ -29,7 +44,8 @@ class Op2MotionError(Exception):
 
     def render(self, name_of: Callable[[str], str] = lambda p: p) -> str:
         """One line: ``<name>: <message>``, the parameter shown through ``name_of`` (the CLI maps it to a flag)."""
-        return f"{name_of(self.param)}: {self.message}" if self.param else self.message
+        message = render_refs(self.message, name_of)
+        return f"{name_of(self.param)}: {message}" if self.param else message
 
     def __str__(self) -> str:
         return self.render()

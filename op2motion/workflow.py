@@ -11,8 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from op2motion import physics
-from op2motion.physics import DEFAULT_SECONDS, Validation
+from op2motion.errors import ref
+from op2motion.physics import DEFAULT_SECONDS, RunReport, Schedule, check
 from op2motion.posture.cost import PostureProblem
 from op2motion.posture.pso import PSOSettings
 from op2motion.posture.solve import PostureResult, optimize_posture
@@ -29,7 +29,7 @@ class Outcome:
     (and, with validation, the pose stands); ``message`` says why not otherwise."""
 
     result: PostureResult
-    validation: Validation | None
+    validation: RunReport | None
 
     @property
     def ok(self) -> bool:
@@ -55,7 +55,7 @@ class Outcome:
         r = self.result
         if self.validation is None and r.reached and r.margin_full_m < 0:
             return [f"the full-inertia CoM is {-r.margin_full_m * 1000:.1f} mm outside the support rectangle (br "
-                    f"{r.problem.br:g}): the pose is likely to fall; check it with --validate"]
+                    f"{r.problem.br:g}): the pose is likely to fall; check it in physics ({ref('validate')})"]
         return []
 
     def as_dict(self) -> dict[str, Any]:
@@ -68,16 +68,25 @@ class Outcome:
         return out
 
 
+@dataclass(frozen=True)
+class Validate:
+    """The physics check of each reached pose: held ``seconds`` [s] in ``engine``."""
+
+    seconds: float = DEFAULT_SECONDS
+    engine: str = "pybullet"
+
+
 def solve(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSettings(), *,
-          restarts: int = DEFAULT_RESTARTS, refine: bool = True, validate: bool = False,
-          seconds: float = DEFAULT_SECONDS, engine: str = "pybullet",
+          restarts: int = DEFAULT_RESTARTS, refine: bool = True, validate: Validate | None = None,
           on_iteration: Callable[[float], Any] | None = None) -> Outcome:
-    """Solve ``problem`` (see the module docstring); ``seconds`` [s] is the simulated time of each validation on
-    ``engine``."""
-    validations: dict[int, Validation] = {}
+    """Solve ``problem`` (see the module docstring); with ``validate``, every reached pose is checked in
+    physics and one that falls counts as not reached."""
+    validations: dict[int, RunReport] = {}
 
     def physics_check(res: PostureResult) -> tuple[bool, str]:
-        v = physics.validate(res.pose("candidate", spec).servo, problem.support, spec, seconds, engine)
+        assert validate is not None
+        schedule = Schedule.hold(res.pose("candidate", spec).servo, problem.support, spec, validate.seconds)
+        v = check(schedule, spec, engines=(validate.engine,)).run
         validations[res.settings.seed] = v
         return v.stable, f"does not stand in physics ({', '.join(v.reasons)})"
 

@@ -4,6 +4,7 @@
 from helpers import STOCK
 
 from op2motion.bench import run_bench
+from op2motion.formats.action import ActionFile
 
 DH_VS_PINOCCHIO_M = 1e-9      # the D-H joint centres equal pinocchio's on the generated URDF
 PSO_REACH_M = 0.01            # the default problem's swarm lands the hand within a centimetre
@@ -13,7 +14,7 @@ FULL_COM_VS_PINOCCHIO_M = 1e-5  # the URDF's six 10-mg frame links are the only 
 
 
 def test_bench_reports_every_figure_and_its_work_is_right(spec):
-    result = run_bench(spec, n=500, repeat=1, action=STOCK.read_bytes())
+    result = run_bench(spec, n=500, repeat=1, action=ActionFile.read(STOCK))
     assert result["poses"] == 500 and result["repeat"] == 1
     for key in ("fk_pb_40k_ms", "fk_dh_40k_ms", "fk_dh_full_com_40k_ms", "pinocchio_com_40k_ms", "validate_ms",
                 "pso_solve_ms", "self_clearance_swarm_ms", "motion_play_ms", "motion_validate_ms",

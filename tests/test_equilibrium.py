@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import sweep_base
 
 from op2motion.model.dynamics import dynamics_for
 from op2motion.model.equilibrium import _right_from_left, sagged_angles
 from op2motion.model.servo import ServoModel
-from op2motion.physics import judged_run
-from op2motion.physics.schedule import Schedule
+from op2motion.physics import Schedule, Setup, check
+from op2motion.physics.sweeps import sweep_base
 from op2motion.robot.specfile import default_spec
 
 BALANCE_TOL_NM = 1e-5          # torque imbalance left at a solution [N·m]
@@ -18,6 +17,7 @@ MIRROR_TOL_RAD = 1e-4          # left and right sags of a symmetric pose differ 
 SETTLED_TOL_DEG = 0.5          # physics started at the sagged angles moves them less than this (friction band
                                # 0.03 N·m / 12.6 N·m/rad = 0.14°, and the contacts give; a ramped start overshoots
                                # by degrees)
+HOLD_S = 2.5                   # the shortest check [s]
 SOLE_TOL_M = 1e-6              # the right sole stays where it was put down, seen from the left one
 
 
@@ -62,7 +62,7 @@ def test_physics_holds_the_sagged_angles(spec, engine):
     servo = ServoModel.of(spec)
     goal = sweep_base(spec, "left")
     q = sagged_angles(goal, "left", spec, servo.kp, servo.torque_max)
-    verdict, track, _ = judged_run(engine, Schedule.hold(goal, "left", servo), spec, servo, 2.0, None)
+    verdict = check(Schedule.hold(goal, "left", spec, HOLD_S), spec, (engine,), setup=Setup(keep_track=True)).run
     assert verdict.stable, verdict.reasons
-    moved = np.degrees(np.max(np.abs(np.asarray(track.q) - q), axis=0))
+    moved = np.degrees(np.max(np.abs(verdict.track.q - q), axis=0))
     assert moved.max() < SETTLED_TOL_DEG, dict(zip(spec.joint_names, np.round(moved, 2)))

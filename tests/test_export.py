@@ -16,7 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from op2motion.errors import InputError, PoseFileError
-from op2motion.formats.action import encode_poses, list_pages, page_to_pose, requested_page
+from op2motion.formats.action import ActionFile
 from op2motion.formats.actionlayout import FILE_SIZE, PAGE_SIZE, checksum_ok, reset_file, reset_page
 from op2motion.formats.posefile import read_pose
 from op2motion.formats.tables import csv_table, webots_motion
@@ -33,7 +33,7 @@ STOCK_NAMES = {1: "init", 2: "ok", 3: "no", 4: "hi", 9: "walkready", 10: "f up",
 
 
 def test_stock_file_imports_with_all_its_pages(spec, stock_action_bytes):
-    pages = list_pages(stock_action_bytes, spec)
+    pages = ActionFile(stock_action_bytes).pages(spec)
     assert len(pages) == 45
     names = {p.index: p.name for p in pages}
     for index, name in STOCK_NAMES.items():
@@ -65,7 +65,7 @@ def test_reexport_is_byte_identical_and_pages_round_trip(capsys, spec, stock_act
     data = out.read_bytes()
     assert code == 0 and len(data) == FILE_SIZE
     for k, path in enumerate(files):
-        page = requested_page(data, 200 + k, spec, "out")
+        page = ActionFile(data, "out").page(200 + k, spec)
         pose = read_pose(path, spec)
         assert page.name == pose.name[:13] and page.steps[0].time == round(1.5 / 0.008)
         ticks = np.array([page.steps[0].ticks[j.id] for j in spec.joints])
@@ -78,10 +78,11 @@ def test_reexport_is_byte_identical_and_pages_round_trip(capsys, spec, stock_act
 def test_invalid_pages_of_the_base_are_kept(spec, stock_action_bytes, tmp_path):
     base = bytearray(stock_action_bytes)
     base[30 * PAGE_SIZE + 5] ^= 0xFF                      # break page 30's checksum
-    out, _ = encode_poses([read_pose(os.path.join(POSES, "standing.json"), spec)], spec, 100, base=bytes(base))
+    written, _ = ActionFile(bytes(base)).with_poses([read_pose(os.path.join(POSES, "standing.json"), spec)], spec, 100)
+    out = written.data
     assert out[30 * PAGE_SIZE:31 * PAGE_SIZE] == bytes(base[30 * PAGE_SIZE:31 * PAGE_SIZE])
     with pytest.raises(InputError, match="checksum"):
-        requested_page(bytes(base), 30, spec, "base")
+        ActionFile(bytes(base), "base").page(30, spec)
 
 
 @pytest.mark.parametrize("argv, needle", [
@@ -124,7 +125,7 @@ def test_reader_fuzz_only_clear_errors(blob, page):
         for offset, value in blob:
             buf[offset] = value
         data = bytes(buf)
-    for call in (lambda: list_pages(data, spec), lambda: page_to_pose(requested_page(data, page, spec, "f"), spec)):
+    for call in (lambda: ActionFile(data).pages(spec), lambda: ActionFile(data, "f").pose(page, spec)):
         try:
             call()
         except InputError:
@@ -296,16 +297,16 @@ def test_action_export_finds_an_empty_page_and_never_overwrites_unasked(capsys, 
     first = next(i for i in range(1, 255) if requested_page_or_none(stock_action_bytes, i, spec) is None
                  and requested_page_or_none(stock_action_bytes, i + 1, spec) is None)
     assert code == 0 and json.loads(text)["pages"] == [first, first + 1]
-    assert requested_page(out.read_bytes(), first, spec, "out").name == "standing"
+    assert ActionFile(out.read_bytes(), "out").page(first, spec).name == "standing"
     forced = tmp_path / "forced.bin"
     assert run_cli(capsys, "export", "--format", "action", stand, "--base", STOCK, "--page", "9", "--force", "-o",
                    str(forced))[0] == 0
-    assert requested_page(forced.read_bytes(), 9, spec, "out").name == "standing"
+    assert ActionFile(forced.read_bytes(), "out").page(9, spec).name == "standing"
 
 
 def requested_page_or_none(data, index, spec):
     try:
-        return requested_page(data, index, spec, "data")
+        return ActionFile(data, "data").page(index, spec)
     except InputError:
         return None
 

@@ -11,13 +11,14 @@ import pytest
 from helpers import run_cli
 
 from op2motion.errors import InputError
-from op2motion.gait import PRESETS, GaitParams, plan_gait, preset_path, read_preset, walk_physics
+from op2motion.gait import PRESETS, GaitParams, gait_schedule, plan_gait, preset_path, read_preset, walk_summary
 from op2motion.gait.footsteps import plan_footsteps
 from op2motion.gait.leg_ik import leg_fk, leg_ik, leg_of
 from op2motion.gait.preview import preview_gains, track_reference
 from op2motion.gait.timeline import build_timeline
 from op2motion.kinematics.dh import forward_dh_frames
 from op2motion.kinematics.dh_chain import matrix_plan
+from op2motion.physics import check
 from op2motion.physics.body import Body
 from op2motion.robot.joints import servo_to_book
 from op2motion.robot.spec import GRAVITY_M_S2
@@ -161,22 +162,24 @@ def test_timeline_marks_single_support_while_the_foot_is_up(spec):
 
 def test_a_short_walk_walks_in_pybullet(spec):
     gait = plan_gait(read_preset(preset_path("forward")).with_steps(4), spec)
-    physics, runs = walk_physics(gait, spec, ("pybullet",))
+    schedule = gait_schedule(gait, spec)
+    report = check(schedule, spec)
+    physics = walk_summary(report, schedule.plan.walk.start_s)
     run = physics["engines"]["pybullet"]
     assert run["fell"] is False and physics["fell"] is False
     planned = np.hypot(*gait.end_pose()[:2])
     assert run["distance_m"] > WALK_DISTANCE_SHARE * planned
     assert run["cop_inside_fraction"] >= COP_INSIDE
     assert run["self_collisions"] == []
-    assert runs["pybullet"].validation.engine == "pybullet"
+    assert report.run.engine == "pybullet" and report.run.walk.distance_m == pytest.approx(run["distance_m"], abs=1e-4)
 
 
 def test_turning_in_place_keeps_the_servos_below_their_limit_in_mujoco(spec):
     """The turn preset (8 steps) in MuJoCo, the engine with the rotor inertia the feed-forward is computed for:
     it turns at >= 30 deg/s with no servo at its available torque and the CoP inside the planned soles."""
     gait = plan_gait(read_preset(preset_path("turn_left")).with_steps(8), spec)
-    physics, _ = walk_physics(gait, spec, ("mujoco",))
-    run = physics["engines"]["mujoco"]
+    schedule = gait_schedule(gait, spec)
+    run = walk_summary(check(schedule, spec, ("mujoco",)), schedule.plan.walk.start_s)["engines"]["mujoco"]
     assert run["fell"] is False and run["reasons"] == []
     assert run["turn_rate_deg_s"] >= TURN_RATE_DEG_S
     assert run["worst_torque"]["limited_share"] == 0.0

@@ -18,7 +18,8 @@ from __future__ import annotations
 import multiprocessing
 
 import pytest
-from helpers import sweep_verdict
+
+from op2motion.physics.sweeps import sweep_verdict
 
 STEP_DEG = 0.5
 SECONDS = 3.0

@@ -10,18 +10,17 @@ import pytest
 from helpers import POSES, STOCK, pose_path, run_cli
 
 from op2motion.errors import CheckFailed, PoseFileError
-from op2motion.formats.action import list_pages
+from op2motion.formats.action import ActionFile
 from op2motion.formats.actionlayout import PAGE_SIZE, is_empty, reset_file
 from op2motion.formats.motionfile import read_motion
 from op2motion.formats.posefile import read_pose
 from op2motion.motion.checks import check_trajectory, require_clear
 from op2motion.motion.planner import SPEED_FRACTION, action_pages, plan, robot_steps
-from op2motion.motion.player import IDS, play
+from op2motion.motion.player import play, start_ticks
 from op2motion.motion.shift import settled_coms, with_weight_shifts
 from op2motion.motion.trajectory import from_playback
 from op2motion.motion.waypoint import Waypoint
 from op2motion.robot.framework import CONTROL_PERIOD_S
-from op2motion.robot.joints import servo_to_ticks
 
 SETTLED_COM_TOL_M = 2e-4      # the balanced rows' settled CoM against its straight-line target
 SPEED_TOL = 1e-6              # relative, on the stretched peak speed
@@ -115,11 +114,10 @@ def test_a_motion_exported_as_pages_imports_and_plays_back_the_same(spec):
     for k, page in enumerate(pages):
         data[(30 + k) * PAGE_SIZE:(31 + k) * PAGE_SIZE] = page
     steps, _, _ = robot_steps(waypoints, spec, SPEED_FRACTION * spec.servo.no_load_speed_rad_s)
-    imported = [s for p in list_pages(bytes(data), spec) for s in p.steps]
+    imported = [s for p in ActionFile(bytes(data)).pages(spec) for s in p.steps]
     assert [(s.time, s.pause) for s in imported] == [(s.time, s.pause) for s in steps]
     assert [s.ticks for s in imported] == [s.words for s in steps]
-    start = {j.id: int(t) for j, t in zip(spec.joints, servo_to_ticks(waypoints[0].servo, spec))}
-    played = from_playback(play(bytes(data), 30, [start[i] for i in IDS]), spec)
+    played = from_playback(play(ActionFile(bytes(data)), 30, start_ticks(waypoints[0].servo, spec)), spec)
     planned = plan(waypoints, spec, "robot", shift_weight=False)
     assert np.array_equal(np.round(played.goals, 9), np.round(planned.goals, 9))
 
@@ -149,33 +147,31 @@ def test_cli_export_writes_empty_pages_only(tmp_path, capsys):
 
 @pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
 def test_stand_sit_stand_gets_through_in_physics(spec, engine):
-    from op2motion.physics import validate_motion
+    from op2motion.motion.pipeline import plan_motion
+    from op2motion.physics import check
 
-    motion = read_motion(POSES / "motions" / "stand_sit_stand.json", spec)
-    waypoints = [Waypoint(s.pose.name, s.pose.servo, s.duration_s, s.pause_s, s.pose.support) for s in motion.steps]
-    traj = plan(waypoints, spec)
-    verdict = validate_motion(traj.goals, traj.p_gains, traj.supports, spec, engine=engine)
+    traj = plan_motion(read_motion(POSES / "motions" / "stand_sit_stand.json", spec), spec)
+    verdict = check(traj.schedule(spec), spec, (engine,)).run
     assert verdict.stable, verdict.reasons
-    assert verdict.tracking_max_deg and verdict.motion_worst_torque["torque_nm"] > 0.0
+    assert verdict.motion.tracking_max_deg and verdict.motion.worst_torque.torque_nm > 0.0
 
 
 def test_stand_to_a_one_leg_pose_and_back_in_physics(spec):
-    from op2motion.physics import validate_motion
+    from op2motion.physics import check
 
     traj = plan(_waypoints(spec, ["init", "book_2_47", "init"], pauses=[0.0, 0.5, 0.0]), spec)
     assert "right" in traj.supports
-    verdict = validate_motion(traj.goals, traj.p_gains, traj.supports, spec, engine="pybullet")
+    verdict = check(traj.schedule(spec), spec).run
     assert verdict.stable, verdict.reasons
 
 
 def test_stock_page_played_in_physics(spec):
-    from op2motion.formats.action import page_to_pose, requested_page
-    from op2motion.physics import validate_motion
+    from op2motion.motion.pipeline import play_page
+    from op2motion.physics import check
 
-    data = STOCK.read_bytes()
-    start = page_to_pose(requested_page(data, 1, spec, "stock"), spec)
-    ticks = {j.id: int(t) for j, t in zip(spec.joints, servo_to_ticks(start.servo, spec))}
-    traj = from_playback(play(data, 15, [ticks[i] for i in IDS]), spec)     # sit down
-    verdict = validate_motion(traj.goals, traj.p_gains, traj.supports, spec, engine="mujoco")
+    action = ActionFile.read(STOCK)
+    played = play_page(action, 15, spec)                    # sit down, from page 1's end (init)
+    assert played.start.name == "init"
+    verdict = check(played.trajectory.schedule(spec), spec, ("mujoco",)).run
     assert verdict.stable, verdict.reasons
-    assert not is_empty(data, 15)
+    assert not action.is_empty(15)

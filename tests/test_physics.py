@@ -9,15 +9,16 @@ import tempfile
 
 import numpy as np
 import pytest
-from helpers import balanced, pose_path, servo_pose
+from helpers import pose_path
 
 from op2motion.errors import InputError
 from op2motion.formats.posefile import read_pose
 from op2motion.model.servo import ServoModel
 from op2motion.model.urdf import FRAME_LINK_MASS_KG, link_inertial
-from op2motion.physics import ENGINES, make_engine, validate
+from op2motion.physics import ENGINES, Pushes, Schedule, Setup, check, make_engine
 from op2motion.physics.body import Body, placement
 from op2motion.physics.pybullet_engine import PyBulletEngine, load_robot, quiet_c_output
+from op2motion.physics.sweeps import ARMS_FORWARD, FOLDED_SWING, balanced, servo_pose
 from op2motion.robot.framework import p_gain_of_slope
 
 STOCK_STANDING = ["init", "walkready", "sit_down", "stand_up"]
@@ -25,8 +26,12 @@ PUSH_N = 2.0
 PUSH_RUN_S = 3.0                # 1.5 s after the push
 ENGINE_MARGIN_M = 0.002         # the two engines' settled margins agree this well on standing poses
 KP_P32_NM_RAD = 0.158 * 32 * 2.5
-ARMS_FORWARD = dict(r_sho_pitch=-90, l_sho_pitch=90)
-FOLDED_SWING = dict(r_hip_roll=25, r_ank_roll=25, r_hip_pitch=-90, r_knee=140, r_ank_pitch=50)
+
+
+def _run(servo, support, spec, seconds=3.0, engine="pybullet", p_gains=None, voltage=None):
+    """The main run of a held pose in one engine."""
+    schedule = Schedule.hold(servo, support, spec, seconds, p_gains)
+    return check(schedule, spec, (engine,), setup=Setup(voltage=voltage)).run
 
 
 # --- the servo model -------------------------------------------------------------------------------------------
@@ -60,19 +65,22 @@ def test_compliance_byte_sets_the_p_gain(slope, p):
 @pytest.mark.parametrize("name", STOCK_STANDING)
 def test_stock_standing_pages_stand_in_both_engines_and_survive_pushes(spec, name):
     pose = read_pose(pose_path(name), spec)
-    verdicts = {e: validate(pose.servo, pose.support, spec, PUSH_RUN_S, e, push_n=PUSH_N) for e in ENGINES}
-    for engine, v in verdicts.items():
+    report = check(Schedule.hold(pose.servo, pose.support, spec, PUSH_RUN_S), spec, ENGINES, Pushes(PUSH_N))
+    for engine, e in report.engines.items():
+        v = e.run
         assert v.stable, (engine, v.reason)
-        assert [p.direction for p in v.pushes if p.stable] == ["forward", "backward", "left", "right"], engine
-        assert v.support_margin_m > 0.01 and v.max_tilt_deg < 10 and v.self_collisions == []
+        assert [p.direction for p in e.pushes if p.stable] == ["forward", "backward", "left", "right"], engine
+        assert v.support_margin_m > 0.01 and v.max_tilt_deg < 10 and v.self_collisions == ()
         assert v.cop_xy is not None
-    assert abs(verdicts["pybullet"].support_margin_m - verdicts["mujoco"].support_margin_m) < ENGINE_MARGIN_M
+    assert report.agree and report.stable and report.pushes_stood
+    runs = {name: e.run for name, e in report.engines.items()}
+    assert abs(runs["pybullet"].support_margin_m - runs["mujoco"].support_margin_m) < ENGINE_MARGIN_M
 
 
 def test_same_input_same_verdict(spec):
     servo = servo_pose(spec)
     for engine in ENGINES:
-        assert validate(servo, "double", spec, 3.0, engine) == validate(servo, "double", spec, 3.0, engine)
+        assert _run(servo, "double", spec, 3.0, engine) == _run(servo, "double", spec, 3.0, engine)
 
 
 # --- every failure mode has a pose that fails with exactly that reason -----------------------------------------
@@ -84,22 +92,22 @@ def _one_leg(spec, **joints):
 def test_a_balanced_one_leg_stance_stands_in_both_engines(spec):
     servo = _one_leg(spec, **FOLDED_SWING)
     for engine in ENGINES:
-        v = validate(servo, "left", spec, 3.0, engine)
+        v = _run(servo, "left", spec, 3.0, engine)
         assert v.stable, (engine, v.reason)
 
 
 @pytest.mark.parametrize("engine", ENGINES)
 def test_swing_foot_on_the_floor_is_swing_foot_contact(spec, engine):
     """The standing pose declared as single support: the swing foot carries weight, so it is not a one-leg pose."""
-    v = validate(servo_pose(spec), "left", spec, 3.0, engine)
+    v = _run(servo_pose(spec), "left", spec, 3.0, engine)
     assert v.reasons == ["swing_foot_contact"]
 
 
 @pytest.mark.parametrize("engine", ENGINES)
 def test_thigh_pressed_into_the_torso_is_self_collision(spec, engine):
-    v = validate(_one_leg(spec, r_hip_pitch=-105, r_hip_roll=10, r_ank_roll=10), "left", spec, 3.0, engine)
+    v = _run(_one_leg(spec, r_hip_pitch=-105, r_hip_roll=10, r_ank_roll=10), "left", spec, 3.0, engine)
     assert v.reasons == ["self_collision"]
-    assert ["body_link", "r_hip_pitch_link"] in v.self_collisions
+    assert ("body_link", "r_hip_pitch_link") in v.self_collisions
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -110,32 +118,34 @@ def test_one_leg_squat_beyond_stall_is_torque_saturation(spec, engine):
     squat = dict(l_knee=-100, l_hip_pitch=50, l_ank_pitch=-50, **FOLDED_SWING)
     servo = balanced(spec, servo_pose(spec, "left", **{**ARMS_FORWARD, **squat}), "left", (-0.02, 0.011))
     stiff = np.full(20, p_gain_of_slope(0x33))
-    assert validate(servo, "left", spec, 3.0, engine, p_gains=stiff).stable
-    v = validate(servo, "left", spec, 3.0, engine, p_gains=stiff, voltage=11.1)
+    assert _run(servo, "left", spec, 3.0, engine, p_gains=stiff).stable
+    v = _run(servo, "left", spec, 3.0, engine, p_gains=stiff, voltage=11.1)
     assert v.reasons == ["torque_saturation"] and v.worst_joint == "l_knee" and not v.torque_ok
 
 
 @pytest.mark.parametrize("engine", ENGINES)
 def test_lean_past_the_edge_tilts(spec, engine):
-    v = validate(servo_pose(spec, l_ank_pitch=35, r_ank_pitch=-35), "double", spec, 3.0, engine)
+    v = _run(servo_pose(spec, l_ank_pitch=35, r_ank_pitch=-35), "double", spec, 3.0, engine)
     assert v.reasons[0] == "tilt" and v.max_tilt_deg > 30 and "ground_contact" in v.reasons
 
 
 def test_arm_through_the_torso_is_reported(spec):
-    v = validate(servo_pose(spec, l_sho_roll=75), "double", spec, 3.0)   # upper arm swung 30° inwards
+    v = _run(servo_pose(spec, l_sho_roll=75), "double", spec, 3.0)   # upper arm swung 30° inwards
     assert v.reasons[0] == "self_collision"
     assert {"body_link"} < set(v.self_collisions[0]) and set(v.self_collisions[0]) & {"l_sho_roll_link", "l_el_link"}
 
 
 def test_bad_input(spec):
     with pytest.raises(InputError, match="support"):
-        validate(servo_pose(spec), "both", spec)
+        Schedule.hold(servo_pose(spec), "both", spec)
     with pytest.raises(InputError, match="seconds"):
-        validate(servo_pose(spec), "left", spec, seconds=float("nan"))
+        Schedule.hold(servo_pose(spec), "left", spec, seconds=float("nan"))
     with pytest.raises(InputError, match="engine"):
-        validate(servo_pose(spec), "left", spec, engine="ode")
+        check(Schedule.hold(servo_pose(spec), "left", spec), spec, ("ode",))
     with pytest.raises(InputError, match="push"):
-        validate(servo_pose(spec), "left", spec, push_n=-1)
+        Pushes(-1.0)
+    with pytest.raises(InputError, match="servo angles"):
+        Schedule.hold(servo_pose(spec)[:19], "left", spec)
 
 
 # --- placement -------------------------------------------------------------------------------------------------
@@ -158,7 +168,7 @@ def test_non_parallel_feet_start_on_the_floor_not_in_it(spec, splay):
     assert state.corners[other][:, 2].min() == pytest.approx(0.0, abs=FLOOR_M)            # touches at a corner
     assert state.corners[flat][:, 2].min() == pytest.approx(gap, abs=1e-9) and gap < 0.005
     for engine in ENGINES:
-        v = validate(servo, "double", spec, 3.0, engine)
+        v = _run(servo, "double", spec, 3.0, engine)
         assert v.stable and v.start_gap_m == pytest.approx(gap, abs=1e-5), engine
 
 
@@ -231,7 +241,7 @@ def test_pybullet_banner_is_silenced(capfd):
 def test_servo_sag_matches_the_stiffness(spec):
     """Standing double support: every loaded joint sags by about its static torque / Kp."""
     pose = read_pose(pose_path("walkready"), spec)
-    v = validate(pose.servo, pose.support, spec, 3.0, "mujoco")
+    v = _run(pose.servo, pose.support, spec, 3.0, "mujoco")
     from op2motion.model.dynamics import dynamics_for
 
     static = dynamics_for(spec).static_torques(pose.servo, "double").torques

@@ -16,7 +16,7 @@ from op2motion.kinematics import forward
 from op2motion.kinematics.dh_chain import matrix_frames
 from op2motion.kinematics.points import ROW
 from op2motion.model.compliance import Compliance, SwingLegSag
-from op2motion.physics import ENGINES, validate
+from op2motion.physics import ENGINES, Schedule, check
 from op2motion.posture.cost import SAG_TILT_LIMIT_RAD, CostModel, PostureProblem, evaluate_cost
 from op2motion.posture.pso import PSOSettings, run_pso, variable_bounds
 from op2motion.posture.solve import optimize_posture
@@ -97,7 +97,7 @@ def test_compliance_predicts_where_physics_settles(spec):
         frames = matrix_frames(angles.vector(), spec, "left")
         swing_z = (model.settled_heights(pts, settled, swing) + SwingLegSag(spec, "left").heights(frames, swing)
                    ).min(axis=0)[0]
-        v = validate(book_to_servo(angles, spec)[0], "left", spec, 3.0, "mujoco")
+        v = check(Schedule.hold(book_to_servo(angles, spec)[0], "left", spec, 3.0), spec, ("mujoco",)).run
         if v.stable:
             assert np.hypot(*(predicted - v.com_settled[:2])) < SETTLE_PREDICTION_M, seed
             assert -SWING_BELOW_M <= swing_z - v.swing_foot_min_z_m <= SWING_ABOVE_M, (seed, swing_z, v)
@@ -131,7 +131,7 @@ def test_committed_book_poses_reach_balance_on_the_full_body_and_stand(spec, sup
     assert terms.hand_error[0] <= REFINED_REACH_M + 1e-6
     assert terms.margin[0] >= -1e-6 and terms.swing_lift[0] >= 0 and terms.sag_tilt[0] <= SAG_TILT_LIMIT_RAD
     for engine in ENGINES:
-        v = validate(pose.servo, pose.support, spec, 3.0, engine)
+        v = check(Schedule.hold(pose.servo, pose.support, spec, 3.0), spec, (engine,)).run
         assert v.stable, (engine, v.reason)
 
 

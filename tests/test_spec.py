@@ -102,11 +102,11 @@ def test_mechanical_ranges_hold_every_goal_of_the_stock_file(spec, stock_action_
     beyond the cable-safe range (advice), so the cable-safe range must never be used as a hard limit."""
     import numpy as np
 
-    from op2motion.formats.action import list_pages
+    from op2motion.formats.action import ActionFile
     from op2motion.robot.joints import limit_violations, ticks_to_servo
 
     beyond_safe = set()
-    for page in list_pages(stock_action_bytes, spec):
+    for page in ActionFile(stock_action_bytes).pages(spec):
         for step in page.steps:
             servo = np.zeros(20)
             given = np.array([step.ticks[j.id] is not None for j in spec.joints])

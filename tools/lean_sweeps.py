@@ -7,14 +7,9 @@ reasons. The README's lean-sweep table comes from here.
 
 from __future__ import annotations
 
-import sys
 from multiprocessing import Pool
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-
-from helpers import sweep_verdict  # noqa: E402
+from op2motion.physics.sweeps import sweep_verdict
 
 STEP_DEG = 0.5
 SECONDS = 3.0

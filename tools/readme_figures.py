@@ -7,37 +7,45 @@ book poses' margins. ``tests/test_readme.py`` checks that the torque and margin 
 
 from __future__ import annotations
 
-import sys
 from multiprocessing import Pool
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 STOCK = ("init", "walkready", "sit_down", "stand_up")
+#: The README's static torque rows: the stock poses on both feet as recorded, and on the left foot alone.
+STATIC_TORQUE_CASES = (("init", "double"), ("walkready", "double"), ("sit_down", "double"), ("stand_up", "double"),
+                       ("walkready", "left"), ("sit_down", "left"))
 STIFFNESS = (0.5, 1.0, 2.0)
 PUSH_N = 2.0
 
 
 def _verdict(task: tuple[str, str, float, float]) -> tuple[tuple[str, str, float, float], dict]:
     from op2motion.formats.posefile import read_pose
-    from op2motion.physics import validate
+    from op2motion.physics import Pushes, Schedule, Setup, check
     from op2motion.robot.specfile import default_spec
 
     name, engine, stiffness, push = task
     spec = default_spec()
     pose = read_pose(ROOT / "poses" / f"{name}.json", spec)
-    v = validate(pose.servo, pose.support, spec, 5.0, engine, push_n=push, stiffness=stiffness)
+    report = check(Schedule.hold(pose.servo, pose.support, spec, 5.0), spec, (engine,),
+                   Pushes(push) if push else None, setup=Setup(stiffness)).first
+    v = report.run
     return task, {"stable": v.stable, "reasons": v.reasons, "margin_mm": v.support_margin_m * 1000,
                   "load_tilt": v.load_tilt_deg, "torque": v.max_torque_nm, "worst": v.worst_joint,
-                  "pushes": {p.direction: p.stable for p in v.pushes}}
+                  "pushes": {p.direction: p.stable for p in report.pushes}}
 
 
 def main() -> int:
-    sys.path.insert(0, str(ROOT / "tests"))
-    from helpers import static_torque_rows
+    from op2motion.formats.posefile import read_pose
+    from op2motion.model.dynamics import dynamics_for
+    from op2motion.robot.specfile import default_spec
 
+    spec = default_spec()
     print("| pose | support | worst joint | static torque [N·m] | share of stall |\n|---|---|---|---|---|")
-    for row in static_torque_rows():
-        print(f"| {row[0]} | {row[1]} | {row[2]} | {row[3]:.2f} | {row[4]:.0%} |")
+    for name, support in STATIC_TORQUE_CASES:
+        report = dynamics_for(spec).static_torques(read_pose(ROOT / "poses" / f"{name}.json", spec).servo, support)
+        print(f"| {name} | {support} | {report.worst_joint} | {abs(report.worst_torque_nm):.2f} | "
+              f"{report.worst_ratio:.0%} |")
     tasks = [(n, e, s, PUSH_N if s == 1.0 else 0.0) for n in STOCK for e in ("pybullet", "mujoco") for s in STIFFNESS]
     with Pool(2) as pool:
         results = dict(pool.map(_verdict, tasks))

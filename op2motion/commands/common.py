@@ -7,12 +7,13 @@ handler it names is called with the parsed arguments and the spec, and returns t
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import sys
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Iterator, Sequence
 
-from op2motion.errors import InputError
+from op2motion.errors import InputError, render_refs
 from op2motion.robot.spec import Spec
 
 Handler = Callable[[argparse.Namespace, Spec], int]
@@ -54,9 +55,11 @@ def emit(args: argparse.Namespace, result: dict[str, Any], text: str) -> None:
         print(text)
 
 
-def warn(result: dict[str, Any], warnings: Sequence[str]) -> None:
-    """Record ``warnings`` in the JSON result and print each as one line on stderr (stdout stays the result)."""
-    result["warnings"] = list(warnings)
+def warn(args: argparse.Namespace, result: dict[str, Any], warnings: Sequence[str]) -> None:
+    """Record ``warnings`` in the JSON result and print each as one line on stderr (stdout stays the result); a
+    parameter a warning refers to is shown as the flag of the command that set it."""
+    warnings = [render_refs(w, args.parser.flag_of) for w in warnings]
+    result["warnings"] = warnings
     for w in warnings:
         print(f"op2motion: warning: {w}", file=sys.stderr)
 
@@ -72,6 +75,39 @@ def cable_warnings(poses: Sequence[Any], spec: Spec) -> list[str]:
 def progress_enabled(args: argparse.Namespace) -> bool:
     """Progress bars go to stderr when it is a terminal and the output is not JSON."""
     return sys.stderr.isatty() and not getattr(args, "json", False)
+
+
+@contextlib.contextmanager
+def progress(args: argparse.Namespace, desc: str, unit: str) -> Iterator[Callable[[float, float], None]]:
+    """A progress bar on stderr (see :func:`progress_enabled`) fed with (done, total), e.g. the simulated seconds of
+    a physics check."""
+    from tqdm import tqdm
+
+    with tqdm(total=None, desc=desc, unit=unit, leave=False, disable=not progress_enabled(args)) as bar:
+        def update(done: float, total: float) -> None:
+            if bar.total != total:
+                bar.total = total
+            bar.update(done - bar.n)
+
+        yield update
+
+
+def physics_args(p: argparse.ArgumentParser, flag: bool, push_help: str) -> None:
+    """``--validate`` (when ``flag``), ``--engine pybullet|mujoco|both`` and ``--push N``."""
+    from op2motion.physics import ENGINES, MAX_PUSH_N
+
+    if flag:
+        p.add_argument("--validate", action="store_true", help="check it in physics")
+    p.add_argument("--engine", choices=(*ENGINES, "both"), default="pybullet",
+                   help="physics engine (default pybullet); both: run both and say where they disagree")
+    p.add_argument("--push", type=number(0.0, MAX_PUSH_N, "N"), default=0.0, metavar="N", help=push_help)
+
+
+def engines_of(args: argparse.Namespace) -> tuple[str, ...]:
+    """The engines ``--engine`` names."""
+    from op2motion.physics import ENGINES
+
+    return tuple(ENGINES) if args.engine == "both" else (args.engine,)
 
 
 def book_args(p: argparse.ArgumentParser, pose_flag: bool = True) -> None:

@@ -39,16 +39,16 @@ def register(sub: Any) -> None:
 def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion export``."""
     from op2motion.fileio import OutputSet
-    from op2motion.formats.action import encode_poses, read_action
+    from op2motion.formats.action import ActionFile
     from op2motion.formats.posefile import read_pose
     from op2motion.formats.tables import csv_table, webots_motion, webots_warnings
 
     outputs = OutputSet({"output": args.output})
     poses = [read_pose(p, spec) for p in args.poses]
     if args.format == "action":
-        base = read_action(args.base) if args.base else None
-        data, first = encode_poses(poses, spec, args.page, args.time, base, args.force)
-        outputs.put("output", data)
+        base = ActionFile.read(args.base) if args.base else ActionFile.blank()
+        written, first = base.with_poses(poses, spec, args.page, args.time, args.force)
+        outputs.put("output", written.data)
         text = (f"{len(poses)} pose(s) in pages {first}..{first + len(poses) - 1}" if poses
                 else "the base, unchanged")
     else:
@@ -61,7 +61,7 @@ def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
     result = {"path": str(out), "format": args.format, "poses": [p.name for p in poses]}
     if args.format == "action" and poses:
         result["pages"] = list(range(first, first + len(poses)))
-    warn(result, cable_warnings(poses, spec) + (webots_warnings(poses, spec) if args.format == "webots" else []))
+    warn(args, result, cable_warnings(poses, spec) + (webots_warnings(poses, spec) if args.format == "webots" else []))
     emit(args, result, f"wrote {out}: {text}")
     return 0
 
@@ -69,24 +69,24 @@ def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
 def cmd_import_action(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion import-action``."""
     from op2motion.fileio import OutputSet
-    from op2motion.formats.action import list_pages, page_to_pose, read_action, requested_page
+    from op2motion.formats.action import ActionFile
     from op2motion.formats.posefile import pose_to_json
 
     if args.out and args.page is None:
         raise InputError("expected --page N with --out")
     outputs = OutputSet({"out": args.out} if args.out else {})
-    data = read_action(args.file)
+    action = ActionFile.read(args.file)
     if args.page is not None:
-        pose = page_to_pose(requested_page(data, args.page, spec, args.file), spec, args.name).checked(spec, "page")
+        pose = action.pose(args.page, spec, args.name).checked(spec, "page")
         text = pose_to_json(pose, spec)
         if args.out:
             outputs.put("out", text)
             outputs.commit()
         result = {"page": args.page, "pose": json.loads(text), "path": args.out}
-        warn(result, cable_warnings([pose], spec))
+        warn(args, result, cable_warnings([pose], spec))
         emit(args, result, f"page {args.page} -> pose {pose.name!r}" + (f", wrote {args.out}" if args.out else ""))
         return 0
-    pages = list_pages(data, spec, args.file)
+    pages = action.pages(spec)
     result = {"pages": [{"index": p.index, "name": p.name, "repeat": p.repeat, "next": p.next,
                          "steps": [{"ticks": {str(k): v for k, v in s.ticks.items()}, "pause": s.pause, "time": s.time}
                                    for s in p.steps]} for p in pages]}

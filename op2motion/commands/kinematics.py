@@ -144,10 +144,10 @@ def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
     support = pose.support if pose is not None else angles.support
     validation = None
     if args.validate:
-        from op2motion.physics import validate
+        from op2motion.physics import Schedule, check
 
         servo = pose.servo if pose is not None else book_to_servo(angles, spec)[0]
-        validation = validate(servo, support, spec, args.seconds)
+        validation = check(Schedule.hold(servo, support, spec, args.seconds), spec).run
     png, drawn, reports = pose_figure(name, angles, spec, models, args.br, target, validation,
                                       None if pose is None else pose.metrics, double=Support.of(support).is_double)
     outputs.put("output", png)

@@ -61,12 +61,13 @@ def cmd_library_build(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.library.build import BuildSettings, build_library, check_workers
     from op2motion.library.grid import axis, grid_jobs
     from op2motion.posture.pso import PSOSettings
+    from op2motion.workflow import Validate
 
     check_workers(args.workers)
     jobs = grid_jobs(args.hands, args.supports, args.br, axis(*args.x, "x"), axis(*args.y, "y"), axis(*args.z, "z"),
                      args.com_model)
     settings = BuildSettings(PSOSettings(args.particles, args.iters, seed=args.seed).validated(), args.restarts,
-                             args.validate, args.seconds, args.engine)
+                             Validate(args.seconds, args.engine) if args.validate else None)
     with tqdm(total=len(jobs), desc="library", unit="pose", disable=not progress_enabled(args)) as bar:
         summary = build_library(jobs, spec, args.out, settings, args.workers, args.spec,
                                 on_done=lambda row: bar.update())

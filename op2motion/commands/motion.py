@@ -3,26 +3,35 @@
 from __future__ import annotations
 
 import argparse
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
-from op2motion.commands.common import add_command, emit, number, output_path, progress_enabled, warn, whole
+from op2motion.commands.common import (
+    add_command,
+    emit,
+    engines_of,
+    number,
+    output_path,
+    physics_args,
+    progress,
+    warn,
+    whole,
+)
 from op2motion.errors import CheckFailed, InputError
 from op2motion.formats.actionlayout import NUM_PAGES
 from op2motion.formats.motionfile import PROFILES
-from op2motion.physics import ENGINES, MAX_PUSH_N
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support
+
+if TYPE_CHECKING:
+    from op2motion.motion.trajectory import Trajectory
+    from op2motion.physics import CheckReport
 
 PAGE = whole(1, NUM_PAGES - 1)
 SECONDS = number(0.0, 60.0, "s")
 
 
 def _physics_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--validate", action="store_true", help="play the goals into the servo model in physics")
-    p.add_argument("--engine", choices=(*ENGINES, "both"), default="pybullet", help="physics engine (default "
-                                                                                     "pybullet)")
-    p.add_argument("--push", type=number(0.0, MAX_PUSH_N, "N"), default=0.0, metavar="N",
-                   help="with --validate: push the torso N newtons for 0.1 s halfway through (four directions)")
+    physics_args(p, True, "with --validate: push the torso N newtons for 0.1 s halfway through (four directions)")
     p.add_argument("--plot", type=output_path, metavar="PNG", help="q, q̇, q̈ per joint and the CoM/ZMP/CoP tracks")
     p.add_argument("--csv", type=output_path, metavar="CSV", help="the goals every 8 ms as CSV")
 
@@ -62,29 +71,28 @@ def register(sub: Any) -> None:
     p.add_argument("-o", "--output", type=output_path, required=True, metavar="OUT", help="file to write")
 
 
-def _validate(args: argparse.Namespace, trajectory: Any, spec: Spec) -> tuple[dict[str, Any] | None, dict[str, Any]]:
-    """With ``--validate``: the physics result for the JSON and the verdict of each engine."""
-    from tqdm import tqdm
-
-    from op2motion.physics import MOTION_HOLD_S, MOTION_SETTLE_S, RAMP_S, TIME_STEP_S, validate_motion
+def _physics(args: argparse.Namespace, trajectory: Trajectory, spec: Spec) -> CheckReport | None:
+    """With ``--validate``: the trajectory's goals played in physics in the engines asked for."""
+    from op2motion.physics import Pushes, check
 
     if not args.validate:
-        return None, {}
-    engines = ENGINES if args.engine == "both" else (args.engine,)
-    seconds = RAMP_S + MOTION_SETTLE_S + trajectory.duration_s + MOTION_HOLD_S
-    steps = int(round(seconds / TIME_STEP_S)) * len(engines) * (1 + 4 * (args.push > 0))
-    verdicts = {}
-    with tqdm(total=steps, desc="physics", unit="step", leave=False, disable=not progress_enabled(args)) as bar:
-        for engine in engines:
-            verdicts[engine] = validate_motion(trajectory.goals, trajectory.p_gains, trajectory.supports, spec,
-                                               trajectory.dt, engine, args.push, on_step=bar.update)
-    agree = len({v.stable for v in verdicts.values()}) == 1
-    first = next(iter(verdicts.values()))
-    return {"engines": {e: v.as_dict() for e, v in verdicts.items()}, "agree": agree,
-            "stable": agree and first.stable and all(p.stable for v in verdicts.values() for p in v.pushes)}, verdicts
+        return None
+    with progress(args, "physics", "s") as on_progress:
+        return check(trajectory.schedule(spec), spec, engines_of(args), Pushes(args.push) if args.push else None,
+                     on_progress=on_progress)
 
 
-def _finish(args: argparse.Namespace, spec: Spec, trajectory: Any, title: str, result: dict[str, Any],
+def _physics_lines(report: CheckReport) -> list[str]:
+    lines = []
+    for engine, e in report.engines.items():
+        m = e.run.motion
+        worst = f"{m.worst_torque.torque_nm:.2f} N·m at {m.worst_torque.joint}" if m else "-"
+        tracking = max(m.tracking_max_deg.values()) if m else 0.0
+        lines.append(f"  {engine}: {e.run.summary()}; tracking error <= {tracking:.1f}°, worst torque {worst}")
+    return lines
+
+
+def _finish(args: argparse.Namespace, spec: Spec, trajectory: Trajectory, title: str, result: dict[str, Any],
             lines: list[str]) -> int:
     """Checks, physics, plot and CSV common to play and plan; raises CheckFailed (exit 1) when physics says no."""
     from op2motion.figures.motion import render_motion
@@ -93,64 +101,49 @@ def _finish(args: argparse.Namespace, spec: Spec, trajectory: Any, title: str, r
     from op2motion.motion.checks import check_trajectory
 
     outputs = OutputSet({k: getattr(args, k) for k in ("plot", "csv") if getattr(args, k)})
-    physics, verdicts = _validate(args, trajectory, spec)
-    flat = next(iter(verdicts.values())).flat_foot if verdicts else None      # the physics world's floor frame
-    checks = check_trajectory(trajectory, spec, foot=flat)
+    report = _physics(args, trajectory, spec)
+    checks = check_trajectory(trajectory, spec, foot=report.run.flat_foot if report else None)
     result["checks"] = checks.summary()
-    if physics:
-        result["physics"] = physics
+    if report is not None:
+        result["physics"] = {"engines": {e: r.as_dict() for e, r in report.engines.items()}, "agree": report.agree,
+                             "stable": report.agree and report.stable and report.pushes_stood}
     if args.plot:
-        first = next(iter(verdicts.values()), None)
-        verdict = "not checked in physics" if first is None else " | ".join(
-            f"{e}: {'stable' if v.stable else ', '.join(v.reasons)}" for e, v in verdicts.items())
-        outputs.put("plot", render_motion(trajectory, checks, spec, title, first.cop_track if first else None,
-                                          verdict))
+        verdict = "not checked in physics" if report is None else " | ".join(
+            f"{e}: {'stable' if r.run.stable else ', '.join(r.run.reasons)}" for e, r in report.engines.items())
+        cop = report.run.motion.cop_track if report is not None and report.run.motion else None
+        outputs.put("plot", render_motion(trajectory, checks, spec, title, cop, verdict))
     if args.csv:
         outputs.put("csv", goals_csv(trajectory.times, trajectory.goals, trajectory.supports, spec))
     written = outputs.commit()
     result["files"] = {k: str(v) for k, v in written.items()}
     s = checks.summary()
-    pair = " / ".join(s["min_clearance_links"])
-    lines.append(f"  checks: least clearance {s['min_clearance_m'] * 1000:.1f} mm ({pair}), "
-                 f"ZMP margin >= {s['zmp_margin_min_m'] * 1000:.1f} mm, torque <= {s['torque_ratio_max']:.0%} of "
-                 f"available ({s['torque_joint']})")
-    for engine, v in verdicts.items():
-        worst = v.motion_worst_torque or {}
-        lines.append(f"  {engine}: {v.summary()}; tracking error <= {max(v.tracking_max_deg.values()):.1f}°, "
-                     f"worst torque {worst.get('torque_nm', 0):.2f} N·m at {worst.get('joint', '-')}")
-    lines += [f"  wrote {p}" for p in written.values()]
+    lines.append(f"  checks: least clearance {s['min_clearance_m'] * 1000:.1f} mm "
+                 f"({' / '.join(s['min_clearance_links'])}), ZMP margin >= {s['zmp_margin_min_m'] * 1000:.1f} mm, "
+                 f"torque <= {s['torque_ratio_max']:.0%} of available ({s['torque_joint']})")
+    lines += ([] if report is None else _physics_lines(report)) + [f"  wrote {p}" for p in written.values()]
     emit(args, result, "\n".join(lines))
-    if physics and not physics["agree"]:
-        raise CheckFailed(f"{title}: the engines disagree (" + ", ".join(
-            f"{e}: {'stands' if v.stable else v.reason}" for e, v in verdicts.items()) + ")")
-    if physics and not physics["stable"]:
-        bad = next(v for v in verdicts.values() if not v.stable or any(not p.stable for p in v.pushes))
-        raise CheckFailed(f"{title} does not get through in physics: " + (bad.reason if not bad.stable else "a push"))
+    problem = None if report is None else report.problem("does not get through")
+    if problem:
+        raise CheckFailed(f"{title}: {problem}")
     return 0
 
 
 def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion motion play``."""
-    from op2motion.formats.action import page_to_pose, read_action, requested_page
+    from op2motion.formats.action import ActionFile
     from op2motion.formats.posefile import read_pose
-    from op2motion.motion.player import IDS, play
-    from op2motion.motion.trajectory import from_playback
-    from op2motion.robot.joints import servo_to_ticks
+    from op2motion.motion.pipeline import play_page
+    from op2motion.motion.player import IDS
 
-    data = read_action(args.file)
-    page = requested_page(data, args.page, spec, args.file)
-    start = read_pose(args.start, spec) if args.start else page_to_pose(requested_page(data, 1, spec, args.file),
-                                                                         spec)
-    by_id = {j.id: int(t) for j, t in zip(spec.joints, servo_to_ticks(start.servo, spec))}
-    playback = play(data, args.page, [by_id[i] for i in IDS])
-    trajectory = from_playback(playback, spec, page.name)
-    result: dict[str, Any] = {"page": args.page, "name": page.name, "start": start.name, "ticks": playback.calls,
-                              "duration_s": round(playback.calls * trajectory.dt, 3),
-                              "pages_played": list(playback.pages), "ids": list(IDS),
+    action = ActionFile.read(args.file)
+    played = play_page(action, args.page, spec, read_pose(args.start, spec) if args.start else None)
+    playback, name, duration = played.playback, played.page.name, played.trajectory.duration_s
+    result: dict[str, Any] = {"page": args.page, "name": name, "start": played.start.name, "ticks": playback.calls,
+                              "duration_s": round(duration, 3), "pages_played": list(playback.pages), "ids": list(IDS),
                               "goals": playback.goals.astype(int).tolist()}
-    lines = [f"page {args.page} ({page.name}) from {start.name}: {playback.calls} ticks, "
-             f"{playback.calls * trajectory.dt:.3f} s, pages {' -> '.join(map(str, playback.pages))}"]
-    return _finish(args, spec, trajectory, f"page {args.page} ({page.name})", result, lines)
+    lines = [f"page {args.page} ({name}) from {played.start.name}: {playback.calls} ticks, {duration:.3f} s, pages "
+             f"{' -> '.join(map(str, playback.pages))}"]
+    return _finish(args, spec, played.trajectory, f"page {args.page} ({name})", result, lines)
 
 
 def _broadcast(values: Sequence[float] | None, n: int, default: float | None, flag: str) -> list[float]:
@@ -192,23 +185,14 @@ def _motion_from_args(args: argparse.Namespace, spec: Spec) -> Any:
     return motion_of(poses, sources, durations, pauses, name, args.profile or "quintic")
 
 
-def waypoints_of(motion: Any) -> list[Any]:
-    """The planner's waypoints of a motion file's steps."""
-    from op2motion.motion.waypoint import Waypoint
-
-    return [Waypoint(s.pose.name, s.pose.servo, s.duration_s, s.pause_s, s.pose.support) for s in motion.steps]
-
-
 def cmd_plan(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion motion plan``."""
     from op2motion.fileio import OutputSet
     from op2motion.formats.motionfile import motion_to_json
-    from op2motion.motion.checks import require_clear
-    from op2motion.motion.planner import plan
+    from op2motion.motion.pipeline import plan_motion
 
     motion = _motion_from_args(args, spec)
-    trajectory = plan(waypoints_of(motion), spec, motion.profile, motion.p_gain)
-    require_clear(trajectory, spec)
+    trajectory = plan_motion(motion, spec)
     if args.out:
         outputs = OutputSet({"out": args.out})
         outputs.put("out", motion_to_json(motion, spec, args.out))
@@ -216,7 +200,7 @@ def cmd_plan(args: argparse.Namespace, spec: Spec) -> int:
     result: dict[str, Any] = {"name": motion.name, "profile": motion.profile, "ticks": len(trajectory.goals) - 1,
                               "duration_s": round(trajectory.duration_s, 3), "segments": list(trajectory.segment_names),
                               "notes": list(trajectory.notes), "motion_file": args.out}
-    warn(result, list(trajectory.notes))
+    warn(args, result, list(trajectory.notes))
     lines = [f"{motion.name}: {len(motion.steps)} poses, {trajectory.duration_s:.3f} s ({motion.profile})"
              + (f", wrote {args.out}" if args.out else "")]
     return _finish(args, spec, trajectory, motion.name, result, lines)
@@ -225,44 +209,32 @@ def cmd_plan(args: argparse.Namespace, spec: Spec) -> int:
 def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion motion export``."""
     from op2motion.fileio import OutputSet
-    from op2motion.formats.action import check_pages_free, first_empty_run, read_action
-    from op2motion.formats.actionlayout import PAGE_SIZE, check_file, reset_file
+    from op2motion.formats.action import ActionFile
     from op2motion.formats.motionfile import read_motion
-    from op2motion.formats.tables import goals_csv, webots_motion, webots_warnings
-    from op2motion.motion.checks import require_clear
-    from op2motion.motion.planner import action_pages, plan
-    from op2motion.robot.pose import Pose
+    from op2motion.formats.tables import goals_csv, webots_rows, webots_warnings
+    from op2motion.motion.pipeline import motion_to_action, plan_motion
 
     motion = read_motion(args.motion, spec)
-    waypoints = waypoints_of(motion)
     outputs = OutputSet({"output": args.output})
     result: dict[str, Any] = {"name": motion.name, "format": args.format}
     if args.format == "action":
-        data = bytearray(read_action(args.base) if args.base else reset_file())
-        check_file(bytes(data), "base")
-        pages, notes = action_pages(waypoints, spec, motion.name, 1, motion.p_gain)
-        first = first_empty_run(bytes(data), len(pages)) if args.page is None else args.page
-        check_pages_free(bytes(data), first, len(pages), args.force)
-        pages, notes = action_pages(waypoints, spec, motion.name, first, motion.p_gain)
-        for k, page in enumerate(pages):
-            data[(first + k) * PAGE_SIZE:(first + k + 1) * PAGE_SIZE] = page
-        outputs.put("output", bytes(data))
-        result["pages"] = list(range(first, first + len(pages)))
-        text = f"pages {first}..{first + len(pages) - 1} (play page {first})"
+        base = ActionFile.read(args.base) if args.base else ActionFile.blank()
+        written, pages, notes = motion_to_action(motion, spec, base, args.page, args.force)
+        outputs.put("output", written.data)
+        result["pages"] = pages
+        text = f"pages {pages[0]}..{pages[-1]} (play page {pages[0]})"
     else:
-        trajectory = plan(waypoints, spec, motion.profile, motion.p_gain)
-        require_clear(trajectory, spec)
+        trajectory = plan_motion(motion, spec)
         notes = list(trajectory.notes)
         if args.format == "csv":
             outputs.put("output", goals_csv(trajectory.times, trajectory.goals, trajectory.supports, spec))
         else:
-            rows = [Pose(f"t{k}", "double", g, {}, {}) for k, g in enumerate(trajectory.goals)]
-            outputs.put("output", webots_motion(rows, spec, times=list(trajectory.times)))
+            names = [f"t{k}" for k in range(len(trajectory.goals))]
+            outputs.put("output", webots_rows(list(trajectory.times), trajectory.goals, spec, names))
             notes += webots_warnings([s.pose for s in motion.steps], spec)
         text = f"{len(trajectory.goals)} rows every {trajectory.dt * 1000:.0f} ms"
     out = outputs.commit()["output"]
     result["path"] = str(out)
-    warn(result, notes)
+    warn(args, result, notes)
     emit(args, result, f"wrote {out}: {motion.name}, {text}")
     return 0
-

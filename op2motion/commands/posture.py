@@ -87,7 +87,7 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.fileio import OutputSet
     from op2motion.formats.posefile import pose_to_json
     from op2motion.posture.cost import PostureProblem
-    from op2motion.workflow import solve
+    from op2motion.workflow import Validate, solve
 
     target = vec3(args.target, "target")
     problem = PostureProblem(args.support, args.hand, target, args.br, args.model, args.com_model).validated()
@@ -99,7 +99,7 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     with tqdm(total=settings.iterations * (1 + args.restarts), desc="PSO", unit="it", leave=False,
               disable=not progress_enabled(args)) as bar:
         outcome = solve(problem, spec, settings, restarts=args.restarts, refine=not args.no_refine,
-                        validate=args.validate, seconds=args.seconds, engine=args.engine,
+                        validate=Validate(args.seconds, args.engine) if args.validate else None,
                         on_iteration=lambda best: (bar.update(), bar.set_postfix(cost=f"{best:.4f}")))
     command = "op2motion " + " ".join(sys.argv[1:]) if len(sys.argv) > 1 else "op2motion optimize"
     pose = outcome.pose(name, spec, {"command": command})
@@ -117,7 +117,7 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     v = outcome.validation
     if v is not None:
         lines.append(f"  physics: {v.summary()}")
-    warn(result, outcome.warnings())
+    warn(args, result, outcome.warnings())
     if not outcome.ok:
         emit(args, result, "\n".join(lines))
         raise CheckFailed(f"{r.message}; nothing written")

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import argparse
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from op2motion.commands.common import add_command, emit, number, output_path, progress_enabled, whole
+from op2motion.commands.common import add_command, emit, engines_of, number, output_path, physics_args, progress, whole
 from op2motion.errors import CheckFailed, InputError
-from op2motion.physics import ENGINES, MAX_PUSH_N
 from op2motion.robot.spec import Spec
+
+if TYPE_CHECKING:
+    from op2motion.physics import CheckReport
 
 OUT_FORMATS = {".csv": "csv", ".motion": "webots"}
 
@@ -26,10 +28,7 @@ def register(sub: Any) -> None:
     p.add_argument("--target", type=float, nargs=3, metavar=("X", "Y", "YAW"),
                    help="walk to this pose instead: x [m], y [m], heading [deg] from the start")
     p.add_argument("--validate", action="store_true", help="play the walk in physics")
-    p.add_argument("--engine", choices=(*ENGINES, "both"), default="pybullet", help="physics engine (default "
-                                                                                     "pybullet)")
-    p.add_argument("--push", type=number(0.0, MAX_PUSH_N, "N"), default=0.0, metavar="N",
-                   help="with --validate: also push the torso N newtons for 0.1 s halfway, from each side")
+    physics_args(p, False, "with --validate: also push the torso N newtons for 0.1 s halfway, from each side")
     p.add_argument("--trials", type=whole(0, 100), default=0, metavar="N",
                    help="with --validate: N more runs from randomly perturbed starts (seeded)")
     p.add_argument("--perturb-deg", type=number(0.0, 5.0, "deg"), default=0.5, metavar="DEG",
@@ -52,73 +51,87 @@ def _outputs(args: argparse.Namespace) -> dict[str, str]:
     return paths
 
 
+def _walk_line(engine: str, s: dict[str, Any]) -> str:
+    """One engine's walk in words."""
+    w = s["worst_torque"]
+    line = (f"  {engine}: {'FELL' if s['fell'] else 'walked'}"
+            f"{' (' + ', '.join(s['reasons']) + ')' if s['reasons'] else ''}, {s['distance_m']:.3f} m, "
+            f"{s['mean_speed_mps']:.3f} m/s steady, drift {s['lateral_drift_m'] * 1000:.0f} mm, heading "
+            f"{s['heading_error_deg']:+.1f}°, turn {s['turn_rate_deg_s']:.1f}°/s, CoP inside "
+            f"{s['cop_inside_fraction']:.1%}, worst torque {w['torque_nm']:.2f} N·m at {w['joint']} "
+            f"({w['ratio']:.0%} of {w['available_nm']:.2f})")
+    if s["pushes"]:
+        line += "; pushes: " + ", ".join(f"from {p['from']} {'FELL' if p['fell'] else 'ok'}" for p in s["pushes"])
+    if "trials" in s:
+        line += f"; trials: {s['trials']['walked']}/{s['trials']['runs']} walked"
+    return line
+
+
+def _walk_physics(args: argparse.Namespace, gait: Any, spec: Spec, result: dict[str, Any]) -> CheckReport:
+    """``--validate``: the walk in physics; its results go into ``result``."""
+    from op2motion.gait import gait_schedule, side_pushes, walk_summary
+    from op2motion.physics import Trials, check
+
+    schedule = gait_schedule(gait, spec)
+    trials = Trials(args.trials, args.perturb_deg, args.seed) if args.trials else None
+    with progress(args, "physics", "s") as on_progress:
+        report = check(schedule, spec, engines_of(args), side_pushes(args.push) if args.push else None, trials,
+                       on_progress=on_progress)
+    assert schedule.plan.walk is not None
+    physics = walk_summary(report, schedule.plan.walk.start_s)
+    main = physics["engines"][next(iter(report.engines))]
+    result["physics"] = physics
+    result.update({key: main[key] for key in ("reasons", "lateral_drift_m", "heading_error_deg", "turn_rate_deg_s",
+                                              "cop_inside_fraction", "worst_torque")})
+    result["mean_speed_mps"] = min(s["mean_speed_mps"] for s in physics["engines"].values())
+    result["fell"] = physics["fell"]
+    return report
+
+
+def _walk_files(args: argparse.Namespace, outputs: Any, gait: Any, spec: Spec, report: CheckReport | None) -> None:
+    """Stage the plot and the goal tables asked for."""
+    from op2motion.figures.gait import render_gait
+    from op2motion.gait import gait_csv, gait_webots
+    from op2motion.physics import RAMP_S, WALK_SETTLE_S
+
+    for key, path in outputs.paths.items():
+        if key == "plot":
+            verdict = "not checked in physics" if report is None else " | ".join(
+                f"{e}: {'fell' if r.run.fell else 'walked'} {r.run.walk.mean_speed_mps if r.run.walk else 0.0:.3f} "
+                f"m/s" for e, r in report.engines.items())
+            cop = report.run.motion.cop_track if report is not None and report.run.motion else None
+            outputs.put(key, render_gait(gait, spec, f"walk '{gait.params.name}'", cop, RAMP_S + WALK_SETTLE_S,
+                                         verdict))
+        else:
+            fmt = OUT_FORMATS[path.suffix.lower()]
+            outputs.put(key, gait_csv(gait, spec) if fmt == "csv" else gait_webots(gait, spec))
+
+
 def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion walk``."""
-    from tqdm import tqdm
-
-    from op2motion.figures.gait import render_gait
     from op2motion.fileio import OutputSet
-    from op2motion.gait import gait_csv, gait_summary, gait_webots, plan_gait, preset_path, read_preset, walk_physics
-    from op2motion.physics import RAMP_S, TIME_STEP_S
-    from op2motion.physics.walk import WALK_HOLD_S, WALK_SETTLE_S
+    from op2motion.gait import gait_summary, plan_gait, preset_path, read_preset
 
     if not args.validate and (args.push or args.trials):
         raise InputError("expected --validate with --push or --trials", "validate")
     outputs = OutputSet(_outputs(args))
     params = read_preset(preset_path(args.preset)).with_steps(args.steps)
     target = None if args.target is None else (args.target[0], args.target[1], math.radians(args.target[2]))
-    with tqdm(total=params.zmp_passes + 1, desc="plan", unit="pass", leave=False,
-              disable=not progress_enabled(args)) as bar:
-        gait = plan_gait(params, spec, target, on_pass=bar.update)
+    with progress(args, "plan", "pass") as on_progress:
+        gait = plan_gait(params, spec, target, on_progress)
     result: dict[str, Any] = gait_summary(gait)
     lines = [f"walk '{params.name}': {result['steps']} steps in {result['walking_s']:.2f} s, "
              f"{result['distance_m']:.3f} m planned ({result['planned_speed_mps']:.3f} m/s steady), ZMP margin >= "
              f"{result['zmp_margin_min_m'] * 1000:.1f} mm, CoM height {result['com_height_m']:.3f} m"]
-    runs: dict[str, Any] = {}
-    if args.validate:
-        engines = ENGINES if args.engine == "both" else (args.engine,)
-        seconds = RAMP_S + WALK_SETTLE_S + gait.duration_s + WALK_HOLD_S
-        total = int(round(seconds / TIME_STEP_S)) * len(engines) * (1 + 2 * (args.push > 0) + args.trials)
-        with tqdm(total=total, desc="physics", unit="step", leave=False, disable=not progress_enabled(args)) as bar:
-            physics, runs = walk_physics(gait, spec, engines, args.push, args.trials, args.perturb_deg, args.seed,
-                                         on_step=bar.update)
-        result["physics"] = physics
-        main = physics["engines"][engines[0]]
-        for key in ("fell", "reasons", "mean_speed_mps", "lateral_drift_m", "heading_error_deg", "turn_rate_deg_s",
-                    "cop_inside_fraction", "worst_torque"):
-            result[key] = main[key]
-        result["mean_speed_mps"] = min(s["mean_speed_mps"] for s in physics["engines"].values())
-        result["fell"] = physics["fell"]
-        for engine, s in physics["engines"].items():
-            w = s["worst_torque"]
-            line = (f"  {engine}: {'FELL' if s['fell'] else 'walked'}"
-                    f"{' (' + ', '.join(s['reasons']) + ')' if s['reasons'] else ''}, {s['distance_m']:.3f} m, "
-                    f"{s['mean_speed_mps']:.3f} m/s steady, drift {s['lateral_drift_m'] * 1000:.0f} mm, heading "
-                    f"{s['heading_error_deg']:+.1f}°, turn {s['turn_rate_deg_s']:.1f}°/s, CoP inside "
-                    f"{s['cop_inside_fraction']:.1%}, worst torque {w['torque_nm']:.2f} N·m at {w['joint']} "
-                    f"({w['ratio']:.0%} of {w['available_nm']:.2f})")
-            if s["pushes"]:
-                line += "; pushes: " + ", ".join(f"from {p['from']} {'FELL' if p['fell'] else 'ok'}"
-                                                 for p in s["pushes"])
-            if "trials" in s:
-                line += f"; trials: {s['trials']['walked']}/{s['trials']['runs']} walked"
-            lines.append(line)
-    for key, path in outputs.paths.items():
-        if key == "plot":
-            first = next(iter(runs.values()), None)
-            verdict = "not checked in physics" if first is None else " | ".join(
-                f"{e}: {'fell' if r.fell else 'walked'} {r.mean_speed_mps:.3f} m/s" for e, r in runs.items())
-            outputs.put(key, render_gait(gait, spec, f"walk '{params.name}'",
-                                         first.validation.cop_track if first else None, RAMP_S + WALK_SETTLE_S,
-                                         verdict))
-        else:
-            fmt = OUT_FORMATS[path.suffix.lower()]
-            outputs.put(key, gait_csv(gait, spec) if fmt == "csv" else gait_webots(gait, spec))
+    report = _walk_physics(args, gait, spec, result) if args.validate else None
+    if report is not None:
+        lines += [_walk_line(e, s) for e, s in result["physics"]["engines"].items()]
+    _walk_files(args, outputs, gait, spec, report)
     written = outputs.commit()
     result["files"] = {k: str(v) for k, v in written.items()}
     lines += [f"  wrote {p}" for p in written.values()]
     emit(args, result, "\n".join(lines))
-    if args.validate and result["fell"]:
+    if report is not None and report.fell:
         raise CheckFailed(f"walk '{params.name}' fell in physics: " + "; ".join(
-            f"{e}: {', '.join(s['reasons'])}" for e, s in result["physics"]["engines"].items() if s["fell"]))
+            f"{e}: {', '.join(r.run.reasons)}" for e, r in report.engines.items() if r.run.fell))
     return 0

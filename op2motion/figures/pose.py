@@ -16,7 +16,7 @@ import numpy as np
 from op2motion.figures.draw import PoseFigure, TitleBlock, render_cost_curve, render_poses
 from op2motion.kinematics import forward
 from op2motion.kinematics.report import PoseReport, evaluate
-from op2motion.physics import Validation
+from op2motion.physics import RunReport
 from op2motion.robot.balance import convex_hull, polygon_margin
 from op2motion.robot.joints import BookAngles
 from op2motion.robot.spec import Spec
@@ -25,7 +25,7 @@ from op2motion.workflow import Outcome
 PB_PSI_NOTE = "projection model drawn with psi = 0 (it has no transverse rotation)"
 
 
-def verdict_of(validation: Validation | None, metrics: Mapping[str, Any] | None = None) -> tuple[str, bool | None]:
+def verdict_of(validation: RunReport | None, metrics: Mapping[str, Any] | None = None) -> tuple[str, bool | None]:
     """The verdict line and its sense: from a validation run now, else from a pose file's recorded metrics."""
     if validation is not None:
         return (f"STANDS in physics ({validation.seconds:g} s)" if validation.stable
@@ -34,7 +34,7 @@ def verdict_of(validation: Validation | None, metrics: Mapping[str, Any] | None 
         stable = bool(metrics.get("stable"))
         why = metrics.get("validation_reason", "")
         return (("STANDS in physics (recorded)" if stable else f"FALLS in physics (recorded): {why}"), stable)
-    return "not checked in physics (use --validate)", None
+    return "not checked in physics", None
 
 
 def double_support_margin_m(report: PoseReport) -> float:
@@ -58,7 +58,7 @@ def _numbers(report: PoseReport, double: bool = False) -> list[str]:
 
 
 def pose_figure(name: str, angles: BookAngles, spec: Spec, models: Sequence[str] = ("dh",), br: float = 1.0,
-                target: Sequence[float] | None = None, validation: Validation | None = None,
+                target: Sequence[float] | None = None, validation: RunReport | None = None,
                 metrics: Mapping[str, Any] | None = None, lines: Sequence[str] = (),
                 ghost: BookAngles | None = None, double: bool = False
                 ) -> tuple[bytes, dict[str, Any], list[PoseReport]]:

@@ -8,18 +8,19 @@ of reset pages exactly as the Action Editor makes them (the stock file's empty p
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
-from op2motion.errors import InputError
+from op2motion.errors import InputError, ref
 from op2motion.fileio import read_bytes
 from op2motion.formats.actionlayout import (
     MAX_BYTE,
     NUM_PAGES,
     PAGE_SIZE,
+    RawPage,
     StepBytes,
     check_file,
     encode_page,
@@ -58,41 +59,13 @@ class Page:
     steps: tuple[Step, ...]
 
 
-def decode_page(data: bytes, index: int, spec: Spec) -> Page:
-    """Decode page ``index`` of a checked file (goal ticks by ID; None where not specified)."""
-    raw = parse_page(data, index)
+def decode_page(raw: RawPage, spec: Spec) -> Page:
+    """A raw page decoded: goal ticks by ID (None where not specified)."""
     invalid = spec.servo.invalid_bit
     steps = tuple(Step({j.id: (None if int(raw.words[s, j.id]) & invalid else int(raw.words[s, j.id]) & 0x0FFF)
                         for j in spec.joints}, raw.pause[s], raw.time[s])
                   for s in range(min(raw.stepnum, len(raw.words))))
-    return Page(index, raw.name, raw.valid, raw.repeat, raw.speed, raw.next, raw.exit, steps)
-
-
-def read_action(path: str | Path) -> bytes:
-    """Read and size-check an action file."""
-    data = read_bytes(path, "action file")
-    check_file(data, str(path))
-    return data
-
-
-def list_pages(data: bytes, spec: Spec, where: str = "<action>") -> list[Page]:
-    """Every page that holds an action (valid checksum, at least one step), in order."""
-    check_file(data, where)
-    pages = [decode_page(data, i, spec) for i in range(1, NUM_PAGES)]
-    return [p for p in pages if p.valid and p.steps]
-
-
-def requested_page(data: bytes, index: int, spec: Spec, where: str) -> Page:
-    """Page ``index``, which must exist, be valid and hold at least one step."""
-    check_file(data, where)
-    if not 1 <= index < NUM_PAGES:
-        raise InputError(f"expected 1..{NUM_PAGES - 1}, got {index}", "page")
-    page = decode_page(data, index, spec)
-    if not page.valid:
-        raise InputError(f"page {index} fails its checksum", where)
-    if not page.steps:
-        raise InputError(f"page {index} holds no steps", where)
-    return page
+    return Page(raw.index, raw.name, raw.valid, raw.repeat, raw.speed, raw.next, raw.exit, steps)
 
 
 def page_to_pose(page: Page, spec: Spec, name: str | None = None) -> Pose:
@@ -106,6 +79,97 @@ def page_to_pose(page: Page, spec: Spec, name: str | None = None) -> Pose:
     servo = ticks_to_servo(np.array([ticks[j.id] for j in spec.joints]), spec)
     return Pose(name or safe_pose_name(page.name, f"page{page.index}"), "double", servo, {},
                 {"source": f"action file page {page.index} ({page.name}), last step"})
+
+
+@dataclass(frozen=True)
+class ActionFile:
+    """A whole action file (256 pages of 512 bytes, checked when made), parsed once: pages by index, the poses
+    they end in, the empty pages, and new files with pages written in. ``where`` names it in messages."""
+
+    data: bytes
+    where: str = "<action file>"
+    _raw: dict[int, RawPage] = field(default_factory=dict, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        check_file(self.data, self.where)
+
+    @classmethod
+    def read(cls, path: str | Path) -> "ActionFile":
+        """Read and size-check an action file."""
+        return cls(read_bytes(path, "action file"), str(path))
+
+    @classmethod
+    def blank(cls) -> "ActionFile":
+        """A file of reset pages, as the Action Editor makes them (the stock file's empty pages)."""
+        return cls(reset_file(), "<reset pages>")
+
+    def raw(self, index: int) -> RawPage:
+        """Page ``index`` as bytes say it (parsed once)."""
+        if index not in self._raw:
+            self._raw[index] = parse_page(self.data, index)
+        return self._raw[index]
+
+    def is_empty(self, index: int) -> bool:
+        """Page ``index`` holds no action (a bad checksum, or no steps)."""
+        return is_empty(self.data, index)
+
+    def page(self, index: int, spec: Spec) -> Page:
+        """Page ``index`` decoded; it must exist, be valid and hold at least one step."""
+        if isinstance(index, bool) or not isinstance(index, int) or not 1 <= index < NUM_PAGES:
+            raise InputError(f"expected 1..{NUM_PAGES - 1}, got {index!r}", "page")
+        page = decode_page(self.raw(index), spec)
+        if not page.valid:
+            raise InputError(f"page {index} fails its checksum", self.where)
+        if not page.steps:
+            raise InputError(f"page {index} holds no steps", self.where)
+        return page
+
+    def pages(self, spec: Spec) -> list[Page]:
+        """Every page that holds an action (valid checksum, at least one step), in order."""
+        pages = [decode_page(self.raw(i), spec) for i in range(1, NUM_PAGES)]
+        return [p for p in pages if p.valid and p.steps]
+
+    def pose(self, index: int, spec: Spec, name: str | None = None) -> Pose:
+        """Page ``index``'s last step as a double-support pose (:func:`page_to_pose`)."""
+        return page_to_pose(self.page(index, spec), spec, name)
+
+    def first_empty_run(self, count: int, start: int = 1) -> int:
+        """The first page from ``start`` on that begins ``count`` consecutive empty pages."""
+        for first in range(start, NUM_PAGES - count + 1):
+            if all(self.is_empty(i) for i in range(first, first + count)):
+                return first
+        raise InputError(f"no {count} consecutive empty pages in the file", "page")
+
+    def check_free(self, first: int, count: int, force: bool) -> None:
+        """Refuse to overwrite pages that hold an action (unless ``force``), or to run past the last page."""
+        if not (1 <= first and first + count - 1 < NUM_PAGES):
+            raise InputError(f"{count} page(s) from page {first} do not fit in pages 1..{NUM_PAGES - 1}", "page")
+        taken = [i for i in range(first, first + count) if not self.is_empty(i)]
+        if taken and not force:
+            raise InputError(f"page(s) {', '.join(map(str, taken))} of the base hold actions; choose empty pages or "
+                             f"give {ref('force')} to overwrite them", "page")
+
+    def with_pages(self, pages: Sequence[bytes], first: int | None = None, force: bool = False
+                   ) -> tuple["ActionFile", int]:
+        """A new file with ``pages`` (512 bytes each) written from ``first`` on (default: the first run of empty
+        pages; occupied pages refused unless ``force``), every other page kept byte for byte; and that first page."""
+        if not pages:
+            return self, 0
+        first = self.first_empty_run(len(pages)) if first is None else first
+        self.check_free(first, len(pages), force)
+        data = bytearray(self.data)
+        for k, page in enumerate(pages):
+            data[(first + k) * PAGE_SIZE:(first + k + 1) * PAGE_SIZE] = page
+        return ActionFile(bytes(data), self.where), first
+
+    def with_poses(self, poses: Sequence[Pose], spec: Spec, first: int | None = None, seconds: float = 1.0,
+                   force: bool = False) -> tuple["ActionFile", int]:
+        """A new file with each pose in its own one-step page of ``seconds`` (see :meth:`with_pages`)."""
+        if not poses:
+            return self, 0
+        units = step_units(seconds)
+        pages = [encode_page(pose.name, [StepBytes(pose_words(pose, spec), 0, units)]) for pose in poses]
+        return self.with_pages(pages, first, force)
 
 
 def step_units(seconds: float, what: str = "time") -> int:
@@ -128,38 +192,3 @@ def encode_pose_page(pose: Pose, spec: Spec, seconds: float, base: bytes | None 
     return encode_page(pose.name, [StepBytes(pose_words(pose, spec), 0, step_units(seconds))], base=base)
 
 
-def first_empty_run(data: bytes, count: int, start: int = 1) -> int:
-    """The first page from ``start`` on that begins ``count`` consecutive empty pages."""
-    for first in range(start, NUM_PAGES - count + 1):
-        if all(is_empty(data, i) for i in range(first, first + count)):
-            return first
-    raise InputError(f"no {count} consecutive empty pages in the file", "page")
-
-
-def check_pages_free(data: bytes, first: int, count: int, force: bool) -> None:
-    """Refuse to overwrite pages that hold an action (unless ``force``), or to run past the last page."""
-    if not (1 <= first and first + count - 1 < NUM_PAGES):
-        raise InputError(f"{count} page(s) from page {first} do not fit in pages 1..{NUM_PAGES - 1}", "page")
-    taken = [i for i in range(first, first + count) if not is_empty(data, i)]
-    if taken and not force:
-        raise InputError(f"page(s) {', '.join(map(str, taken))} of the base hold actions; choose empty pages or "
-                         f"give --force to overwrite them", "page")
-
-
-def encode_poses(poses: Sequence[Pose], spec: Spec, first_page: int | None = None, seconds: float = 1.0,
-                 base: bytes | None = None, force: bool = False) -> tuple[bytes, int]:
-    """A whole action file with each pose in its own one-step page from ``first_page`` on (default: the first run
-    of empty pages), and that first page; every other page of ``base`` (default: reset pages) is kept byte for
-    byte."""
-    data = bytearray(base if base is not None else reset_file())
-    check_file(bytes(data), "base")
-    if not poses:
-        return bytes(data), 0
-    units = step_units(seconds)
-    first = first_empty_run(bytes(data), len(poses)) if first_page is None else first_page
-    check_pages_free(bytes(data), first, len(poses), force)
-    for k, pose in enumerate(poses):
-        i = first + k
-        page = encode_page(pose.name, [StepBytes(pose_words(pose, spec), 0, units)])
-        data[i * PAGE_SIZE:(i + 1) * PAGE_SIZE] = page
-    return bytes(data), first

@@ -1,15 +1,17 @@
 """Walking: footsteps, ZMP preview control, swing trajectories, the closed-form leg IK and the gait generator.
 
 :func:`plan_gait` turns :class:`GaitParams` (or a preset, :func:`read_preset`) into a :class:`Gait`: joint goals
-every 8 ms with the planned CoM, ZMP and feet; :func:`walk_physics` plays it in PyBullet and/or MuJoCo.
+every 8 ms with the planned CoM, ZMP and feet; :func:`gait_schedule` makes it the controller that
+:func:`op2motion.physics.check` plays in PyBullet and/or MuJoCo, and :func:`walk_summary` reports the walk.
 """
 
 from __future__ import annotations
 
 from op2motion.gait.generator import Gait, plan_gait
 from op2motion.gait.params import GaitParams, read_preset
-from op2motion.gait.presets import PRESETS, preset_path
-from op2motion.gait.report import gait_csv, gait_summary, gait_webots, walk_physics
+from op2motion.gait.presets import PRESETS, load_preset, preset_path
+from op2motion.gait.report import gait_csv, gait_summary, gait_webots, side_pushes, walk_summary
+from op2motion.gait.schedule import gait_plan, gait_schedule
 
-__all__ = ["PRESETS", "Gait", "GaitParams", "gait_csv", "gait_summary", "gait_webots", "plan_gait",
-           "preset_path", "read_preset", "walk_physics"]
+__all__ = ["PRESETS", "Gait", "GaitParams", "gait_csv", "gait_plan", "gait_schedule", "gait_summary", "gait_webots",
+           "load_preset", "plan_gait", "preset_path", "read_preset", "side_pushes", "walk_summary"]

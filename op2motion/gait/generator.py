@@ -202,9 +202,9 @@ def standing_height(params: GaitParams, spec: Spec) -> float:
 
 
 def plan_gait(params: GaitParams, spec: Spec, target: tuple[float, float, float] | None = None,
-              on_pass: Callable[[], Any] | None = None) -> Gait:
+              on_progress: Callable[[float, float], Any] | None = None) -> Gait:
     """Plan a walk (see the module docstring); ``target`` (x [m], y [m], yaw [rad]) walks there instead of
-    ``params.steps`` steps; ``on_pass`` is called after each planning pass (progress)."""
+    ``params.steps`` steps; ``on_progress(done, total)`` gets the planning passes done."""
     plan = plan_footsteps(params, spec, target)
     timeline = build_timeline(params, plan)
     body = _Body(spec, timeline)
@@ -229,8 +229,8 @@ def plan_gait(params: GaitParams, spec: Spec, target: tuple[float, float, float]
             goals = body.goals(arm_rows(params, timeline, spec, rot, pos), pos, rot)
             com = body.com(body.configs(goals, pos, rot))
         com, zmp = body.zmp(body.configs(goals, pos, rot))
-        if on_pass is not None:
-            on_pass()
+        if on_progress is not None:
+            on_progress(p + 1, params.zmp_passes + 1)
         if p < params.zmp_passes:
             fix = track_reference(gains, timeline.zmp_ref - zmp, start=np.zeros(2))
             target_com = target_com + fix.com

@@ -10,6 +10,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from op2motion.errors import InputError
+from op2motion.gait.params import GaitParams, read_preset
 
 PRESETS = ("forward", "backward", "sideways", "turn_left", "turn_right")
 DEFAULT_PRESET = "forward"
@@ -39,3 +40,8 @@ def preset_path(preset: str | None) -> Path:
     if shipped is None:
         raise InputError(f"expected a gait preset file or one of {', '.join(PRESETS)}, got {text!r}", "preset")
     return shipped
+
+
+def load_preset(preset: str | None = None) -> GaitParams:
+    """The gait parameters of a preset file or a shipped preset's name (default: :data:`DEFAULT_PRESET`)."""
+    return read_preset(preset_path(preset))

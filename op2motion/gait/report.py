@@ -1,20 +1,19 @@
-"""A planned gait as people and other tools see it: the JSON summary, CSV and Webots exports, physics runs.
-
-:func:`walk_physics` plays the gait in each engine asked for (:func:`op2motion.physics.walk.validate_walk`), with
-optional side pushes and repeated runs from randomly perturbed starts (seeded), and says whether the engines agree.
+"""A planned gait as people and other tools see it: the JSON summary, CSV and Webots exports, and the walk's
+physics results (a :class:`~op2motion.physics.CheckReport` of its schedule, :mod:`.schedule`) as JSON.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import asdict
-from typing import Any, Callable, Sequence
+from typing import Any
 
 import numpy as np
 
 from op2motion.formats.tables import goals_csv, webots_rows
 from op2motion.gait.generator import Gait
-from op2motion.physics.walk import validate_walk
+from op2motion.physics import CheckReport, EngineReport, Pushes, RunReport
+from op2motion.physics.report import OPPOSITE
 from op2motion.robot.spec import Spec
 
 
@@ -53,35 +52,43 @@ def gait_webots(gait: Gait, spec: Spec) -> str:
     return webots_rows(gait.times, gait.goals, spec, names)
 
 
-def walk_physics(gait: Gait, spec: Spec, engines: Sequence[str], push_n: float = 0.0, trials: int = 0,
-                 perturb_deg: float = 0.5, seed: int = 0,
-                 on_step: Callable[[], Any] | None = None) -> tuple[dict[str, Any], dict[str, Any]]:
-    """Play ``gait`` in each engine: the walk's measurements, side pushes of ``push_n`` [N], and ``trials`` more
-    runs each starting with every joint off its first goal by a normal draw of ``perturb_deg`` [deg] (seed
-    ``seed``). Returns the JSON-ready results with ``fell`` (any engine's main run), ``agree`` and the trials'
-    counts, and each engine's main run (:class:`op2motion.physics.walk.WalkRun`)."""
-    out: dict[str, Any] = {"engines": {}}
-    runs: dict[str, Any] = {}
-    rng = np.random.default_rng(seed)
-    offsets = [np.radians(rng.normal(0.0, perturb_deg, len(spec.joints))) for _ in range(trials)]
+def _run_summary(run: RunReport) -> dict[str, Any]:
+    """One walking run's JSON: its setup, verdict and walking measurements."""
+    w = run.walk
+    assert w is not None, "a walk's run has walking measurements"
+    return {"engine": run.engine, "servo": run.servo, "time_step_s": run.time_step_s, "seconds": run.seconds,
+            "fell": run.fell, "reasons": run.reasons, "distance_m": round(w.distance_m, 4),
+            "mean_speed_mps": round(w.mean_speed_mps, 4), "overall_speed_mps": round(w.overall_speed_mps, 4),
+            "lateral_drift_m": round(w.lateral_drift_m, 4), "heading_error_deg": round(w.heading_error_deg, 2),
+            "turn_rate_deg_s": round(w.turn_rate_deg_s, 2), "cop_inside_fraction": round(w.cop_inside_fraction, 4),
+            "worst_torque": w.worst_torque.as_dict(), "feet_slip_m": run.feet_slip_m,
+            "self_collisions": [list(p) for p in run.self_collisions],
+            "failures": [{"reason": f.reason, "time_s": round(f.time_s, 3), "detail": f.detail} for f in run.failures]}
 
-    def run(engine: str, push: float, offset: np.ndarray | None) -> Any:
-        return validate_walk(gait.goals, gait.p_gains, gait.supports, gait.timeline.contact, gait.torso_pos,
-                             gait.torso_rot, gait.walking_s, gait.steady_window, spec, gait.dt, engine, push,
-                             start_offset=offset, start_joints=gait.joints[0], on_step=on_step)
 
-    for engine in engines:
-        runs[engine] = run(engine, push_n, None)
-        summary = runs[engine].summary()
-        if trials:
-            results = [run(engine, 0.0, o) for o in offsets]
-            summary["trials"] = {"runs": trials, "walked": sum(not r.fell for r in results),
-                                 "perturb_deg": perturb_deg, "seed": seed,
-                                 "mean_speed_mps": [round(r.mean_speed_mps, 4) for r in results],
-                                 "reasons": [r.validation.reasons for r in results]}
-        out["engines"][engine] = summary
-    verdicts = [s["fell"] for s in out["engines"].values()]
-    out["fell"] = any(verdicts)
-    out["agree"] = len(set(verdicts)) == 1
-    out["pushes_survived"] = all(not p["fell"] for s in out["engines"].values() for p in s["pushes"])
-    return out, runs
+def engine_summary(report: EngineReport, walk_start_s: float) -> dict[str, Any]:
+    """One engine's walk JSON: the main run, the side pushes (``from`` the side the push comes from, ``at_s`` [s]
+    into the walk) and the perturbed trials."""
+    out = _run_summary(report.run)
+    out["pushes"] = [{"from": OPPOSITE[p.direction], "force_n": p.force_n, "at_s": round(p.start_s - walk_start_s, 3),
+                      "duration_s": p.duration_s, "fell": p.fell, "reasons": p.reasons} for p in report.pushes]
+    if report.trials is not None:
+        runs = report.trials.runs
+        out["trials"] = {"runs": len(runs), "walked": report.trials.survived, "perturb_deg": report.trials.perturb_deg,
+                         "seed": report.trials.seed,
+                         "mean_speed_mps": [round(r.walk.mean_speed_mps, 4) if r.walk else 0.0 for r in runs],
+                         "reasons": [r.reasons for r in runs]}
+    return out
+
+
+def walk_summary(report: CheckReport, walk_start_s: float) -> dict[str, Any]:
+    """The walk's physics JSON: each engine's summary, ``fell`` (any engine's main run), ``agree`` and whether
+    every push was survived."""
+    return {"engines": {name: engine_summary(e, walk_start_s) for name, e in report.engines.items()},
+            "fell": report.fell, "agree": report.agree, "pushes_survived": report.pushes_survived}
+
+
+def side_pushes(force_n: float) -> Pushes:
+    """A walk's pushes: ``force_n`` [N] from the left, then from the right (the force pointing right, then left),
+    halfway through the walk."""
+    return Pushes(force_n, ("right", "left"))

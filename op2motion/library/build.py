@@ -27,11 +27,10 @@ from op2motion.fileio import write_atomic
 from op2motion.formats.posefile import pose_to_json
 from op2motion.library.grid import Job
 from op2motion.library.index import INDEX_JSON, IndexRow, load_index, reconcile, write_index
-from op2motion.physics import DEFAULT_SECONDS
 from op2motion.posture.pso import PSOSettings
 from op2motion.robot.spec import Spec
 from op2motion.robot.specfile import load_spec
-from op2motion.workflow import DEFAULT_RESTARTS, solve
+from op2motion.workflow import DEFAULT_RESTARTS, Validate, solve
 
 MAX_WORKERS = 64
 WATCHDOG_PERIOD_S = 0.5
@@ -40,13 +39,11 @@ _PR_SET_PDEATHSIG = 1   # linux/prctl.h
 
 @dataclass(frozen=True)
 class BuildSettings:
-    """How each target is solved: PSO settings, restarts, physics validation and its simulated time [s]."""
+    """How each target is solved: PSO settings, restarts, and the physics check of each reached pose (None: none)."""
 
     pso: PSOSettings = PSOSettings()
     restarts: int = DEFAULT_RESTARTS
-    validate: bool = False
-    seconds: float = DEFAULT_SECONDS
-    engine: str = "pybullet"
+    validate: Validate | None = None
 
 
 @dataclass(frozen=True)
@@ -102,8 +99,7 @@ def _solve_job(task: tuple[Job, str | None, str, BuildSettings]) -> tuple[IndexR
         spec = load_spec(spec_path)
         if spec.sha256 != sha:
             return _row(job, False, "error: the spec file changed during the build"), None
-        out = solve(job.problem, spec, settings.pso, restarts=settings.restarts, validate=settings.validate,
-                    seconds=settings.seconds, engine=settings.engine)
+        out = solve(job.problem, spec, settings.pso, restarts=settings.restarts, validate=settings.validate)
     except Op2MotionError as exc:
         return _row(job, False, f"error: {exc}"), None
     r, v = out.result, out.validation

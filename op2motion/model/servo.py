@@ -42,6 +42,7 @@ class ServoModel:
     stall_torque: float         # [N·m] at the supply voltage
     no_load_speed: float        # [rad/s] at the supply voltage
     p_gains: tuple[int, ...]    # the firmware P gains behind kp
+    kp_per_p: float = 0.0       # stiffness per unit of P gain [N·m/rad]: duty_per_p_rad x stall x stiffness scale
     stiffness_scale: float = 1.0
     supply_voltage: float = 12.0
 
@@ -63,10 +64,14 @@ class ServoModel:
         gains = np.full(len(spec.joints), s.p_gain_default) if p_gains is None else np.asarray(p_gains)
         if gains.shape != (len(spec.joints),) or np.any(gains < 0) or np.any(gains > 1024):
             raise InputError(f"expected {len(spec.joints)} P gains 0..1024, got {gains!r}", "p_gains")
-        kp = s.duty_per_p_rad * gains * s.stall_torque_nm * stiffness_scale
-        return cls(kp, s.stall_torque_nm / s.no_load_speed_rad_s, s.viscous_nm_s_rad, s.friction_nm,
+        per_p = s.duty_per_p_rad * s.stall_torque_nm * stiffness_scale
+        return cls(per_p * gains, s.stall_torque_nm / s.no_load_speed_rad_s, s.viscous_nm_s_rad, s.friction_nm,
                    s.max_duty * s.stall_torque_nm, s.armature_kg_m2, s.stall_torque_nm, s.no_load_speed_rad_s,
-                   tuple(int(g) for g in gains), float(stiffness_scale), s.supply_voltage_v)
+                   tuple(int(g) for g in gains), per_p, float(stiffness_scale), s.supply_voltage_v)
+
+    def kp_of(self, p_gains: np.ndarray) -> np.ndarray:
+        """The stiffness [N·m/rad] of servos at firmware P gains ``p_gains`` (the one place Kp follows from P)."""
+        return self.kp_per_p * np.asarray(p_gains, dtype=float)
 
     @property
     def damping(self) -> float:

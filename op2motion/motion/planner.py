@@ -24,9 +24,10 @@ from typing import Sequence
 import numpy as np
 
 from op2motion.errors import InputError
-from op2motion.formats.actionlayout import MAX_BYTE, MAX_STEPS, NUM_PAGES, StepBytes, encode_page, reset_file
+from op2motion.formats.action import ActionFile
+from op2motion.formats.actionlayout import MAX_BYTE, MAX_STEPS, NUM_PAGES, StepBytes, encode_page
 from op2motion.formats.motionfile import PROFILES
-from op2motion.motion.player import IDS, play, step_calls
+from op2motion.motion.player import play, start_ticks, step_calls
 from op2motion.motion.shift import balanced, settled_swing_heights, with_weight_shifts
 from op2motion.motion.trajectory import Trajectory, from_playback
 from op2motion.motion.waypoint import Waypoint, check_waypoints
@@ -168,12 +169,8 @@ def robot_pages(name: str, steps: Sequence[StepBytes], first_page: int = _FIRST_
 def _robot_rows(waypoints: Sequence[Waypoint], spec: Spec, v_max: float) -> tuple[np.ndarray, np.ndarray,
                                                                                    list[str], np.ndarray]:
     steps, notes, owner = robot_steps(waypoints, spec, v_max)
-    data = bytearray(reset_file())
-    for k, page in enumerate(robot_pages("motion", steps)):
-        i = _FIRST_PAGE + k
-        data[i * len(page):(i + 1) * len(page)] = page
-    by_id = {j.id: int(t) for j, t in zip(spec.joints, servo_to_ticks(waypoints[0].servo, spec))}
-    played = from_playback(play(bytes(data), _FIRST_PAGE, [by_id[i] for i in IDS]), spec)
+    action, _ = ActionFile.blank().with_pages(robot_pages("motion", steps), _FIRST_PAGE)
+    played = from_playback(play(action, _FIRST_PAGE, start_ticks(waypoints[0].servo, spec)), spec)
     # the segment of each row, from the calls each step takes (the first call prepares the first step)
     bounds = 1 + np.cumsum([step_calls(s.time, s.pause) for s in steps])
     step_of = np.minimum(np.searchsorted(bounds, np.arange(len(played.goals)), side="right"), len(steps) - 1)

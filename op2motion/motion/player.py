@@ -26,16 +26,18 @@ from typing import Sequence
 import numpy as np
 
 from op2motion.errors import InputError
+from op2motion.formats.action import ActionFile
 from op2motion.formats.actionlayout import (
     NUM_PAGES,
     SPEED_BASE_SCHEDULE,
     TIME_BASE_SCHEDULE,
     RawPage,
-    check_file,
     parse_page,
     reset_page,
 )
 from op2motion.robot.framework import CONTROL_PERIOD_S, DEFAULT_P_GAIN, p_gain_of_slope
+from op2motion.robot.joints import servo_to_ticks
+from op2motion.robot.spec import Spec
 
 INVALID_BIT = 0x4000
 MAX_TICK = 4095                    # the 4096 build clamps every goal to 0..4095
@@ -109,11 +111,11 @@ class Playback:
 class ActionPlayer:
     """The player's state, as the framework keeps it between calls."""
 
-    def __init__(self, data: bytes, start_ticks: Sequence[int]):
-        check_file(data, "action file")
+    def __init__(self, action: ActionFile | bytes, start_ticks: Sequence[int]):
+        action = action if isinstance(action, ActionFile) else ActionFile(bytes(action))
         if len(start_ticks) != len(IDS):
             raise InputError(f"expected {len(IDS)} start ticks (IDs 1-20), got {len(start_ticks)}", "start")
-        self.data = data
+        self.action = action
         n = len(IDS)
         self.value = [int(t) for t in start_ticks]     # the goals sent (the joint values)
         self.gain = [DEFAULT_P_GAIN] * n
@@ -135,7 +137,7 @@ class ActionPlayer:
         self.played: list[int] = []
 
     def _load(self, index: int) -> RawPage:
-        page = parse_page(self.data, index)
+        page = self.action.raw(index)
         return page if page.valid else parse_page(reset_page(), 0)   # a bad page plays as a reset page
 
     def start_page(self, index: int) -> None:
@@ -144,7 +146,7 @@ class ActionPlayer:
             raise InputError(f"expected a page from 1 to {NUM_PAGES - 1}, got {index}", "page")
         if self.playing:
             raise InputError("a page is already playing", "page")
-        page = parse_page(self.data, index)
+        page = self.action.raw(index)
         if not page.playable:
             why = "fails its checksum" if not page.valid else "holds no steps" if not page.stepnum else "has repeat 0"
             raise InputError(f"page {index} {why}: the robot would not play it", "page")
@@ -294,11 +296,17 @@ class ActionPlayer:
         self.num = accel
 
 
-def play(data: bytes, page: int, start_ticks: Sequence[int], stop_at: int | None = None,
+def start_ticks(servo: np.ndarray, spec: Spec) -> list[int]:
+    """The goal ticks of IDs 1-20 (the player's order) for servo angles (20,) [rad] in the spec's joint order."""
+    by_id = {j.id: int(t) for j, t in zip(spec.joints, servo_to_ticks(servo, spec))}
+    return [by_id[i] for i in IDS]
+
+
+def play(action: ActionFile | bytes, page: int, start_ticks: Sequence[int], stop_at: int | None = None,
          brake_at: int | None = None) -> Playback:
     """Play ``page`` of an action file from ``start_ticks`` (IDs 1-20) to its end; ``stop_at`` / ``brake_at`` call
     ``Stop()`` / ``Brake()`` just before that call."""
-    player = ActionPlayer(data, start_ticks)
+    player = ActionPlayer(action, start_ticks)
     player.start_page(page)
     goals, gains = [list(player.value)], [list(player.gain)]
     call = 0

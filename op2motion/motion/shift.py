@@ -21,7 +21,7 @@ from op2motion.kinematics.dh import MATRIX_BELOW, forward_dh_frames
 from op2motion.kinematics.points import ROW
 from op2motion.model.compliance import Compliance, SwingLegSag
 from op2motion.motion.waypoint import Waypoint
-from op2motion.robot.joints import servo_to_book
+from op2motion.robot.joints import hip_roll_sign, servo_to_book
 from op2motion.robot.spec import Spec
 
 SHIFT_S = 1.0                  # the time a weight shift takes [s]
@@ -37,18 +37,13 @@ _ITERATIONS = 30
 _STEP_RAD = 1e-4
 
 
-def _hip_roll_sign(spec: Spec, side: str) -> float:
-    """The hip-roll change that undoes an ankle-roll change (torso level): the ratio of the axes' x parts."""
-    return -spec.joint(f"{side}_ank_roll").axis[0] / spec.joint(f"{side}_hip_roll").axis[0]
-
-
 def _leaned(spec: Spec, servo: np.ndarray, roll: np.ndarray | float, pitch: np.ndarray | float) -> np.ndarray:
     """Poses (..., 20) with both legs leaned by ``roll`` (torso level, feet parallel) and both ankles pitched by
     ``pitch`` [rad] (scalars or one per pose)."""
     out = np.array(servo, dtype=float)
     for s in ("l", "r"):
         out[..., spec.joint_names.index(f"{s}_ank_roll")] += roll
-        out[..., spec.joint_names.index(f"{s}_hip_roll")] += np.multiply(roll, _hip_roll_sign(spec, s))
+        out[..., spec.joint_names.index(f"{s}_hip_roll")] += np.multiply(roll, hip_roll_sign(spec, s))
         # the same forward lean on both legs: the pitch axes of the two ankles point opposite ways
         sign = spec.joint(f"{s}_ank_pitch").axis[1] / spec.joint("l_ank_pitch").axis[1]
         out[..., spec.joint_names.index(f"{s}_ank_pitch")] += np.multiply(pitch, sign)

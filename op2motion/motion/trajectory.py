@@ -13,6 +13,7 @@ import numpy as np
 
 from op2motion.errors import InputError
 from op2motion.motion.player import IDS, Playback
+from op2motion.physics import Schedule
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.joints import ticks_to_servo
 from op2motion.robot.spec import Spec
@@ -56,6 +57,11 @@ class Trajectory:
     def acceleration(self) -> np.ndarray:
         """Goal acceleration [rad/s²] (K, 20)."""
         return np.gradient(self.velocity(), self.dt, axis=0) if len(self.goals) > 1 else np.zeros_like(self.goals)
+
+    def schedule(self, spec: Spec) -> Schedule:
+        """The open-loop controller that sends these goals every :attr:`dt` in physics
+        (:func:`op2motion.physics.check`)."""
+        return Schedule.motion(self.goals, self.p_gains, self.supports, spec, self.dt)
 
     def segment_of(self, row: int) -> str:
         """The name of the segment row ``row`` belongs to."""

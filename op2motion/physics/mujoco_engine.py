@@ -14,8 +14,8 @@ import numpy as np
 
 from op2motion.model.servo import ServoModel
 from op2motion.model.urdf import URDF_ROOT, build_urdf, frame_points
-from op2motion.physics.scene import FLOOR_FRICTION, GRAVITY_M_S2, Contact
-from op2motion.robot.spec import Spec
+from op2motion.physics.scene import FLOOR_FRICTION, Contact
+from op2motion.robot.spec import GRAVITY_M_S2, Spec
 
 SOLREF = (0.005, 1.0)                    # contact time constant [s] and damping ratio
 SOLIMP = (0.95, 0.99, 0.001, 0.5, 2.0)   # contact impedance: stiff, little penetration
@@ -105,6 +105,12 @@ class MuJoCoEngine:
         d = self.data
         self.mj.mj_kinematics(self.model, d)
         return d.xpos[self.root].copy(), d.xmat[self.root].reshape(3, 3).copy()
+
+    def base_velocity(self) -> tuple[np.ndarray, np.ndarray]:
+        """Velocity of the torso link frame's origin: linear [m/s] and angular [rad/s], world frame."""
+        twist = np.zeros(6)                       # MuJoCo: (angular, linear) at the body's frame origin
+        self.mj.mj_objectVelocity(self.model, self.data, self.mj.mjtObj.mjOBJ_BODY, self.root, twist, 0)
+        return twist[3:].copy(), twist[:3].copy()
 
     def contacts(self) -> list[Contact]:
         """Contacts of the robot with the floor (``other`` None) and with itself, at the current state."""

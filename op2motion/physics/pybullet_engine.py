@@ -25,8 +25,8 @@ import numpy as np
 
 from op2motion.model.servo import ServoModel
 from op2motion.model.urdf import URDF_ROOT, build_urdf
-from op2motion.physics.scene import FLOOR_FRICTION, GRAVITY_M_S2, Contact
-from op2motion.robot.spec import Spec
+from op2motion.physics.scene import FLOOR_FRICTION, Contact
+from op2motion.robot.spec import GRAVITY_M_S2, Spec
 
 SOLVER_ITERATIONS = 20   # PyBullet's default 50 gives the same verdicts and margins (within 0.4 mm), 25 % slower
 
@@ -150,6 +150,15 @@ class PyBulletEngine:
         inv = c.invertTransform(*self._inertial)
         pos, orn = c.multiplyTransforms(com_pos, com_orn, inv[0], inv[1])
         return np.asarray(pos), np.asarray(c.getMatrixFromQuaternion(orn)).reshape(3, 3)
+
+    def base_velocity(self) -> tuple[np.ndarray, np.ndarray]:
+        """Velocity of the torso link frame's origin: linear [m/s] and angular [rad/s], world frame (PyBullet
+        reports the base's centre of mass: v_origin = v_com + w x (p_origin - p_com))."""
+        c = self.client
+        linear, angular = (np.asarray(v, dtype=float) for v in c.getBaseVelocity(self.robot))
+        com = np.asarray(c.getBasePositionAndOrientation(self.robot)[0])
+        origin, _ = self.base()
+        return linear + np.cross(angular, origin - com), angular
 
     def contacts(self) -> list[Contact]:
         """Contacts of the robot with the floor (``other`` None) and with itself."""

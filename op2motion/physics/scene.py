@@ -1,4 +1,4 @@
-"""The scene every engine builds: gravity, the floor, the time step, and how contacts are reported.
+"""The scene every engine builds: the floor, the time step, and how contacts are reported.
 
 The floor is a plane with Coulomb friction :data:`FLOOR_FRICTION` against every link (a robot foot on a
 competition carpet or a lab floor: the walking literature and ROBOTIS-OP3-Common#11 use about 0.8). Each engine
@@ -10,8 +10,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
-from op2motion.robot.spec import GRAVITY_M_S2  # noqa: F401  (re-exported for the engines)
 
 FLOOR_FRICTION = 0.8
 TIME_STEP_S = 0.001

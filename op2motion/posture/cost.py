@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from op2motion import book
-from op2motion.errors import InputError
+from op2motion.errors import InputError, ref
 from op2motion.kinematics import MODELS, BodyPoints, forward
 from op2motion.kinematics.dh import MATRIX_BELOW, forward_dh_frames
 from op2motion.kinematics.dh_chain import matrix_frames
@@ -85,8 +85,8 @@ class PostureProblem:
         if self.com_model not in COM_MODELS:
             raise InputError(f"expected one of {', '.join(COM_MODELS)}, got {self.com_model!r}", "com_model")
         if self.com_model == COM_MODEL_FULL and self.model != "dh":
-            raise InputError("the full-inertia CoM needs the D-H model; choose --model dh or --com-model book",
-                             "com_model")
+            raise InputError(f"the full-inertia CoM needs the D-H model; choose {ref('model')} dh or "
+                             f"{ref('com_model')} book", "com_model")
         return self
 
     def extents(self, spec: Spec) -> tuple[float, float, float, float]:

@@ -179,6 +179,14 @@ def joint_range(joint: Joint, kind: str) -> tuple[float, float]:
     return joint.mechanical if kind == "mechanical" else joint.safe
 
 
+def hip_roll_sign(spec: Spec, side: str) -> float:
+    """The hip-roll change that undoes an ankle-roll change of the ``side`` (``l``/``left`` or ``r``/``right``) leg,
+    so the torso stays level: with the pitch joints cancelling, the roll from torso to foot is a_hip q_hip +
+    a_ankle q_ankle (a: the axes' x components)."""
+    s = side[0]
+    return -spec.joint(f"{s}_ank_roll").axis[0] / spec.joint(f"{s}_hip_roll").axis[0]
+
+
 def limit_violations(servo: Sequence[float], spec: Spec, kind: str = "mechanical") -> list[LimitViolation]:
     """Joints of one pose (servo angles (20,) [rad]) outside their ``kind`` range (see :data:`LIMIT_KINDS`)."""
     out: list[LimitViolation] = []

@@ -1,0 +1,169 @@
+"""The physics loop, engine-independent: place the robot, ramp gravity in if needed, call the controller every
+8 ms with simulated sensors, drive the servo model every millisecond, record.
+
+1. The first planned pose is placed on the floor (:func:`.body.placement`), at rest, with its joints where the
+   servos' springs hold it still against gravity (:func:`op2motion.model.equilibrium.sagged_angles`) and gravity at
+   full strength, so the start is neither an impact nor a transient. A plan with torso poses (a walk), a pose for
+   which no such equilibrium exists, and one whose sag would press a foot meant to swing into the floor (it was
+   not standing on one leg) start at their goals instead while gravity rises from zero over :data:`.plan.RAMP_S`.
+2. Every :data:`~op2motion.robot.framework.CONTROL_PERIOD_S` the controller gets the time, the torso's gyro and
+   accelerometer (torso frame; the acceleration is the torso origin's velocity change over the last period) and the
+   joint angles (:mod:`.controller`), and returns the goals the servos hold until the next call.
+3. Every physics step (1 kHz) the servo model turns goals and joint angles into motor torques; a push, if any,
+   acts on the torso's centre of mass; every :data:`.track.SAMPLE_S` the state is recorded (:class:`.track.Track`).
+"""
+
+from __future__ import annotations
+
+import inspect
+from dataclasses import dataclass, replace
+from typing import Callable
+
+import numpy as np
+
+from op2motion.errors import InputError
+from op2motion.model.equilibrium import sagged_angles
+from op2motion.model.servo import ServoModel
+from op2motion.physics.body import Body, BodyState, placement
+from op2motion.physics.controller import Controller, Goals
+from op2motion.physics.engine import Engine
+from op2motion.physics.plan import RAMP_S, PlannedStates, planned_states
+from op2motion.physics.track import SAMPLE_S, Recorder, Track, foot_loads
+from op2motion.robot.framework import CONTROL_PERIOD_S
+from op2motion.robot.spec import GRAVITY_M_S2
+
+SAGGED_GAP_TOL_M = 1e-6    # the sagged start may leave a supporting foot this much higher than the rigid one
+
+
+@dataclass(frozen=True)
+class Push:
+    """A force (3,) [N] (world frame) at the torso's centre of mass from ``start_s`` for ``duration_s`` [s]."""
+
+    force: np.ndarray
+    start_s: float
+    duration_s: float
+
+
+@dataclass(frozen=True)
+class RunSetup:
+    """What differs between the runs of one check: a push, and joint offsets (20,) [rad] at the start (a perturbed
+    start: the joints start that far from where the plan puts them)."""
+
+    push: Push | None = None
+    start_offset: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class StartFacts:
+    """Where a run started: the body state, the planned states (with the start's flat foot and gap), and whether
+    gravity was ramped in."""
+
+    state: BodyState
+    planned: PlannedStates
+    ramped: bool
+
+
+def start_pose(body: Body, controller: Controller, servo: ServoModel
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, PlannedStates, bool]:
+    """Where a run starts (see the module docstring): joint angles (20,) [rad], torso position [m] and rotation,
+    the planned states (with the start's flat foot and gap), and whether gravity must be ramped in."""
+    plan = controller.plan
+    planned = planned_states(body, plan)
+    if plan.base is None:
+        q0 = sagged_angles(plan.goals[0], plan.supports[0], body.spec, servo.kp_of(plan.p_gains[0]),
+                           servo.torque_max)
+        if q0 is not None:
+            pos, rot, flat, gap = placement(body, q0, plan.supports[0])
+            if gap <= planned.gap + SAGGED_GAP_TOL_M:
+                return q0, pos, rot, replace(planned, flat_foot=flat, gap=gap), False
+    return plan.goals[0], planned.start_pos, planned.start_rot, planned, True
+
+
+class _Servos:
+    """The goals and stiffness the servos hold, updated from the controller every control tick."""
+
+    def __init__(self, controller: Controller, body: Body, servo: ServoModel):
+        self.controller, self.servo = controller, servo
+        self.names = body.spec.joint_names
+        self.index = {n: i for i, n in enumerate(self.names)}
+        self.goals = controller.plan.goals[0].copy()
+        self.kp = servo.kp_of(controller.plan.p_gains[0])
+        self.feet = "foot_forces_n" in inspect.signature(controller.step).parameters
+        self.foot_links = body.foot_links
+
+    def _apply(self, goals: Goals, row: int) -> None:
+        for name, value in goals.items():
+            if name not in self.index:
+                raise InputError(f"expected goals by official joint name ({self.names[0]}, ...), got {name!r}",
+                                 "goals")
+            self.goals[self.index[name]] = value
+        gains = getattr(self.controller, "p_gains", None)
+        plan_gains = self.controller.plan.p_gains[row]
+        self.kp = self.servo.kp_of(plan_gains if gains is None else [gains.get(n, p) for n, p in
+                                                                     zip(self.names, plan_gains)])
+
+    def start(self, q: np.ndarray) -> None:
+        """Ask the controller for its first goals."""
+        self._apply(self.controller.start(dict(zip(self.names, q.tolist()))), 0)
+
+    def tick(self, engine: Engine, t: float, imu: tuple[np.ndarray, np.ndarray], q: np.ndarray) -> None:
+        """One control tick: the sensors to the controller, its goals to the servos."""
+        if self.controller.done:
+            return
+        positions = dict(zip(self.names, q.tolist()))
+        if self.feet:
+            ground = [c for c in engine.contacts() if c.other is None and c.normal_force > 0.0]
+            loads = {side: load for side, (load, _) in foot_loads(ground, self.foot_links).items()}
+            goals = self.controller.step(t, *imu, positions, foot_forces_n=loads)    # type: ignore[call-arg]
+        else:
+            goals = self.controller.step(t, *imu, positions)
+        self._apply(goals, self.controller.plan.row(t))
+
+
+class _Imu:
+    """The CM-730's gyro and accelerometer, from the torso's simulated motion (torso frame)."""
+
+    def __init__(self) -> None:
+        self.last: np.ndarray | None = None
+
+    def read(self, engine: Engine, gravity_scale: float) -> tuple[np.ndarray, np.ndarray]:
+        """Angular velocity (3,) [rad/s] and specific force (3,) [m/s²] in the torso frame."""
+        _, rot = engine.base()
+        linear, angular = engine.base_velocity()
+        accel = np.zeros(3) if self.last is None else (linear - self.last) / CONTROL_PERIOD_S
+        self.last = linear
+        return rot.T @ angular, rot.T @ (accel + np.array([0.0, 0.0, GRAVITY_M_S2 * gravity_scale]))
+
+
+def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoModel, setup: RunSetup = RunSetup(),
+             on_tick: Callable[[float], object] | None = None) -> tuple[Track, StartFacts]:
+    """One run of ``controller`` for its plan's duration (see the module docstring); ``on_tick`` gets the
+    simulated time [s] after every control period. Returns the samples and where the run started."""
+    plan = controller.plan
+    q0, base_pos, base_rot, planned, ramp = start_pose(body, controller, servo)
+    engine.reset(base_pos, base_rot, q0 + (0.0 if setup.start_offset is None else setup.start_offset))
+    dt = engine.time_step
+    per_tick, every = max(1, int(round(CONTROL_PERIOD_S / dt))), max(1, int(round(SAMPLE_S / dt)))
+    steps = int(round(plan.duration_s / dt))
+    push = setup.push
+    pushing = range(0) if push is None else range(int(round(push.start_s / dt)),
+                                                   int(round((push.start_s + push.duration_s) / dt)))
+    servos, imu, recorder = _Servos(controller, body, servo), _Imu(), Recorder(body, servo)
+    gravity = 1.0
+    for k in range(steps):
+        t = k * dt
+        if t <= RAMP_S + dt:
+            gravity = min(1.0, t / RAMP_S) if ramp else 1.0
+            engine.set_gravity(gravity)
+        q, _ = engine.state()
+        if k == 0:
+            servos.start(q)
+            imu.read(engine, gravity)
+        elif k % per_tick == 0:
+            servos.tick(engine, t, imu.read(engine, gravity), q)
+        engine.step(servo.active_torque(servos.goals, q, servos.kp), push.force if k in pushing else None)
+        if k % every == every - 1 or k == steps - 1:
+            recorder.sample(engine, (k + 1) * dt, plan.row(t), servos.goals, servos.kp)
+        if on_tick is not None and k % per_tick == per_tick - 1:
+            on_tick((k + 1) * dt)
+    return recorder.track(), StartFacts(body.state(base_pos, base_rot, q0), planned, ramp)
