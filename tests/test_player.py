@@ -10,7 +10,7 @@ import pytest
 from helpers import DATA
 
 from op2motion.errors import InputError
-from op2motion.formats.actionlayout import PAGE_SIZE, StepBytes, encode_page, parse_page, reset_file
+from op2motion.formats.actionlayout import PAGE_SIZE, PageHeader, StepBytes, encode_page, parse_page, reset_file
 from op2motion.motion.player import play
 
 STOCK = (DATA / "motion_4096.bin").read_bytes()
@@ -33,7 +33,8 @@ def file_with(pages: dict[int, bytes]) -> bytes:
 
 def one_joint(goals: list[tuple[int, int, int]], accel: int = 5, **page) -> bytes:
     """A page moving ID 1 through (goal tick, time, pause) steps; the other joints not specified."""
-    return encode_page("test", [StepBytes({1: g}, pause, time) for g, time, pause in goals], accel=accel, **page)
+    return encode_page("test", [StepBytes({1: g}, pause, time) for g, time, pause in goals],
+                       PageHeader(accel=accel, **page))
 
 
 @pytest.mark.parametrize("page, calls", [(1, 257), (9, 129), (4, 464), (12, 231)])
@@ -137,7 +138,7 @@ def test_repeat_next_and_exit_chains():
     """Page 10 (two steps) repeats twice then goes to 11. A stop during its first step goes to its exit page 12
     after this play; once its last step has begun the follower is chosen, so the stop waits one more play; a stop
     before the first call is lost (the first call clears it)."""
-    data = file_with({10: one_joint([(2148, 10, 0), (2248, 10, 0)], repeat=2, next_page=11, exit_page=12),
+    data = file_with({10: one_joint([(2148, 10, 0), (2248, 10, 0)], repeat=2, next=11, exit=12),
                       11: one_joint([(2048, 10, 0)]), 12: one_joint([(1948, 10, 0)])})
     assert play(data, 10, FREE).pages == (10, 10, 11)
     stopped = play(data, 10, FREE, stop_at=5)

@@ -133,7 +133,7 @@ def cmd_convert(args: argparse.Namespace, spec: Spec) -> int:
 
 def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion plot``: the figure, with the physics verdict when asked (or recorded in the pose file)."""
-    from op2motion.figures.pose import PB_PSI_NOTE, pose_figure
+    from op2motion.figures.pose import PB_PSI_NOTE, Drawing, pose_figure
     from op2motion.fileio import OutputSet
     from op2motion.robot.joints import book_to_servo
 
@@ -148,8 +148,8 @@ def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
 
         servo = pose.servo if pose is not None else book_to_servo(angles, spec)[0]
         validation = check(Schedule.hold(servo, support, spec, args.seconds), spec).run
-    png, drawn, reports = pose_figure(name, angles, spec, models, args.br, target, validation,
-                                      None if pose is None else pose.metrics, double=Support.of(support).is_double)
+    drawing = Drawing(models, args.br, target, double=Support.of(support).is_double)
+    png, drawn, reports = pose_figure(name, angles, spec, drawing, validation, None if pose is None else pose.metrics)
     outputs.put("output", png)
     out = outputs.commit()["output"]
     summary = {"png": str(out), "support": support, "drawn": drawn,
@@ -165,7 +165,7 @@ def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
 def cmd_arm_ik(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion arm-ik``."""
     from op2motion.errors import CheckFailed, Unreachable
-    from op2motion.figures.pose import pose_figure
+    from op2motion.figures.pose import Drawing, pose_figure
     from op2motion.fileio import OutputSet
     from op2motion.kinematics.arm_ik import ARMS, solve_arm_ik
     from op2motion.kinematics.report import evaluate
@@ -175,7 +175,7 @@ def cmd_arm_ik(args: argparse.Namespace, spec: Spec) -> int:
     angles, name, _ = angles_from(args, spec)
     delta = vec3(args.delta, "delta")
     tol = args.tol_mm / 1000.0
-    res = solve_arm_ik(angles, args.hand, delta, spec, args.model, args.single_step, tol,
+    res = solve_arm_ik(angles, args.hand, delta, spec, args.model, single_step=args.single_step, tol=tol,
                        enforce_limits=not args.allow_limits)
     arm = ARMS[args.hand]
     converged = res.mode == "single-step" or res.error_m <= tol
@@ -205,8 +205,8 @@ def cmd_arm_ik(args: argparse.Namespace, spec: Spec) -> int:
         target = start.points.point(arm.hand)[0] + res.requested
         lines = [f"{args.hand} hand moved by ({', '.join(f'{v * 1000:+.1f}' for v in res.requested)}) mm with "
                  f"{res.mode} arm IK: {deltas}; error {res.error_m * 1000:.3f} mm"]
-        png, _, _ = pose_figure(f"{name} + arm IK", res.angles, spec, (res.model,), target=target, lines=lines,
-                                ghost=res.initial)
+        drawing = Drawing((res.model,), target=target, lines=lines, ghost=res.initial)
+        png, _, _ = pose_figure(f"{name} + arm IK", res.angles, spec, drawing)
         outputs.put("plot", png)
         result["png"] = str(outputs.commit()["plot"])
     emit(args, result, text)

@@ -8,7 +8,7 @@ cost curves of every attempt.
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -57,18 +57,29 @@ def _numbers(report: PoseReport, double: bool = False) -> list[str]:
             f"swing foot lowest corner {mm(report.swing_foot_min_z)}"]
 
 
-def pose_figure(name: str, angles: BookAngles, spec: Spec, models: Sequence[str] = ("dh",), br: float = 1.0,
-                target: Sequence[float] | None = None, validation: RunReport | None = None,
-                metrics: Mapping[str, Any] | None = None, lines: Sequence[str] = (),
-                ghost: BookAngles | None = None, double: bool = False
-                ) -> tuple[bytes, dict[str, Any], list[PoseReport]]:
-    """PNG bytes, a report of what was drawn, and the pose reports of one pose on ``models``.
+@dataclass(frozen=True)
+class Drawing:
+    """What a pose figure shows besides the pose: one row per kinematic model (``dh``, ``pb``), the support
+    rectangle shrunk by ``br``, a ``target`` [m], lines of text, a ``ghost`` pose drawn faintly (e.g. before an arm
+    IK move), and ``double``: the pose measured as standing on both feet (the support polygon is the hull of both
+    soles; the kinematic chain still starts at the book angles' support sole)."""
 
-    ``double`` draws and measures the pose as standing on both feet: the support polygon is the hull of both soles
-    (the kinematic chain still starts at ``angles.support``'s sole).
-    """
+    models: Sequence[str] = ("dh",)
+    br: float = 1.0
+    target: Sequence[float] | None = None
+    lines: Sequence[str] = ()
+    ghost: BookAngles | None = None
+    double: bool = False
+
+
+def pose_figure(name: str, angles: BookAngles, spec: Spec, drawing: Drawing = Drawing(),
+                validation: RunReport | None = None, metrics: Mapping[str, Any] | None = None
+                ) -> tuple[bytes, dict[str, Any], list[PoseReport]]:
+    """PNG bytes, a report of what was drawn, and the pose reports of one pose (see :class:`Drawing`); the verdict
+    comes from ``validation`` (a physics run now) or from a pose file's recorded ``metrics``."""
+    br, target, ghost, double = drawing.br, drawing.target, drawing.ghost, drawing.double
     rows, reports = [], []
-    for model in models:
+    for model in drawing.models:
         note, shown = "", angles
         if model == "pb" and np.any(angles.psi != 0.0):
             note, shown = PB_PSI_NOTE, replace(angles, psi=np.zeros_like(angles.psi))
@@ -81,8 +92,8 @@ def pose_figure(name: str, angles: BookAngles, spec: Spec, models: Sequence[str]
     support = "double" if double else angles.support
     margins = ({"margin_full_double_m": double_support_margin_m(reports[0])} if double else
                {"margin_lumped_m": reports[0].stability_margin_m, "margin_full_m": reports[0].stability_margin_full_m})
-    block = TitleBlock(f"{name}: {spec.name}, {support} support", [*lines, *_numbers(reports[0], double)], verdict, ok,
-                       margins)
+    block = TitleBlock(f"{name}: {spec.name}, {support} support", [*drawing.lines, *_numbers(reports[0], double)],
+                       verdict, ok, margins)
     png, drawn = render_poses(rows, spec, block)
     return png, drawn, reports
 
@@ -94,7 +105,8 @@ def outcome_figures(outcome: Outcome, name: str, spec: Spec) -> tuple[bytes, byt
     lines = [f"{p.hand} hand to ({', '.join(f'{v:.3f}' for v in p.target)}) m: {r.message}",
              f"torso tilt {np.degrees(r.terms.tilt[0]):.0f}°, PSO seed {r.settings.seed} (attempt {r.attempts}), "
              f"refinement {r.method}"]
-    png, drawn, _ = pose_figure(name, r.angles, spec, ("dh",), p.br, p.target, outcome.validation, lines=lines)
+    png, drawn, _ = pose_figure(name, r.angles, spec, Drawing(br=p.br, target=p.target, lines=lines),
+                                outcome.validation)
     attempts = r.attempt_pso or (r.pso,)
     cost = render_cost_curve([a.history for a in attempts], [a.hand_error_history for a in attempts], r.tolerance_m,
                              f"PSO cost, {name} ({len(attempts)} attempt(s))", r.chosen_attempt)

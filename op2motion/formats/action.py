@@ -185,10 +185,3 @@ def step_units(seconds: float, what: str = "time") -> int:
 def pose_words(pose: Pose, spec: Spec) -> dict[int, int]:
     """Goal words by Dynamixel ID of a pose."""
     return {j.id: int(t) for j, t in zip(spec.joints, servo_to_ticks(pose.servo, spec))}
-
-
-def encode_pose_page(pose: Pose, spec: Spec, seconds: float, base: bytes | None = None) -> bytes:
-    """A one-step page for a pose: name, goal ticks, ``seconds`` of motion, reset defaults elsewhere."""
-    return encode_page(pose.name, [StepBytes(pose_words(pose, spec), 0, step_units(seconds))], base=base)
-
-

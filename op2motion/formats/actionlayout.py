@@ -142,21 +142,34 @@ class StepBytes:
     time: int
 
 
-def encode_page(name: str, steps: Sequence[StepBytes], repeat: int = 1, next_page: int = 0, exit_page: int = 0,
-                slopes: Mapping[int, int] | None = None, speed: int = DEFAULT_SPEED, accel: int = DEFAULT_ACCEL,
+@dataclass(frozen=True)
+class PageHeader:
+    """A page's playing fields: ``repeat`` count, the ``next`` page (after the repeats) and the ``exit`` page (after
+    a stop), ``speed`` and ``accel`` (32: the framework's), and compliance bytes by Dynamixel ID (None: keep)."""
+
+    repeat: int = 1
+    next: int = 0
+    exit: int = 0
+    speed: int = DEFAULT_SPEED
+    accel: int = DEFAULT_ACCEL
+    slopes: Mapping[int, int] | None = None
+
+
+def encode_page(name: str, steps: Sequence[StepBytes], header: PageHeader = PageHeader(),
                 base: bytes | None = None) -> bytes:
     """A time-base page with up to 7 steps, the Action Editor's reset defaults elsewhere (or ``base``'s bytes)."""
     if not 1 <= len(steps) <= MAX_STEPS:
         raise InputError(f"expected 1 to {MAX_STEPS} steps in a page, got {len(steps)}", "steps")
-    for field, value in (("repeat", repeat), ("next", next_page), ("exit", exit_page), ("speed", speed),
-                         ("accel", accel)):
+    h = header
+    for field_name, value in (("repeat", h.repeat), ("next", h.next), ("exit", h.exit), ("speed", h.speed),
+                              ("accel", h.accel)):
         if not 0 <= value <= MAX_BYTE:
-            raise InputError(f"expected a byte (0..{MAX_BYTE}), got {value}", field)
+            raise InputError(f"expected a byte (0..{MAX_BYTE}), got {value}", field_name)
     page = bytearray(base if base is not None else reset_page())
     page[:NAME_LEN] = name.encode("ascii", "replace")[:NAME_LEN - 1].ljust(NAME_LEN, b"\0")
-    page[OFF_REPEAT], page[OFF_SCHEDULE], page[OFF_STEPNUM] = repeat, TIME_BASE_SCHEDULE, len(steps)
-    page[OFF_SPEED], page[OFF_ACCEL], page[OFF_NEXT], page[OFF_EXIT] = speed, accel, next_page, exit_page
-    for ident, slope in (slopes or {}).items():
+    page[OFF_REPEAT], page[OFF_SCHEDULE], page[OFF_STEPNUM] = h.repeat, TIME_BASE_SCHEDULE, len(steps)
+    page[OFF_SPEED], page[OFF_ACCEL], page[OFF_NEXT], page[OFF_EXIT] = h.speed, h.accel, h.next, h.exit
+    for ident, slope in (h.slopes or {}).items():
         page[OFF_SLOPE + ident] = slope
     for k, step in enumerate(steps):
         if not (0 <= step.pause <= MAX_BYTE and 0 <= step.time <= MAX_BYTE):

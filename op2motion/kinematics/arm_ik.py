@@ -17,7 +17,7 @@ cannot overshoot.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -157,14 +157,14 @@ class ArmIKResult:
         return float(np.linalg.norm(self.achieved - self.requested))
 
 
-def solve_arm_ik(angles: BookAngles, hand: str, delta: object, spec: Spec, model: str = "pb",
-                 single_step: bool = False, tol: float = TOL_M, max_iter: int = MAX_ITER,
-                 enforce_limits: bool = True) -> ArmIKResult:
+def solve_arm_ik(angles: BookAngles, hand: str, delta: object, spec: Spec, model: str = "pb", *,
+                 single_step: bool = False, tol: float = TOL_M, enforce_limits: bool = True) -> ArmIKResult:
     """Move one hand by ``delta`` [m] (world frame) with that arm's three joints.
 
     ``single_step`` applies :func:`book_step` once; otherwise damped linearised steps on ``model`` ("pb": exact
     projection Jacobian, "dh": central differences on the D-H model) run until the hand is within ``tol`` [m] of
-    the target or no step improves it. With ``enforce_limits`` the iterates stay inside the servo limits.
+    the target or no step improves it (at most :data:`MAX_ITER` per start). With ``enforce_limits`` the iterates
+    stay inside the servo limits.
     """
     arm, d = _arm(hand), _delta(delta)
     one = angles.row(0)
@@ -172,15 +172,11 @@ def solve_arm_ik(angles: BookAngles, hand: str, delta: object, spec: Spec, model
         raise InputError(f"expected a positive length [m], got {tol!r}", "tol")
     q0 = np.array([one.th[0, arm.th_upper], one.th[0, arm.th_lower], one.phi[0, arm.phi]])
     start = _hands(one, arm, q0, spec, model)[0]
-    target = start + d
-    lo, hi = book_bounds(spec, one.support, arm.names, "cable-safe")
-    iterations = 0
+    bounds = book_bounds(spec, one.support, arm.names, "cable-safe") if enforce_limits else None
     if single_step:
-        q = q0 + book_step(one, hand, d, spec)
-        iterations = 1
+        q, iterations = q0 + book_step(one, hand, d, spec), 1
     else:
-        q, iterations = _multi_start(one, arm, q0, d, target, spec, model, tol, max_iter,
-                                     (lo, hi) if enforce_limits else None)
+        q, iterations = _ArmSolve(one, arm, spec, model, tol, bounds).multi_start(q0, d, start + d)
     final = _with_arm(one, arm, q)
     achieved = _hands(one, arm, q, spec, model)[0] - start
     servo = book_to_servo(final, spec)[0]
@@ -190,84 +186,90 @@ def solve_arm_ik(angles: BookAngles, hand: str, delta: object, spec: Spec, model
                        iterations, violations)
 
 
-def _multi_start(angles: BookAngles, arm: Arm, q0: np.ndarray, d: np.ndarray, target: np.ndarray, spec: Spec,
-                 model: str, tol: float, max_iter: int,
-                 bounds: tuple[np.ndarray, np.ndarray] | None) -> tuple[np.ndarray, int]:
-    """Damped Newton from the start pose; if that stalls (a local minimum near a singular arm), again from the
-    book's Taylor guess and, on the D-H model, from the projection model's solution. Best residual wins."""
-    seeds = [lambda: q0]
-    hand = arm.hand.split("_")[0]
-    seeds.append(lambda: q0 + book_step(angles, hand, d, spec))
-    if model == "dh":
-        seeds.append(lambda: _damped_newton(angles, arm, q0, angles_target_pb(angles, arm, q0, d, spec), spec,
-                                            "pb", tol, max_iter, bounds)[0])
-    for elbow in _elbow_seeds(angles, arm, q0, target, spec, model, bounds):
-        seeds.append(lambda e=elbow: np.array([q0[0], e, q0[2]]))
-    best, best_err, total = q0, math.inf, 0
-    for seed in seeds:
-        try:
-            start = seed()
-        except ModelError:  # singular Taylor guess: skip that seed
-            continue
-        q, used = _damped_newton(angles, arm, start, target, spec, model, tol, max_iter, bounds)
-        total += used
-        err = float(np.linalg.norm(target - _hands(angles, arm, q, spec, model)[0]))
-        if err < best_err:
-            best, best_err = q, err
-        if best_err <= tol:
-            break
-    return best, total
-
-
 ELBOW_GRID = 241  # elbow samples for the distance seeds
 
 
-def _elbow_seeds(angles: BookAngles, arm: Arm, q0: np.ndarray, target: np.ndarray, spec: Spec, model: str,
-                 bounds: tuple[np.ndarray, np.ndarray] | None) -> list[float]:
-    """Elbow angles at which the shoulder-roll-to-hand distance equals the target's distance (as analytic arm IK
-    fixes the elbow first); pitch and roll are then left to the damped solver."""
-    lo, hi = (bounds[0][1], bounds[1][1]) if bounds is not None else (q0[1] - math.pi, q0[1] + math.pi)
-    grid = np.linspace(lo, hi, ELBOW_GRID)
-    q = np.repeat(q0[None, :], ELBOW_GRID, axis=0)
-    q[:, 1] = grid
-    pts = forward(_with_arm(angles, arm, q), spec, model)
-    root = pts.point(f"{arm.hand[0]}_sho_roll")
-    reach = np.linalg.norm(pts.point(arm.hand) - root, axis=1) - np.linalg.norm(target - root[0])
-    cross = np.nonzero(np.sign(reach[:-1]) * np.sign(reach[1:]) <= 0)[0]
-    return [float(grid[i] - reach[i] * (grid[i + 1] - grid[i]) / (reach[i + 1] - reach[i] or 1.0)) for i in cross]
+@dataclass(frozen=True)
+class _ArmSolve:
+    """One iterated arm solve: the pose, the arm, the model, the tolerance [m] and the bounds [rad] (or None)."""
 
+    angles: BookAngles
+    arm: Arm
+    spec: Spec
+    model: str
+    tol: float
+    bounds: tuple[np.ndarray, np.ndarray] | None
 
-def angles_target_pb(angles: BookAngles, arm: Arm, q0: np.ndarray, d: np.ndarray, spec: Spec) -> np.ndarray:
-    """The projection model's hand target for the same displacement (seed for the D-H solve)."""
-    return _hands(angles, arm, q0, spec, "pb")[0] + d
+    def hand_at(self, q: np.ndarray) -> np.ndarray:
+        """The hand's position [m] (3,) with the arm at ``q`` (3,) [rad]."""
+        return _hands(self.angles, self.arm, q, self.spec, self.model)[0]
 
-
-def _damped_newton(angles: BookAngles, arm: Arm, q: np.ndarray, target: np.ndarray, spec: Spec, model: str,
-                   tol: float, max_iter: int, bounds: tuple[np.ndarray, np.ndarray] | None) -> tuple[np.ndarray, int]:
-    """Levenberg-Marquardt on the hand position; returns the final arm angles and the iterations used."""
-    if bounds is not None:
-        q = np.clip(q, *bounds)
-    err = target - _hands(angles, arm, q, spec, model)[0]
-    mu = 1e-8
-    for it in range(1, max_iter + 1):
-        if np.linalg.norm(err) <= tol:
-            return q, it - 1
-        jac = _jacobian(angles, arm, q, spec, model)
-        jtj, jte = jac.T @ jac, jac.T @ err
-        improved = False
-        while mu < 1e6:
-            step = np.linalg.solve(jtj + mu * np.eye(3), jte)
-            step *= min(1.0, MAX_STEP_RAD / max(float(np.max(np.abs(step))), 1e-300))
-            trial = q + step if bounds is None else np.clip(q + step, *bounds)
-            trial_err = target - _hands(angles, arm, trial, spec, model)[0]
-            if np.linalg.norm(trial_err) < np.linalg.norm(err) - _PROGRESS_M:
-                q, err, improved = trial, trial_err, True
-                mu = max(mu / 10.0, 1e-12)
+    def multi_start(self, q0: np.ndarray, d: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, int]:
+        """Damped Newton from the start pose; if that stalls (a local minimum near a singular arm), again from the
+        book's Taylor guess, on the D-H model from the projection model's solution, and from the elbow angles that
+        give the target's distance. Best residual wins."""
+        a, arm, spec = self.angles, self.arm, self.spec
+        seeds = [lambda: q0, lambda: q0 + book_step(a, arm.hand.split("_")[0], d, spec)]
+        if self.model == "dh":
+            pb = replace(self, model="pb")
+            seeds.append(lambda: pb.damped_newton(q0, _hands(a, arm, q0, spec, "pb")[0] + d)[0])
+        seeds += [lambda e=elbow: np.array([q0[0], e, q0[2]]) for elbow in self.elbow_seeds(q0, target)]
+        best, best_err, total = q0, math.inf, 0
+        for seed in seeds:
+            try:
+                start = seed()
+            except ModelError:  # singular Taylor guess: skip that seed
+                continue
+            q, used = self.damped_newton(start, target)
+            total += used
+            err = float(np.linalg.norm(target - self.hand_at(q)))
+            if err < best_err:
+                best, best_err = q, err
+            if best_err <= self.tol:
                 break
-            mu *= 10.0
-        if not improved:
-            return q, it
-    return q, max_iter
+        return best, total
+
+    def elbow_seeds(self, q0: np.ndarray, target: np.ndarray) -> list[float]:
+        """Elbow angles at which the shoulder-roll-to-hand distance equals the target's distance (as analytic arm
+        IK fixes the elbow first); pitch and roll are then left to the damped solver."""
+        bounds = self.bounds
+        lo, hi = (bounds[0][1], bounds[1][1]) if bounds is not None else (q0[1] - math.pi, q0[1] + math.pi)
+        grid = np.linspace(lo, hi, ELBOW_GRID)
+        q = np.repeat(q0[None, :], ELBOW_GRID, axis=0)
+        q[:, 1] = grid
+        pts = forward(_with_arm(self.angles, self.arm, q), self.spec, self.model)
+        root = pts.point(f"{self.arm.hand[0]}_sho_roll")
+        reach = np.linalg.norm(pts.point(self.arm.hand) - root, axis=1) - np.linalg.norm(target - root[0])
+        cross = np.nonzero(np.sign(reach[:-1]) * np.sign(reach[1:]) <= 0)[0]
+        return [float(grid[i] - reach[i] * (grid[i + 1] - grid[i]) / (reach[i + 1] - reach[i] or 1.0))
+                for i in cross]
+
+    def damped_newton(self, q: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, int]:
+        """Levenberg-Marquardt on the hand position; returns the final arm angles and the iterations used."""
+        bounds = self.bounds
+        if bounds is not None:
+            q = np.clip(q, *bounds)
+        err = target - self.hand_at(q)
+        mu = 1e-8
+        for it in range(1, MAX_ITER + 1):
+            if np.linalg.norm(err) <= self.tol:
+                return q, it - 1
+            jac = _jacobian(self.angles, self.arm, q, self.spec, self.model)
+            jtj, jte = jac.T @ jac, jac.T @ err
+            improved = False
+            while mu < 1e6:
+                step = np.linalg.solve(jtj + mu * np.eye(3), jte)
+                step *= min(1.0, MAX_STEP_RAD / max(float(np.max(np.abs(step))), 1e-300))
+                trial = q + step if bounds is None else np.clip(q + step, *bounds)
+                trial_err = target - self.hand_at(trial)
+                if np.linalg.norm(trial_err) < np.linalg.norm(err) - _PROGRESS_M:
+                    q, err, improved = trial, trial_err, True
+                    mu = max(mu / 10.0, 1e-12)
+                    break
+                mu *= 10.0
+            if not improved:
+                return q, it
+        return q, MAX_ITER
 
 
 def _jacobian(angles: BookAngles, arm: Arm, q: np.ndarray, spec: Spec, model: str) -> np.ndarray:

@@ -25,7 +25,7 @@ import numpy as np
 
 from op2motion.errors import InputError
 from op2motion.formats.action import ActionFile
-from op2motion.formats.actionlayout import MAX_BYTE, MAX_STEPS, NUM_PAGES, StepBytes, encode_page
+from op2motion.formats.actionlayout import MAX_BYTE, MAX_STEPS, NUM_PAGES, PageHeader, StepBytes, encode_page
 from op2motion.formats.motionfile import PROFILES
 from op2motion.motion.player import play, start_ticks, step_calls
 from op2motion.motion.shift import balanced, settled_swing_heights, with_weight_shifts
@@ -162,7 +162,7 @@ def robot_pages(name: str, steps: Sequence[StepBytes], first_page: int = _FIRST_
         raise InputError(f"{len(chunks)} pages from page {first_page} do not fit in pages 1..{NUM_PAGES - 1}",
                          "page")
     return [encode_page(f"{name[:10]}{k + 1}" if len(chunks) > 1 else name, chunk,
-                        next_page=first_page + k + 1 if k + 1 < len(chunks) else 0, slopes=slopes)
+                        PageHeader(next=first_page + k + 1 if k + 1 < len(chunks) else 0, slopes=slopes))
             for k, chunk in enumerate(chunks)]
 
 
