@@ -1,6 +1,7 @@
 """The benchmark reports every figure, and the work it times is right (speed itself is measured by
 ``op2motion bench``, not asserted)."""
 
+import pytest
 from helpers import STOCK
 
 from op2motion.bench import run_bench
@@ -13,6 +14,7 @@ WALK_SPEED_MPS = 0.20        # the forward preset's steady speed in PyBullet (is
 FULL_COM_VS_PINOCCHIO_M = 1e-5  # the URDF's six 10-mg frame links are the only difference (2 µm)
 
 
+@pytest.mark.physics
 def test_bench_reports_every_figure_and_its_work_is_right(spec):
     result = run_bench(spec, n=500, repeat=1, action=ActionFile.read(STOCK))
     assert result["poses"] == 500 and result["repeat"] == 1

@@ -100,6 +100,7 @@ def test_urdf_command(capsys, tmp_path):
     assert code == 0 and out.startswith("<?xml")
 
 
+@pytest.mark.physics
 def test_validate_command(capsys, tmp_path):
     import os
 

@@ -57,6 +57,7 @@ def test_too_soft_servos_have_no_equilibrium(spec):
     assert sagged_angles(sweep_base(spec, "left"), "left", spec, servo.kp, servo.torque_max) is None
 
 
+@pytest.mark.physics
 @pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
 def test_physics_holds_the_sagged_angles(spec, engine):
     servo = ServoModel.of(spec)

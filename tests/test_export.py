@@ -159,7 +159,7 @@ def test_library_build_and_resume(spec, tmp_path):
 def test_killed_library_build_leaves_no_half_written_file(tmp_path):
     cmd = [sys.executable, "-m", "op2motion", "library", "build", "--x", "0.06", "0.14", "5", "--y", "0", "0.04",
            "2", "--z", "0.07", "0.07", "1", "--hands", "left", "--supports", "left", "--workers", "2",
-           "--out", str(tmp_path / "lib")]
+           "--iters", "80", "--restarts", "0", "--out", str(tmp_path / "lib")]
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     deadline = time.time() + 60
     while time.time() < deadline and not list((tmp_path / "lib").glob("reach-*.json")):
@@ -257,7 +257,7 @@ INTERRUPT_EXIT_S = 3.0
 def test_ctrl_c_stops_a_build_fast_with_a_complete_index_and_it_resumes(tmp_path, spec):
     cmd = [sys.executable, "-m", "op2motion", "library", "build", "--x", "0.06", "0.14", "5", "--y", "0", "0.04",
            "2", "--z", "0.07", "0.07", "1", "--hands", "left", "--supports", "left", "--workers", "2",
-           "--iters", "150", "--out", str(tmp_path / "lib")]
+           "--iters", "150", "--restarts", "0", "--out", str(tmp_path / "lib")]
     # Ctrl-C as a terminal delivers it: a test run started in the background of a script has SIGINT ignored, and
     # its children would inherit that
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,

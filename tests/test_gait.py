@@ -160,6 +160,7 @@ def test_timeline_marks_single_support_while_the_foot_is_up(spec):
             assert timeline.feet[swing][i, 2] > 0.0
 
 
+@pytest.mark.physics
 def test_a_short_walk_walks_in_pybullet(spec):
     gait = plan_gait(read_preset(preset_path("forward")).with_steps(4), spec)
     schedule = gait_schedule(gait, spec)
@@ -174,6 +175,7 @@ def test_a_short_walk_walks_in_pybullet(spec):
     assert report.run.engine == "pybullet" and report.run.walk.distance_m == pytest.approx(run["distance_m"], abs=1e-4)
 
 
+@pytest.mark.physics
 def test_turning_in_place_keeps_the_servos_below_their_limit_in_mujoco(spec):
     """The turn preset (8 steps) in MuJoCo, the engine with the rotor inertia the feed-forward is computed for:
     it turns at >= 30 deg/s with no servo at its available torque and the CoP inside the planned soles."""

@@ -27,6 +27,8 @@ FALLS_PAST_SWITCH = 3          # steps leaned on after the first fall, to see th
 MAX_STEPS = 70
 AGREE_BEYOND_M = 0.005         # the engines agree wherever the margin is beyond this
 SWITCH_TOL_M = 0.005           # the switch lies this close to the edge
+pytestmark = pytest.mark.physics
+
 SWEEPS = [  # support, kind, direction, what runs out (the CoM's polygon or a loaded foot's own sole)
     ("left", "pitch", 1, "com"), ("left", "pitch", -1, "com"), ("left", "roll", 1, "com"),
     ("double", "pitch", 1, "com"), ("double", "pitch", -1, "com"), ("double", "roll", 1, "foot"),

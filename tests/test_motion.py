@@ -145,6 +145,7 @@ def test_cli_export_writes_empty_pages_only(tmp_path, capsys):
     assert code == 2 and "--force" in err and not (tmp_path / "x.bin").exists()
 
 
+@pytest.mark.physics
 @pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
 def test_stand_sit_stand_gets_through_in_physics(spec, engine):
     from op2motion.motion.pipeline import plan_motion
@@ -156,6 +157,7 @@ def test_stand_sit_stand_gets_through_in_physics(spec, engine):
     assert verdict.motion.tracking_max_deg and verdict.motion.worst_torque.torque_nm > 0.0
 
 
+@pytest.mark.physics
 def test_stand_to_a_one_leg_pose_and_back_in_physics(spec):
     from op2motion.physics import check
 
@@ -165,6 +167,7 @@ def test_stand_to_a_one_leg_pose_and_back_in_physics(spec):
     assert verdict.stable, verdict.reasons
 
 
+@pytest.mark.physics
 def test_stock_page_played_in_physics(spec):
     from op2motion.motion.pipeline import play_page
     from op2motion.physics import check

@@ -62,6 +62,7 @@ def test_compliance_byte_sets_the_p_gain(slope, p):
 
 # --- real poses stand, in both engines, and survive pushes -----------------------------------------------------
 
+@pytest.mark.physics
 @pytest.mark.parametrize("name", STOCK_STANDING)
 def test_stock_standing_pages_stand_in_both_engines_and_survive_pushes(spec, name):
     pose = read_pose(pose_path(name), spec)
@@ -77,6 +78,7 @@ def test_stock_standing_pages_stand_in_both_engines_and_survive_pushes(spec, nam
     assert abs(runs["pybullet"].support_margin_m - runs["mujoco"].support_margin_m) < ENGINE_MARGIN_M
 
 
+@pytest.mark.physics
 def test_same_input_same_verdict(spec):
     servo = servo_pose(spec)
     for engine in ENGINES:
@@ -89,6 +91,7 @@ def _one_leg(spec, **joints):
     return balanced(spec, servo_pose(spec, "left", **{**ARMS_FORWARD, **joints}), "left", (0.0, 0.011))
 
 
+@pytest.mark.physics
 def test_a_balanced_one_leg_stance_stands_in_both_engines(spec):
     servo = _one_leg(spec, **FOLDED_SWING)
     for engine in ENGINES:
@@ -96,6 +99,7 @@ def test_a_balanced_one_leg_stance_stands_in_both_engines(spec):
         assert v.stable, (engine, v.reason)
 
 
+@pytest.mark.physics
 @pytest.mark.parametrize("engine", ENGINES)
 def test_swing_foot_on_the_floor_is_swing_foot_contact(spec, engine):
     """The standing pose declared as single support: the swing foot carries weight, so it is not a one-leg pose."""
@@ -103,6 +107,7 @@ def test_swing_foot_on_the_floor_is_swing_foot_contact(spec, engine):
     assert v.reasons == ["swing_foot_contact"]
 
 
+@pytest.mark.physics
 @pytest.mark.parametrize("engine", ENGINES)
 def test_thigh_pressed_into_the_torso_is_self_collision(spec, engine):
     v = _run(_one_leg(spec, r_hip_pitch=-105, r_hip_roll=10, r_ank_roll=10), "left", spec, 3.0, engine)
@@ -110,6 +115,7 @@ def test_thigh_pressed_into_the_torso_is_self_collision(spec, engine):
     assert ("body_link", "r_hip_pitch_link") in v.self_collisions
 
 
+@pytest.mark.physics
 @pytest.mark.parametrize("engine", ENGINES)
 def test_one_leg_squat_beyond_stall_is_torque_saturation(spec, engine):
     """A one-leg squat that needs 2.09 N·m at the knee: at 12 V (2.41 N·m available) it stands; on the OP2's 11.1 V
@@ -123,12 +129,14 @@ def test_one_leg_squat_beyond_stall_is_torque_saturation(spec, engine):
     assert v.reasons == ["torque_saturation"] and v.worst_joint == "l_knee" and not v.torque_ok
 
 
+@pytest.mark.physics
 @pytest.mark.parametrize("engine", ENGINES)
 def test_lean_past_the_edge_tilts(spec, engine):
     v = _run(servo_pose(spec, l_ank_pitch=35, r_ank_pitch=-35), "double", spec, 3.0, engine)
     assert v.reasons[0] == "tilt" and v.max_tilt_deg > 30 and "ground_contact" in v.reasons
 
 
+@pytest.mark.physics
 def test_arm_through_the_torso_is_reported(spec):
     v = _run(servo_pose(spec, l_sho_roll=75), "double", spec, 3.0)   # upper arm swung 30° inwards
     assert v.reasons[0] == "self_collision"
@@ -153,6 +161,7 @@ def test_bad_input(spec):
 FLOOR_M = 1e-9
 
 
+@pytest.mark.physics
 @pytest.mark.parametrize("splay", [-6.0, 6.0])
 def test_non_parallel_feet_start_on_the_floor_not_in_it(spec, splay):
     """Double support with the feet rolled apart by ``splay`` degrees: the lower sole lies flat, the other touches
@@ -174,6 +183,7 @@ def test_non_parallel_feet_start_on_the_floor_not_in_it(spec, splay):
 
 # --- engine traps and models ----------------------------------------------------------------------------------
 
+@pytest.mark.physics
 def test_mujoco_compiles_the_same_robot(spec):
     engine = make_engine("mujoco", spec, ServoModel.of(spec))
     assert engine.total_mass() == pytest.approx(sum(i.mass for i in spec.inertials), abs=1e-4)
@@ -184,6 +194,7 @@ def test_mujoco_compiles_the_same_robot(spec):
         assert list(m.jnt_range[m.joint(name).id]) == pytest.approx([lower, upper])
 
 
+@pytest.mark.physics
 def test_trap_inertia_is_taken_from_the_file_only_when_told(spec):
     expected = np.linalg.eigvalsh(link_inertial(next(i for i in spec.inertials if i.link == "l_knee_link")).tensor)
     for from_file in (True, False):
@@ -196,6 +207,7 @@ def test_trap_inertia_is_taken_from_the_file_only_when_told(spec):
             assert not np.allclose(diag, expected, rtol=0.05)
 
 
+@pytest.mark.physics
 def test_trap_a_link_without_inertial_weighs_one_kilogram(spec):
     bare = ('<robot name="t"><link name="a"><inertial><mass value="0.5"/><inertia ixx="1e-3" iyy="1e-3" '
             'izz="1e-3" ixy="0" ixz="0" iyz="0"/></inertial></link><link name="b"/>'
@@ -210,6 +222,7 @@ def test_trap_a_link_without_inertial_weighs_one_kilogram(spec):
         assert mass == pytest.approx(webots.get(link, FRAME_LINK_MASS_KG))
 
 
+@pytest.mark.physics
 def test_trap_loadurdf_needs_a_file_and_the_temp_file_is_removed(spec):
     before = set(os.listdir(tempfile.gettempdir()))
     PyBulletEngine(spec, ServoModel.of(spec), 0.001).close()
@@ -217,6 +230,7 @@ def test_trap_loadurdf_needs_a_file_and_the_temp_file_is_removed(spec):
     assert leftovers == set()
 
 
+@pytest.mark.physics
 @pytest.mark.parametrize("engine_name", ENGINES)
 def test_trap_the_torso_frame_is_not_its_centre_of_mass(spec, engine_name):
     """PyBullet reports the base's centre of mass; both engines must put and report the torso link frame."""
@@ -238,6 +252,7 @@ def test_pybullet_banner_is_silenced(capfd):
     assert "noise" not in out and "noise" not in err
 
 
+@pytest.mark.physics
 def test_servo_sag_matches_the_stiffness(spec):
     """Standing double support: every loaded joint sags by about its static torque / Kp."""
     pose = read_pose(pose_path("walkready"), spec)

@@ -83,6 +83,7 @@ SWING_BELOW_M, SWING_ABOVE_M = 0.008, 0.002   # the settled swing-foot height: p
                                               # or higher than MuJoCo's (the model errs towards more sag)
 
 
+@pytest.mark.physics
 def test_compliance_predicts_where_physics_settles(spec):
     problem = PostureProblem.from_scenario(DEFAULT_PROBLEM)
     checked = 0
@@ -120,6 +121,7 @@ def test_book_scenarios_are_solved_on_the_books_body(spec, support, hand, target
     assert unrefined.terms.hand_error[0] <= PSO_REACH_M
 
 
+@pytest.mark.physics
 @pytest.mark.parametrize("support, hand, target, br, name", BOOK)
 def test_committed_book_poses_reach_balance_on_the_full_body_and_stand(spec, support, hand, target, br, name):
     """The committed scenario poses were solved on the full body and validated: they reach, their settled
@@ -189,6 +191,7 @@ def test_optimize_bad_input(capsys, tmp_path, monkeypatch, argv, needle):
     assert code == 2 and needle in err and out == "" and os.listdir(tmp_path) == []
 
 
+@pytest.mark.physics
 def test_the_default_problems_figure_shows_both_coms_and_the_verdict(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     code, out, _ = run_cli(capsys, "optimize", "--validate", "--json")

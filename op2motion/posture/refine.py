@@ -14,7 +14,6 @@ import contextlib
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.optimize import minimize
 
 from op2motion.errors import Op2MotionError
 from op2motion.kinematics import forward
@@ -99,6 +98,8 @@ def _slsqp(x0: np.ndarray, model: CostModel, problem: PostureProblem,
                           split(SAG_TILT_LIMIT_RAD - np.minimum(terms.sag_tilt, 1.0)),
                           split(terms.clearance - SELF_CLEARANCE_M))
         return cache[key]
+
+    from scipy.optimize import minimize
 
     res = minimize(lambda x: values(x)[0][0], x0, jac=lambda x: values(x)[0][1], method="SLSQP",
                    bounds=list(zip(lo, hi)),
