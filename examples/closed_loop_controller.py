@@ -44,11 +44,16 @@ def upright_deg(rotation: np.ndarray) -> float:
     return math.degrees(math.acos(float(np.clip(rotation[2, 2], -1.0, 1.0))))
 
 
-spec = op2.load_spec()
-leaning = leaned(spec, centred(spec, servo_pose(spec)), "double", "pitch", 8.0)   # 8° forward at the ankles
-schedule = op2.Schedule.hold(leaning, "double", spec, seconds=4.0)
-keep = op2.Setup(keep_track=True)
-open_loop = op2.check(schedule, spec, setup=keep).run
-closed_loop = op2.check(LevelTheTorso(schedule, spec), spec, setup=keep).run
-print(f"open loop: the torso ends {upright_deg(open_loop.track.rot[-1]):.1f}° from upright")
-print(f"closed loop on the accelerometer: {upright_deg(closed_loop.track.rot[-1]):.1f}° from upright")
+def main() -> None:
+    spec = op2.load_spec()
+    leaning = leaned(spec, centred(spec, servo_pose(spec)), "double", "pitch", 8.0)   # 8° forward at the ankles
+    schedule = op2.Schedule.hold(leaning, "double", spec, seconds=4.0)
+    keep = op2.Setup(keep_track=True)
+    open_loop = op2.check(schedule, spec, setup=keep).run
+    closed_loop = op2.check(LevelTheTorso(schedule, spec), spec, setup=keep).run
+    print(f"open loop: the torso ends {upright_deg(open_loop.track.rot[-1]):.1f}° from upright")
+    print(f"closed loop on the accelerometer: {upright_deg(closed_loop.track.rot[-1]):.1f}° from upright")
+
+
+if __name__ == "__main__":
+    main()

@@ -3,10 +3,12 @@ torso would (checked at rest in both engines, and by closing a loop on them), go
 
 from __future__ import annotations
 
+import importlib.util
 import math
 
 import numpy as np
 import pytest
+from helpers import ROOT
 
 from op2motion.errors import InputError
 from op2motion.physics import ENGINES, Plan, Schedule, Setup, check
@@ -20,7 +22,6 @@ HOLD_S = 2.5
 GRAVITY_TOL_M_S2 = 0.3         # at rest the accelerometer reads gravity's reaction within this (contact jitter)
 GYRO_TOL_RAD_S = 0.05
 LEAN_DEG = 8.0                 # a forward lean the robot stands in on both feet (it tips at about 12°)
-LEVEL_GAIN = 0.5               # [1/s]: ankle pitch rate per radian of torso pitch (1/s oscillates: 1 Hz body)
 LEVELLED_DEG = 2.0             # the closed loop brings the torso this close to upright
 
 
@@ -47,29 +48,12 @@ class Recorder:
         return False                          # a held pose's schedule is done at once; keep being called
 
 
-class LevelTorso:
-    """Closes a loop on the accelerometer: the torso's pitch from gravity's direction in the torso frame
-    (forward lean: the reading tips towards -x), integrated into both ankle pitches until the torso is upright."""
-
-    def __init__(self, schedule: Schedule, spec):
-        self.inner, self.plan, self.spec = schedule, schedule.plan, spec
-        self.correction = 0.0
-
-    def start(self, joint_positions):
-        self.correction = 0.0
-        return self.inner.start(joint_positions)
-
-    def step(self, t_s, gyro_rad_s, accel_m_s2, joint_positions):
-        pitch = math.atan2(-accel_m_s2[0], accel_m_s2[2])          # forward lean > 0
-        self.correction += LEVEL_GAIN * pitch * CONTROL_PERIOD_S
-        goals = dict(self.inner.step(t_s, gyro_rad_s, accel_m_s2, joint_positions))
-        for side in ("l", "r"):               # lean back: the shank turns about -Y relative to the foot
-            goals[f"{side}_ank_pitch"] += self.correction * self.spec.joint(f"{side}_ank_pitch").axis[1]
-        return goals
-
-    @property
-    def done(self):
-        return False
+def _example(name: str):
+    """A module of examples/ (its script part runs only as __main__)."""
+    spec = importlib.util.spec_from_file_location(name, ROOT / "examples" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def _upright_deg(rot: np.ndarray) -> float:
@@ -92,13 +76,13 @@ def test_the_controller_is_called_every_8_ms_with_an_imu_at_rest(spec, engine):
 
 
 def test_a_closed_loop_on_the_accelerometer_levels_a_leaning_torso(spec):
-    """Open loop the robot stands leaning forward; closing a loop on the simulated accelerometer brings the torso
-    upright: the sensor's sign and frame are the robot's."""
+    """Open loop the robot stands leaning forward; closing a loop on the simulated accelerometer (the controller of
+    examples/closed_loop_controller.py) brings the torso upright: the sensor's sign and frame are the robot's."""
     pose = leaned(spec, centred(spec, servo_pose(spec)), "double", "pitch", LEAN_DEG)
     schedule = Schedule.hold(pose, "double", spec, 4.0)
     keep = Setup(keep_track=True)
     open_loop = check(schedule, spec, setup=keep).run
-    closed = check(LevelTorso(schedule, spec), spec, setup=keep).run
+    closed = check(_example("closed_loop_controller").LevelTheTorso(schedule, spec), spec, setup=keep).run
     assert open_loop.stable and _upright_deg(open_loop.track.rot[-1]) > LEAN_DEG - 1.0
     assert _upright_deg(closed.track.rot[-1]) < LEVELLED_DEG
     assert not closed.fell or closed.reasons == ["tilt"]     # judged against the plan: levelling turns away from it

@@ -6,6 +6,7 @@ The graph is drawn from every ``import`` in the source (module level and inside 
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -115,3 +116,56 @@ def test_every_subpackage_is_packaged():
     listed = set(re.findall(r'"(op2motion(?:\.\w+)*)"', re.search(r"packages = \[(.*?)\]", text).group(1)))
     present = {".".join(("op2motion", *p.parent.relative_to(PACKAGE).parts)) for p in PACKAGE.rglob("__init__.py")}
     assert present <= listed, f"not in pyproject.toml packages: {sorted(present - listed)}"
+
+
+MAX_TOP_LEVEL_MODULES = 12       # loose modules in op2motion/ beside its sub-packages
+MAX_PARAMETERS = 8               # per function (self and cls not counted)
+MAX_FUNCTION_LINES = 60
+UNROLLED_KERNELS = {"op2motion/kinematics/projection.py:_chunk"}   # the book's projection formulas, one per line
+
+
+def _functions():
+    for path in sorted(PACKAGE.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                yield f"{path.relative_to(PACKAGE.parent)}:{node.name}", node
+
+
+def test_the_package_shows_its_wings():
+    loose = sorted(p.name for p in PACKAGE.glob("*.py"))
+    assert len(loose) <= MAX_TOP_LEVEL_MODULES, loose
+
+
+def test_no_function_takes_more_than_8_parameters():
+    heavy = []
+    for name, node in _functions():
+        a = node.args
+        params = [*a.posonlyargs, *a.args, *a.kwonlyargs] + ([a.vararg] if a.vararg else []) + (
+            [a.kwarg] if a.kwarg else [])
+        count = len([p for p in params if p.arg not in ("self", "cls")])
+        if count > MAX_PARAMETERS:
+            heavy.append((name, count))
+    assert heavy == []
+
+
+def test_no_function_is_longer_than_60_lines():
+    long = [(name, node.end_lineno - node.lineno + 1) for name, node in _functions()
+            if node.end_lineno - node.lineno + 1 > MAX_FUNCTION_LINES and name not in UNROLLED_KERNELS]
+    assert long == []
+
+
+#: What the rest of the code may use of the physics package: its public API, its report types, the lean sweeps.
+PHYSICS_API = {"physics", "physics.report", "physics.sweeps"}
+
+
+def test_physics_check_is_the_only_way_into_physics():
+    """Outside the physics package (and the tests), nothing runs an engine or the loop by itself."""
+    for module, targets in GRAPH.items():
+        if not module.startswith("physics"):
+            used = {t for t in targets if t.startswith("physics")}
+            assert used <= PHYSICS_API, (module, used - PHYSICS_API)
+    for folder in ("tools", "examples"):
+        for path in (PACKAGE.parent / folder).glob("*.py"):
+            used = set(re.findall(r"op2motion\.(physics[\w.]*)", path.read_text(encoding="utf-8")))
+            assert used <= PHYSICS_API, (path.name, used - PHYSICS_API)
+            assert "sys.path" not in path.read_text(encoding="utf-8"), f"{path.name} reaches into another folder"

@@ -126,3 +126,18 @@ def test_the_book_poses_margins_are_the_committed_ones():
     for name in ("book_2_44", "book_2_45", "book_2_46", "book_2_47"):
         margin = json.loads((POSES / f"{name}.json").read_text())["metrics"]["stability_margin_full_m"]
         assert f"{margin * 1000:.1f} mm" in README.split("The book's four scenarios", 1)[1].split("\n* ", 1)[0], name
+
+
+def test_the_development_map_names_every_wing_and_module():
+    """The map in README's Development section lists each sub-package (``name/``) and loose module (``name.py``) of
+    op2motion, and nothing that is not there."""
+    section = README.split("## Development", 1)[1].split("\n## ", 1)[0]
+    block = re.findall(r"```\n(.*?)```", section, re.S)[0]
+    named = set()
+    for line in block.splitlines():
+        head = line[:26].strip()                      # the first column: names separated by commas
+        named |= {n.strip() for n in head.split(",") if n.strip()}
+    package = ROOT / "op2motion"
+    present = {p.name for p in package.glob("*.py")} | {f"{p.name}/" for p in package.iterdir()
+                                                        if (p / "__init__.py").is_file()}
+    assert named == present

@@ -19,7 +19,7 @@ stiffness against the servos'; where it wins in some direction, or a servo would
 no equilibrium exists and ``None`` is returned, as it is where a sole would have to pull on the floor or press
 outside itself (then the physics check starts from the goals and ramps gravity in).
 
-The physics check starts a held pose here with gravity at full strength (:mod:`op2motion.physics.run`), so the start
+The physics check starts a held pose here with gravity at full strength (:mod:`op2motion.physics.loop`), so the start
 is not an impact: a pose loaded by a gravity ramp overshoots its sag (the OP2 on one leg at P = 32 is a 1 Hz
 oscillator with about a quarter of critical damping), and near a foot's edge that overshoot alone tips it.
 """

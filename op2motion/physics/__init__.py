@@ -12,7 +12,7 @@ controller's :class:`Plan`. The result is a typed :class:`CheckReport`::
 
 from __future__ import annotations
 
-from op2motion.physics.check import MAX_PUSH_N, Pushes, Setup, Trials, check
+from op2motion.physics.runner import MAX_PUSH_N, Pushes, Setup, Trials, check
 from op2motion.physics.controller import Controller, Goals, Schedule
 from op2motion.physics.engine import Engine, make_engine
 from op2motion.physics.plan import (

@@ -14,7 +14,7 @@ from typing import Sequence
 import numpy as np
 
 from op2motion.model.dynamics import dynamics_for
-from op2motion.physics.check import check
+from op2motion.physics.runner import check
 from op2motion.physics.controller import Schedule
 from op2motion.robot.joints import BookAngles, book_to_servo, hip_roll_sign
 from op2motion.robot.spec import Spec
