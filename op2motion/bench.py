@@ -24,6 +24,7 @@ from op2motion.posture.cost import CLEARANCE_EXACT_M, PostureProblem, evaluate_c
 from op2motion.posture.pso import PSOSettings, run_pso
 from op2motion.robot.joints import BookAngles, book_to_servo
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
 
 BENCH_POSES = 40_000
 CHECK_POSES = 200   # poses compared against pinocchio one by one
@@ -58,7 +59,7 @@ def _full_com_vs_pinocchio_m(spec: Spec, poses: BookAngles) -> float:
     dyn = dynamics_for(spec)
     n = min(CHECK_POSES, poses.n)
     sub = BookAngles(poses.th[:n], poses.phi[:n], poses.psi[:n], poses.support)
-    full = forward(sub, spec, "dh", full_com=True).com_full
+    full = forward(sub, spec, "dh", full_com=True).full()
     servo = book_to_servo(sub, spec)
     return max(float(np.linalg.norm(full[:, i] - dyn.com(servo[i], poses.support))) for i in range(n))
 
@@ -107,7 +108,7 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
     40 000 poses), with their correctness checks."""
     rng = np.random.default_rng(seed)
     poses_dh = BookAngles.random(n, rng, "left", psi=True)
-    poses_pb = BookAngles(poses_dh.th, poses_dh.phi, np.zeros_like(poses_dh.psi), "left")
+    poses_pb = BookAngles(poses_dh.th, poses_dh.phi, np.zeros_like(poses_dh.psi), Support.LEFT)
     scale = BENCH_POSES / n
     pb_ms = _best_ms(lambda: forward(poses_pb, spec, "pb").com, repeat) * scale
     dh_ms = _best_ms(lambda: forward(poses_dh, spec, "dh").com, repeat) * scale
@@ -124,7 +125,7 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
     clearance_ms = _best_ms(lambda: clearances(frames, shapes, CLEARANCE_EXACT_M), repeat)
     standing = matrix_frames(BookAngles.standing("left").vector(), spec, "left")
     problem = PostureProblem.from_scenario(book.DEFAULT_PROBLEM)
-    pso = {}
+    pso: dict[str, Any] = {}
     pso_ms = _best_ms(lambda: pso.update(r=run_pso(problem, spec, PSOSettings())), 3)
     return {
         "poses": n,

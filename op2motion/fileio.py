@@ -13,7 +13,7 @@ import contextlib
 import os
 import secrets
 from pathlib import Path
-from typing import Type
+from typing import Mapping, Type
 
 from op2motion.errors import InputError, Op2MotionError, OutputError
 
@@ -111,7 +111,7 @@ class OutputSet:
     nothing.
     """
 
-    def __init__(self, paths: dict[str, str | Path]):
+    def __init__(self, paths: Mapping[str, str | Path]):
         self.paths = {key: check_output_path(path, key) for key, path in paths.items()}
         seen: dict[Path, str] = {}
         for key, path in self.paths.items():

@@ -217,7 +217,7 @@ def _alive(pid: int) -> bool:
 
 
 ORPHAN_GRACE_S = 10.0
-WORKER_BUSY_S = 2.0     # CPU time after which a worker is surely solving, not starting up
+WORKER_BUSY_S = 1.5     # CPU time after which a worker is surely solving, not starting up (imports: < 1 s)
 
 
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="needs Linux /proc to list processes")

@@ -64,8 +64,9 @@ def cmd_library_build(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.workflow import Validate
 
     check_workers(args.workers)
-    jobs = grid_jobs(args.hands, args.supports, args.br, axis(*args.x, "x"), axis(*args.y, "y"), axis(*args.z, "z"),
-                     args.com_model)
+    x, y, z = (axis(start, stop, count, name) for name, (start, stop, count) in
+               (("x", args.x), ("y", args.y), ("z", args.z)))
+    jobs = grid_jobs(args.hands, args.supports, args.br, x, y, z, args.com_model)
     settings = BuildSettings(PSOSettings(args.particles, args.iters, seed=args.seed).validated(), args.restarts,
                              Validate(args.seconds, args.engine) if args.validate else None)
     with tqdm(total=len(jobs), desc="library", unit="pose", disable=not progress_enabled(args)) as bar:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING, Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence, TypeVar
 
 from op2motion.commands.common import (
     add_command,
@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from op2motion.physics import CheckReport
 
 PAGE = whole(1, NUM_PAGES - 1)
+T = TypeVar("T")
 SECONDS = number(0.0, 60.0, "s")
 
 
@@ -146,7 +147,7 @@ def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
     return _finish(args, spec, played.trajectory, f"page {args.page} ({name})", result, lines)
 
 
-def _broadcast(values: Sequence[float] | None, n: int, default: float | None, flag: str) -> list[float]:
+def _broadcast(values: Sequence[T] | None, n: int, default: T | None, flag: str) -> list[T]:
     if values is None:
         if default is None:
             raise InputError(f"expected {flag} for the {n} pose(s) after the first", flag.lstrip("-"))
@@ -175,8 +176,8 @@ def _motion_from_args(args: argparse.Namespace, spec: Spec) -> Any:
     if len(poses) < 2:
         raise InputError(f"expected at least two poses, got {len(poses)}", "poses")
     if args.support:
-        supports = _broadcast(args.support, len(poses), None, "--support")      # type: ignore[arg-type]
-        poses = [Pose(p.name, s, p.servo, p.metrics, p.provenance) for p, s in zip(poses, supports)]
+        supports: list[str] = _broadcast(args.support, len(poses), None, "--support")
+        poses = [Pose(p.name, Support.of(s), p.servo, p.metrics, p.provenance) for p, s in zip(poses, supports)]
     durations = _broadcast(args.durations, len(poses) - 1, None, "--durations")
     pauses = _broadcast(args.pauses, len(poses), 0.0, "--pauses")
     where = args.out or "motion.json"

@@ -89,7 +89,7 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.posture.cost import PostureProblem
     from op2motion.workflow import Validate, solve
 
-    target = vec3(args.target, "target")
+    target = vec3(args.target, "target") or book.DEFAULT_PROBLEM.target
     problem = PostureProblem(args.support, args.hand, target, args.br, args.model, args.com_model).validated()
     settings = PSOSettings(args.particles, args.iters, seed=args.seed).validated()
     name = args.name or problem.name

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from op2motion.commands.common import add_command, emit, engines_of, number, output_path, physics_args, progress, whole
@@ -39,8 +40,8 @@ def register(sub: Any) -> None:
                    help="write the goals every 8 ms: .csv (CSV) and/or .motion (Webots)")
 
 
-def _outputs(args: argparse.Namespace) -> dict[str, str]:
-    paths = {}
+def _outputs(args: argparse.Namespace) -> dict[str, str | Path]:
+    paths: dict[str, str | Path] = {}
     for path in args.out or ():
         suffix = "." + path.rsplit(".", 1)[-1].lower() if "." in path else ""
         if suffix not in OUT_FORMATS:

@@ -76,7 +76,7 @@ def _pyplot():
     return plt
 
 
-def _png(fig) -> bytes:  # type: ignore[no-untyped-def]
+def _png(fig: Any) -> bytes:
     """The figure as PNG bytes; the figure is closed."""
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=DPI)
@@ -205,8 +205,9 @@ def render_poses(figures: Sequence[PoseFigure], spec: Spec, block: TitleBlock) -
     return _png(fig), report
 
 
-def render_cost_curve(attempts: Sequence[Sequence[float]], hand_errors: Sequence[Sequence[float]],
-                      threshold_m: float, title: str, chosen: int) -> bytes:
+def render_cost_curve(attempts: Sequence[Sequence[float] | np.ndarray],
+                      hand_errors: Sequence[Sequence[float] | np.ndarray], threshold_m: float, title: str,
+                      chosen: int) -> bytes:
     """The PSO's best cost after each iteration for every attempt (book fig. 2.43), log scale, with the hand
     error of the best particle and the reach threshold; ``chosen`` marks the attempt that was kept."""
     plt = _pyplot()
@@ -237,7 +238,7 @@ def render_cost_curve(attempts: Sequence[Sequence[float]], hand_errors: Sequence
     return _png(fig)
 
 
-def margin_panel_png(fig, ax, t: np.ndarray, margin_m: np.ndarray, colour: str) -> bytes:  # type: ignore[no-untyped-def]
+def margin_panel_png(fig: Any, ax: Any, t: np.ndarray, margin_m: np.ndarray, colour: str) -> bytes:
     """Draw the ZMP margin [m] against time [s] (in mm) on ``ax`` as the last panel, and the figure's PNG."""
     ax.plot(t, margin_m * 1000, color=colour, lw=1.0)
     ax.axhline(0.0, color="k", lw=0.6)

@@ -8,7 +8,7 @@ and the ZMP margin against time.
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -18,7 +18,7 @@ from op2motion.motion.trajectory import Trajectory
 from op2motion.robot.spec import Spec
 
 
-def _joint_panel(ax, t: np.ndarray, values: np.ndarray, spec: Spec, label: str) -> None:  # type: ignore[no-untyped-def]
+def _joint_panel(ax: Any, t: np.ndarray, values: np.ndarray, spec: Spec, label: str) -> None:
     for j, name in enumerate(spec.joint_names):
         colour = "tab:blue" if any(k in name for k in ("hip", "knee", "ank")) else (
             "tab:orange" if any(k in name for k in ("sho", "el")) else "tab:green")

@@ -32,6 +32,7 @@ from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.joints import servo_to_ticks, ticks_to_servo
 from op2motion.robot.pose import Pose, safe_pose_name
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
 
 MIN_STEP_UNITS = 3             # the framework moves a step only when time x speed / 32 >= 3 ticks (24 ms)
 
@@ -77,7 +78,7 @@ def page_to_pose(page: Page, spec: Spec, name: str | None = None) -> Pose:
     if missing:
         raise InputError(f"no goal position for {', '.join(missing)}", f"page {page.index}")
     servo = ticks_to_servo(np.array([ticks[j.id] for j in spec.joints]), spec)
-    return Pose(name or safe_pose_name(page.name, f"page{page.index}"), "double", servo, {},
+    return Pose(name or safe_pose_name(page.name, f"page{page.index}"), Support.DOUBLE, servo, {},
                 {"source": f"action file page {page.index} ({page.name}), last step"})
 
 

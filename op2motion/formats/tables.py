@@ -51,7 +51,7 @@ def webots_motion(poses: Sequence[Pose], spec: Spec, seconds: float = 1.0,
                        [p.name for p in poses])
 
 
-def webots_rows(times: Sequence[float], goals: np.ndarray, spec: Spec, names: Sequence[str]) -> str:
+def webots_rows(times: Sequence[float] | np.ndarray, goals: np.ndarray, spec: Spec, names: Sequence[str]) -> str:
     """Webots motion text of servo rows (K, 20) [rad] reached at ``times`` [s] (strictly increasing on the file's
     millisecond clock, from 0), each line named by ``names``."""
     stamps = [int(round(t * 1000)) for t in times]

@@ -40,10 +40,9 @@ from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
-import tomllib
-
 from op2motion.errors import InputError
 from op2motion.robot.framework import CONTROL_PERIOD_S, DEFAULT_P_GAIN
+from op2motion.robot.specfile import tomllib
 
 MIN_STEP_WIDTH_M = 0.06     # narrower side-by-side feet would overlap (the OP2's soles reach 23 mm inwards)
 

@@ -14,6 +14,7 @@ import numpy as np
 from op2motion.gait.generator import Gait
 from op2motion.physics import RAMP_S, WALK_HOLD_S, WALK_SETTLE_S, Plan, Schedule, WalkClock
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
 
 
 def _lead(rows: np.ndarray, lead: int) -> np.ndarray:
@@ -29,9 +30,11 @@ def gait_plan(gait: Gait) -> Plan:
     ramp = np.minimum(1.0, np.arange(lead) * dt / RAMP_S)[:, None]
     goals = np.vstack([begin + ramp * (first - begin), gait.goals])
     steady_from, steady_to = gait.steady_window
-    return Plan("walk", goals, _lead(gait.p_gains, lead), (gait.supports[0],) * lead + tuple(gait.supports), dt,
+    supports = tuple(Support.of(s) for s in gait.supports)
+    contact = tuple(Support.of(s) for s in gait.timeline.contact)
+    return Plan("walk", goals, _lead(gait.p_gains, lead), (supports[0],) * lead + supports, dt,
                 0.0, (len(goals) - 1) * dt + WALK_HOLD_S, (_lead(gait.torso_pos, lead), _lead(gait.torso_rot, lead)),
-                (gait.timeline.contact[0],) * lead + tuple(gait.timeline.contact),
+                (contact[0],) * lead + contact,
                 WalkClock(start, gait.walking_s, steady_from, steady_to))
 
 

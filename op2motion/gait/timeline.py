@@ -92,7 +92,7 @@ def build_timeline(params: GaitParams, plan: FootPlan) -> Timeline:
     where = {side: np.array([f.x, f.y, 0.0, f.yaw]) for side, f in plan.start.items()}
     middle = 0.5 * (where["left"][:2] + where["right"][:2])
     rows_step, rows_contact, refs = [], [], []
-    feet = {side: [] for side in ("left", "right")}
+    feet: dict[str, list[np.ndarray]] = {side: [] for side in ("left", "right")}
 
     def hold(n: int, step: int, ref: np.ndarray) -> None:
         for side in feet:

@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from functools import partial
+from typing import Callable
 
 import numpy as np
 
@@ -189,6 +191,11 @@ def solve_arm_ik(angles: BookAngles, hand: str, delta: object, spec: Spec, model
 ELBOW_GRID = 241  # elbow samples for the distance seeds
 
 
+def _with_elbow(q0: np.ndarray, elbow: float) -> np.ndarray:
+    """The arm angles ``q0`` (3,) [rad] with the elbow at ``elbow`` [rad]."""
+    return np.array([q0[0], elbow, q0[2]])
+
+
 @dataclass(frozen=True)
 class _ArmSolve:
     """One iterated arm solve: the pose, the arm, the model, the tolerance [m] and the bounds [rad] (or None)."""
@@ -209,11 +216,12 @@ class _ArmSolve:
         book's Taylor guess, on the D-H model from the projection model's solution, and from the elbow angles that
         give the target's distance. Best residual wins."""
         a, arm, spec = self.angles, self.arm, self.spec
-        seeds = [lambda: q0, lambda: q0 + book_step(a, arm.hand.split("_")[0], d, spec)]
+        seeds: list[Callable[[], np.ndarray]] = [lambda: q0,
+                                                 lambda: q0 + book_step(a, arm.hand.split("_")[0], d, spec)]
         if self.model == "dh":
             pb = replace(self, model="pb")
             seeds.append(lambda: pb.damped_newton(q0, _hands(a, arm, q0, spec, "pb")[0] + d)[0])
-        seeds += [lambda e=elbow: np.array([q0[0], e, q0[2]]) for elbow in self.elbow_seeds(q0, target)]
+        seeds += [partial(_with_elbow, q0, elbow) for elbow in self.elbow_seeds(q0, target)]
         best, best_err, total = q0, math.inf, 0
         for seed in seeds:
             try:

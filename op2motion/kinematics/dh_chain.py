@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any, Callable, TypeVar
 
 import numpy as np
 
@@ -49,19 +50,22 @@ class Step:
     rot: tuple[tuple[float, ...], ...] | None = None
 
 
-_CACHE: dict[tuple[str, str, str], object] = {}
+_CACHE: dict[tuple[str, str, str], Any] = {}
+T = TypeVar("T")
 
 
-def cached(kind: str, spec: Spec, support: str, build):  # type: ignore[no-untyped-def]
+def cached(kind: str, spec: Spec, support: str, build: Callable[[Spec, str], T]) -> T:
+    """``build(spec, support)``, made once per (kind, spec content, support)."""
     key = (kind, spec.sha256, support)
     if key not in _CACHE:
         _CACHE[key] = build(spec, support)
-    return _CACHE[key]
+    built: T = _CACHE[key]
+    return built
 
 
 def chain(spec: Spec, support: str) -> tuple[Step, ...]:
     """The book's D-H chain with the real robot's lengths, rooted at the ``support`` ankle (frame "0")."""
-    return cached("chain", spec, support, _build_chain)  # type: ignore[return-value]
+    return cached("chain", spec, support, _build_chain)
 
 
 def _build_chain(spec: Spec, support: str) -> tuple[Step, ...]:
@@ -136,14 +140,15 @@ class MatrixPlan:
 
 
 def matrix_plan(spec: Spec, support: str) -> MatrixPlan:
-    return cached("matrix", spec, support, _build_matrix_plan)  # type: ignore[return-value]
+    return cached("matrix", spec, support, _build_matrix_plan)
 
 
 def _build_matrix_plan(spec: Spec, support: str) -> MatrixPlan:
     steps = chain(spec, support)
     by_frame = {st.frame: st for st in steps}
     # Level order: each level lists children of the previous level's frames in that order, so ranges are contiguous.
-    order, previous, levels = [], ["0"], []
+    order: list[str] = []
+    previous, levels = ["0"], []
     while len(order) < len(steps):
         level = [st.frame for parent in previous for st in steps if st.parent == parent]
         parents = sorted({by_frame[f].parent for f in level}, key=previous.index)

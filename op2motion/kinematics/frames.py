@@ -78,12 +78,13 @@ class Frame:
         p = self.point(origin)
         if rotation is None:
             return Frame(self.x, self.y, self.z, p)
-        new = []
+        new: list[np.ndarray] = []
         for column in _sparse_columns(tuple(tuple(float(v) for v in row) for row in rotation)):
-            acc = None
+            acc: np.ndarray | None = None
             for k, w in column:
                 term = cols[k] if w == 1.0 else -cols[k] if w == -1.0 else w * cols[k]
                 acc = term if acc is None else acc + term
+            assert acc is not None, "a rotation column has at least one entry"
             new.append(acc)
         return Frame(new[0], new[1], new[2], p)
 

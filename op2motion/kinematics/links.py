@@ -34,7 +34,7 @@ class Attachment:
 
 def attachments(spec: Spec, support: str) -> dict[str, Attachment]:
     """``{link: Attachment}`` for every link of ``spec`` with ``support`` as the chain's root (cached)."""
-    return cached("links", spec, support, _calibrate)  # type: ignore[return-value]
+    return cached("links", spec, support, _calibrate)
 
 
 def _calibrate(spec: Spec, support: str) -> dict[str, Attachment]:
@@ -78,7 +78,7 @@ class FullComPlan:
 
 def full_com_plan(spec: Spec, support: str) -> FullComPlan:
     """The plan of the full-inertia CoM for ``support`` (computed once per spec)."""
-    return cached("fullcom", spec, support, _build_full_com_plan)  # type: ignore[return-value]
+    return cached("fullcom", spec, support, _build_full_com_plan)
 
 
 def _build_full_com_plan(spec: Spec, support: str) -> FullComPlan:

@@ -13,6 +13,7 @@ from typing import Iterable
 
 import numpy as np
 
+from op2motion.errors import ModelError
 from op2motion.robot.spec import Foot
 from op2motion.robot.support import other_side
 
@@ -65,6 +66,12 @@ class BodyPoints:
     def n(self) -> int:
         """Number of poses."""
         return self.data.shape[2]
+
+    def full(self) -> np.ndarray:
+        """The full-inertia centre of mass (3, N) [m]; the points must have been made with ``full_com``."""
+        if self.com_full is None:
+            raise ModelError("the full-inertia CoM was not computed: evaluate the points with full_com", "full_com")
+        return self.com_full
 
     @property
     def swing(self) -> str:

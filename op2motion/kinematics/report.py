@@ -87,7 +87,7 @@ def evaluate(angles: BookAngles, spec: Spec, model: str = "dh", br: float = 1.0,
     com = points.com[:, 0].copy()
     margin = float(stability_margin(com[None, :2], spec, one.support, check_br(br), (sp[0], sp[1]), gamma)[0])
     servo = book_to_servo(one, spec)[0]
-    full = forward(one, spec, "dh", sp, gamma, full_com=True).com_full[:, 0].copy()   # true geometry, any model
+    full = forward(one, spec, "dh", sp, gamma, full_com=True).full()[:, 0].copy()   # true geometry, any model
     margin_full = float(stability_margin(full[None, :2], spec, one.support, br, (sp[0], sp[1]), gamma,
                                          COM_MODEL_FULL)[0])
     try:

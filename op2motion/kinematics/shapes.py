@@ -63,7 +63,7 @@ class ShapeSet:
 
 def shape_set(spec: Spec, support: str) -> ShapeSet:
     """The shapes and pairs of ``spec`` on the chain rooted at ``support`` (cached)."""
-    return cached("shapes", spec, support, _build)  # type: ignore[return-value]
+    return cached("shapes", spec, support, _build)
 
 
 def _build(spec: Spec, support: str) -> ShapeSet:

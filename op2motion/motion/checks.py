@@ -57,7 +57,7 @@ class MotionChecks:
     torque_nm: np.ndarray
     torque_joint: tuple[str, ...]
 
-    def summary(self) -> dict[str, object]:
+    def summary(self) -> dict[str, Any]:
         """The worst of each check, for reports."""
         c, z, t = int(np.argmin(self.clearance_m)), int(np.argmin(self.zmp_margin_m)), int(np.argmax(self.torque_ratio))
         return {"min_clearance_m": round(float(self.clearance_m[c]), 5), "min_clearance_links": self.clearance_links[c],
@@ -94,7 +94,7 @@ def require_clear(trajectory: Trajectory, spec: Spec) -> None:
                           f"mm): add a pose in between that keeps them apart, or change the order of the moves")
 
 
-def _polygon(dyn, data, side_list: tuple[str, ...], spec: Spec) -> np.ndarray:  # type: ignore[no-untyped-def]
+def _polygon(dyn: Any, data: Any, side_list: tuple[str, ...], spec: Spec) -> np.ndarray:
     points = []
     for side in side_list:
         foot = data.oMf[dyn.model.getFrameId(foot_link(spec, side))]
@@ -125,7 +125,8 @@ def multibody_zmp(dyn: Any, configs: np.ndarray, dt: float) -> tuple[np.ndarray,
         v[1:-1] = 0.5 * (steps[1:] + steps[:-1])
         v[0], v[-1] = steps[0], steps[-1]
     a = np.gradient(v, dt, axis=0) if k > 1 else np.zeros_like(v)
-    com, momentum = np.zeros((k, 3)), np.zeros((k, 3))
+    com: np.ndarray = np.zeros((k, 3))
+    momentum: np.ndarray = np.zeros((k, 3))
     for i in range(k):
         com[i] = pin.centerOfMass(model, data, configs[i])
         momentum[i] = np.asarray(pin.computeCentroidalMomentum(model, data, configs[i], v[i]).angular)

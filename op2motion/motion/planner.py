@@ -19,7 +19,7 @@ its lowest corner is within :data:`LIFTED_M` of the floor, with the other foot's
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -73,7 +73,8 @@ def _peak_speed(q0: np.ndarray, q1: np.ndarray, v0: np.ndarray, v1: np.ndarray, 
     return np.abs(np.gradient(_quintic(q0, q1, v0, v1, length, t), t, axis=0)).max(axis=0)
 
 
-def _timed(waypoints: Sequence[Waypoint], v_max: float, peak) -> tuple[np.ndarray, list[str]]:  # type: ignore[no-untyped-def]
+def _timed(waypoints: Sequence[Waypoint], v_max: float, peak: Callable[[np.ndarray], np.ndarray]
+           ) -> tuple[np.ndarray, list[str]]:
     """Durations [s] (n,) in whole 8 ms units, stretched until no joint exceeds ``v_max``; notes on each stretch."""
     asked = np.array([0.0] + [_units(w.duration_s) * CONTROL_PERIOD_S for w in waypoints[1:]])
     durations = asked.copy()
@@ -85,7 +86,7 @@ def _timed(waypoints: Sequence[Waypoint], v_max: float, peak) -> tuple[np.ndarra
         durations[1:] = np.where(over, _units_array(durations[1:] * speeds.max(axis=1) / v_max) * CONTROL_PERIOD_S,
                                  durations[1:])
     notes = []
-    for i in np.flatnonzero(durations[1:] > asked[1:] + 1e-9) + 1:
+    for i in map(int, np.flatnonzero(durations[1:] > asked[1:] + 1e-9) + 1):
         notes.append(f"{waypoints[i - 1].name} -> {waypoints[i].name}: stretched from {asked[i]:.3f} s to "
                      f"{durations[i]:.3f} s to keep every joint under {v_max:.2f} rad/s "
                      f"({SPEED_FRACTION:.0%} of the MX-28's no-load speed)")

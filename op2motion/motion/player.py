@@ -132,8 +132,8 @@ class ActionPlayer:
         self.count = self.num = self.pause_ticks = self.total = self.accel = 0
         self.section = PAUSE
         self.step_index = self.repeat_left = self.page_index = self.next_index = 0
-        self.page: RawPage | None = None
-        self.next_page: RawPage | None = None
+        self.page: RawPage = action.raw(0)          # a placeholder until start_page (page 0 is never played)
+        self.next_page: RawPage = self.page
         self.played: list[int] = []
 
     def _load(self, index: int) -> RawPage:

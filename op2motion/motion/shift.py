@@ -23,6 +23,7 @@ from op2motion.model.compliance import Compliance, SwingLegSag
 from op2motion.motion.waypoint import Waypoint
 from op2motion.robot.joints import hip_roll_sign, servo_to_book
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
 
 SHIFT_S = 1.0                  # the time a weight shift takes [s]
 SHIFT_TOL_M = 1e-4             # the centre of mass lands this close to its target
@@ -54,7 +55,7 @@ def settled_coms(servo: np.ndarray, side: str, spec: Spec, model: Compliance | N
     """Where the full-inertia CoM of poses (N, 20) would settle [m] (N, 2) standing on the ``side`` foot alone, in
     that sole's frame (infinite where the servos cannot hold it)."""
     points = forward(servo_to_book(np.atleast_2d(servo), side, spec), spec, "dh", full_com=True)
-    return (model or Compliance(spec)).settle(points, points.com_full).com_xy.T
+    return (model or Compliance(spec)).settle(points, points.full()).com_xy.T
 
 
 def settled_com(servo: np.ndarray, side: str, spec: Spec, model: Compliance | None = None) -> np.ndarray:
@@ -62,7 +63,8 @@ def settled_com(servo: np.ndarray, side: str, spec: Spec, model: Compliance | No
     return settled_coms(servo, side, spec, model)[0]
 
 
-def weight_shift(servo: np.ndarray, side: str, spec: Spec, target_xy: Sequence[float] = (0.0, 0.0)) -> np.ndarray:
+def weight_shift(servo: np.ndarray, side: str, spec: Spec,
+                 target_xy: Sequence[float] | np.ndarray = (0.0, 0.0)) -> np.ndarray:
     """``servo`` (a double-support pose) leaned until the CoM it would settle at on the ``side`` foot alone is
     over ``target_xy`` [m] in that sole's frame (default: the sole's centre below the ankle)."""
     model = Compliance(spec)
@@ -97,7 +99,7 @@ def settled_swing_heights(goals: np.ndarray, side: str, spec: Spec) -> np.ndarra
                                            full_com=True)
         first = ROW[f"{points.swing}_foot_0"]
         corners = points.data[first:first + 4]
-        settled = model.settle(points, points.com_full)
+        settled = model.settle(points, points.full())
         lowered = (model.settled_heights(points, settled, corners) + swing.heights(frames, corners)).min(axis=0)
         heights.append(np.where(np.isfinite(lowered), lowered, points.swing_foot_min_z))
     return np.concatenate(heights)
@@ -159,7 +161,7 @@ def with_weight_shifts(waypoints: Sequence[Waypoint], spec: Spec) -> tuple[list[
             lifted = lift_swing(shifted, single.support, spec)
             name = f"{double.name}@{single.support}"
             if prev.support.is_double:       # shift, lift, then move into the single-support pose
-                out += [Waypoint(name, shifted, SHIFT_S, 0.0, "double"),
+                out += [Waypoint(name, shifted, SHIFT_S, 0.0, Support.DOUBLE),
                         Waypoint(f"{name}+lift", lifted, LIFT_S, 0.0, single.support), nxt]
             else:                             # come down over the standing foot, put the foot down, shift back
                 touch = lift_swing(shifted, single.support, spec, TOUCH_CLEAR_M)

@@ -12,7 +12,6 @@ controller's :class:`Plan`. The result is a typed :class:`CheckReport`::
 
 from __future__ import annotations
 
-from op2motion.physics.runner import MAX_PUSH_N, Pushes, Setup, Trials, check
 from op2motion.physics.controller import Controller, Goals, Schedule
 from op2motion.physics.engine import Engine, make_engine
 from op2motion.physics.plan import (
@@ -39,6 +38,7 @@ from op2motion.physics.report import (
     WalkMeasures,
     WorstTorque,
 )
+from op2motion.physics.runner import MAX_PUSH_N, Pushes, Setup, Trials, check
 from op2motion.physics.scene import ENGINES, TIME_STEP_S
 from op2motion.physics.walk import WALK_HOLD_S, WALK_SETTLE_S
 

@@ -171,7 +171,7 @@ def tilts(track: Track, start: StartFacts, plan: Plan) -> tuple[np.ndarray, np.n
     """The torso's turn [deg] from the planned attitude: from the start (n,), and from the loaded attitude (n,),
     counted afresh :data:`SUPPORT_SETTLE_S` after every change of support; and the loaded sample's index."""
     times = track.times
-    loaded = int(min(np.searchsorted(times, RAMP_S), len(times) - 1))
+    loaded = min(int(np.searchsorted(times, RAMP_S)), len(times) - 1)
     ups = np.einsum("kji,kj->ki", start.planned.rot[track.rows], track.rot[:, :, 2])   # up axis, planned frame
     from_start = np.degrees(np.arccos(np.clip(ups[:, 2], -1.0, 1.0)))
     reference, pending, tilt = ups[loaded], None, np.zeros(len(times))

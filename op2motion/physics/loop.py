@@ -99,8 +99,9 @@ class _Servos:
             self.goals[self.index[name]] = value
         gains = getattr(self.controller, "p_gains", None)
         plan_gains = self.controller.plan.p_gains[row]
-        self.kp = self.servo.kp_of(plan_gains if gains is None else [gains.get(n, p) for n, p in
-                                                                     zip(self.names, plan_gains)])
+        if gains is not None:
+            plan_gains = np.array([gains.get(n, p) for n, p in zip(self.names, plan_gains)], dtype=float)
+        self.kp = self.servo.kp_of(plan_gains)
 
     def start(self, q: np.ndarray) -> None:
         """Ask the controller for its first goals."""
@@ -146,6 +147,7 @@ def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoMod
     per_tick, every = max(1, int(round(CONTROL_PERIOD_S / dt))), max(1, int(round(SAMPLE_S / dt)))
     steps = int(round(plan.duration_s / dt))
     push = setup.push
+    force = None if push is None else push.force
     pushing = range(0) if push is None else range(int(round(push.start_s / dt)),
                                                    int(round((push.start_s + push.duration_s) / dt)))
     servos, imu, recorder = _Servos(controller, body, servo), _Imu(), Recorder(body, servo)
@@ -161,7 +163,7 @@ def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoMod
             imu.read(engine, gravity)
         elif k % per_tick == 0:
             servos.tick(engine, t, imu.read(engine, gravity), q)
-        engine.step(servo.active_torque(servos.goals, q, servos.kp), push.force if k in pushing else None)
+        engine.step(servo.active_torque(servos.goals, q, servos.kp), force if k in pushing else None)
         if k % every == every - 1 or k == steps - 1:
             recorder.sample(engine, (k + 1) * dt, plan.row(t), servos.goals, servos.kp)
         if on_tick is not None and k % per_tick == per_tick - 1:

@@ -41,11 +41,11 @@ def _r(v: float, digits: int = 5) -> float:
     return round(float(v), digits)
 
 
-def _xy(v: Sequence[float]) -> tuple[float, float]:
+def _xy(v: Sequence[float] | np.ndarray) -> tuple[float, float]:
     return _r(v[0]), _r(v[1])
 
 
-def _xyz(v: Sequence[float]) -> tuple[float, float, float]:
+def _xyz(v: Sequence[float] | np.ndarray) -> tuple[float, float, float]:
     return _r(v[0]), _r(v[1]), _r(v[2])
 
 
@@ -100,7 +100,7 @@ def _torques(track: Track, steady: np.ndarray, spec: Spec) -> dict[str, Any]:
                         for n, v in zip(spec.joint_names, (track.q[steady] - track.goals[steady]).mean(axis=0))}}
 
 
-def _tilts(from_start: np.ndarray, tilt: np.ndarray, loaded: int, fell_loading: bool) -> dict[str, float]:
+def _tilts(from_start: np.ndarray, tilt: np.ndarray, loaded: int, fell_loading: bool) -> dict[str, Any]:
     return {"max_tilt_deg": _r(tilt.max() if not fell_loading else from_start.max(), 3),
             "settled_tilt_deg": _r(from_start[-1], 3), "load_tilt_deg": _r(from_start[loaded], 3)}
 

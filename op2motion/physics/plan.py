@@ -112,7 +112,8 @@ class Plan:
                              f"{len(goals)} goals every {dt!r} s", "motion")
         start = on_grid(RAMP_S + MOTION_SETTLE_S)
         end = start + (len(goals) - 1) * dt
-        return cls("motion", goals, p_gains, tuple(supports), float(dt), start, end + MOTION_HOLD_S)
+        return cls("motion", goals, p_gains, tuple(Support.of(s) for s in supports), float(dt), start,
+                   end + MOTION_HOLD_S)
 
     @property
     def is_motion(self) -> bool:
@@ -163,15 +164,16 @@ def planned_states(body: Body, plan: Plan) -> PlannedStates:
     with torso poses (a walk) starts at, and plans, those."""
     if plan.base is not None:
         positions, rotations = plan.base
-        states = tuple(body.state(p, r, g) for p, r, g in zip(positions, rotations, plan.goals))
-        gap = max(0.0, max(float(states[0].corners[s][:, 2].min()) for s in plan.supports[0].feet))
-        return PlannedStates(rotations, states, "left", gap, positions[0], rotations[0])
+        along = tuple(body.state(p, r, g) for p, r, g in zip(positions, rotations, plan.goals))
+        gap = max(0.0, max(float(along[0].corners[s][:, 2].min()) for s in plan.supports[0].feet))
+        return PlannedStates(rotations, along, "left", gap, positions[0], rotations[0])
     pos0, rot0, flat, gap = placement(body, plan.goals[0], plan.supports[0])
     if not plan.is_motion:
         return PlannedStates(rot0[None], (body.state(pos0, rot0, plan.goals[0]),), flat, gap, pos0, rot0)
     side = fixed_foot(plan.supports) if len(set(plan.supports)) > 1 else flat
     start = body.state(pos0, rot0, plan.goals[0]).soles[side]
-    rots, states = [], []
+    rots: list[np.ndarray] = []
+    states: list[BodyState] = []
     for goal in plan.goals:
         pos, rot = sole_flat(body, goal, side)
         sole_pos, sole_rot = body.state(pos, rot, goal).soles[side]

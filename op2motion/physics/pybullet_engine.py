@@ -179,7 +179,8 @@ def _quat_xyzw(rot: np.ndarray) -> tuple[float, float, float, float]:
     """Rotation matrix -> quaternion (x, y, z, w)."""
     from scipy.spatial.transform import Rotation
 
-    return tuple(float(v) for v in Rotation.from_matrix(np.asarray(rot, dtype=float)).as_quat())
+    x, y, z, w = (float(v) for v in Rotation.from_matrix(np.asarray(rot, dtype=float)).as_quat())
+    return x, y, z, w
 
 
 def render_png(client: Any, pb: Any, centre: np.ndarray, width: int, height: int) -> bytes:

@@ -103,7 +103,7 @@ def sag_allowance_deg(plan: Plan, spec: Spec, servo: ServoModel) -> float:
         rows = [k for k, s in enumerate(plan.supports) if s == side]
         if rows:
             points = forward(servo_to_book(plan.goals[rows], side, spec), spec, "dh", full_com=True)
-            tilt = model.settle(points, points.com_full).tilt
+            tilt = model.settle(points, points.full()).tilt
             worst = max(worst, float(np.degrees(np.max(np.where(np.isfinite(tilt), tilt, 0.0)))))
     return worst
 

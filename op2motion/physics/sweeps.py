@@ -14,8 +14,8 @@ from typing import Sequence
 import numpy as np
 
 from op2motion.model.dynamics import dynamics_for
-from op2motion.physics.runner import check
 from op2motion.physics.controller import Schedule
+from op2motion.physics.runner import check
 from op2motion.robot.joints import BookAngles, book_to_servo, hip_roll_sign
 from op2motion.robot.spec import Spec
 
@@ -94,7 +94,7 @@ def centred(spec: Spec, servo: np.ndarray, x: float = 0.0, iterations: int = 20)
 def sweep_base(spec: Spec, support: str) -> np.ndarray:
     """The start of a lean sweep (see the module docstring) on ``left`` or ``double`` support."""
     if support == "double":
-        return centred(spec, servo_pose(spec, **ARMS_FORWARD))
+        return centred(spec, servo_pose(spec, "double", **ARMS_FORWARD))
     return balanced(spec, servo_pose(spec, "left", **ARMS_FORWARD, **FOLDED_SWING), "left", ONE_LEG_COM_XY_M)
 
 

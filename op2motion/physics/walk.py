@@ -83,7 +83,7 @@ def walk_measures(track: Track, start: StartFacts, plan: Plan, spec: Spec, torqu
     distance = float(np.hypot(*(com[-1, :2] - com[first, :2])))
     yaw = np.unwrap([_yaw(r) for r in track.rot])                # turns of more than half a circle add up
     planned_yaw = np.unwrap([_yaw(r) for r in planned.rot])
-    a, b = (int(min(np.searchsorted(times, clock.start_s + t), len(times) - 1))
+    a, b = (min(int(np.searchsorted(times, clock.start_s + t)), len(times) - 1)
             for t in (clock.steady_from_s, clock.steady_to_s))
     steady_s = max(float(times[b] - times[a]), 1e-9)
     return WalkMeasures(

@@ -189,8 +189,8 @@ class CostModel:
         hand = data[self.hand_row] - self.target
         hand_error = np.sqrt(np.einsum("in,in->n", hand, hand))
         swing_min_z = data[self.swing_rows, 2].min(axis=0)
-        if self.compliance is not None:   # the body physics simulates: full inertia on compliant servos
-            settled = self.compliance.settle(points, points.com_full)
+        if self.compliance is not None and self.swing_sag is not None:   # the body physics simulates: full inertia
+            settled = self.compliance.settle(points, points.full())
             com_xy, sag_tilt = settled.com_xy, settled.tilt      # infinite where no equilibrium exists
             corners = data[self.swing_rows]
             lowered = (self.compliance.settled_heights(points, settled, corners)

@@ -29,6 +29,7 @@ from op2motion.errors import InputError
 from op2motion.posture.cost import CostModel, PostureProblem
 from op2motion.robot.joints import N_PHI, N_TH, BookAngles, book_bounds
 from op2motion.robot.spec import BOOK_VARS, Spec
+from op2motion.robot.support import Support
 
 MAX_PARTICLES = 10_000
 MAX_ITERATIONS = 100_000
@@ -54,9 +55,9 @@ class PSOSettings:
                                     ("seed", self.seed, 0, MAX_SEED)):
             if isinstance(value, bool) or not isinstance(value, int) or not lo <= value <= hi:
                 raise InputError(f"expected a whole number from {lo} to {hi}, got {value!r}", name)
-        for name, value in (("w", self.w), ("c1", self.c1), ("c2", self.c2)):
-            if not (math.isfinite(value) and value >= 0):
-                raise InputError(f"expected a finite non-negative number, got {value!r}", name)
+        for name, weight in (("w", self.w), ("c1", self.c1), ("c2", self.c2)):
+            if not (math.isfinite(weight) and weight >= 0):
+                raise InputError(f"expected a finite non-negative number, got {weight!r}", name)
         if not 0.0 < self.velocity_fraction <= 1.0:
             raise InputError(f"expected (0, 1], got {self.velocity_fraction}", "velocity_fraction")
         return self
@@ -130,11 +131,12 @@ def run_pso(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSett
     best, best_hand, hand_history = [math.inf], [math.inf], []
     cost_model = CostModel(problem, spec)
     personal = np.full(settings.particles, np.inf)   # each particle's best cost, as pyswarms keeps it
+    support = Support.single(problem.support)
 
     def objective(swarm: np.ndarray) -> np.ndarray:
         x = swarm if dims == full else np.hstack([swarm, np.zeros((swarm.shape[0], full - dims))])
         # a particle that cannot beat its personal best skips the self-collision check (the search is unchanged)
-        terms = cost_model(BookAngles(x[:, :N_TH], x[:, N_TH:N_TH + N_PHI], x[:, N_TH + N_PHI:], problem.support),
+        terms = cost_model(BookAngles(x[:, :N_TH], x[:, N_TH:N_TH + N_PHI], x[:, N_TH + N_PHI:], support),
                            only_below=personal)
         np.minimum(personal, terms.total, out=personal)
         i = int(np.argmin(terms.total))

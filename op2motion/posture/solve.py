@@ -162,7 +162,7 @@ def _solve_once(problem: PostureProblem, spec: Spec, settings: PSOSettings, refi
     angles = BookAngles.from_vector(x, problem.support)
     reached, message = _verdict(terms, tol)
     points = forward(angles, spec, "dh", full_com=True)
-    lumped, full = points.com[:, 0].copy(), points.com_full[:, 0].copy()
+    lumped, full = points.com[:, 0].copy(), points.full()[:, 0].copy()
     book_rect = replace(problem, com_model=COM_MODEL_LUMPED).extents(spec)
     sole_rect = replace(problem, com_model=COM_MODEL_FULL).extents(spec)
     return PostureResult(

@@ -187,7 +187,7 @@ def hip_roll_sign(spec: Spec, side: str) -> float:
     return -spec.joint(f"{s}_ank_roll").axis[0] / spec.joint(f"{s}_hip_roll").axis[0]
 
 
-def limit_violations(servo: Sequence[float], spec: Spec, kind: str = "mechanical") -> list[LimitViolation]:
+def limit_violations(servo: np.ndarray | Sequence[float], spec: Spec, kind: str = "mechanical") -> list[LimitViolation]:
     """Joints of one pose (servo angles (20,) [rad]) outside their ``kind`` range (see :data:`LIMIT_KINDS`)."""
     out: list[LimitViolation] = []
     for joint, q in zip(spec.joints, np.asarray(servo, dtype=float).reshape(-1)):
@@ -211,7 +211,7 @@ def book_bounds(spec: Spec, support: str, variables: Sequence[str] = BOOK_VARS,
     return lo, hi
 
 
-def servo_dict(servo_row: Sequence[float], spec: Spec, degrees: bool = True) -> dict[str, float]:
+def servo_dict(servo_row: np.ndarray | Sequence[float], spec: Spec, degrees: bool = True) -> dict[str, float]:
     """``{joint name: angle}`` for one pose, in degrees by default."""
     conv = math.degrees if degrees else float
     return {j.name: conv(float(q)) for j, q in zip(spec.joints, servo_row)}

@@ -14,6 +14,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import math
+import sys
 from importlib import resources
 from pathlib import Path
 from typing import Mapping
@@ -41,10 +42,10 @@ from op2motion.robot.spec import (
 from op2motion.robot.support import SIDES
 from op2motion.robot.tablereader import TableReader
 
-try:  # Python >= 3.11
+if sys.version_info >= (3, 11):
     import tomllib
-except ModuleNotFoundError:  # pragma: no cover - Python 3.10
-    import tomli as tomllib  # type: ignore[no-redef]
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
 
 #: Body points the kinematic models make besides the joints and the spec's named points.
 DERIVED_POINTS = ("pelvis", "neck", "left_sole", "right_sole")
@@ -190,13 +191,13 @@ def _geometry(path: str, joints: Mapping[str, Joint], points: Mapping[str, Point
             need(mirror.origin_xyz == (x, -y, z) and mirror.origin_rpy == (-rr, pp, -yy),
                  f"{mirror.name} origin must mirror {name}'s (x, -y, z; -roll, pitch, -yaw)")
     for side, sgn in (("l", 1.0), ("r", -1.0)):
-        for joint in ("hip_pitch", "ank_roll"):
-            need(origin(f"{side}_{joint}") == (0.0, 0.0, 0.0), f"{side}_{joint} origin must be at its parent's origin")
+        for part in ("hip_pitch", "ank_roll"):
+            need(origin(f"{side}_{part}") == (0.0, 0.0, 0.0), f"{side}_{part} origin must be at its parent's origin")
         hx, hy, hz = origin(f"{side}_hip_yaw")
         need(abs(hy - sgn * origin("l_hip_yaw")[1]) < 1e-12, "hip yaw origins must be left/right symmetric")
-        for joint in ("hip_roll", "knee", "ank_pitch"):
-            ox, oy, _ = origin(f"{side}_{joint}")
-            need(ox == 0.0 and oy == 0.0, f"{side}_{joint} origin must lie straight below its parent")
+        for part in ("hip_roll", "knee", "ank_pitch"):
+            ox, oy, _ = origin(f"{side}_{part}")
+            need(ox == 0.0 and oy == 0.0, f"{side}_{part} origin must lie straight below its parent")
         sx, sy, sz = origin(f"{side}_sho_pitch")
         need(sx == 0.0 and sz == 0.0 and abs(sy - sgn * origin("l_sho_pitch")[1]) < 1e-12,
              "shoulder pitch origins must lie on the torso's y axis, symmetric")

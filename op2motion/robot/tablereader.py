@@ -15,7 +15,8 @@ class TableReader:
     def __init__(self, path: str, where: str, table: Any):
         if not isinstance(table, dict):
             raise SpecError(f"{path}: {where}: expected a table, got {type(table).__name__}")
-        self.path, self.where, self.table, self.used = path, where, table, set()
+        self.path, self.where, self.table = path, where, table
+        self.used: set[str] = set()
 
     def _key(self, key: str) -> str:
         return f"{self.where}.{key}" if self.where else key
