@@ -17,8 +17,9 @@ from typing import Any, Sequence
 import numpy as np
 
 from op2motion.kinematics.points import BodyPoints
-from op2motion.robot.balance import COM_MODEL_FULL, convex_hull, support_polygon
+from op2motion.robot.balance import COM_MODEL_FULL, support_polygon
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import SIDES, Support
 
 LEFT_COLOUR, RIGHT_COLOUR, BODY_COLOUR = "tab:blue", "tab:red", "black"
 LUMPED_COLOUR, FULL_COLOUR, TARGET_COLOUR = "green", "tab:purple", "gold"
@@ -105,8 +106,7 @@ def _draw(ax, xyz: dict[str, np.ndarray], fig: PoseFigure, spec: Spec, h: int | 
             ax.fill(ring[:, 0], ring[:, 1], color=colour, alpha=0.15)
     sp = fig.points.point(f"{fig.points.support}_sole")[0]
     if fig.double:      # the hull of both real soles
-        polys = [(convex_hull(np.vstack([fig.points.foot_corners(s)[0][:, :2] for s in ("left", "right")])),
-                  FULL_COLOUR)]
+        polys = [(Support.DOUBLE.polygon({s: fig.points.foot_corners(s)[0] for s in SIDES}), FULL_COLOUR)]
     else:               # the book's rectangle (lumped CoM) and the real sole (full-inertia CoM), both shrunk by br
         polys = [(support_polygon(spec, fig.points.support, fig.br, (sp[0], sp[1])), LUMPED_COLOUR),
                  (support_polygon(spec, fig.points.support, fig.br, (sp[0], sp[1]), com_model=COM_MODEL_FULL),

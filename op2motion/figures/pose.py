@@ -17,9 +17,10 @@ from op2motion.figures.draw import PoseFigure, TitleBlock, render_cost_curve, re
 from op2motion.kinematics import forward
 from op2motion.kinematics.report import PoseReport, evaluate
 from op2motion.physics import RunReport
-from op2motion.robot.balance import convex_hull, polygon_margin
+from op2motion.robot.balance import polygon_margin
 from op2motion.robot.joints import BookAngles
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import SIDES, Support
 from op2motion.workflow import Outcome
 
 PB_PSI_NOTE = "projection model drawn with psi = 0 (it has no transverse rotation)"
@@ -39,7 +40,7 @@ def verdict_of(validation: RunReport | None, metrics: Mapping[str, Any] | None =
 
 def double_support_margin_m(report: PoseReport) -> float:
     """Margin [m] of the full-inertia CoM to the convex hull of both soles (double support)."""
-    hull = convex_hull(np.vstack([report.points.foot_corners(s)[0][:, :2] for s in ("left", "right")]))
+    hull = Support.DOUBLE.polygon({s: report.points.foot_corners(s)[0] for s in SIDES})
     return float(polygon_margin(report.com_full[:2], hull)[0])
 
 

@@ -31,7 +31,7 @@ from op2motion.gait.timeline import Timeline, build_timeline
 from op2motion.model.dynamics import dynamics_for
 from op2motion.model.servo import ServoModel
 from op2motion.motion.checks import SMOOTH_ROWS, contact_torques, multibody_zmp, smoothed
-from op2motion.robot.balance import convex_hull, polygon_margin
+from op2motion.robot.balance import polygon_margin
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support
@@ -245,7 +245,8 @@ def zmp_margins(zmp: np.ndarray, timeline: Timeline, plan: FootPlan, spec: Spec)
     """Margin [m] of each row's ZMP to the sole(s) on the floor (positive inside)."""
     out = np.empty(len(zmp))
     for i, contact in enumerate(timeline.contact):
-        corners = [sole_rectangle(spec, Footstep(side, *timeline.feet[side][i, [0, 1, 3]]))
-                   for side in Support.of(contact).feet]
-        out[i] = polygon_margin(zmp[i], convex_hull(np.vstack(corners)))[0]
+        support = Support.of(contact)
+        corners = {side: sole_rectangle(spec, Footstep(side, *timeline.feet[side][i, [0, 1, 3]]))
+                   for side in support.feet}
+        out[i] = polygon_margin(zmp[i], support.polygon(corners))[0]
     return out

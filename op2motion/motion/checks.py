@@ -30,7 +30,7 @@ from op2motion.model.dynamics import dynamics_for
 from op2motion.model.servo import ServoModel
 from op2motion.model.urdf import foot_box_corners, foot_link
 from op2motion.motion.trajectory import Trajectory
-from op2motion.robot.balance import convex_hull, polygon_margin
+from op2motion.robot.balance import polygon_margin
 from op2motion.robot.joints import servo_to_book
 from op2motion.robot.spec import GRAVITY_M_S2, Spec
 from op2motion.robot.support import Support, fixed_foot
@@ -94,12 +94,13 @@ def require_clear(trajectory: Trajectory, spec: Spec) -> None:
                           f"mm): add a pose in between that keeps them apart, or change the order of the moves")
 
 
-def _polygon(dyn: Any, data: Any, side_list: tuple[str, ...], spec: Spec) -> np.ndarray:
-    points = []
-    for side in side_list:
+def _polygon(dyn: Any, data: Any, support: Support, spec: Spec) -> np.ndarray:
+    """The support polygon of the soles (foot boxes) of ``support`` in pinocchio's current frame placements."""
+    corners = {}
+    for side in support.feet:
         foot = data.oMf[dyn.model.getFrameId(foot_link(spec, side))]
-        points.append(foot_box_corners(spec, side) @ foot.rotation.T + foot.translation)
-    return convex_hull(np.vstack(points)[:, :2])
+        corners[side] = foot_box_corners(spec, side) @ foot.rotation.T + foot.translation
+    return support.polygon(corners)
 
 
 def smoothed(values: np.ndarray, width: int) -> np.ndarray:
@@ -179,7 +180,7 @@ def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | Non
     available = servo.available(joint_speed, torques)
     for i in range(k):
         pin.framesForwardKinematics(model, data, configs[i])
-        polygons.append(_polygon(dyn, data, Support.of(trajectory.supports[i]).feet, spec))
+        polygons.append(_polygon(dyn, data, Support.of(trajectory.supports[i]), spec))
     share = np.minimum(np.abs(torques) / np.maximum(available, 1e-9), MAX_RATIO)
     worst = np.argmax(share, axis=1)
     ratio, torque = share[np.arange(k), worst], np.abs(torques)[np.arange(k), worst]

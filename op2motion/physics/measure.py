@@ -21,7 +21,7 @@ from op2motion.physics.loop import StartFacts
 from op2motion.physics.plan import Plan
 from op2motion.physics.report import FootLoad, MotionMeasures, RunReport, WorstTorque
 from op2motion.physics.track import Track
-from op2motion.robot.balance import convex_hull, polygon_margin
+from op2motion.robot.balance import polygon_margin
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support
 
@@ -66,7 +66,7 @@ def feet_report(track: Track, steady: np.ndarray) -> dict[str, FootLoad]:
         if total <= 0.0 or weights.sum() <= 0.0:
             continue
         cop = sum(f[side][0] * f[side][1] for f in samples if side in f) / weights.sum()
-        margin = float(polygon_margin(cop, convex_hull(last.corners[side][:, :2]))[0])
+        margin = float(polygon_margin(cop, Support.of(side).polygon(last.corners))[0])
         out[side] = FootLoad(_r(weights.sum() / total, 4), _xy(cop), _r(margin))
     return out
 
