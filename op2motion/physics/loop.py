@@ -8,7 +8,8 @@
    not standing on one leg) start at their goals instead while gravity rises from zero over :data:`.plan.RAMP_S`.
 2. Every :data:`~op2motion.robot.framework.CONTROL_PERIOD_S` the controller gets the time, the torso's gyro and
    accelerometer (torso frame; the acceleration is the torso origin's velocity change over the last period) and the
-   joint angles (:mod:`.controller`), and returns the goals the servos hold until the next call.
+   joint angles (:mod:`.controller`), and returns the goals the servos hold until the next call. The first call
+   (``start``) comes at time 0; the ticks fall where the plan's rows change (:attr:`.plan.Plan.tick_phase_s`).
 3. Every physics step (1 kHz) the servo model turns goals and joint angles into motor torques; a push, if any,
    acts on the torso's centre of mass; every :data:`.track.SAMPLE_S` the state is recorded (:class:`.track.Track`).
 """
@@ -145,6 +146,7 @@ def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoMod
     engine.reset(base_pos, base_rot, q0 + (0.0 if setup.start_offset is None else setup.start_offset))
     dt = engine.time_step
     per_tick, every = max(1, int(round(CONTROL_PERIOD_S / dt))), max(1, int(round(SAMPLE_S / dt)))
+    phase = int(round(plan.tick_phase_s / dt))
     steps = int(round(plan.duration_s / dt))
     push = setup.push
     force = None if push is None else push.force
@@ -161,11 +163,11 @@ def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoMod
         if k == 0:
             servos.start(q)
             imu.read(engine, gravity)
-        elif k % per_tick == 0:
+        elif (k - phase) % per_tick == 0:
             servos.tick(engine, t, imu.read(engine, gravity), q)
         engine.step(servo.active_torque(servos.goals, q, servos.kp), force if k in pushing else None)
         if k % every == every - 1 or k == steps - 1:
             recorder.sample(engine, (k + 1) * dt, plan.row(t), servos.goals, servos.kp)
-        if on_tick is not None and k % per_tick == per_tick - 1:
+        if on_tick is not None and (k - phase) % per_tick == per_tick - 1:
             on_tick((k + 1) * dt)
     return recorder.track(), StartFacts(body.state(base_pos, base_rot, q0), planned, ramp)

@@ -31,16 +31,11 @@ RAMP_S = 1.0                   # gravity ramps in over this long when a run cann
 STEADY_S = 1.0                 # the last second of a run: the steady window for torques, sag and centre of pressure
 MIN_SECONDS, MAX_SECONDS = RAMP_S + STEADY_S + 0.5, 60.0
 DEFAULT_SECONDS = 5.0
-MOTION_SETTLE_S = 0.5          # a motion starts this long after gravity reached full strength (on the 8 ms grid)
+MOTION_SETTLE_S = 0.5          # a motion starts this long after gravity reached full strength
 MOTION_HOLD_S = 1.5            # ... and its last goal is held this long (the last second is the steady window)
 MAX_MOTION_S = 120.0
 PUSH_SETTLE_S = 1.0            # a held pose is pushed this long after gravity reached full strength
 KINDS = ("pose", "motion", "walk")
-
-
-def on_grid(seconds: float) -> float:
-    """``seconds`` rounded up to the control grid (a whole number of 8 ms periods from 0)."""
-    return math.ceil(seconds / CONTROL_PERIOD_S - 1e-9) * CONTROL_PERIOD_S
 
 
 @dataclass(frozen=True)
@@ -110,7 +105,7 @@ class Plan:
         if not (math.isfinite(dt) and 0 < dt <= 1.0) or (len(goals) - 1) * dt > MAX_MOTION_S:
             raise InputError(f"expected goals at most {MAX_MOTION_S:g} s long, one every 0 to 1 s, got "
                              f"{len(goals)} goals every {dt!r} s", "motion")
-        start = on_grid(RAMP_S + MOTION_SETTLE_S)
+        start = RAMP_S + MOTION_SETTLE_S
         end = start + (len(goals) - 1) * dt
         return cls("motion", goals, p_gains, tuple(Support.of(s) for s in supports), float(dt), start,
                    end + MOTION_HOLD_S)
@@ -124,6 +119,11 @@ class Plan:
     def end_s(self) -> float:
         """When the last row is first sent [s]."""
         return self.start_s + (len(self.goals) - 1) * self.dt
+
+    @property
+    def tick_phase_s(self) -> float:
+        """Where the control ticks fall in each period [s]: the plan's rows change on a tick."""
+        return self.start_s % CONTROL_PERIOD_S
 
     @property
     def contacts(self) -> tuple[Support, ...]:
