@@ -64,7 +64,7 @@ class Outcome:
         out = {"reached": r.reached, "message": r.message, **r.as_dict(), "iterations": int(len(r.pso.history)),
                "refinement": r.method, "seconds": round(r.seconds, 3), "seed": r.settings.seed}
         if self.validation is not None:
-            out["validation"] = self.validation.as_dict()
+            out["validation"] = {**self.validation.as_dict(), "pushes": []}     # the validate keys (never pushed)
         return out
 
 
