@@ -110,8 +110,6 @@ class _Servos:
 
     def tick(self, engine: Engine, t: float, imu: tuple[np.ndarray, np.ndarray], q: np.ndarray) -> None:
         """One control tick: the sensors to the controller, its goals to the servos."""
-        if self.controller.done:
-            return
         positions = dict(zip(self.names, q.tolist()))
         if self.feet:
             ground = [c for c in engine.contacts() if c.other is None and c.normal_force > 0.0]
@@ -163,7 +161,7 @@ def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoMod
         if k == 0:
             servos.start(q)
             imu.read(engine, gravity)
-        elif (k - phase) % per_tick == 0:
+        elif (k - phase) % per_tick == 0 and not controller.done:
             servos.tick(engine, t, imu.read(engine, gravity), q)
         engine.step(servo.active_torque(servos.goals, q, servos.kp), force if k in pushing else None)
         if k % every == every - 1 or k == steps - 1:
