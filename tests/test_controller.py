@@ -104,3 +104,19 @@ def test_a_plan_checks_its_rows(spec):
         Plan("motion", np.zeros((3, 20)), np.zeros((2, 20)), ("left",) * 3, 0.008, 1.5, 3.0)
     with pytest.raises(InputError, match="support"):
         Plan("motion", np.zeros((2, 20)), np.zeros((2, 20)), ("left", "both"), 0.008, 1.5, 3.0)
+
+
+def test_a_controller_that_asks_gets_the_soles_loads(spec):
+    """A ``step`` with a ``foot_forces_n`` parameter is offered each sole's vertical load [N]: at rest on two feet
+    they carry the robot's weight between them."""
+    weight_n = sum(i.mass for i in spec.inertials) * GRAVITY_M_S2
+
+    class Loads(Recorder):
+        def step(self, t_s, gyro_rad_s, accel_m_s2, joint_positions, foot_forces_n=None):
+            self.loads = foot_forces_n
+            return super().step(t_s, gyro_rad_s, accel_m_s2, joint_positions)
+
+    recorder = Loads(Schedule.hold(servo_pose(spec), "double", spec, HOLD_S))
+    assert check(recorder, spec).run.stable
+    assert set(recorder.loads) == {"left", "right"}
+    assert sum(recorder.loads.values()) == pytest.approx(weight_n, rel=0.05)
