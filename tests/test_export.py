@@ -159,7 +159,7 @@ def test_library_build_and_resume(spec, tmp_path):
 def test_killed_library_build_leaves_no_half_written_file(tmp_path):
     cmd = [sys.executable, "-m", "op2motion", "library", "build", "--x", "0.06", "0.14", "5", "--y", "0", "0.04",
            "2", "--z", "0.07", "0.07", "1", "--hands", "left", "--supports", "left", "--workers", "2",
-           "--iters", "80", "--restarts", "0", "--out", str(tmp_path / "lib")]
+           "--iters", "80", "--particles", "20", "--restarts", "0", "--out", str(tmp_path / "lib")]
     proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     deadline = time.time() + 60
     while time.time() < deadline and not list((tmp_path / "lib").glob("reach-*.json")):
@@ -244,7 +244,8 @@ def test_sigkill_of_the_parent_leaves_no_worker_and_the_rerun_completes(tmp_path
     for p in survivors:                                      # do not leave them behind if the test fails
         os.kill(p, signal.SIGKILL)
     assert survivors == []
-    resumed = subprocess.run(cmd + ["--iters", "60", "--json"], capture_output=True, text=True, timeout=300)
+    resumed = subprocess.run(cmd + ["--iters", "60", "--particles", "20", "--json"], capture_output=True, text=True,
+                             timeout=300)
     summary = json.loads(resumed.stdout)
     assert resumed.returncode == 0 and summary["targets"] == 8 and summary["solved"] + summary["failed"] == 8
     rows = json.loads((tmp_path / "lib" / "index.json").read_text(encoding="utf-8"))
