@@ -1,10 +1,12 @@
-"""Shared fixtures: the shipped spec, a seeded RNG, the stock action file."""
+"""Shared fixtures: the shipped spec, a seeded RNG, the stock action file; op2motion compiled once for the many
+subprocesses the tests start (CLI runs, examples, library workers), which would otherwise each compile it again
+where Python is told not to write bytecode (PYTHONDONTWRITEBYTECODE)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import SEED, STOCK
+from helpers import ROOT, SEED, STOCK, compile_package
 
 from op2motion.robot.spec import Spec
 from op2motion.robot.specfile import default_spec
@@ -24,3 +26,7 @@ def rng() -> np.random.Generator:
 def stock_action_bytes() -> bytes:
     """The stock ROBOTIS motion_4096.bin (copied from the ROBOTIS framework's Data folder)."""
     return STOCK.read_bytes()
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    compile_package(ROOT)

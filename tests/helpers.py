@@ -15,6 +15,14 @@ STOCK = DATA / "motion_4096.bin"
 SEED = 20261121
 
 
+def compile_package(root: Path) -> None:
+    """Write the bytecode of ``root``/op2motion (``__pycache__``, git-ignored) so that subprocesses import it without
+    compiling it each time."""
+    import compileall
+
+    compileall.compile_dir(str(root / "op2motion"), quiet=2)
+
+
 def pose_path(name: str) -> str:
     """Path of a committed pose file."""
     return str(POSES / f"{name}.json")

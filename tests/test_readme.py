@@ -9,7 +9,7 @@ import subprocess
 import sys
 
 import pytest
-from helpers import POSES, ROOT
+from helpers import POSES, ROOT, compile_package
 
 from op2motion.cli import build_parser
 
@@ -43,6 +43,7 @@ def clone(tmp_path_factory):
         target = dest / name
         target.parent.mkdir(parents=True, exist_ok=True)
         target.write_bytes((ROOT / name).read_bytes())
+    compile_package(dest)
     return dest
 
 
