@@ -11,7 +11,7 @@ import pytest
 from helpers import ROOT
 
 from op2motion.errors import InputError
-from op2motion.physics import ENGINES, Plan, Schedule, Setup, check
+from op2motion.physics import ENGINES, Plan, Schedule, Sensors, Setup, check
 from op2motion.physics.sweeps import centred, leaned, servo_pose
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import GRAVITY_M_S2
@@ -120,3 +120,24 @@ def test_a_controller_that_asks_gets_the_soles_loads(spec):
     assert check(recorder, spec).run.stable
     assert set(recorder.loads) == {"left", "right"}
     assert sum(recorder.loads.values()) == pytest.approx(weight_n, rel=0.05)
+
+
+def test_sensor_latency_delays_every_reading_by_whole_periods(spec):
+    """The same run read with 16 ms of latency sees exactly what the run without it saw two ticks earlier."""
+    seen = {}
+    for latency in (0.0, 0.016):
+        recorder = Recorder(Schedule.hold(servo_pose(spec), "double", spec, HOLD_S))
+        check(recorder, spec, setup=Setup(sensors=Sensors(latency_s=latency)))
+        seen[latency] = np.array([np.concatenate([g, a]) for _, g, a in recorder.calls])
+    assert np.array_equal(seen[0.016][2:], seen[0.0][:-2])
+
+
+def test_sensor_noise_is_seeded_and_of_its_size(spec):
+    gyro_noise = 0.02
+    runs = []
+    for seed in (1, 1, 2):
+        recorder = Recorder(Schedule.hold(servo_pose(spec), "double", spec, HOLD_S))
+        check(recorder, spec, setup=Setup(sensors=Sensors(gyro_noise_rad_s=gyro_noise, seed=seed)))
+        runs.append(np.array([g for t, g, _ in recorder.calls if t > HOLD_S - 1.0]))
+    assert np.array_equal(runs[0], runs[1]) and not np.array_equal(runs[0], runs[2])
+    assert np.std(runs[0]) == pytest.approx(gyro_noise, rel=0.2)        # the robot itself is still

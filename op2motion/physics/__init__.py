@@ -39,11 +39,12 @@ from op2motion.physics.report import (
     WorstTorque,
 )
 from op2motion.physics.runner import MAX_PUSH_N, Pushes, Setup, Trials, check
-from op2motion.physics.scene import ENGINES, TIME_STEP_S
+from op2motion.physics.scene import ENGINES, FLOOR_FRICTION, TIME_STEP_S
+from op2motion.physics.sensors import Sensors
 from op2motion.physics.walk import WALK_HOLD_S, WALK_SETTLE_S
 
-__all__ = ["DEFAULT_SECONDS", "ENGINES", "FALL_REASONS", "MAX_PUSH_N", "MAX_SECONDS", "MIN_SECONDS", "MOTION_HOLD_S",
-           "MOTION_SETTLE_S", "RAMP_S", "REASONS", "TIME_STEP_S", "WALK_HOLD_S", "WALK_SETTLE_S", "CheckReport",
-           "Controller", "Engine", "EngineReport", "Failure", "FootLoad", "Goals", "MotionMeasures", "Plan",
-           "PushResult", "Pushes", "RunReport", "Schedule", "Setup", "Trials", "TrialsResult", "WalkClock",
-           "WalkMeasures", "WorstTorque", "check", "make_engine"]
+__all__ = ["DEFAULT_SECONDS", "ENGINES", "FALL_REASONS", "FLOOR_FRICTION", "MAX_PUSH_N", "MAX_SECONDS",
+           "MIN_SECONDS", "MOTION_HOLD_S", "MOTION_SETTLE_S", "RAMP_S", "REASONS", "TIME_STEP_S", "WALK_HOLD_S",
+           "WALK_SETTLE_S", "CheckReport", "Controller", "Engine", "EngineReport", "Failure", "FootLoad", "Goals",
+           "MotionMeasures", "Plan", "PushResult", "Pushes", "RunReport", "Schedule", "Sensors", "Setup", "Trials",
+           "TrialsResult", "WalkClock", "WalkMeasures", "WorstTorque", "check", "make_engine"]

@@ -15,7 +15,7 @@ import numpy as np
 
 from op2motion.errors import InputError
 from op2motion.model.servo import ServoModel
-from op2motion.physics.scene import ENGINES, TIME_STEP_S, Contact
+from op2motion.physics.scene import ENGINES, FLOOR_FRICTION, TIME_STEP_S, Contact
 from op2motion.robot.spec import Spec
 
 __all__ = ["ENGINES", "TIME_STEP_S", "Contact", "Engine", "make_engine", "snapshot_png"]
@@ -53,16 +53,17 @@ class Engine(Protocol):
         """Release the world."""
 
 
-def make_engine(name: str, spec: Spec, servo: ServoModel) -> Engine:
-    """A fresh world of engine ``name`` (one of :data:`ENGINES`) with the robot and the floor."""
+def make_engine(name: str, spec: Spec, servo: ServoModel, friction: float = FLOOR_FRICTION) -> Engine:
+    """A fresh world of engine ``name`` (one of :data:`ENGINES`) with the robot and a floor of Coulomb
+    ``friction``."""
     if name == "pybullet":
         from op2motion.physics.pybullet_engine import PyBulletEngine
 
-        return PyBulletEngine(spec, servo, TIME_STEP_S)
+        return PyBulletEngine(spec, servo, TIME_STEP_S, friction=friction)
     if name == "mujoco":
         from op2motion.physics.mujoco_engine import MuJoCoEngine
 
-        return MuJoCoEngine(spec, servo, TIME_STEP_S)
+        return MuJoCoEngine(spec, servo, TIME_STEP_S, friction)
     raise InputError(f"expected one of {', '.join(ENGINES)}, got {name!r}", "engine")
 
 

@@ -29,9 +29,9 @@ from op2motion.physics.body import Body, BodyState, placement
 from op2motion.physics.controller import Controller, Goals
 from op2motion.physics.engine import Engine
 from op2motion.physics.plan import RAMP_S, PlannedStates, planned_states
+from op2motion.physics.sensors import Imu, Reading, Sensors
 from op2motion.physics.track import SAMPLE_S, Recorder, Track, foot_loads
 from op2motion.robot.framework import CONTROL_PERIOD_S
-from op2motion.robot.spec import GRAVITY_M_S2
 
 SAGGED_GAP_TOL_M = 1e-6    # the sagged start may leave a supporting foot this much higher than the rigid one
 
@@ -47,11 +47,12 @@ class Push:
 
 @dataclass(frozen=True)
 class RunSetup:
-    """What differs between the runs of one check: a push, and joint offsets (20,) [rad] at the start (a perturbed
-    start: the joints start that far from where the plan puts them)."""
+    """What differs between the runs of one check: a push, joint offsets (20,) [rad] at the start (a perturbed
+    start: the joints start that far from where the plan puts them), and the sensors' latency and noise."""
 
     push: Push | None = None
     start_offset: np.ndarray | None = None
+    sensors: Sensors = Sensors()
 
 
 @dataclass(frozen=True)
@@ -108,31 +109,17 @@ class _Servos:
         """Ask the controller for its first goals."""
         self._apply(self.controller.start(dict(zip(self.names, q.tolist()))), 0)
 
-    def tick(self, engine: Engine, t: float, imu: tuple[np.ndarray, np.ndarray], q: np.ndarray) -> None:
+    def tick(self, engine: Engine, t: float, reading: Reading) -> None:
         """One control tick: the sensors to the controller, its goals to the servos."""
+        gyro, accel, q = reading
         positions = dict(zip(self.names, q.tolist()))
         if self.feet:
             ground = [c for c in engine.contacts() if c.other is None and c.normal_force > 0.0]
             loads = {side: load for side, (load, _) in foot_loads(ground, self.foot_links).items()}
-            goals = self.controller.step(t, *imu, positions, foot_forces_n=loads)    # type: ignore[call-arg]
+            goals = self.controller.step(t, gyro, accel, positions, foot_forces_n=loads)  # type: ignore[call-arg]
         else:
-            goals = self.controller.step(t, *imu, positions)
+            goals = self.controller.step(t, gyro, accel, positions)
         self._apply(goals, self.controller.plan.row(t))
-
-
-class _Imu:
-    """The CM-730's gyro and accelerometer, from the torso's simulated motion (torso frame)."""
-
-    def __init__(self) -> None:
-        self.last: np.ndarray | None = None
-
-    def read(self, engine: Engine, gravity_scale: float) -> tuple[np.ndarray, np.ndarray]:
-        """Angular velocity (3,) [rad/s] and specific force (3,) [m/s²] in the torso frame."""
-        _, rot = engine.base()
-        linear, angular = engine.base_velocity()
-        accel = np.zeros(3) if self.last is None else (linear - self.last) / CONTROL_PERIOD_S
-        self.last = linear
-        return rot.T @ angular, rot.T @ (accel + np.array([0.0, 0.0, GRAVITY_M_S2 * gravity_scale]))
 
 
 def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoModel, setup: RunSetup = RunSetup(),
@@ -150,7 +137,7 @@ def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoMod
     force = None if push is None else push.force
     pushing = range(0) if push is None else range(int(round(push.start_s / dt)),
                                                    int(round((push.start_s + push.duration_s) / dt)))
-    servos, imu, recorder = _Servos(controller, body, servo), _Imu(), Recorder(body, servo)
+    servos, imu, recorder = _Servos(controller, body, servo), Imu(setup.sensors), Recorder(body, servo)
     gravity = 1.0
     for k in range(steps):
         t = k * dt
@@ -159,10 +146,9 @@ def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoMod
             engine.set_gravity(gravity)
         q, _ = engine.state()
         if k == 0:
-            servos.start(q)
-            imu.read(engine, gravity)
+            servos.start(imu.read(engine, q, gravity)[2])
         elif (k - phase) % per_tick == 0 and not controller.done:
-            servos.tick(engine, t, imu.read(engine, gravity), q)
+            servos.tick(engine, t, imu.read(engine, q, gravity))
         engine.step(servo.active_torque(servos.goals, q, servos.kp), force if k in pushing else None)
         if k % every == every - 1 or k == steps - 1:
             recorder.sample(engine, (k + 1) * dt, plan.row(t), servos.goals, servos.kp)

@@ -27,7 +27,7 @@ class MuJoCoEngine:
 
     name = "mujoco"
 
-    def __init__(self, spec: Spec, servo: ServoModel, time_step: float):
+    def __init__(self, spec: Spec, servo: ServoModel, time_step: float, friction: float = FLOOR_FRICTION):
         import mujoco
 
         self.mj, self.spec, self.servo, self.time_step = mujoco, spec, servo, time_step
@@ -42,12 +42,12 @@ class MuJoCoEngine:
         o.timestep, o.gravity = time_step, [0.0, 0.0, -GRAVITY_M_S2]
         o.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
         o.cone, o.impratio = mujoco.mjtCone.mjCONE_ELLIPTIC, IMPRATIO
-        friction = [FLOOR_FRICTION, 0.005, 0.0001]
-        ms.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], friction=friction,
+        coefficients = [friction, 0.005, 0.0001]
+        ms.worldbody.add_geom(name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05], friction=coefficients,
                               solref=list(SOLREF), solimp=list(SOLIMP), condim=3)
         for g in ms.geoms:
             if g.name != "floor":
-                g.friction, g.solref, g.solimp, g.condim = friction, list(SOLREF), list(SOLIMP), 3
+                g.friction, g.solref, g.solimp, g.condim = coefficients, list(SOLREF), list(SOLIMP), 3
         ms.body(URDF_ROOT).add_freejoint(name="root")
         limit = servo.torque_max
         for j in ms.joints:

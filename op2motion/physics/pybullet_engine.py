@@ -65,7 +65,8 @@ class PyBulletEngine:
 
     name = "pybullet"
 
-    def __init__(self, spec: Spec, servo: ServoModel, time_step: float, use_inertia_from_file: bool = True):
+    def __init__(self, spec: Spec, servo: ServoModel, time_step: float, use_inertia_from_file: bool = True,
+                 friction: float = FLOOR_FRICTION):
         with quiet_c_output():
             import pybullet as pb
             from pybullet_utils import bullet_client
@@ -91,7 +92,7 @@ class PyBulletEngine:
             self.joint_index[info[1].decode()] = i
         self.link_name = {i: n for n, i in self.link_index.items()}
         for i in self.link_index.values():
-            c.changeDynamics(self.robot, i, lateralFriction=FLOOR_FRICTION)
+            c.changeDynamics(self.robot, i, lateralFriction=friction)
         self.joints = [self.joint_index[n] for n in spec.joint_names]
         c.setJointMotorControlArray(self.robot, self.joints, pb.VELOCITY_CONTROL, forces=[0.0] * len(self.joints))
         info = c.getDynamicsInfo(self.robot, -1)

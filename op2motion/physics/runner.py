@@ -25,10 +25,13 @@ from op2motion.physics.loop import Push, RunSetup, simulate
 from op2motion.physics.measure import RunSetupFacts, run_report
 from op2motion.physics.plan import Plan
 from op2motion.physics.report import PUSH_DIRECTIONS, CheckReport, EngineReport, PushResult, RunReport, TrialsResult
+from op2motion.physics.scene import FLOOR_FRICTION
+from op2motion.physics.sensors import Sensors
 from op2motion.physics.walk import walk_measures
 from op2motion.robot.spec import Spec
 
 MAX_PUSH_N = 100.0
+MAX_FRICTION = 2.0
 PUSH_DURATION_S = 0.1
 MAX_TRIALS = 100
 MAX_PERTURB_DEG = 5.0
@@ -37,14 +40,22 @@ Progress = Callable[[float, float], object]      # (simulated seconds done, in a
 
 @dataclass(frozen=True)
 class Setup:
-    """The servo model of every run: Kp scaled by ``stiffness`` (sensitivity studies), a rated supply ``voltage``
-    [V] (None: the spec's); ``snapshot`` keeps a picture of the main run's end (the first engine's), ``keep_track``
-    each main run's samples (:class:`.track.Track`, e.g. to plot the joints)."""
+    """What every run of a check shares: the servo model (Kp scaled by ``stiffness``, a rated supply ``voltage`` [V],
+    None: the spec's), the floor's Coulomb ``friction``, the ``sensors``' latency and noise; ``snapshot`` keeps a
+    picture of the main run's end (the first engine's), ``keep_track`` each main run's samples
+    (:class:`.track.Track`, e.g. to plot the joints)."""
 
     stiffness: float = 1.0
     voltage: float | None = None
     snapshot: bool = False
     keep_track: bool = False
+    friction: float = FLOOR_FRICTION
+    sensors: Sensors = Sensors()
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.friction) and 0.0 < self.friction <= MAX_FRICTION):
+            raise InputError(f"expected a friction coefficient in (0, {MAX_FRICTION:g}], got {self.friction!r}",
+                             "friction")
 
 
 @dataclass(frozen=True)
@@ -127,7 +138,8 @@ class _Runner:
     def run(self, engine_name: str, run: RunSetup = RunSetup(), snapshot: bool = False,
             keep_track: bool = False) -> RunReport:
         """One run in a fresh world, judged and measured."""
-        engine = make_engine(engine_name, self.spec, self.servo)
+        engine = make_engine(engine_name, self.spec, self.servo, self.setup.friction)
+        run = replace(run, sensors=self.setup.sensors)
         plan = self.controller.plan
         try:
             track, start = simulate(engine, self.body, self.controller, self.servo, run, self._tick)
