@@ -29,7 +29,7 @@ def _fixtures(root: Path) -> dict[str, str]:
         "random": bytes(range(256)) * 8,
         "latin1": "caf\u00e9 = 1".encode("latin-1"),
         "truncated.bin": STOCK.read_bytes()[:-1],
-        "neg_inertia.toml": SPEC_TEXT.replace("inertia = [5.3316e-03", "inertia = [-5.3316e-03").encode(),
+        "neg_inertia.toml": SPEC_TEXT.replace("inertia = [1.98125e-03", "inertia = [-1.98125e-03").encode(),
         "ghost_link.toml": SPEC_TEXT.replace('parent = "l_knee_link"', 'parent = "l_calf_link"').encode(),
         "ghost_point.toml": SPEC_TEXT.replace('link = "head_tilt_link"', 'link = "hat_link"', 1).encode(),
         "empty.toml": b"",

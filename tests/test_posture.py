@@ -79,7 +79,9 @@ def test_a_load_over_the_joints_does_not_sag(spec):
 
 
 SETTLE_PREDICTION_M = 0.010   # the compliance model against MuJoCo's settled CoM on standing one-leg poses
-SWING_BELOW_M, SWING_ABOVE_M = 0.008, 0.002   # the settled swing-foot height: predicted at most this much lower
+# The settled swing-foot height: predicted at most this much lower / higher (the model neglects static friction and
+# errs towards more sag: 4-8 mm lower on these poses).
+SWING_BELOW_M, SWING_ABOVE_M = 0.010, 0.002
                                               # or higher than MuJoCo's (the model errs towards more sag)
 
 

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from op2motion.errors import SpecError
@@ -36,7 +38,54 @@ def test_lumped_masses_total_the_book_table(spec):
                                                  + 0.16711 + 0.07945)
     assert spec.lumped_total_mass == pytest.approx(expected, abs=1e-9)
     assert 2.8 <= spec.lumped_total_mass <= 3.0
-    assert sum(i.mass for i in spec.inertials) == pytest.approx(2.925, abs=0.002)  # Webots per-link set
+    assert sum(i.mass for i in spec.inertials) == pytest.approx(2.925, abs=0.002)  # the ROBOTIS CAD parts
+
+
+def test_every_mass_figure_names_a_source_and_an_uncertainty(spec):
+    """Each link's mass, CoM and tensor cite an entry of [sources]; each states how far it may be off, and the
+    torso's (the figure that matters most) covers what the robustness checks vary: ±20 mm fore-aft, ±10 mm sideways,
+    ±15 % mass."""
+    assert len(spec.inertials) == 21
+    for item in spec.inertials:
+        assert set(item.sources) == {"mass", "com", "inertia"}, item.link
+        assert all(key in spec.sources and spec.sources[key] for key in item.sources.values()), item.link
+        u = item.uncertainty
+        assert u is not None and 0.0 < u.mass_fraction < 0.5, item.link
+        assert all(lo < 0.0 < hi for lo, hi in u.com_m), item.link
+    torso = spec.inertial(spec.root_link).uncertainty
+    assert torso.mass_fraction >= 0.15 and torso.com_m[0] == (-0.020, 0.020) and torso.com_m[1] == (-0.010, 0.010)
+
+
+def test_the_body_is_mirror_symmetric(spec):
+    """Every left link's mass, CoM and tensor mirror its right twin's (y -> -y)."""
+    flip = [1.0, -1.0, 1.0]
+    for left in (i for i in spec.inertials if i.link.startswith("l_")):
+        right = spec.inertial("r_" + left.link[2:])
+        assert right.mass == left.mass
+        assert right.link_com == pytest.approx(left.link_com * flip, abs=1e-9)
+        assert right.link_tensor == pytest.approx(left.link_tensor * np.outer(flip, flip), abs=1e-12)
+    assert spec.inertial(spec.root_link).com[1] == 0.0
+
+
+def test_an_inertial_in_a_turned_frame_is_read_into_the_link_frame(spec):
+    """Older files give an inertial in its source's frame, placed in the link frame by webots_frame_xyz_m and
+    webots_frame_rpy_deg: the loader turns the CoM and the tensor into the link frame."""
+    head = spec.inertial("head_tilt_link")
+    pitch = math.radians(12.0)
+    rot = np.array([[math.cos(pitch), 0.0, math.sin(pitch)], [0.0, 1.0, 0.0], [-math.sin(pitch), 0.0, math.cos(pitch)]])
+    offset = np.array([0.001, 0.0, -0.002])
+    com = (rot.T @ (head.link_com - offset)).tolist()
+    t = (rot.T @ head.link_tensor @ rot).tolist()
+    block = re.search(r'\[\[inertial\]\]\nlink = "head_tilt_link"\n(?:.*\n)*?com_uncertainty_m = .*\n', SPEC_TEXT)
+    turned = (f'[[inertial]]\nlink = "head_tilt_link"\nwebots = "Head"\nmass_kg = {head.mass!r}\n'
+              f"com_m = [{com[0]!r}, {com[1]!r}, {com[2]!r}]\n"
+              f"inertia = [{t[0][0]!r}, {t[1][1]!r}, {t[2][2]!r}, {t[0][1]!r}, {t[0][2]!r}, {t[1][2]!r}]\n"
+              "webots_frame_xyz_m = [0.001, 0.0, -0.002]\n"
+              "webots_frame_rpy_deg = [0.0, 12.0, 0.0]\n")
+    read = parse_spec(SPEC_TEXT.replace(block.group(0), turned)).inertial("head_tilt_link")
+    assert read.link_com == pytest.approx(head.link_com, abs=1e-12)
+    assert read.link_tensor == pytest.approx(head.link_tensor, abs=1e-15)
+    assert read.uncertainty is None and not read.sources
 
 
 def _mutate(pattern: str, repl: str, count: int = 1) -> str:
@@ -61,9 +110,14 @@ def _mutate(pattern: str, repl: str, count: int = 1) -> str:
      "r_knee origin must mirror l_knee"),
     (_mutate(r"^supply_voltage_v = 12.0", "supply_voltage_v = 13.0"), "servo.supply_voltage_v"),
     # Physical sense: inertia tensors, masses, references that exist.
-    (_mutate(r"^inertia = \[5.3316e-03", "inertia = [-5.3316e-03"), "positive definite"),
-    (_mutate(r"^inertia = \[1.1352e-04, 9.3370e-05, 4.6296e-05, 2.3992e-07",
-             "inertia = [1.1352e-04, 9.3370e-05, 4.6296e-04, 2.3992e-07"), "triangle inequality"),
+    (_mutate(r"^inertia = \[1.98125e-03", "inertia = [-1.98125e-03"), "positive definite"),
+    (_mutate(r"^inertia = \[1.13515e-04, 9.33696e-05, 4.62955e-05, 2.39921e-07",
+             "inertia = [1.13515e-04, 9.33696e-05, 4.62955e-04, 2.39921e-07"), "triangle inequality"),
+    (_mutate(r'^sources = \{ mass = "robotis_cad", com = "robotis_cad", inertia = "mesh_official" \}',
+             'sources = { mass = "robotis_cad", com = "a_guess", inertia = "mesh_official" }'), "sources.com"),
+    (_mutate(r"^mass_uncertainty = 0.15\ncom_uncertainty_m = \[\[-0.020, 0.020\]",
+             "mass_uncertainty = 0.15\ncom_uncertainty_m = [[0.020, 0.020]"), "com_uncertainty_m"),
+    (_mutate(r"^mass_uncertainty = 0.15\n", ""), "mass_uncertainty and com_uncertainty_m together"),
     (_mutate(r"^mass_kg = 0.975599", "mass_kg = -0.975599"), "mass_kg"),
     (_mutate(r'^link = "l_knee_link"', 'link = "l_shin_link"'), "'l_shin_link' does not exist"),
     (_mutate(r'^link = "head_tilt_link"', 'link = "hat_link"'), "points.head_top"),

@@ -23,7 +23,6 @@ from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.support import LIFTED_M, other_side
 
 LEAD_S = 0.5             # standing still before the start ramp: the preview moves the CoM ahead of the reference
-CRUISE_RAMP = 0.3        # share of the swing spent speeding up (and again slowing down), see cruise_blend
 
 
 def quintic_blend(s: np.ndarray) -> np.ndarray:
@@ -32,7 +31,7 @@ def quintic_blend(s: np.ndarray) -> np.ndarray:
     return s ** 3 * (10.0 - 15.0 * s + 6.0 * s * s)
 
 
-def cruise_blend(s: np.ndarray, ramp: float = CRUISE_RAMP) -> np.ndarray:
+def cruise_blend(s: np.ndarray, ramp: float) -> np.ndarray:
     """0 -> 1 over ``s`` in [0, 1] at a constant speed between two ramps of ``ramp`` of the phase each, whose
     speed rises and falls as a half cosine: zero velocity and acceleration at both ends, a peak speed of
     1 / (1 - ramp) times the mean (the quintic's is 1.875), so the swing leg's servos stay further from their
@@ -109,7 +108,7 @@ def build_timeline(params: GaitParams, plan: FootPlan) -> Timeline:
     for k, step in enumerate(plan.steps):
         stand, before = plan.stance_before(k)
         s = (np.arange(1, n_single + 1) / n_single)
-        blend = cruise_blend(s)[:, None]
+        blend = cruise_blend(s, params.swing_ramp)[:, None]
         start, goal = where[step.side], np.array([step.x, step.y, 0.0, step.yaw])
         goal[3] = start[3] + math.remainder(goal[3] - start[3], 2.0 * math.pi)
         path = start + blend * (goal - start)

@@ -36,7 +36,7 @@ class LinkInertial:
 
 
 def link_inertial(item: Inertial) -> LinkInertial:
-    """A Webots inertial re-expressed in our link frame (see :attr:`Inertial.link_com`, ``link_tensor``)."""
+    """A spec inertial as arrays (link frame)."""
     return LinkInertial(item.mass, item.link_com, item.link_tensor)
 
 

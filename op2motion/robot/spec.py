@@ -8,7 +8,7 @@ Angles [rad], lengths [m], masses [kg], torques [N·m].
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
@@ -165,28 +165,42 @@ def rpy_matrix(rpy: tuple[float, float, float]) -> np.ndarray:
 
 
 @dataclass(frozen=True)
+class Uncertainty:
+    """How far a link's mass figures may be off (about 2σ): the mass by ±``mass_fraction`` of itself, the centre of
+    mass by ``com_m`` = ((low, high) per axis x, y, z) [m] in the link frame (low <= 0 <= high)."""
+
+    mass_fraction: float
+    com_m: tuple[tuple[float, float], tuple[float, float], tuple[float, float]]
+
+
+@dataclass(frozen=True)
 class Inertial:
-    """A per-link inertial (Webots data): CoM [m] and tensor about the CoM [kg·m²] in the Webots link frame."""
+    """A link's mass [kg], centre of mass [m] and inertia tensor about the centre of mass (ixx, iyy, izz, ixy, ixz,
+    iyz) [kg·m²] in the link frame; where each figure comes from (``sources``: figure -> key of the spec's
+    ``[sources]`` table, for ``mass``, ``com`` and ``inertia``) and how far it may be off (None: not stated)."""
 
     link: str
-    webots: str
     mass: float
     com: tuple[float, float, float]
     inertia: tuple[float, float, float, float, float, float]
-    webots_frame_xyz: tuple[float, float, float]
-    webots_frame_rpy: tuple[float, float, float]
+    sources: Mapping[str, str]
+    uncertainty: Uncertainty | None
 
     @property
     def link_com(self) -> np.ndarray:
-        """The centre of mass (3,) [m] in our link frame (the Webots frame moved and turned into it)."""
-        return rpy_matrix(self.webots_frame_rpy) @ np.asarray(self.com) + np.asarray(self.webots_frame_xyz)
+        """The centre of mass (3,) [m] in the link frame."""
+        return np.asarray(self.com, dtype=float)
 
     @property
     def link_tensor(self) -> np.ndarray:
-        """The inertia tensor about the centre of mass (3, 3) [kg·m²] in our link frame."""
-        rot = rpy_matrix(self.webots_frame_rpy)
-        ixx, iyy, izz, ixy, ixz, iyz = self.inertia
-        return rot @ np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]) @ rot.T
+        """The inertia tensor about the centre of mass (3, 3) [kg·m²] in the link frame."""
+        return inertia_matrix(self.inertia)
+
+
+def inertia_matrix(six: tuple[float, ...]) -> np.ndarray:
+    """The symmetric (3, 3) tensor [kg·m²] of (ixx, iyy, izz, ixy, ixz, iyz)."""
+    ixx, iyy, izz, ixy, ixz, iyz = six
+    return np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
 
 
 @dataclass(frozen=True)
@@ -242,6 +256,7 @@ class Spec:
     geometry: Geometry
     path: str
     sha256: str
+    sources: Mapping[str, str] = field(default_factory=dict)
 
     @property
     def joint_names(self) -> tuple[str, ...]:
@@ -254,6 +269,13 @@ class Spec:
             if j.name == name:
                 return j
         raise SpecError(f"{self.path}: no joint named {name!r}")
+
+    def inertial(self, link: str) -> Inertial:
+        """The inertial of ``link``."""
+        for item in self.inertials:
+            if item.link == link:
+                return item
+        raise SpecError(f"{self.path}: no inertial for link {link!r}")
 
     def foot_box(self, side: str) -> Collision:
         """The collision box of the ``left`` or ``right`` foot: the real sole is its underside."""

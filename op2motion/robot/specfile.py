@@ -38,6 +38,9 @@ from op2motion.robot.spec import (
     Rating,
     Servo,
     Spec,
+    Uncertainty,
+    inertia_matrix,
+    rpy_matrix,
 )
 from op2motion.robot.support import SIDES
 from op2motion.robot.tablereader import TableReader
@@ -221,7 +224,72 @@ def _geometry(path: str, joints: Mapping[str, Joint], points: Mapping[str, Point
     return Geometry(**lengths)
 
 
-def _masses(top: TableReader) -> tuple[list[LumpedMass], list[Inertial], list[Collision]]:
+def _sources(top: TableReader) -> dict[str, str]:
+    """The ``[sources]`` table: short key -> citation (optional)."""
+    if "sources" not in top.table:
+        return {}
+    reader = top.sub("sources")
+    out = {key: reader.get(key, str) for key in list(reader.table)}
+    reader.done()
+    return out
+
+
+def _uncertainty(r: TableReader) -> Uncertainty | None:
+    """A link's stated uncertainty (``mass_uncertainty`` and ``com_uncertainty_m`` together, or neither)."""
+    given = [key for key in ("mass_uncertainty", "com_uncertainty_m") if key in r.table]
+    if not given:
+        return None
+    if len(given) == 1:
+        raise SpecError(f"{r.path}: {r.where}: expected mass_uncertainty and com_uncertainty_m together, got only "
+                        f"{given[0]}")
+    fraction = r.number("mass_uncertainty", nonnegative=True)
+    if fraction >= 1.0:
+        raise SpecError(f"{r.path}: {r.where}.mass_uncertainty: expected a fraction below 1, got {fraction!r}")
+    rows = r.get("com_uncertainty_m", list)
+    bounds = []
+    for row in rows if len(rows) == 3 else ():
+        ok = isinstance(row, list) and len(row) == 2 and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in row)
+        if not ok or not row[0] <= 0.0 <= row[1]:
+            break
+        bounds.append((float(row[0]), float(row[1])))
+    if len(bounds) != 3:
+        raise SpecError(f"{r.path}: {r.where}.com_uncertainty_m: expected [[low, high], [low, high], [low, high]] "
+                        f"[m] with low <= 0 <= high per axis, got {rows!r}")
+    return Uncertainty(fraction, (bounds[0], bounds[1], bounds[2]))
+
+
+def _inertial(r: TableReader, sources: Mapping[str, str]) -> Inertial:
+    """One ``[[inertial]]``: in the link frame, or (older files) in a Webots frame placed by
+    ``webots_frame_xyz_m`` / ``webots_frame_rpy_deg``, re-expressed here in the link frame."""
+    inertia = r.vector("inertia", 6)
+    _check_inertia(r.path, r.where, inertia)
+    com = np.asarray(r.vector("com_m"))
+    tensor = inertia_matrix(inertia)
+    if "webots_frame_xyz_m" in r.table or "webots_frame_rpy_deg" in r.table or "webots" in r.table:
+        r.get("webots", str)
+        rot = rpy_matrix(tuple(math.radians(v) for v in r.vector("webots_frame_rpy_deg")))  # type: ignore[arg-type]
+        com = rot @ com + np.asarray(r.vector("webots_frame_xyz_m"))
+        tensor = rot @ tensor @ rot.T
+    cited: dict[str, str] = {}
+    if "sources" in r.table:
+        s = r.sub("sources")
+        for figure in ("mass", "com", "inertia"):
+            key = s.get(figure, str)
+            if key not in sources:
+                raise SpecError(f"{r.path}: {r.where}.sources.{figure}: expected a key of [sources] "
+                                f"({', '.join(sorted(sources)) or 'none given'}), got {key!r}")
+            cited[figure] = key
+        s.done()
+    item = Inertial(r.get("link", str), r.number("mass_kg", positive=True),
+                    (float(com[0]), float(com[1]), float(com[2])),
+                    (float(tensor[0, 0]), float(tensor[1, 1]), float(tensor[2, 2]), float(tensor[0, 1]),
+                     float(tensor[0, 2]), float(tensor[1, 2])), cited, _uncertainty(r))
+    r.done()
+    return item
+
+
+def _masses(top: TableReader, sources: Mapping[str, str]) -> tuple[list[LumpedMass], list[Inertial], list[Collision]]:
     masses = []
     for r in top.array("lumped_mass"):
         fraction = r.number("fraction")
@@ -230,15 +298,7 @@ def _masses(top: TableReader) -> tuple[list[LumpedMass], list[Inertial], list[Co
         masses.append(LumpedMass(r.get("name", str), r.number("mass_kg", positive=True), r.get("from", str),
                                  r.get("to", str), fraction))
         r.done()
-    inertials = []
-    for r in top.array("inertial"):
-        inertia = r.vector("inertia", 6)
-        _check_inertia(r.path, r.where, inertia)
-        inertials.append(Inertial(r.get("link", str), r.get("webots", str), r.number("mass_kg", positive=True),
-                                  r.vector("com_m"), inertia,  # type: ignore[arg-type]
-                                  r.vector("webots_frame_xyz_m"),  # type: ignore[arg-type]
-                                  tuple(math.radians(v) for v in r.vector("webots_frame_rpy_deg"))))  # type: ignore[arg-type]
-        r.done()
+    inertials = [_inertial(r, sources) for r in top.array("inertial")]
     collisions = []
     for r in top.array("collision"):
         shape = r.get("shape", str)
@@ -282,7 +342,8 @@ def parse_spec(text: str, path: str = "<spec>") -> Spec:
     joints = [_joint(r) for r in top.array("joint")]
     _check_joints(path, root, joints)
     joints.sort(key=lambda j: j.id)
-    masses, inertials, collisions = _masses(top)
+    sources = _sources(top)
+    masses, inertials, collisions = _masses(top, sources)
     top.done()
     links = {root} | {j.child for j in joints}
     named = [(p.link, f"points.{k}") for k, p in points.items()] + [(i.link, "inertial") for i in inertials] + \
@@ -298,7 +359,7 @@ def parse_spec(text: str, path: str = "<spec>") -> Spec:
                 raise SpecError(f"({m.name}): body point {end!r} does not exist", f"{path}: lumped_mass")
     geometry = _geometry(path, {j.name: j for j in joints}, points, foot)
     return Spec(name, root, servo, foot, points, tuple(joints), tuple(masses), tuple(inertials), tuple(collisions),
-                geometry, path, hashlib.sha256(encoded).hexdigest())
+                geometry, path, hashlib.sha256(encoded).hexdigest(), sources)
 
 
 def load_spec(path: str | Path | None = None) -> Spec:

@@ -17,7 +17,7 @@ from typing import Sequence
 import numpy as np
 
 from op2motion.errors import InputError
-from op2motion.robot.spec import Spec, rpy_matrix
+from op2motion.robot.spec import Spec
 
 MAX_SHIFT_M = 0.1           # a torso CoM moved further than this is not the OP2's
 MASS_SCALE_RANGE = (0.5, 2.0)
@@ -39,8 +39,7 @@ def spec_variant(spec: Spec, torso_com_shift_m: Sequence[float] = (0.0, 0.0, 0.0
     inertials = []
     for item in spec.inertials:
         if item.link == spec.root_link:
-            rot = rpy_matrix(item.webots_frame_rpy)        # the inertial's own frame in the link frame
-            com = np.asarray(item.com) + rot.T @ shift
+            com = np.asarray(item.com) + shift
             item = replace(item, mass=item.mass * torso_mass_scale,
                            com=(float(com[0]), float(com[1]), float(com[2])),
                            inertia=tuple(v * torso_mass_scale for v in item.inertia))   # type: ignore[arg-type]

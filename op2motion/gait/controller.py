@@ -1,0 +1,164 @@
+"""A walk that reacts: the ZMP preview plan played every 8 ms with stabilisation from the robot's IMU.
+
+:class:`WalkController` is a :class:`~op2motion.physics.Controller`: the physics check drives it, and so can a
+robot bridge or another simulator, with the torso's gyro [rad/s] and accelerometer [m/s²] (torso frame: x forward,
+y left, z up; the accelerometer reads +9.81 m/s² on z when upright and still) and the joint positions every 8 ms.
+Inside, per tick:
+
+1. **the plan** (:func:`.schedule.gait_plan`): the goals of this row, the planned torso pose and soles;
+2. **the attitude**: a complementary filter of the gyro (integrated) and the accelerometer's direction of gravity
+   (time constant :attr:`Feedback.attitude_tau_s`) estimates the torso's pitch and roll;
+3. **the error** against the plan's torso attitude, its integral, and the gyro (the plan's rate is small);
+4. **the correction**: the whole body turned about the support point (the stance sole's centre, or between both
+   soles on two feet) by ``-(Kp e + Ki ∫e + Kd w)`` in pitch and roll; the legs from the closed-form IK with the soles
+   where the plan puts them, so the swing foot keeps its path and lands flat;
+5. **the goals**: the plan's goals (servo feed-forward included) plus the legs' change.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Mapping
+
+import numpy as np
+
+from op2motion.errors import InputError
+from op2motion.gait.generator import Gait, plan_gait
+from op2motion.gait.leg_ik import leg_ik, leg_of
+from op2motion.gait.presets import load_preset
+from op2motion.gait.schedule import gait_plan
+from op2motion.physics import Plan, Schedule
+from op2motion.robot.framework import CONTROL_PERIOD_S
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import SIDES, Support
+
+MAX_CORRECTION_RAD = 0.25          # the stabiliser turns the body at most this far (14°)
+
+
+@dataclass(frozen=True)
+class Feedback:
+    """The stabiliser's gains (SI): attitude error [rad] -> body turn [rad] (``kp``), its integral [rad·s] (``ki``
+    [1/s]), the gyro [rad/s] (``kd`` [s]), per axis (pitch, roll); the attitude filter's time constant [s]."""
+
+    kp: tuple[float, float] = (0.3, 0.3)
+    ki: tuple[float, float] = (0.5, 0.5)
+    kd: tuple[float, float] = (0.03, 0.03)
+    attitude_tau_s: float = 0.5
+
+    def __post_init__(self) -> None:
+        for name in ("kp", "ki", "kd"):
+            values = getattr(self, name)
+            if len(values) != 2 or not all(math.isfinite(v) and 0.0 <= v <= 100.0 for v in values):
+                raise InputError(f"expected two gains (pitch, roll) from 0 to 100, got {values!r}", name)
+        if not (math.isfinite(self.attitude_tau_s) and 0.01 <= self.attitude_tau_s <= 10.0):
+            raise InputError(f"expected 0.01 to 10 s, got {self.attitude_tau_s!r}", "attitude_tau_s")
+
+
+OPEN_LOOP = Feedback((0.0, 0.0), (0.0, 0.0), (0.0, 0.0))
+
+
+def _rot(pitch: float, roll: float) -> np.ndarray:
+    """Rotation by ``roll`` about X then ``pitch`` about Y (small angles: the order hardly matters)."""
+    cp, sp, cr, sr = math.cos(pitch), math.sin(pitch), math.cos(roll), math.sin(roll)
+    ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
+    return ry @ rx
+
+
+def _rz(yaw: float) -> np.ndarray:
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def attitude_of(rot: np.ndarray) -> np.ndarray:
+    """Pitch and roll [rad] of a torso rotation: the tilt of its z axis towards +x (pitch: leaning forward > 0) and
+    towards -y (roll: turned about +X > 0)."""
+    z = rot[:, 2]
+    return np.array([math.atan2(z[0], z[2]), math.atan2(-z[1], math.hypot(z[0], z[2]))])
+
+
+@dataclass
+class _State:
+    attitude: np.ndarray = field(default_factory=lambda: np.zeros(2))     # estimated pitch, roll [rad]
+    integral: np.ndarray = field(default_factory=lambda: np.zeros(2))     # of the attitude error [rad·s]
+    started: bool = False
+    t: float = 0.0
+
+
+class WalkController:
+    """A planned gait played with attitude stabilisation (see the module docstring)."""
+
+    def __init__(self, gait: Gait, spec: Spec, feedback: Feedback = Feedback()):
+        self.gait, self.spec, self.feedback = gait, spec, feedback
+        self.plan: Plan = gait_plan(gait)
+        self.schedule = Schedule(self.plan, spec.joint_names)
+        self.lead = len(self.plan.goals) - len(gait.goals)
+        self.legs = {side: leg_of(spec, side) for side in SIDES}
+        self.state = _State()
+
+    @classmethod
+    def from_preset(cls, preset: str | None = None, steps: int | None = None, spec: Spec | None = None,
+                    feedback: Feedback = Feedback()) -> "WalkController":
+        """The controller of a preset (a shipped name or a file; default ``forward``) with ``steps`` steps."""
+        from op2motion.robot.specfile import default_spec
+
+        spec = spec or default_spec()
+        return cls(plan_gait(load_preset(preset).with_steps(steps), spec), spec, feedback)
+
+    @property
+    def done(self) -> bool:
+        """The plan's last row has been sent (the stabiliser keeps working while it is held)."""
+        return False
+
+    def start(self, joint_positions: Mapping[str, float]) -> dict[str, float]:
+        """Reset the estimator and the integrals; the plan's first goals."""
+        self.state = _State()
+        return dict(self.schedule.start(joint_positions))
+
+    def step(self, t_s: float, gyro_rad_s: np.ndarray, accel_m_s2: np.ndarray,
+             joint_positions: Mapping[str, float]) -> dict[str, float]:
+        """The goals at ``t_s`` [s]: the plan's, with the body turned against the torso's attitude error."""
+        row = self.plan.row(t_s)
+        k = max(row - self.lead, 0)                       # the gait's own row (its first during the lead-in)
+        gyro = np.array([gyro_rad_s[1], gyro_rad_s[0]])   # pitch rate (about y), roll rate (about x)
+        error = self._estimate(gyro, np.asarray(accel_m_s2, dtype=float), k)
+        f = self.feedback
+        turn = -(np.multiply(f.kp, error) + np.multiply(f.ki, self.state.integral) + np.multiply(f.kd, gyro))
+        turn = np.clip(turn, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
+        goals = self.schedule.goals_at(t_s).copy()
+        if np.any(turn):
+            goals += self._leg_change(k, float(turn[0]), float(turn[1]))
+        return dict(zip(self.spec.joint_names, goals.tolist()))
+
+    def _estimate(self, gyro: np.ndarray, accel: np.ndarray, k: int) -> np.ndarray:
+        """Update the attitude estimate and the error integral; the error [rad] (pitch, roll) against the plan."""
+        s, dt = self.state, CONTROL_PERIOD_S
+        measured = np.array([math.atan2(-accel[0], accel[2]), math.atan2(accel[1], math.hypot(accel[0], accel[2]))])
+        if not s.started:
+            s.attitude, s.started = measured, True
+        blend = dt / (self.feedback.attitude_tau_s + dt)
+        s.attitude = (1.0 - blend) * (s.attitude + gyro * dt) + blend * measured
+        error = s.attitude - attitude_of(self.gait.torso_rot[k])
+        s.integral = np.clip(s.integral + error * dt, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
+        return error
+
+    def _support_point(self, k: int) -> np.ndarray:
+        feet = self.gait.timeline.feet
+        sides = Support.of(self.gait.timeline.contact[k]).feet
+        return np.mean([feet[side][k, :3] for side in sides], axis=0)
+
+    def _leg_change(self, k: int, pitch: float, roll: float) -> np.ndarray:
+        """The servo change (20,) [rad] that turns the whole body by (pitch, roll) [rad] about the support point,
+        the soles staying where the plan puts them."""
+        pos, rot = self.gait.torso_pos[k], self.gait.torso_rot[k]
+        pivot, turn = self._support_point(k), _rot(pitch, roll)
+        moved_pos, moved_rot = pivot + turn @ (pos - pivot), turn @ rot
+        out = np.zeros(len(self.spec.joints))
+        for side, leg in self.legs.items():
+            x, y, z, yaw = self.gait.timeline.feet[side][k]
+            sole, sole_rot = np.array([x, y, z]), _rz(float(yaw))
+            planned = leg_ik(leg, rot.T @ (sole - pos), rot.T @ sole_rot)[0]
+            moved = leg_ik(leg, moved_rot.T @ (sole - moved_pos), moved_rot.T @ sole_rot)[0]
+            out[list(leg.index)] = moved - planned
+        return out
