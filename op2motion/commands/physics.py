@@ -41,6 +41,10 @@ def register(sub: Any) -> None:
     p.add_argument("--voltage", type=float, choices=(11.1, 12.0, 14.8), default=None,
                    help="servo supply voltage [V], one of the MX-28's ratings (default: the spec's, 12 V)")
     p.add_argument("--gui-png", type=output_path, metavar="PNG", help="snapshot of the final state (TinyRenderer)")
+    p.add_argument("--robust", action="store_true",
+                   help="hold the pose on every member of the robustness family (torso CoM and mass from the spec's "
+                        "uncertainty, servo stiffness x0.6-1.6, friction 0.5-1.0, 16 ms IMU latency) and print the "
+                        "table; exit 1 unless every run stands")
 
 
 def cmd_urdf(args: argparse.Namespace, spec: Spec) -> int:
@@ -72,6 +76,8 @@ def cmd_validate(args: argparse.Namespace, spec: Spec) -> int:
 
     outputs = OutputSet({"gui_png": args.gui_png} if args.gui_png else {})
     pose = read_pose(args.pose, spec)
+    if args.robust:
+        return _validate_robust(args, pose, spec)
     schedule = Schedule.hold(pose.servo, pose.support, spec, args.seconds)
     with progress(args, "physics", "s") as on_progress:
         report = check(schedule, spec, engines_of(args), Pushes(args.push) if args.push else None,
@@ -97,6 +103,29 @@ def cmd_validate(args: argparse.Namespace, spec: Spec) -> int:
     problem = report.problem()
     if problem:
         raise CheckFailed(f"{pose.name}: {problem}")
+    return 0
+
+
+def _validate_robust(args: argparse.Namespace, pose: Any, spec: Spec) -> int:
+    """``validate --robust``: the pose held on every member of the family."""
+    from op2motion.errors import CheckFailed, InputError
+    from op2motion.physics import Pushes, Schedule
+    from op2motion.physics.robust import robust_check
+    from op2motion.physics.robust_table import pose_robust_table, robust_summary
+
+    if args.stiffness != 1.0 or args.gui_png:
+        raise InputError("expected --robust without --stiffness or --gui-png (the family sets the stiffness)",
+                         "robust")
+    with progress(args, "robust", "run") as on_progress:
+        report = robust_check(lambda: Schedule.hold(pose.servo, pose.support, spec, args.seconds), spec,
+                              engines_of(args), pushes=Pushes(args.push) if args.push else None,
+                              on_progress=on_progress)
+    result = {"pose": pose.name, "support": pose.support, "robust": robust_summary(report)}
+    emit(args, result, f"{pose.name} ({pose.support} support) across the robustness family:\n"
+                       + pose_robust_table(report))
+    if not report.passed:
+        failed = sum(not r.passed for r in report.runs)
+        raise CheckFailed(f"{pose.name}: fails in {failed} of {len(report.runs)} runs of the robustness family")
     return 0
 
 

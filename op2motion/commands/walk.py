@@ -35,6 +35,15 @@ def register(sub: Any) -> None:
     p.add_argument("--perturb-deg", type=number(0.0, 5.0, "deg"), default=0.5, metavar="DEG",
                    help="standard deviation of the trials' start offsets per joint (default 0.5°)")
     p.add_argument("--seed", type=whole(0, 2 ** 31 - 1), default=0, help="seed of the trials' offsets")
+    p.add_argument("--robust", action="store_true",
+                   help="with --validate: walk every member of the robustness family (torso CoM and mass from the "
+                        "spec's uncertainty, servo stiffness x0.6-1.6, friction 0.5-1.0, 16 ms IMU latency) and "
+                        "print the table; exit 1 unless every run passes")
+    p.add_argument("--open-loop", action="store_true",
+                   help="with --validate: play the planned goals without the controller's feedback")
+    p.add_argument("--retime", action="store_true",
+                   help="lengthen the step when a joint would pass 90%% of the servo's no-load speed "
+                        "(default: refuse the plan and name the joint)")
     p.add_argument("--plot", type=output_path, metavar="PNG", help="footsteps, ZMP and CoM from above and in time")
     p.add_argument("--out", type=output_path, nargs="+", metavar="FILE",
                    help="write the goals every 8 ms: .csv (CSV) and/or .motion (Webots)")
@@ -68,25 +77,49 @@ def _walk_line(engine: str, s: dict[str, Any]) -> str:
     return line
 
 
+def _controller(args: argparse.Namespace, gait: Any, spec: Spec) -> Any:
+    """The walk's controller: the closed loop, or with ``--open-loop`` the planned goals as they are."""
+    from op2motion.gait import gait_schedule
+    from op2motion.gait.controller import WalkController
+
+    return gait_schedule(gait, spec) if args.open_loop else WalkController(gait, spec)
+
+
 def _walk_physics(args: argparse.Namespace, gait: Any, spec: Spec, result: dict[str, Any]) -> CheckReport:
     """``--validate``: the walk in physics; its results go into ``result``."""
-    from op2motion.gait import gait_schedule, side_pushes, walk_summary
+    from op2motion.gait import side_pushes, walk_summary
     from op2motion.physics import Trials, check
 
-    schedule = gait_schedule(gait, spec)
+    controller = _controller(args, gait, spec)
     trials = Trials(args.trials, args.perturb_deg, args.seed) if args.trials else None
     with progress(args, "physics", "s") as on_progress:
-        report = check(schedule, spec, engines_of(args), side_pushes(args.push) if args.push else None, trials,
+        report = check(controller, spec, engines_of(args), side_pushes(args.push) if args.push else None, trials,
                        on_progress=on_progress)
-    assert schedule.plan.walk is not None
-    physics = walk_summary(report, schedule.plan.walk.start_s)
+    assert controller.plan.walk is not None
+    physics = walk_summary(report, controller.plan.walk.start_s)
     main = physics["engines"][next(iter(report.engines))]
     result["physics"] = physics
+    result["controller"] = "open loop" if args.open_loop else "WalkController"
     result.update({key: main[key] for key in ("reasons", "lateral_drift_m", "heading_error_deg", "turn_rate_deg_s",
                                               "cop_inside_fraction", "worst_torque")})
     result["mean_speed_mps"] = min(s["mean_speed_mps"] for s in physics["engines"].values())
     result["fell"] = physics["fell"]
     return report
+
+
+def _walk_robust(args: argparse.Namespace, gait: Any, spec: Spec, result: dict[str, Any]) -> Any:
+    """``--validate --robust``: the walk over the robustness family; the table goes into ``result``."""
+    from op2motion.gait import side_pushes
+    from op2motion.gait.robust import robust_table, walk_badness, walk_judge
+    from op2motion.physics.robust_table import robust_summary
+    from op2motion.physics.robust import robust_check
+
+    with progress(args, "robust", "run") as on_progress:
+        report = robust_check(lambda: _controller(args, gait, spec), spec, engines_of(args), walk_judge,
+                              side_pushes(args.push) if args.push else None, on_progress=on_progress)
+    result["robust"] = robust_summary(report)
+    result["robust"]["worst"] = report.worst(walk_badness).member.name
+    return report, robust_table(report)
 
 
 def _walk_files(args: argparse.Namespace, outputs: Any, gait: Any, spec: Spec, report: CheckReport | None) -> None:
@@ -111,27 +144,39 @@ def _walk_files(args: argparse.Namespace, outputs: Any, gait: Any, spec: Spec, r
 def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion walk``."""
     from op2motion.fileio import OutputSet
-    from op2motion.gait import gait_summary, plan_gait, preset_path, read_preset
+    from op2motion.gait import gait_summary, preset_path, read_preset
+    from op2motion.gait.speeds import plan_within_speed
 
-    if not args.validate and (args.push or args.trials):
-        raise InputError("expected --validate with --push or --trials", "validate")
+    if not args.validate and (args.push or args.trials or args.robust or args.open_loop):
+        raise InputError("expected --validate with --push, --trials, --robust or --open-loop", "validate")
+    if args.robust and args.trials:
+        raise InputError("expected --robust or --trials, not both", "trials")
     outputs = OutputSet(_outputs(args))
     params = read_preset(preset_path(args.preset)).with_steps(args.steps)
     target = None if args.target is None else (args.target[0], args.target[1], math.radians(args.target[2]))
     with progress(args, "plan", "pass") as on_progress:
-        gait = plan_gait(params, spec, target, on_progress)
+        gait = plan_within_speed(params, spec, target, args.retime, on_progress)
     result: dict[str, Any] = gait_summary(gait)
     lines = [f"walk '{params.name}': {result['steps']} steps in {result['walking_s']:.2f} s, "
              f"{result['distance_m']:.3f} m planned ({result['planned_speed_mps']:.3f} m/s steady), ZMP margin >= "
              f"{result['zmp_margin_min_m'] * 1000:.1f} mm, CoM height {result['com_height_m']:.3f} m"]
-    report = _walk_physics(args, gait, spec, result) if args.validate else None
+    if gait.params.step_s != params.step_s:
+        lines.append(f"  re-timed: step {params.step_s:.3f} s -> {gait.params.step_s:.3f} s (joint speeds)")
+    result["step_s"] = gait.params.step_s
+    robust = _walk_robust(args, gait, spec, result) if args.validate and args.robust else None
+    report = _walk_physics(args, gait, spec, result) if args.validate and robust is None else None
     if report is not None:
         lines += [_walk_line(e, s) for e, s in result["physics"]["engines"].items()]
+    if robust is not None:
+        lines.append(robust[1])
     _walk_files(args, outputs, gait, spec, report)
     written = outputs.commit()
     result["files"] = {k: str(v) for k, v in written.items()}
     lines += [f"  wrote {p}" for p in written.values()]
     emit(args, result, "\n".join(lines))
+    if robust is not None and not robust[0].passed:
+        raise CheckFailed(f"walk '{params.name}' failed in {sum(not r.passed for r in robust[0].runs)} of "
+                          f"{len(robust[0].runs)} runs of the robustness family")
     if report is not None and report.fell:
         raise CheckFailed(f"walk '{params.name}' fell in physics: " + "; ".join(
             f"{e}: {', '.join(r.run.reasons)}" for e, r in report.engines.items() if r.run.fell))

@@ -24,8 +24,8 @@ from typing import Mapping
 import numpy as np
 
 from op2motion.errors import InputError
-from op2motion.gait.generator import Gait, plan_gait
-from op2motion.gait.leg_ik import leg_ik, leg_of
+from op2motion.gait.generator import Gait
+from op2motion.gait.leg_ik import Leg, leg_ik, leg_of
 from op2motion.gait.presets import load_preset
 from op2motion.gait.schedule import gait_plan
 from op2motion.physics import Plan, Schedule
@@ -33,7 +33,14 @@ from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import SIDES, Support
 
+REACH_SHARE = 0.999                # a corrected leg stretches at most to this share of its length
+MAX_HEADING_RAD = 0.2             # the swing foot is steered at most this far per step (11°)
+MAX_TRIM_RAD = 0.15                # a leg joint's integral trim stays within this [rad] (8.6°)
 MAX_CORRECTION_RAD = 0.25          # the stabiliser turns the body at most this far (14°)
+#: The stock gait's gyro balance gains in SI [s] (rad of joint per rad/s of torso rate): hip roll and ankle roll
+#: from the roll rate, knee and ankle pitch from the pitch rate. Walking.cpp's 0.5, 0.3, 0.9, 1.0 ticks per gyro
+#: count times 4 (the 4096-tick build), with 1 tick = 0.088° and 1 count = 3.125 °/s.
+STOCK_GYRO_GAINS_S = (0.056, 0.034, 0.101, 0.113)
 
 
 @dataclass(frozen=True)
@@ -41,10 +48,13 @@ class Feedback:
     """The stabiliser's gains (SI): attitude error [rad] -> body turn [rad] (``kp``), its integral [rad·s] (``ki``
     [1/s]), the gyro [rad/s] (``kd`` [s]), per axis (pitch, roll); the attitude filter's time constant [s]."""
 
-    kp: tuple[float, float] = (0.3, 0.3)
-    ki: tuple[float, float] = (0.5, 0.5)
-    kd: tuple[float, float] = (0.03, 0.03)
+    kp: tuple[float, float] = (0.0, 0.0)
+    ki: tuple[float, float] = (0.5, 0.0)
+    kd: tuple[float, float] = (0.0, 0.0)
     attitude_tau_s: float = 0.5
+    gyro: tuple[float, float, float, float] = STOCK_GYRO_GAINS_S
+    heading: float = 0.3
+    joint_ki: float = 0.7
 
     def __post_init__(self) -> None:
         for name in ("kp", "ki", "kd"):
@@ -55,7 +65,7 @@ class Feedback:
             raise InputError(f"expected 0.01 to 10 s, got {self.attitude_tau_s!r}", "attitude_tau_s")
 
 
-OPEN_LOOP = Feedback((0.0, 0.0), (0.0, 0.0), (0.0, 0.0))
+OPEN_LOOP = Feedback(ki=(0.0, 0.0), gyro=(0.0, 0.0, 0.0, 0.0), heading=0.0, joint_ki=0.0)
 
 
 def _rot(pitch: float, roll: float) -> np.ndarray:
@@ -78,12 +88,37 @@ def attitude_of(rot: np.ndarray) -> np.ndarray:
     return np.array([math.atan2(z[0], z[2]), math.atan2(-z[1], math.hypot(z[0], z[2]))])
 
 
+def _within_reach(leg: Leg, sole: np.ndarray, rot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The sole target (3,) [m] pulled towards the hip along the hip–ankle line where it lies beyond the straight
+    leg (a correction must never ask for more leg than there is); its rotation unchanged."""
+    ankle = sole + rot @ np.array([0.0, 0.0, leg.ankle_to_sole])
+    span = ankle - leg.hip
+    reach = (leg.thigh + leg.calf) * REACH_SHARE
+    length = float(np.linalg.norm(span))
+    if length <= reach:
+        return sole, rot
+    return sole - span * (1.0 - reach / length), rot
+
+
+def _swing_phase(contact: tuple[str, ...]) -> np.ndarray:
+    """Per row (K,): 0 -> 1 across each single-support phase (0 on both feet)."""
+    phase = np.zeros(len(contact))
+    start = 0
+    for i in range(1, len(contact) + 1):
+        if i == len(contact) or contact[i] != contact[start]:
+            if contact[start] != "double":
+                phase[start:i] = np.linspace(1.0 / (i - start), 1.0, i - start)
+            start = i
+    return phase
+
+
 @dataclass
 class _State:
     attitude: np.ndarray = field(default_factory=lambda: np.zeros(2))     # estimated pitch, roll [rad]
     integral: np.ndarray = field(default_factory=lambda: np.zeros(2))     # of the attitude error [rad·s]
+    yaw: float = 0.0                                                        # integrated gyro z [rad]
+    joint_integral: np.ndarray | None = None                                # leg goal trims (20,) [rad]
     started: bool = False
-    t: float = 0.0
 
 
 class WalkController:
@@ -95,6 +130,9 @@ class WalkController:
         self.schedule = Schedule(self.plan, spec.joint_names)
         self.lead = len(self.plan.goals) - len(gait.goals)
         self.legs = {side: leg_of(spec, side) for side in SIDES}
+        self.leg_index = np.array(sorted(i for leg in self.legs.values() for i in leg.index))
+        self.plan_yaw = np.arctan2(gait.torso_rot[:, 1, 0], gait.torso_rot[:, 0, 0])
+        self.swing_phase = _swing_phase(gait.timeline.contact)
         self.state = _State()
 
     @classmethod
@@ -104,11 +142,13 @@ class WalkController:
         from op2motion.robot.specfile import default_spec
 
         spec = spec or default_spec()
-        return cls(plan_gait(load_preset(preset).with_steps(steps), spec), spec, feedback)
+        from op2motion.gait.speeds import plan_within_speed
+
+        return cls(plan_within_speed(load_preset(preset).with_steps(steps), spec), spec, feedback)
 
     @property
     def done(self) -> bool:
-        """The plan's last row has been sent (the stabiliser keeps working while it is held)."""
+        """Never: after the plan's last row the stabiliser keeps balancing the pose it holds."""
         return False
 
     def start(self, joint_positions: Mapping[str, float]) -> dict[str, float]:
@@ -127,9 +167,26 @@ class WalkController:
         turn = -(np.multiply(f.kp, error) + np.multiply(f.ki, self.state.integral) + np.multiply(f.kd, gyro))
         turn = np.clip(turn, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
         goals = self.schedule.goals_at(t_s).copy()
-        if np.any(turn):
-            goals += self._leg_change(k, float(turn[0]), float(turn[1]))
+        goals += self._damping(np.asarray(gyro_rad_s, dtype=float))
+        self.state.yaw += float(gyro_rad_s[2]) * CONTROL_PERIOD_S
+        heading = float(np.clip(-f.heading * (self.state.yaw - self.plan_yaw[k]), -MAX_HEADING_RAD, MAX_HEADING_RAD))
+        if np.any(turn) or heading:
+            goals += self._leg_change(k, float(turn[0]), float(turn[1]), heading)
+        if f.joint_ki and row >= self.lead:
+            goals += self._joint_trim(k, joint_positions)
         return dict(zip(self.spec.joint_names, goals.tolist()))
+
+    def _joint_trim(self, k: int, joint_positions: Mapping[str, float]) -> np.ndarray:
+        """The legs' integral trims (20,) [rad]: what the servos' sag keeps them from the planned angles, added to
+        their goals little by little (``joint_ki`` [1/s])."""
+        s = self.state
+        if s.joint_integral is None:
+            s.joint_integral = np.zeros(len(self.spec.joints))
+        measured = np.array([joint_positions[self.spec.joint_names[i]] for i in self.leg_index])
+        error = self.gait.joints[k, self.leg_index] - measured
+        trim = s.joint_integral[self.leg_index] + self.feedback.joint_ki * error * CONTROL_PERIOD_S
+        s.joint_integral[self.leg_index] = np.clip(trim, -MAX_TRIM_RAD, MAX_TRIM_RAD)
+        return s.joint_integral
 
     def _estimate(self, gyro: np.ndarray, accel: np.ndarray, k: int) -> np.ndarray:
         """Update the attitude estimate and the error integral; the error [rad] (pitch, roll) against the plan."""
@@ -143,22 +200,39 @@ class WalkController:
         s.integral = np.clip(s.integral + error * dt, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
         return error
 
+    def _damping(self, gyro: np.ndarray) -> np.ndarray:
+        """The stock-style gyro damping (20,) [rad]: each leg's hip roll, knee, ankle pitch and ankle roll turned so
+        that the body turns against its rate (natural angles, both legs)."""
+        hip_roll, knee, ankle_pitch, ankle_roll = self.feedback.gyro
+        natural = np.array([0.0, hip_roll * gyro[0], 0.0, knee * gyro[1], ankle_pitch * gyro[1], ankle_roll * gyro[0]])
+        out = np.zeros(len(self.spec.joints))
+        for leg in self.legs.values():
+            out[list(leg.index)] = natural * leg.sign
+        return out
+
     def _support_point(self, k: int) -> np.ndarray:
         feet = self.gait.timeline.feet
         sides = Support.of(self.gait.timeline.contact[k]).feet
         return np.mean([feet[side][k, :3] for side in sides], axis=0)
 
-    def _leg_change(self, k: int, pitch: float, roll: float) -> np.ndarray:
+    def _leg_change(self, k: int, pitch: float, roll: float, heading: float = 0.0) -> np.ndarray:
         """The servo change (20,) [rad] that turns the whole body by (pitch, roll) [rad] about the support point,
-        the soles staying where the plan puts them."""
+        the soles staying where the plan puts them, and the swing sole turned by ``heading`` [rad] about the stance
+        sole's centre (in full at landing)."""
         pos, rot = self.gait.torso_pos[k], self.gait.torso_rot[k]
         pivot, turn = self._support_point(k), _rot(pitch, roll)
         moved_pos, moved_rot = pivot + turn @ (pos - pivot), turn @ rot
+        contact = self.gait.timeline.contact[k]
         out = np.zeros(len(self.spec.joints))
         for side, leg in self.legs.items():
             x, y, z, yaw = self.gait.timeline.feet[side][k]
             sole, sole_rot = np.array([x, y, z]), _rz(float(yaw))
-            planned = leg_ik(leg, rot.T @ (sole - pos), rot.T @ sole_rot)[0]
-            moved = leg_ik(leg, moved_rot.T @ (sole - moved_pos), moved_rot.T @ sole_rot)[0]
+            if contact not in ("double", side) and heading:
+                steer = heading * self.swing_phase[k]
+                stance = self.gait.timeline.feet[contact][k, :3]
+                sole, sole_rot = stance + _rz(steer) @ (sole - stance), _rz(steer) @ sole_rot
+            x, y, z, yaw = self.gait.timeline.feet[side][k]
+            planned = leg_ik(leg, *_within_reach(leg, rot.T @ (np.array([x, y, z]) - pos), rot.T @ _rz(float(yaw))))[0]
+            moved = leg_ik(leg, *_within_reach(leg, moved_rot.T @ (sole - moved_pos), moved_rot.T @ sole_rot))[0]
             out[list(leg.index)] = moved - planned
         return out
