@@ -1,7 +1,8 @@
 """Robustness as a check: the same controller over a family of bodies and floors drawn from what we do not know.
 
 The family (:func:`family`) comes from the spec's uncertainty: the torso's centre of mass (the figure that matters
-most; its box in the spec, by default ±20 mm fore–aft and ±10 mm sideways) and mass (±15 %), plus what no spec
+most; its box in ``specs/op2.toml`` is ±20 mm fore–aft and ±10 mm sideways) and mass (±15 %) (a spec that states
+none gets those, :data:`UNSTATED_TORSO`), plus what no spec
 knows: the servos' stiffness (Kp ×0.6 to ×1.6, :data:`STIFFNESS_RANGE`), the floor's friction (0.5 to 1.0,
 :data:`FRICTION_RANGE`) and the IMU's latency (16 ms in every member, :data:`LATENCY_S`). Its members: the nominal
 body, each factor alone at each end of its range, and four corners that pair the torso CoM's ends with the worst
@@ -22,12 +23,14 @@ from op2motion.physics.controller import Controller
 from op2motion.physics.report import EngineReport
 from op2motion.physics.runner import Pushes, Setup, check
 from op2motion.physics.sensors import Sensors
-from op2motion.robot.spec import Spec
+from op2motion.robot.spec import Spec, Uncertainty
 from op2motion.robot.variant import spec_variant
 
 STIFFNESS_RANGE = (0.6, 1.6)      # servo Kp factor: the MX-28's P law and load vary from servo to servo
 FRICTION_RANGE = (0.5, 1.0)       # floor Coulomb friction: carpet to wood
 LATENCY_S = 0.016                 # IMU reading to goal: two 8 ms control periods
+#: The torso's uncertainty when a spec states none: ±15 % mass, CoM ±20 mm fore-aft, ±10 mm sideways, ±8 mm up.
+UNSTATED_TORSO = Uncertainty(0.15, ((-0.02, 0.02), (-0.01, 0.01), (-0.008, 0.008)))
 
 
 @dataclass(frozen=True)
@@ -52,7 +55,7 @@ class Member:
 
 def family(spec: Spec) -> tuple[Member, ...]:
     """The robustness family of ``spec`` (see the module docstring)."""
-    torso = spec.inertial(spec.root_link).uncertainty
+    torso = spec.inertial(spec.root_link).uncertainty or UNSTATED_TORSO
     (x_lo, x_hi), (y_lo, y_hi), _ = torso.com_m
     m_lo, m_hi = 1.0 - torso.mass_fraction, 1.0 + torso.mass_fraction
     s_lo, s_hi = STIFFNESS_RANGE
