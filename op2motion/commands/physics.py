@@ -109,9 +109,7 @@ def cmd_validate(args: argparse.Namespace, spec: Spec) -> int:
 def _validate_robust(args: argparse.Namespace, pose: Any, spec: Spec) -> int:
     """``validate --robust``: the pose held on every member of the family."""
     from op2motion.errors import CheckFailed, InputError
-    from op2motion.physics import Pushes, Schedule
-    from op2motion.physics.robust import robust_check
-    from op2motion.physics.robust_table import pose_robust_table, robust_summary
+    from op2motion.physics import Pushes, Schedule, pose_robust_table, robust_check, robust_summary
 
     if args.stiffness != 1.0 or args.gui_png:
         raise InputError("expected --robust without --stiffness or --gui-png (the family sets the stiffness)",

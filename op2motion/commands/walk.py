@@ -111,8 +111,7 @@ def _walk_robust(args: argparse.Namespace, gait: Any, spec: Spec, result: dict[s
     """``--validate --robust``: the walk over the robustness family; the table goes into ``result``."""
     from op2motion.gait import side_pushes
     from op2motion.gait.robust import robust_table, walk_badness, walk_judge
-    from op2motion.physics.robust import robust_check
-    from op2motion.physics.robust_table import robust_summary
+    from op2motion.physics import robust_check, robust_summary
 
     with progress(args, "robust", "run") as on_progress:
         report = robust_check(lambda: _controller(args, gait, spec), spec, engines_of(args), walk_judge,

@@ -63,6 +63,13 @@ class Feedback:
                 raise InputError(f"expected two gains (pitch, roll) from 0 to 100, got {values!r}", name)
         if not (math.isfinite(self.attitude_tau_s) and 0.01 <= self.attitude_tau_s <= 10.0):
             raise InputError(f"expected 0.01 to 10 s, got {self.attitude_tau_s!r}", "attitude_tau_s")
+        if len(self.gyro) != 4 or not all(math.isfinite(v) and 0.0 <= v <= 1.0 for v in self.gyro):
+            raise InputError(f"expected four gyro gains (hip roll, knee, ankle pitch, ankle roll) from 0 to 1 s, got "
+                             f"{self.gyro!r}", "gyro")
+        for name in ("heading", "joint_ki"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0.0 <= value <= 100.0):
+                raise InputError(f"expected a gain from 0 to 100, got {value!r}", name)
 
 
 OPEN_LOOP = Feedback(ki=(0.0, 0.0), gyro=(0.0, 0.0, 0.0, 0.0), heading=0.0, joint_ki=0.0)

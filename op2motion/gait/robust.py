@@ -8,9 +8,7 @@ Markdown (the JSON: :func:`op2motion.physics.robust_table.robust_summary`).
 
 from __future__ import annotations
 
-from op2motion.physics import EngineReport
-from op2motion.physics.robust import RobustReport, RobustRun
-from op2motion.physics.robust_table import robust_markdown
+from op2motion.physics import EngineReport, RobustReport, RobustRun, robust_markdown
 
 MAX_DRIFT_SHARE = 0.05      # lateral drift over distance walked
 MAX_HEADING_DEG = 5.0       # heading error at the end [deg]

@@ -8,6 +8,8 @@ controller's :class:`Plan`. The result is a typed :class:`CheckReport`::
     from op2motion.physics import Schedule, check
     report = check(Schedule.hold(pose.servo, pose.support, spec), spec, engines=("pybullet", "mujoco"))
     report.stable, report.agree, report.run.reasons, report.engines["mujoco"].run.support_margin_m
+
+:func:`robust_check` runs the same check over :func:`family`, the bodies and floors of what we do not know.
 """
 
 from __future__ import annotations
@@ -38,6 +40,8 @@ from op2motion.physics.report import (
     WalkMeasures,
     WorstTorque,
 )
+from op2motion.physics.robust import Member, RobustReport, RobustRun, family, robust_check, stands
+from op2motion.physics.robust_table import pose_robust_table, robust_markdown, robust_summary
 from op2motion.physics.runner import MAX_PUSH_N, Pushes, Setup, Trials, check
 from op2motion.physics.scene import ENGINES, FLOOR_FRICTION, TIME_STEP_S
 from op2motion.physics.sensors import Sensors
@@ -46,5 +50,7 @@ from op2motion.physics.walk import WALK_HOLD_S, WALK_SETTLE_S
 __all__ = ["DEFAULT_SECONDS", "ENGINES", "FALL_REASONS", "FLOOR_FRICTION", "MAX_PUSH_N", "MAX_SECONDS",
            "MIN_SECONDS", "MOTION_HOLD_S", "MOTION_SETTLE_S", "RAMP_S", "REASONS", "TIME_STEP_S", "WALK_HOLD_S",
            "WALK_SETTLE_S", "CheckReport", "Controller", "Engine", "EngineReport", "Failure", "FootLoad", "Goals",
-           "MotionMeasures", "Plan", "PushResult", "Pushes", "RunReport", "Schedule", "Sensors", "Setup", "Trials",
-           "TrialsResult", "WalkClock", "WalkMeasures", "WorstTorque", "check", "make_engine"]
+           "Member", "MotionMeasures", "Plan", "PushResult", "Pushes", "RobustReport", "RobustRun", "RunReport",
+           "Schedule", "Sensors", "Setup", "Trials",
+           "TrialsResult", "WalkClock", "WalkMeasures", "WorstTorque", "check", "family", "make_engine",
+           "pose_robust_table", "robust_check", "robust_markdown", "robust_summary", "stands"]

@@ -1,0 +1,151 @@
+"""The walk controller, the joint-speed limit and the robustness family: fast checks of what each piece promises
+(the walks themselves run in tests/test_walk_robust.py, physics lane)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from helpers import run_cli
+
+from op2motion.errors import InputError
+from op2motion.gait import load_preset
+from op2motion.gait.controller import OPEN_LOOP, STOCK_GYRO_GAINS_S, Feedback, WalkController, _swing_phase
+from op2motion.gait.leg_ik import leg_fk
+from op2motion.gait.speeds import SPEED_SHARE, plan_within_speed, speed_check
+from op2motion.physics import family
+from op2motion.physics.robust import FRICTION_RANGE, LATENCY_S, STIFFNESS_RANGE, UNSTATED_TORSO
+from op2motion.robot.spec import GRAVITY_M_S2
+from op2motion.robot.specfile import default_spec
+
+SHORT_STEPS = 4
+RATE_RAD_S = 0.5            # a made-up torso rate for the damping's direction
+TURN_SHARE = 0.01           # the damping turns a sole about the axis asked; the others at most 1 % of that
+
+
+@pytest.fixture(scope="module")
+def spec():
+    return default_spec()
+
+
+@pytest.fixture(scope="module")
+def controller(spec):
+    return WalkController.from_preset("forward", steps=SHORT_STEPS, spec=spec)
+
+
+def _foot_in_torso(controller, goals, side):
+    leg = controller.legs[side]
+    return leg_fk(leg, np.asarray(goals)[list(leg.index)])[1][0]
+
+
+@pytest.mark.parametrize("axis", [0, 1])
+def test_gyro_damping_turns_the_body_against_its_rate(controller, spec, axis):
+    """A torso turning about +x (roll) or +y (pitch) gets legs that turn it back: with the soles fixed, each sole
+    turns in the torso frame the same way the torso turns in the world, i.e. the torso turns the other way."""
+    rate = np.zeros(3)
+    rate[axis] = RATE_RAD_S
+    base = controller.gait.joints[0]
+    damped = base + controller._damping(rate)
+    for side in ("left", "right"):
+        before, after = _foot_in_torso(controller, base, side), _foot_in_torso(controller, damped, side)
+        turn = before.T @ after                                     # the sole's own turn, torso frame
+        about = np.array([turn[2, 1] - turn[1, 2], turn[0, 2] - turn[2, 0], turn[1, 0] - turn[0, 1]]) / 2.0
+        assert about[axis] > 0.0, (side, about)
+        assert abs(about[1 - axis]) < TURN_SHARE * about[axis] and abs(about[2]) < TURN_SHARE * about[axis], about
+
+
+def test_stock_gains_are_the_frameworks_in_si():
+    # Walking.cpp: gain x 4 ticks per gyro count; 1 tick = 360/4096 deg... the framework's 0.088 deg; 1 count =
+    # 3.125 deg/s. Ankle roll 1.0 -> 4 x 0.088 / 3.125 = 0.113 s.
+    tick, count = 0.088, 3.125
+    expected = [g * 4 * tick / count for g in (0.5, 0.3, 0.9, 1.0)]
+    assert np.allclose(STOCK_GYRO_GAINS_S, expected, atol=5e-4)
+
+
+def test_open_loop_sends_the_plan(controller, spec):
+    """Without feedback the controller is the planned schedule, tick for tick, whatever the IMU says."""
+    open_loop = WalkController(controller.gait, spec, OPEN_LOOP)
+    start = open_loop.start({n: 0.0 for n in spec.joint_names})
+    assert start == controller.schedule.start({n: 0.0 for n in spec.joint_names})
+    for t in (0.5, 1.7, 2.9):
+        goals = open_loop.step(t, np.array([0.3, -0.2, 0.1]), np.array([1.0, 0.5, GRAVITY_M_S2]),
+                               dict(zip(spec.joint_names, controller.gait.joints[0])))
+        assert np.allclose([goals[n] for n in spec.joint_names], controller.schedule.goals_at(t))
+
+
+def test_at_rest_upright_on_plan_the_controller_adds_nothing(spec, controller):
+    """Still, upright and on the planned joints, every correction is zero: the goals are the plan's."""
+    ctl = WalkController(controller.gait, spec)
+    ctl.start({n: 0.0 for n in spec.joint_names})
+    t = 0.1                                              # the lead-in: the plan's first row
+    goals = ctl.step(t, np.zeros(3), np.array([0.0, 0.0, GRAVITY_M_S2]),
+                     dict(zip(spec.joint_names, ctl.gait.joints[0])))
+    assert np.allclose([goals[n] for n in spec.joint_names], ctl.schedule.goals_at(t), atol=1e-9)
+
+
+def test_swing_phase_runs_zero_to_one_in_each_single_support():
+    phase = _swing_phase(("double", "double", "left", "left", "left", "double", "right", "right"))
+    assert phase.tolist() == pytest.approx([0, 0, 1 / 3, 2 / 3, 1, 0, 0.5, 1])
+
+
+@pytest.mark.parametrize("field, value", [("kp", (1.0,)), ("ki", (-1.0, 0.0)), ("gyro", (0.1, 0.1, 0.1)),
+                                          ("gyro", (0.1, 0.1, float("nan"), 0.1)), ("heading", -0.1),
+                                          ("joint_ki", 1e9), ("attitude_tau_s", 0.0)])
+def test_bad_feedback_gains_are_refused_by_name(field, value):
+    with pytest.raises(InputError) as err:
+        Feedback(**{field: value})
+    assert err.value.param == field
+
+
+def test_the_forward_preset_is_within_the_servos_speed(spec):
+    check = speed_check(plan_within_speed(load_preset("forward").with_steps(SHORT_STEPS), spec), spec)
+    assert check.ok and check.limit_rad_s == pytest.approx(SPEED_SHARE * spec.servo.no_load_speed_rad_s)
+
+
+def test_a_plan_too_fast_is_refused_naming_the_joint_or_re_timed(spec):
+    fast = replace(load_preset("forward").with_steps(SHORT_STEPS), step_s=0.24, step_height_m=0.03)
+    with pytest.raises(InputError) as err:
+        plan_within_speed(fast, spec)
+    assert err.value.param == "step_s" and "knee" in str(err.value) and "rad/s" in str(err.value)
+    gait = plan_within_speed(fast, spec, retime=True)
+    assert gait.params.step_s > fast.step_s and speed_check(gait, spec).ok
+    assert gait.params.step_length_m == fast.step_length_m
+
+
+def test_the_cli_refuses_a_too_fast_preset_in_one_line(capsys, tmp_path):
+    preset = tmp_path / "fast.toml"
+    preset.write_text('name = "fast"\nsteps = 4\nstep_length_m = 0.08\nstep_s = 0.24\nstep_height_m = 0.03\n'
+                      'hip_lower_m = 0.04\n')
+    code, out, err = run_cli(capsys, "walk", "--preset", str(preset))
+    assert code == 2 and "knee" in err and len(err.strip().splitlines()) == 1
+    code, out, err = run_cli(capsys, "walk", "--preset", str(preset), "--retime", "--json")
+    assert code == 0 and '"step_s"' in out
+
+
+def test_robust_needs_validate(capsys):
+    code, _, err = run_cli(capsys, "walk", "--robust")
+    assert code == 2 and "--validate" in err
+
+
+def test_the_family_spans_the_specs_uncertainty(spec):
+    members = family(spec)
+    torso = spec.inertial(spec.root_link).uncertainty
+    assert members[0].name == "nominal" and len(members) == 15 and len({m.name for m in members}) == 15
+    xs = {m.com_shift_m[0] for m in members}
+    ys = {m.com_shift_m[1] for m in members}
+    assert min(xs) == torso.com_m[0][0] and max(xs) == torso.com_m[0][1]
+    assert min(ys) == torso.com_m[1][0] and max(ys) == torso.com_m[1][1]
+    assert {m.mass_scale for m in members} == {1.0, 1.0 - torso.mass_fraction, 1.0 + torso.mass_fraction}
+    assert {m.stiffness for m in members} == {1.0, *STIFFNESS_RANGE}
+    assert {m.friction for m in members} >= set(FRICTION_RANGE)
+    assert all(m.setup().sensors.latency_s == LATENCY_S for m in members)
+    heavy = next(m for m in members if m.mass_scale > 1.0 and m.stiffness == 1.0)
+    body = heavy.body(spec)
+    assert body.inertial(spec.root_link).mass == pytest.approx(spec.inertial(spec.root_link).mass * heavy.mass_scale)
+
+
+def test_a_spec_without_a_torso_uncertainty_gets_the_issues_box(spec):
+    bare = replace(spec, inertials=tuple(replace(i, uncertainty=None) for i in spec.inertials))
+    xs = {m.com_shift_m[0] for m in family(bare)}
+    assert max(xs) == UNSTATED_TORSO.com_m[0][1] == 0.02
