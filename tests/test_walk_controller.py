@@ -149,3 +149,11 @@ def test_a_spec_without_a_torso_uncertainty_gets_the_issues_box(spec):
     bare = replace(spec, inertials=tuple(replace(i, uncertainty=None) for i in spec.inertials))
     xs = {m.com_shift_m[0] for m in family(bare)}
     assert max(xs) == UNSTATED_TORSO.com_m[0][1] == 0.02
+
+
+def test_a_turns_planned_heading_is_continuous_past_half_a_turn(spec):
+    """The heading correction compares the integrated gyro with the plan's heading: a turn of more than 180° must
+    not jump by 360° where the angle wraps (it would steer the wrong way at full strength)."""
+    ctl = WalkController.from_preset("turn_left", steps=16, spec=spec)
+    assert ctl.plan_yaw[-1] > np.pi
+    assert np.max(np.abs(np.diff(ctl.plan_yaw))) < 0.1

@@ -138,7 +138,7 @@ class WalkController:
         self.lead = len(self.plan.goals) - len(gait.goals)
         self.legs = {side: leg_of(spec, side) for side in SIDES}
         self.leg_index = np.array(sorted(i for leg in self.legs.values() for i in leg.index))
-        self.plan_yaw = np.arctan2(gait.torso_rot[:, 1, 0], gait.torso_rot[:, 0, 0])
+        self.plan_yaw = np.unwrap(np.arctan2(gait.torso_rot[:, 1, 0], gait.torso_rot[:, 0, 0]))   # turns pass ±180°
         self.swing_phase = _swing_phase(gait.timeline.contact)
         self.state = _State()
 
