@@ -12,7 +12,7 @@ from op2motion.physics import EngineReport, RobustReport, RobustRun, robust_mark
 
 MAX_DRIFT_SHARE = 0.05      # lateral drift over distance walked
 MAX_HEADING_DEG = 5.0       # heading error at the end [deg]
-MIN_DISTANCE_M = 0.05       # below this a drift share means nothing: judged in metres against this distance
+MIN_DISTANCE_M = 0.5        # drift is judged against at least this distance: a turn in place may wander 25 mm
 
 
 def walk_judge(report: EngineReport) -> str | None:
