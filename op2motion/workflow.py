@@ -9,6 +9,7 @@ was asked for. :class:`Outcome` is the typed result (its figures: :mod:`op2motio
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 from typing import Any, Callable
 
 from op2motion.errors import ref
@@ -83,14 +84,13 @@ def solve(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSettin
     physics and one that falls counts as not reached."""
     validations: dict[int, RunReport] = {}
 
-    def physics_check(res: PostureResult) -> tuple[bool, str]:
-        assert validate is not None
+    def physics_check(res: PostureResult, validate: Validate) -> tuple[bool, str]:
         schedule = Schedule.hold(res.pose("candidate", spec).servo, problem.support, spec, validate.seconds)
         v = check(schedule, spec, engines=(validate.engine,)).run
         validations[res.settings.seed] = v
         return v.stable, f"does not stand in physics ({', '.join(v.reasons)})"
 
     res = optimize_posture(problem, spec, settings, refine, on_iteration, restarts,
-                           physics_check if validate else None)
+                           None if validate is None else partial(physics_check, validate=validate))
     return Outcome(res, validations.get(res.settings.seed))
 

@@ -200,3 +200,15 @@ def test_bad_input_exit_2_one_line_nothing_written(capsys, tmp_path, monkeypatch
     assert "Traceback" not in err and needle in err, err
     assert _snapshot(tmp_path, ROOT / "poses") == before
     assert not os.listdir(work)
+
+
+def test_a_fixed_frame_with_a_zero_rotation_column_is_refused_even_under_python_O():
+    """The check is an error, not an assert (asserts vanish under ``python -O``)."""
+    import subprocess
+    import sys
+
+    code = ("from op2motion.kinematics.frames import Frame\nfrom op2motion.errors import InputError\n"
+            "f = Frame.constant(((1, 0, 0), (0, 1, 0), (0, 0, 1)), (0, 0, 0), 2)\n"
+            "try:\n    f.fixed(((0, 0, 0), (0, 1, 0), (0, 0, 1)))\nexcept InputError as e:\n    print(e.param)\n")
+    out = subprocess.run([sys.executable, "-O", "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "rotation"

@@ -95,8 +95,7 @@ def _walk_physics(args: argparse.Namespace, gait: Any, spec: Spec, result: dict[
     with progress(args, "physics", "s") as on_progress:
         report = check(controller, spec, engines_of(args), side_pushes(args.push) if args.push else None, trials,
                        on_progress=on_progress)
-    assert controller.plan.walk is not None
-    physics = walk_summary(report, controller.plan.walk.start_s)
+    physics = walk_summary(report, controller.plan.walk.start_s if controller.plan.walk else 0.0)
     main = physics["engines"][next(iter(report.engines))]
     result["physics"] = physics
     result["controller"] = "open loop" if args.open_loop else "WalkController"

@@ -25,7 +25,7 @@ import numpy as np
 
 from op2motion.errors import InputError
 from op2motion.gait.generator import Gait
-from op2motion.gait.leg_ik import Leg, leg_ik, leg_of
+from op2motion.gait.leg_ik import Leg, leg_ik, leg_of, rot_x, rot_y, rot_z
 from op2motion.gait.presets import load_preset
 from op2motion.gait.schedule import gait_plan
 from op2motion.physics import Plan, Schedule
@@ -73,19 +73,6 @@ class Feedback:
 
 
 OPEN_LOOP = Feedback(ki=(0.0, 0.0), gyro=(0.0, 0.0, 0.0, 0.0), heading=0.0, joint_ki=0.0)
-
-
-def _rot(pitch: float, roll: float) -> np.ndarray:
-    """Rotation by ``roll`` about X then ``pitch`` about Y (small angles: the order hardly matters)."""
-    cp, sp, cr, sr = math.cos(pitch), math.sin(pitch), math.cos(roll), math.sin(roll)
-    ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
-    return ry @ rx
-
-
-def _rz(yaw: float) -> np.ndarray:
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def attitude_of(rot: np.ndarray) -> np.ndarray:
@@ -227,19 +214,18 @@ class WalkController:
         the soles staying where the plan puts them, and the swing sole turned by ``heading`` [rad] about the stance
         sole's centre (in full at landing)."""
         pos, rot = self.gait.torso_pos[k], self.gait.torso_rot[k]
-        pivot, turn = self._support_point(k), _rot(pitch, roll)
+        pivot, turn = self._support_point(k), rot_y(pitch) @ rot_x(roll)
         moved_pos, moved_rot = pivot + turn @ (pos - pivot), turn @ rot
         contact = self.gait.timeline.contact[k]
         out = np.zeros(len(self.spec.joints))
         for side, leg in self.legs.items():
-            x, y, z, yaw = self.gait.timeline.feet[side][k]
-            sole, sole_rot = np.array([x, y, z]), _rz(float(yaw))
+            planned_sole, planned_rot = self.gait.timeline.feet[side][k, :3], rot_z(self.gait.timeline.feet[side][k, 3])
+            sole, sole_rot = planned_sole, planned_rot
             if contact not in ("double", side) and heading:
-                steer = heading * self.swing_phase[k]
+                steer = rot_z(heading * self.swing_phase[k])
                 stance = self.gait.timeline.feet[contact][k, :3]
-                sole, sole_rot = stance + _rz(steer) @ (sole - stance), _rz(steer) @ sole_rot
-            x, y, z, yaw = self.gait.timeline.feet[side][k]
-            planned = leg_ik(leg, *_within_reach(leg, rot.T @ (np.array([x, y, z]) - pos), rot.T @ _rz(float(yaw))))[0]
+                sole, sole_rot = stance + steer @ (sole - stance), steer @ sole_rot
+            planned = leg_ik(leg, *_within_reach(leg, rot.T @ (planned_sole - pos), rot.T @ planned_rot))[0]
             moved = leg_ik(leg, *_within_reach(leg, moved_rot.T @ (sole - moved_pos), moved_rot.T @ sole_rot))[0]
             out[list(leg.index)] = moved - planned
         return out

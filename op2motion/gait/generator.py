@@ -24,7 +24,7 @@ from typing import Any, Callable
 import numpy as np
 
 from op2motion.gait.footsteps import FootPlan, Footstep, plan_footsteps, sole_rectangle
-from op2motion.gait.leg_ik import leg_ik, leg_of
+from op2motion.gait.leg_ik import leg_ik, leg_of, rot_y, rot_z
 from op2motion.gait.params import GaitParams
 from op2motion.gait.preview import preview_gains, track_reference
 from op2motion.gait.timeline import Timeline, build_timeline
@@ -110,16 +110,6 @@ class Gait:
         return np.array([0.5 * (left[0] + right[0]), 0.5 * (left[1] + right[1]), yaw])
 
 
-def _rz(yaw: np.ndarray) -> np.ndarray:
-    c, s, z, o = np.cos(yaw), np.sin(yaw), np.zeros_like(yaw), np.ones_like(yaw)
-    return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)], -2)
-
-
-def _ry(pitch: float) -> np.ndarray:
-    c, s = math.cos(pitch), math.sin(pitch)
-    return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
-
-
 def arm_rows(params: GaitParams, timeline: Timeline, spec: Spec, torso_rot: np.ndarray,
              torso_pos: np.ndarray) -> np.ndarray:
     """Servo rows (K, 20) [rad] with the arm pose and its swing, zero elsewhere: each shoulder pitches forward as
@@ -147,7 +137,7 @@ class _Body:
         self.spec, self.timeline = spec, timeline
         self.dyn = dynamics_for(spec)
         self.legs = {side: leg_of(spec, side) for side in ("left", "right")}
-        self.sole_rot = {side: _rz(timeline.feet[side][:, 3]) for side in ("left", "right")}
+        self.sole_rot = {side: rot_z(timeline.feet[side][:, 3]) for side in ("left", "right")}
 
     def goals(self, arms: np.ndarray, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
         out = arms.copy()
@@ -197,7 +187,7 @@ def standing_height(params: GaitParams, spec: Spec) -> float:
     straight legs, with the torso leaning :attr:`~.GaitParams.torso_pitch_deg`."""
     leg = leg_of(spec, "left")
     straight = leg.ankle_to_sole + leg.thigh + leg.calf
-    hip = _ry(math.radians(params.torso_pitch_deg)) @ leg.hip
+    hip = rot_y(math.radians(params.torso_pitch_deg)) @ leg.hip
     return straight - params.hip_lower_m - float(hip[2])
 
 
@@ -211,7 +201,7 @@ def plan_gait(params: GaitParams, spec: Spec, target: tuple[float, float, float]
     feet = timeline.feet
     yaw = feet["left"][:, 3] + 0.5 * np.remainder(feet["right"][:, 3] - feet["left"][:, 3] + np.pi, 2 * np.pi) - (
         0.5 * np.pi)
-    rot = _rz(yaw) @ _ry(math.radians(params.torso_pitch_deg))
+    rot = rot_z(yaw) @ rot_y(math.radians(params.torso_pitch_deg))
     k = len(timeline.times)
     pos = np.zeros((k, 3))
     pos[:, 2] = standing_height(params, spec)

@@ -64,19 +64,26 @@ def leg_of(spec: Spec, side: str) -> Leg:
                tuple(spec.joint_names.index(j.name) for j in joints), np.array(signs))
 
 
-def _rx(a: np.ndarray) -> np.ndarray:
+def rot_x(a: np.ndarray | float) -> np.ndarray:
+    """Rotations (..., 3, 3) about X by ``a`` [rad] (any shape, a float gives one (3, 3)); likewise
+    :func:`rot_y`, :func:`rot_z`: the gait's one home for elementary rotations."""
+    a = np.asarray(a, dtype=float)
     c, s = np.cos(a), np.sin(a)
     o, z = np.ones_like(a), np.zeros_like(a)
     return np.stack([np.stack([o, z, z], -1), np.stack([z, c, -s], -1), np.stack([z, s, c], -1)], -2)
 
 
-def _ry(a: np.ndarray) -> np.ndarray:
+def rot_y(a: np.ndarray | float) -> np.ndarray:
+    """Rotations (..., 3, 3) about Y by ``a`` [rad]."""
+    a = np.asarray(a, dtype=float)
     c, s = np.cos(a), np.sin(a)
     o, z = np.ones_like(a), np.zeros_like(a)
     return np.stack([np.stack([c, z, s], -1), np.stack([z, o, z], -1), np.stack([-s, z, c], -1)], -2)
 
 
-def _rz(a: np.ndarray) -> np.ndarray:
+def rot_z(a: np.ndarray | float) -> np.ndarray:
+    """Rotations (..., 3, 3) about Z by ``a`` [rad]."""
+    a = np.asarray(a, dtype=float)
     c, s = np.cos(a), np.sin(a)
     o, z = np.ones_like(a), np.zeros_like(a)
     return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)], -2)
@@ -87,12 +94,12 @@ def leg_fk(leg: Leg, servo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     (the order of :data:`op2motion.robot.joints.LEG_JOINTS`)."""
     n = np.asarray(servo, dtype=float).reshape(-1, 6) * leg.sign
     yaw, roll, pitch, knee, ank, ank_roll = n.T
-    hip_rot = _rz(yaw) @ _rx(roll) @ _ry(pitch)
+    hip_rot = rot_z(yaw) @ rot_x(roll) @ rot_y(pitch)
     down = np.array([0.0, 0.0, -1.0])
     knee_pos = leg.hip + hip_rot @ (down * leg.thigh)
-    shin_rot = hip_rot @ _ry(knee)
+    shin_rot = hip_rot @ rot_y(knee)
     ankle_pos = knee_pos + shin_rot @ (down * leg.calf)
-    rot = shin_rot @ _ry(ank) @ _rx(ank_roll)
+    rot = shin_rot @ rot_y(ank) @ rot_x(ank_roll)
     return ankle_pos + rot @ (down * leg.ankle_to_sole), rot
 
 
@@ -120,7 +127,7 @@ def leg_ik(leg: Leg, sole: np.ndarray, rot: np.ndarray) -> np.ndarray:
     # v: the hip from the ankle in the shin frame before the ankle pitch; its direction less r's gives the pitch
     vx, vz = -a * np.sin(knee), a * np.cos(knee) + b
     ank = np.arctan2(vx, vz) - np.arctan2(r[:, 0], np.hypot(r[:, 1], r[:, 2]))
-    m = rot @ _rx(-ank_roll) @ _ry(-(knee + ank))
+    m = rot @ rot_x(-ank_roll) @ rot_y(-(knee + ank))
     yaw = np.arctan2(-m[:, 0, 1], m[:, 1, 1])
     roll = np.arctan2(m[:, 2, 1], np.hypot(m[:, 2, 0], m[:, 2, 2]))
     pitch = np.arctan2(-m[:, 2, 0], m[:, 2, 2])

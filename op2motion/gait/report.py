@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from op2motion.errors import InputError
 from op2motion.formats.tables import goals_csv, webots_rows
 from op2motion.gait.generator import Gait
 from op2motion.physics import CheckReport, EngineReport, Pushes, RunReport
@@ -55,7 +56,9 @@ def gait_webots(gait: Gait, spec: Spec) -> str:
 def _run_summary(run: RunReport) -> dict[str, Any]:
     """One walking run's JSON: its setup, verdict and walking measurements."""
     w = run.walk
-    assert w is not None, "a walk's run has walking measurements"
+    if w is None:
+        raise InputError(f"expected the run of a walk (with walking measurements), got a {run.engine} run of a plan "
+                         "without a walking clock", "report")
     return {"engine": run.engine, "servo": run.servo, "time_step_s": run.time_step_s, "seconds": run.seconds,
             "fell": run.fell, "reasons": run.reasons, "distance_m": round(w.distance_m, 4),
             "mean_speed_mps": round(w.mean_speed_mps, 4), "overall_speed_mps": round(w.overall_speed_mps, 4),

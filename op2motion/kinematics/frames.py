@@ -15,6 +15,8 @@ from typing import Sequence
 
 import numpy as np
 
+from op2motion.errors import InputError
+
 
 def _snap(v: float) -> float:
     """Round cos/sin of multiples of pi/2 to exact 0 or ±1 so that constant steps cost nothing."""
@@ -84,7 +86,8 @@ class Frame:
             for k, w in column:
                 term = cols[k] if w == 1.0 else -cols[k] if w == -1.0 else w * cols[k]
                 acc = term if acc is None else acc + term
-            assert acc is not None, "a rotation column has at least one entry"
+            if acc is None:
+                raise InputError(f"expected a rotation matrix, got a zero column in {rotation!r}", "rotation")
             new.append(acc)
         return Frame(new[0], new[1], new[2], p)
 

@@ -20,6 +20,7 @@ import math
 
 import numpy as np
 
+from op2motion.errors import InputError
 from op2motion.physics.loop import StartFacts
 from op2motion.physics.measure import margin_to
 from op2motion.physics.plan import Plan, WalkClock
@@ -75,7 +76,8 @@ def worst_walk_torque(track: Track, plan: Plan, spec: Spec, torque_max: float, c
 def walk_measures(track: Track, start: StartFacts, plan: Plan, spec: Spec, torque_max: float) -> WalkMeasures:
     """The measurements of a walk (see the module docstring); ``torque_max`` [N·m] is the servo's largest."""
     clock = plan.walk
-    assert clock is not None, "a walk's plan has a walking clock"
+    if clock is None:
+        raise InputError(f"expected a walk's plan (with a walking clock), got a '{plan.kind}' plan", "plan")
     times, com = track.times, track.com
     first = int(np.searchsorted(times, clock.start_s))
     planned = start.planned
