@@ -91,7 +91,9 @@ def test_swing_phase_runs_zero_to_one_in_each_single_support():
 
 @pytest.mark.parametrize("field, value", [("kp", (1.0,)), ("ki", (-1.0, 0.0)), ("gyro", (0.1, 0.1, 0.1)),
                                           ("gyro", (0.1, 0.1, float("nan"), 0.1)), ("heading", -0.1),
-                                          ("joint_ki", 1e9), ("attitude_tau_s", 0.0)])
+                                          ("joint_ki", 1e9), ("attitude_tau_s", 0.0), ("heading_ki", -1.0),
+                                          ("cross_track", float("inf")), ("learn_gain", 1.5),
+                                          ("learn_shift_rows", 2.5), ("latency_s", 1.0)])
 def test_bad_feedback_gains_are_refused_by_name(field, value):
     with pytest.raises(InputError) as err:
         Feedback(**{field: value})
@@ -157,3 +159,56 @@ def test_a_turns_planned_heading_is_continuous_past_half_a_turn(spec):
     ctl = WalkController.from_preset("turn_left", steps=16, spec=spec)
     assert ctl.plan_yaw[-1] > np.pi
     assert np.max(np.abs(np.diff(ctl.plan_yaw))) < 0.1
+
+
+YAW_RATE_RAD_S = 0.05       # a made-up steady turn to the left the plan did not ask for
+
+
+def test_a_steady_unplanned_turn_is_steered_back_and_its_sideways_error_counted(spec, controller):
+    """A torso turning left that the plan does not turn: the heading error and its integral grow, the dead-reckoned
+    position drifts to the left of the planned line, and the swing foot is steered to the right, more and more
+    (PI plus line); without the integral and the line term the steer only follows the error."""
+    def run(feedback):
+        ctl = WalkController(controller.gait, spec, feedback)
+        ctl.start({n: 0.0 for n in spec.joint_names})
+        steer = []
+        for k in range(ctl.lead, ctl.lead + 100):
+            ctl.step(k * ctl.gait.dt, np.array([0.0, 0.0, YAW_RATE_RAD_S]), np.array([0.0, 0.0, GRAVITY_M_S2]),
+                     dict(zip(spec.joint_names, ctl.gait.joints[k - ctl.lead])))
+            steer.append(ctl._heading(0.0, k - ctl.lead))
+        return ctl, np.array(steer)
+
+    full, steer = run(Feedback())
+    assert full.state.yaw_integral > 0.0 and full.state.offset[1] > 0.0       # left of the line
+    assert steer[-1] < steer[10] < 0.0                                          # to the right, growing
+    _, plain = run(replace(Feedback(), heading_ki=0.0, cross_track=0.0))
+    assert steer[-1] < plain[-1] < 0.0
+
+
+def test_the_learner_feeds_a_swing_legs_miss_forward_to_the_next_step_of_that_side(controller):
+    """What the swing leg missed in one left step, shifted by the servo lag, is added to the goals of the next left
+    step (smoothed, bounded); the stance leg learns nothing; a reset forgets."""
+    from op2motion.gait.learning import MAX_LEARNED_RAD, StepLearner
+
+    ctl = controller
+    legs = {side: np.array(leg.index) for side, leg in ctl.legs.items()}
+    shift, gain, miss_rad = 2, 0.5, 0.02
+    learner = StepLearner.of(ctl.gait, legs, gain, shift)
+    first, side = int(learner.first_row[0]), learner.side_of_step[0]
+    other = "right" if side == "left" else "left"
+    miss = np.full(learner.size, miss_rad)
+    for k in range(first, first + 2 * learner.rows):             # steps 0 and 1
+        assert not learner.correction(k).any()                   # nothing learnt yet for either side
+        learner.learn(k, miss)
+    step2 = int(learner.first_row[2])                            # the next step of the same side as step 0
+    assert learner.side_of_step[2] == side
+    middle = learner.correction(step2 + learner.rows // 2)
+    assert np.allclose(middle[legs[side]], gain * miss_rad, atol=1e-12)
+    assert not middle[legs[other]].any() and not np.delete(middle, np.r_[legs["left"], legs["right"]]).any()
+    for _ in range(200):                                         # a miss that never goes away stays bounded
+        for k in range(first, first + learner.rows):
+            learner.correction(k)
+            learner.learn(k + shift, np.full(learner.size, 1.0))
+    assert np.abs(learner.memory[side]).max() <= MAX_LEARNED_RAD
+    learner.reset()
+    assert not learner.correction(first + 5).any()

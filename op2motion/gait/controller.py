@@ -1,18 +1,22 @@
-"""A walk that reacts: the ZMP preview plan played every 8 ms with stabilisation from the robot's IMU.
+"""A walk that reacts: the ZMP preview plan played every 8 ms with stabilisation from the robot's IMU and joints.
 
 :class:`WalkController` is a :class:`~op2motion.physics.Controller`: the physics check drives it, and so can a
 robot bridge or another simulator, with the torso's gyro [rad/s] and accelerometer [m/s²] (torso frame: x forward,
 y left, z up; the accelerometer reads +9.81 m/s² on z when upright and still) and the joint positions every 8 ms.
-Inside, per tick:
+Inside, per tick (gains in :class:`Feedback`):
 
-1. **the plan** (:func:`.schedule.gait_plan`): the goals of this row, the planned torso pose and soles;
-2. **the attitude**: a complementary filter of the gyro (integrated) and the accelerometer's direction of gravity
-   (time constant :attr:`Feedback.attitude_tau_s`) estimates the torso's pitch and roll;
-3. **the error** against the plan's torso attitude, its integral, and the gyro (the plan's rate is small);
-4. **the correction**: the whole body turned about the support point (the stance sole's centre, or between both
-   soles on two feet) by ``-(Kp e + Ki ∫e + Kd w)`` in pitch and roll; the legs from the closed-form IK with the soles
-   where the plan puts them, so the swing foot keeps its path and lands flat;
-5. **the goals**: the plan's goals (servo feed-forward included) plus the legs' change.
+1. **the plan** (:func:`.schedule.gait_plan`): the goals of this row (servo feed-forward included), the planned
+   torso pose and soles;
+2. **gyro damping** as in the stock gait: hip roll and ankle roll against the roll rate, knee and ankle pitch
+   against the pitch rate;
+3. **attitude trim**: a complementary filter of the gyro and the accelerometer's gravity estimates pitch and roll;
+   the integral of the error against the plan turns the whole body about the support point (legs by the
+   closed-form IK, soles where the plan puts them);
+4. **heading and line**: the integrated yaw rate against the plan's heading, plus the sideways error dead-reckoned
+   from it (the plan's stride velocity turned by the heading error), steer the swing foot about the stance foot
+   (PI, in full at landing);
+5. **the servos**: slow integral trims of the legs' sag, and the swing leg's feed-forward learnt from the steps
+   before (:mod:`.learning`), so the swing foot lands where planned whatever the servos' real stiffness.
 """
 
 from __future__ import annotations
@@ -23,8 +27,9 @@ from typing import Mapping
 
 import numpy as np
 
-from op2motion.errors import InputError
+from op2motion.gait.feedback import GYRO_GAINS_S, OPEN_LOOP, STOCK_GYRO_GAINS_S, Feedback
 from op2motion.gait.generator import Gait
+from op2motion.gait.learning import StepLearner
 from op2motion.gait.leg_ik import Leg, leg_ik, leg_of, rot_x, rot_y, rot_z
 from op2motion.gait.presets import load_preset
 from op2motion.gait.schedule import gait_plan
@@ -36,45 +41,8 @@ from op2motion.robot.support import SIDES, Support
 REACH_SHARE = 0.999                # a corrected leg stretches at most to this share of its length
 MAX_HEADING_RAD = 0.2             # the swing foot is steered at most this far per step (11°)
 MAX_TRIM_RAD = 0.15                # a leg joint's integral trim stays within this [rad] (8.6°)
+MIN_TRACK_SPEED_M_S = 0.02        # below this planned speed there is no line to keep
 MAX_CORRECTION_RAD = 0.25          # the stabiliser turns the body at most this far (14°)
-#: The stock gait's gyro balance gains in SI [s] (rad of joint per rad/s of torso rate): hip roll and ankle roll
-#: from the roll rate, knee and ankle pitch from the pitch rate. Walking.cpp's 0.5, 0.3, 0.9, 1.0 ticks per gyro
-#: count times 4 (the 4096-tick build), with 1 tick = 0.088° and 1 count = 3.125 °/s.
-STOCK_GYRO_GAINS_S = (0.056, 0.034, 0.101, 0.113)
-
-
-@dataclass(frozen=True)
-class Feedback:
-    """The stabiliser's gains (SI): attitude error [rad] -> body turn [rad] (``kp``), its integral [rad·s] (``ki``
-    [1/s]), the gyro [rad/s] (``kd`` [s]), per axis (pitch, roll); the attitude filter's time constant [s]."""
-
-    kp: tuple[float, float] = (0.0, 0.0)
-    ki: tuple[float, float] = (0.5, 0.0)
-    kd: tuple[float, float] = (0.0, 0.0)
-    attitude_tau_s: float = 0.5
-    gyro: tuple[float, float, float, float] = STOCK_GYRO_GAINS_S
-    heading: float = 0.3
-    joint_ki: float = 0.7
-
-    def __post_init__(self) -> None:
-        for name in ("kp", "ki", "kd"):
-            values = getattr(self, name)
-            if len(values) != 2 or not all(math.isfinite(v) and 0.0 <= v <= 100.0 for v in values):
-                raise InputError(f"expected two gains (pitch, roll) from 0 to 100, got {values!r}", name)
-        if not (math.isfinite(self.attitude_tau_s) and 0.01 <= self.attitude_tau_s <= 10.0):
-            raise InputError(f"expected 0.01 to 10 s, got {self.attitude_tau_s!r}", "attitude_tau_s")
-        if len(self.gyro) != 4 or not all(math.isfinite(v) and 0.0 <= v <= 1.0 for v in self.gyro):
-            raise InputError(f"expected four gyro gains (hip roll, knee, ankle pitch, ankle roll) from 0 to 1 s, got "
-                             f"{self.gyro!r}", "gyro")
-        for name in ("heading", "joint_ki"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and 0.0 <= value <= 100.0):
-                raise InputError(f"expected a gain from 0 to 100, got {value!r}", name)
-
-
-OPEN_LOOP = Feedback(ki=(0.0, 0.0), gyro=(0.0, 0.0, 0.0, 0.0), heading=0.0, joint_ki=0.0)
-
-
 def attitude_of(rot: np.ndarray) -> np.ndarray:
     """Pitch and roll [rad] of a torso rotation: the tilt of its z axis towards +x (pitch: leaning forward > 0) and
     towards -y (roll: turned about +X > 0)."""
@@ -94,6 +62,14 @@ def _within_reach(leg: Leg, sole: np.ndarray, rot: np.ndarray) -> tuple[np.ndarr
     return sole - span * (1.0 - reach / length), rot
 
 
+def _stride_velocity(gait: Gait) -> np.ndarray:
+    """Per row (K, 2): the plan's torso velocity [m/s] averaged over a stride (two steps), the sway left out."""
+    rows = max(1, int(round(2.0 * (gait.params.single_s + gait.params.double_s) / CONTROL_PERIOD_S)))
+    velocity = np.gradient(gait.torso_pos[:, :2], CONTROL_PERIOD_S, axis=0)
+    kernel = np.ones(rows) / rows
+    return np.stack([np.convolve(velocity[:, i], kernel, mode="same") for i in range(2)], axis=1)
+
+
 def _swing_phase(contact: tuple[str, ...]) -> np.ndarray:
     """Per row (K,): 0 -> 1 across each single-support phase (0 on both feet)."""
     phase = np.zeros(len(contact))
@@ -106,12 +82,18 @@ def _swing_phase(contact: tuple[str, ...]) -> np.ndarray:
     return phase
 
 
+__all__ = ["Feedback", "GYRO_GAINS_S", "OPEN_LOOP", "STOCK_GYRO_GAINS_S", "WalkController", "attitude_of"]
+
+
 @dataclass
 class _State:
     attitude: np.ndarray = field(default_factory=lambda: np.zeros(2))     # estimated pitch, roll [rad]
     integral: np.ndarray = field(default_factory=lambda: np.zeros(2))     # of the attitude error [rad·s]
     yaw: float = 0.0                                                        # integrated gyro z [rad]
+    yaw_integral: float = 0.0                                               # of the heading error [rad·s]
+    offset: np.ndarray = field(default_factory=lambda: np.zeros(2))       # dead-reckoned position error [m]
     joint_integral: np.ndarray | None = None                                # leg goal trims (20,) [rad]
+    intended: list[np.ndarray] = field(default_factory=list)                # recent intended joints (20,) [rad]
     started: bool = False
 
 
@@ -127,6 +109,10 @@ class WalkController:
         self.leg_index = np.array(sorted(i for leg in self.legs.values() for i in leg.index))
         self.plan_yaw = np.unwrap(np.arctan2(gait.torso_rot[:, 1, 0], gait.torso_rot[:, 0, 0]))   # turns pass ±180°
         self.swing_phase = _swing_phase(gait.timeline.contact)
+        self.plan_velocity = _stride_velocity(gait)
+        self.learner = StepLearner.of(gait, {side: np.array(leg.index) for side, leg in self.legs.items()},
+                                      feedback.learn_gain, feedback.learn_shift_rows)
+        self.delay_rows = int(round(feedback.latency_s / CONTROL_PERIOD_S))
         self.state = _State()
 
     @classmethod
@@ -148,6 +134,7 @@ class WalkController:
     def start(self, joint_positions: Mapping[str, float]) -> dict[str, float]:
         """Reset the estimator and the integrals; the plan's first goals."""
         self.state = _State()
+        self.learner.reset()
         return dict(self.schedule.start(joint_positions))
 
     def step(self, t_s: float, gyro_rad_s: np.ndarray, accel_m_s2: np.ndarray,
@@ -160,23 +147,50 @@ class WalkController:
         f = self.feedback
         turn = -(np.multiply(f.kp, error) + np.multiply(f.ki, self.state.integral) + np.multiply(f.kd, gyro))
         turn = np.clip(turn, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
-        goals = self.schedule.goals_at(t_s).copy()
-        goals += self._damping(np.asarray(gyro_rad_s, dtype=float))
-        self.state.yaw += float(gyro_rad_s[2]) * CONTROL_PERIOD_S
-        heading = float(np.clip(-f.heading * (self.state.yaw - self.plan_yaw[k]), -MAX_HEADING_RAD, MAX_HEADING_RAD))
+        change = self._damping(np.asarray(gyro_rad_s, dtype=float))
+        heading = self._heading(float(gyro_rad_s[2]), k)
         if np.any(turn) or heading:
-            goals += self._leg_change(k, float(turn[0]), float(turn[1]), heading)
-        if f.joint_ki and row >= self.lead:
-            goals += self._joint_trim(k, joint_positions)
+            change += self._leg_change(k, float(turn[0]), float(turn[1]), heading)
+        goals = self.schedule.goals_at(t_s) + change
+        if row >= self.lead:
+            measured = np.array([joint_positions[name] for name in self.spec.joint_names])
+            self._remember(k, self.gait.joints[k] + change, measured)
+            if f.joint_ki:
+                goals += self._joint_trim(k, measured)
+            goals += self.learner.correction(k)
         return dict(zip(self.spec.joint_names, goals.tolist()))
 
-    def _joint_trim(self, k: int, joint_positions: Mapping[str, float]) -> np.ndarray:
+    def _remember(self, k: int, intended: np.ndarray, measured: np.ndarray) -> None:
+        """Keep this row's intended joints; teach the learner what the joints (measured ``delay_rows`` late)
+        missed."""
+        history = self.state.intended
+        history.append(intended)
+        del history[:-(self.delay_rows + 1)]
+        if self.feedback.learn_gain and len(history) == self.delay_rows + 1:
+            self.learner.learn(k - self.delay_rows, history[0] - measured)
+
+    def _heading(self, yaw_rate: float, k: int) -> float:
+        """The swing foot's steer [rad]: a PI loop on the heading error (integrated gyro yaw less the plan's),
+        whose target leans back towards the planned line by ``cross_track`` [rad/m] of the dead-reckoned sideways
+        error (the plan's stride velocity turned by the heading error, integrated)."""
+        s, f, dt = self.state, self.feedback, CONTROL_PERIOD_S
+        s.yaw += yaw_rate * dt
+        error = s.yaw - self.plan_yaw[k]
+        velocity = self.plan_velocity[k]
+        s.offset += (rot_z(error)[:2, :2] @ velocity - velocity) * dt
+        speed = float(np.hypot(*velocity))
+        if speed > MIN_TRACK_SPEED_M_S:
+            error += f.cross_track * float(velocity[0] * s.offset[1] - velocity[1] * s.offset[0]) / speed
+        s.yaw_integral = float(np.clip(s.yaw_integral + error * dt, -MAX_HEADING_RAD, MAX_HEADING_RAD))
+        return float(np.clip(-f.heading * error - f.heading_ki * s.yaw_integral, -MAX_HEADING_RAD, MAX_HEADING_RAD))
+
+    def _joint_trim(self, k: int, measured_all: np.ndarray) -> np.ndarray:
         """The legs' integral trims (20,) [rad]: what the servos' sag keeps them from the planned angles, added to
         their goals little by little (``joint_ki`` [1/s])."""
         s = self.state
         if s.joint_integral is None:
             s.joint_integral = np.zeros(len(self.spec.joints))
-        measured = np.array([joint_positions[self.spec.joint_names[i]] for i in self.leg_index])
+        measured = measured_all[self.leg_index]
         error = self.gait.joints[k, self.leg_index] - measured
         trim = s.joint_integral[self.leg_index] + self.feedback.joint_ki * error * CONTROL_PERIOD_S
         s.joint_integral[self.leg_index] = np.clip(trim, -MAX_TRIM_RAD, MAX_TRIM_RAD)

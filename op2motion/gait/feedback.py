@@ -1,0 +1,73 @@
+"""The walk controller's gains (:class:`Feedback`, SI units) and the stock gait's gyro gains they start from."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from op2motion.errors import InputError
+
+#: The stock gait's gyro balance gains in SI [s] (rad of joint per rad/s of torso rate): hip roll and ankle roll
+#: from the roll rate, knee and ankle pitch from the pitch rate. Walking.cpp's 0.5, 0.3, 0.9, 1.0 ticks per gyro
+#: count times 4 (the 4096-tick build), with 1 tick = 0.088° and 1 count = 3.125 °/s.
+STOCK_GYRO_GAINS_S = (0.056, 0.034, 0.101, 0.113)
+#: The gyro gains the controller uses: 0.6 of the stock ones. With 16 ms of sensor latency the stock gains make
+#: servos 1.6 times stiffer than the model oscillate (PyBullet and MuJoCo alike); the swing leg's learnt
+#: feed-forward (:mod:`.learning`) gives soft servos back what the lower damping takes from them.
+GYRO_GAINS_S = (0.0336, 0.0204, 0.0606, 0.0678)
+
+
+@dataclass(frozen=True)
+class Feedback:
+    """The stabiliser's gains (SI).
+
+    Attributes:
+        kp, ki, kd: attitude error [rad] -> body turn [rad] (``kp``), its integral [rad·s] (``ki`` [1/s]), the gyro
+            [rad/s] (``kd`` [s]), per axis (pitch, roll).
+        attitude_tau_s: the attitude filter's time constant [s].
+        gyro: joint damping [s] (rad per rad/s): hip roll, knee, ankle pitch, ankle roll.
+        heading, heading_ki: the swing foot's steer per rad of heading error [1] and of its integral [1/s].
+        cross_track: heading error [rad] per metre of sideways error from the planned line.
+        joint_ki: the legs' sag trims [1/s].
+        learn_gain, learn_shift_rows: the swing leg's learnt feed-forward: share of a miss kept per step, and rows
+            from a goal to the measurement it shows in.
+        latency_s: how late the joint readings arrive [s] (whole control periods).
+    """
+
+    kp: tuple[float, float] = (0.0, 0.0)
+    ki: tuple[float, float] = (0.5, 0.0)
+    kd: tuple[float, float] = (0.0, 0.0)
+    attitude_tau_s: float = 0.5
+    gyro: tuple[float, float, float, float] = GYRO_GAINS_S
+    heading: float = 0.3
+    heading_ki: float = 0.3
+    cross_track: float = 1.5
+    joint_ki: float = 0.7
+    learn_gain: float = 0.3
+    learn_shift_rows: int = 3
+    latency_s: float = 0.016
+
+    def __post_init__(self) -> None:
+        for name in ("kp", "ki", "kd"):
+            values = getattr(self, name)
+            if len(values) != 2 or not all(math.isfinite(v) and 0.0 <= v <= 100.0 for v in values):
+                raise InputError(f"expected two gains (pitch, roll) from 0 to 100, got {values!r}", name)
+        if not (math.isfinite(self.attitude_tau_s) and 0.01 <= self.attitude_tau_s <= 10.0):
+            raise InputError(f"expected 0.01 to 10 s, got {self.attitude_tau_s!r}", "attitude_tau_s")
+        if len(self.gyro) != 4 or not all(math.isfinite(v) and 0.0 <= v <= 1.0 for v in self.gyro):
+            raise InputError(f"expected four gyro gains (hip roll, knee, ankle pitch, ankle roll) from 0 to 1 s, got "
+                             f"{self.gyro!r}", "gyro")
+        if not (isinstance(self.learn_shift_rows, int) and 0 <= self.learn_shift_rows <= 25):
+            raise InputError(f"expected 0 to 25 rows, got {self.learn_shift_rows!r}", "learn_shift_rows")
+        if not (math.isfinite(self.latency_s) and 0.0 <= self.latency_s <= 0.1):
+            raise InputError(f"expected 0 to 0.1 s, got {self.latency_s!r}", "latency_s")
+        if not (math.isfinite(self.learn_gain) and 0.0 <= self.learn_gain <= 1.0):
+            raise InputError(f"expected a share from 0 to 1, got {self.learn_gain!r}", "learn_gain")
+        for name in ("heading", "heading_ki", "cross_track", "joint_ki"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and 0.0 <= value <= 100.0):
+                raise InputError(f"expected a gain from 0 to 100, got {value!r}", name)
+
+
+OPEN_LOOP = Feedback(ki=(0.0, 0.0), gyro=(0.0, 0.0, 0.0, 0.0), heading=0.0, heading_ki=0.0, cross_track=0.0,
+                     joint_ki=0.0, learn_gain=0.0)
