@@ -33,6 +33,7 @@ FOOT_TOL_M = 1e-6           # planned joints put the soles where the timeline wa
 WALK_DISTANCE_SHARE = 0.85  # a 4-step walk in PyBullet covers at least this share of its planned distance
 COP_INSIDE = 0.95           # the issue: measured CoP inside the support polygon >= 95 % of the time
 TURN_RATE_DEG_S = 30.0      # the issue: turning in place at >= 30 deg/s
+SETTLE_TRAVEL_M = 0.001     # without swing_settle the foot still travels this far in the last 15 % of its swing
 
 
 def test_preview_tracks_a_zmp_step_as_the_lipm_predicts():
@@ -158,6 +159,25 @@ def test_timeline_marks_single_support_while_the_foot_is_up(spec):
         if support != "double":
             swing = "left" if support == "right" else "right"
             assert timeline.feet[swing][i, 2] > 0.0
+
+
+def test_a_settling_swing_is_over_its_place_before_it_lands(spec):
+    """``swing_settle``: for the last share of the swing the foot only descends; without it, it still travels."""
+    for settle in (0.0, 0.15):
+        params = GaitParams(steps=2, step_length_m=0.08, step_s=0.32, double_support_ratio=0.05,
+                            swing_settle=settle)
+        timeline = build_timeline(params, plan_footsteps(params, spec))
+        swing = timeline.feet["left"] if timeline.contact[timeline.step.tolist().index(0)] == "right" \
+            else timeline.feet["right"]
+        rows = np.flatnonzero((timeline.step == 0) & (np.array(timeline.contact) != "double"))
+        goal = swing[rows[-1], :2]
+        late = rows[int(len(rows) * 0.85) + 1:-1]          # the last 15 % of the swing, the landing row left out
+        travelled = np.abs(swing[late, 0] - goal[0])
+        assert np.all(swing[late, 2] > 0.0)
+        if settle:
+            assert np.all(travelled < FOOT_TOL_M)
+        else:
+            assert np.max(travelled) > SETTLE_TRAVEL_M
 
 
 @pytest.mark.physics

@@ -16,6 +16,9 @@ left), so the mean speed is about ``step_length_m / step_s``. Keys (defaults in 
 ``step_height_m``           swing foot's highest lift above the floor [m]
 ``swing_ramp``              share of the swing the foot spends speeding up (and again slowing down) between lift-off
                             and its cruise; its peak speed is 1 / (1 - ramp) times the mean
+``swing_settle``            share of the swing, at its end, in which the foot only descends: it is over its place
+                            before it lands, so a touchdown a little early (sagging servos, a tilted body) loses
+                            no stride
 ``hip_lower_m``             how far the hips sit below their straight-leg height [m]
 ``com_height_m``            the pendulum height [m]; 0 takes it from the model at the gait's standing pose
 ``torso_pitch_deg``         forward lean of the torso [deg]
@@ -63,6 +66,7 @@ class GaitParams:
     double_support_ratio: float = 0.2
     step_height_m: float = 0.03
     swing_ramp: float = 0.3
+    swing_settle: float = 0.0
     hip_lower_m: float = 0.02
     com_height_m: float = 0.0
     torso_pitch_deg: float = 0.0
@@ -126,7 +130,8 @@ class GaitParams:
 RANGES: dict[str, tuple[float, float]] = {
     "steps": (1, 200), "step_length_m": (-0.1, 0.12), "step_side_m": (-0.05, 0.05), "turn_deg": (-30.0, 30.0),
     "step_width_m": (0.0, 0.14), "step_s": (0.2, 2.0), "double_support_ratio": (0.0, 0.6),
-    "step_height_m": (0.005, 0.06), "swing_ramp": (0.05, 0.5), "hip_lower_m": (0.0, 0.06), "com_height_m": (0.0, 0.4),
+    "step_height_m": (0.005, 0.06), "swing_ramp": (0.05, 0.5), "swing_settle": (0.0, 0.4),
+    "hip_lower_m": (0.0, 0.06), "com_height_m": (0.0, 0.4),
     "torso_pitch_deg": (-10.0, 30.0), "zmp_offset_x_m": (-0.03, 0.03), "zmp_offset_y_m": (-0.02, 0.02),
     "preview_s": (0.4, 3.0), "zmp_weight": (1e-6, 1e6), "jerk_weight": (1e-12, 1.0), "zmp_passes": (0, 5),
     "arm_swing_deg": (0.0, 40.0), "start_s": (0.2, 5.0), "end_s": (0.2, 5.0), "p_gain": (1, 254),

@@ -108,7 +108,7 @@ def build_timeline(params: GaitParams, plan: FootPlan) -> Timeline:
     for k, step in enumerate(plan.steps):
         stand, before = plan.stance_before(k)
         s = (np.arange(1, n_single + 1) / n_single)
-        blend = cruise_blend(s, params.swing_ramp)[:, None]
+        blend = cruise_blend(s / (1.0 - params.swing_settle), params.swing_ramp)[:, None]
         start, goal = where[step.side], np.array([step.x, step.y, 0.0, step.yaw])
         goal[3] = start[3] + math.remainder(goal[3] - start[3], 2.0 * math.pi)
         path = start + blend * (goal - start)
