@@ -93,7 +93,8 @@ def test_swing_phase_runs_zero_to_one_in_each_single_support():
                                           ("gyro", (0.1, 0.1, float("nan"), 0.1)), ("heading", -0.1),
                                           ("joint_ki", 1e9), ("attitude_tau_s", 0.0), ("heading_ki", -1.0),
                                           ("cross_track", float("inf")), ("learn_gain", 1.5),
-                                          ("learn_shift_rows", 2.5), ("latency_s", 1.0)])
+                                          ("learn_shift_rows", 2.5), ("latency_s", 1.0), ("soft_kp", (-0.1, 0.0)),
+                                          ("calibrate", 1), ("accel_tau_s", -0.1), ("accel_tau_s", 2.0)])
 def test_bad_feedback_gains_are_refused_by_name(field, value):
     with pytest.raises(InputError) as err:
         Feedback(**{field: value})
@@ -212,3 +213,57 @@ def test_the_learner_feeds_a_swing_legs_miss_forward_to_the_next_step_of_that_si
     assert np.abs(learner.memory[side]).max() <= MAX_LEARNED_RAD
     learner.reset()
     assert not learner.correction(first + 5).any()
+
+
+STIFFNESS_TOL = 1e-9        # the least-squares fit of an exact sag recovers the stiffness to rounding
+TILT_RAD = 0.05             # a made-up steady forward lean (2.9°)
+TILT_TOL_RAD = 0.005        # the filtered estimate's mean within 0.3° of the lean
+WALK_BIAS_RAD = 0.02        # each raw sample's tilt, averaged, is off by more than 1.1° under these impacts
+
+
+@pytest.mark.parametrize("stiffness", [0.6, 1.0, 1.6])
+def test_the_standing_calibration_measures_the_servos_stiffness(controller, stiffness):
+    """Joints that sag by the feed-forward over the stiffness give that stiffness back; a softer servo gets the
+    feed-forward it lacks (ramped in before the first step), a stiffer one nothing taken away."""
+    from op2motion.gait.calibration import StiffnessCalibration
+
+    gait = controller.gait
+    cal = StiffnessCalibration.of(gait, controller.leg_index)
+    assert cal.start_row < cal.end_row < cal.first_step
+    size = gait.joints.shape[1]
+    for k in range(cal.first_step):
+        cal.observe(k, gait.goals[k], gait.goals[k] - (gait.goals[k] - gait.joints[k]) / stiffness)
+    assert cal.estimate == pytest.approx(stiffness, abs=STIFFNESS_TOL)
+    assert cal.softness == pytest.approx(float(np.clip((1.0 - stiffness) / 0.4, 0.0, 1.0)))
+    assert not cal.compensation(cal.end_row - 1, size).any()
+    later = cal.compensation(cal.first_step + 10, size)
+    ff = gait.goals[cal.first_step + 10] - gait.joints[cal.first_step + 10]
+    want = np.zeros(size)
+    want[controller.leg_index] = max(1.0 / stiffness - 1.0, 0.0) * ff[controller.leg_index]
+    assert np.allclose(later, want, atol=1e-12)
+    cal.reset()
+    assert cal.estimate == 1.0
+
+
+def test_the_attitude_filter_is_not_biased_by_the_steps_impacts(spec, controller):
+    """A body leaning steadily forward whose accelerometer also feels the steps: zero-mean forward jolts that come
+    with a dip of the vertical reading (as at each touchdown). The tilt of each raw sample, averaged, is biased; the
+    tilt of the low-passed vector is not."""
+    def mean_tilt(feedback):
+        ctl = WalkController(controller.gait, spec, feedback)
+        ctl.start({n: 0.0 for n in spec.joint_names})
+        estimates = []
+        for i in range(2000):
+            phase = (i % 40) / 40.0
+            jolt = 8.0 * np.sin(2 * np.pi * phase) * (phase < 0.5)       # forward, then back
+            jolt -= np.mean(8.0 * np.sin(2 * np.pi * np.arange(40) / 40.0) * (np.arange(40) < 20))
+            dip = -9.0 if phase < 0.1 else 0.0                            # the vertical reading dips at impact
+            dip -= -9.0 * 4 / 40                                          # zero mean
+            accel = np.array([-GRAVITY_M_S2 * np.sin(TILT_RAD) + jolt, 0.0,
+                              GRAVITY_M_S2 * np.cos(TILT_RAD) + dip])
+            ctl._estimate(np.zeros(2), accel, 0)
+            estimates.append(ctl.state.attitude[0])
+        return float(np.mean(estimates[500:]))
+
+    assert abs(mean_tilt(Feedback()) - TILT_RAD) < TILT_TOL_RAD
+    assert abs(mean_tilt(replace(Feedback(), accel_tau_s=0.0)) - TILT_RAD) > WALK_BIAS_RAD

@@ -9,14 +9,18 @@ Inside, per tick (gains in :class:`Feedback`):
    torso pose and soles;
 2. **gyro damping** as in the stock gait: hip roll and ankle roll against the roll rate, knee and ankle pitch
    against the pitch rate;
-3. **attitude trim**: a complementary filter of the gyro and the accelerometer's gravity estimates pitch and roll;
-   the integral of the error against the plan turns the whole body about the support point (legs by the
-   closed-form IK, soles where the plan puts them);
+3. **attitude**: a complementary filter of the gyro and the gravity in the accelerometer (low-passed as a vector
+   first: the tilt of each raw sample, with the impacts of the steps in it, averaged 4° off while walking) estimates
+   pitch and roll; against the plan's, the error (P, and optionally its integral) turns the whole body about the
+   support point (legs by the closed-form IK, soles where the plan puts them). The P gain follows the servos'
+   measured softness (:mod:`.calibration`): soft servos let the body tip without it, stiff ones oscillate with it;
 4. **heading and line**: the integrated yaw rate against the plan's heading, plus the sideways error dead-reckoned
    from it (the plan's stride velocity turned by the heading error), steer the swing foot about the stance foot
    (PI, in full at landing);
-5. **the servos**: slow integral trims of the legs' sag, and the swing leg's feed-forward learnt from the steps
-   before (:mod:`.learning`), so the swing foot lands where planned whatever the servos' real stiffness.
+5. **the servos**: their stiffness measured while the robot stands before the first step, and the feed-forward a
+   softer servo lacks added (:mod:`.calibration`); slow integral trims of the legs' sag; the swing leg's
+   feed-forward learnt from the steps before (:mod:`.learning`), so the swing foot lands where planned whatever the
+   servos' real stiffness.
 """
 
 from __future__ import annotations
@@ -27,6 +31,7 @@ from typing import Mapping
 
 import numpy as np
 
+from op2motion.gait.calibration import StiffnessCalibration
 from op2motion.gait.feedback import GYRO_GAINS_S, OPEN_LOOP, STOCK_GYRO_GAINS_S, Feedback
 from op2motion.gait.generator import Gait
 from op2motion.gait.learning import StepLearner
@@ -95,6 +100,7 @@ class _State:
     joint_integral: np.ndarray | None = None                                # leg goal trims (20,) [rad]
     intended: list[np.ndarray] = field(default_factory=list)                # recent intended joints (20,) [rad]
     started: bool = False
+    accel: np.ndarray | None = None
 
 
 class WalkController:
@@ -113,6 +119,7 @@ class WalkController:
         self.learner = StepLearner.of(gait, {side: np.array(leg.index) for side, leg in self.legs.items()},
                                       feedback.learn_gain, feedback.learn_shift_rows)
         self.delay_rows = int(round(feedback.latency_s / CONTROL_PERIOD_S))
+        self.calibration = StiffnessCalibration.of(gait, self.leg_index)
         self.state = _State()
 
     @classmethod
@@ -135,6 +142,7 @@ class WalkController:
         """Reset the estimator and the integrals; the plan's first goals."""
         self.state = _State()
         self.learner.reset()
+        self.calibration.reset()
         return dict(self.schedule.start(joint_positions))
 
     def step(self, t_s: float, gyro_rad_s: np.ndarray, accel_m_s2: np.ndarray,
@@ -145,7 +153,8 @@ class WalkController:
         gyro = np.array([gyro_rad_s[1], gyro_rad_s[0]])   # pitch rate (about y), roll rate (about x)
         error = self._estimate(gyro, np.asarray(accel_m_s2, dtype=float), k)
         f = self.feedback
-        turn = -(np.multiply(f.kp, error) + np.multiply(f.ki, self.state.integral) + np.multiply(f.kd, gyro))
+        kp = np.add(f.kp, np.multiply(f.soft_kp, self.calibration.softness))
+        turn = -(kp * error + np.multiply(f.ki, self.state.integral) + np.multiply(f.kd, gyro))
         turn = np.clip(turn, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
         change = self._damping(np.asarray(gyro_rad_s, dtype=float))
         heading = self._heading(float(gyro_rad_s[2]), k)
@@ -158,6 +167,9 @@ class WalkController:
             if f.joint_ki:
                 goals += self._joint_trim(k, measured)
             goals += self.learner.correction(k)
+            if f.calibrate:
+                self.calibration.observe(k, self.schedule.goals_at(t_s), measured)
+                goals += self.calibration.compensation(k, len(goals))
         return dict(zip(self.spec.joint_names, goals.tolist()))
 
     def _remember(self, k: int, intended: np.ndarray, measured: np.ndarray) -> None:
@@ -199,6 +211,11 @@ class WalkController:
     def _estimate(self, gyro: np.ndarray, accel: np.ndarray, k: int) -> np.ndarray:
         """Update the attitude estimate and the error integral; the error [rad] (pitch, roll) against the plan."""
         s, dt = self.state, CONTROL_PERIOD_S
+        if self.feedback.accel_tau_s:
+            if s.accel is None:
+                s.accel = accel.copy()
+            s.accel = s.accel + dt / (self.feedback.accel_tau_s + dt) * (accel - s.accel)
+            accel = s.accel
         measured = np.array([math.atan2(-accel[0], accel[2]), math.atan2(accel[1], math.hypot(accel[0], accel[2]))])
         if not s.started:
             s.attitude, s.started = measured, True

@@ -32,10 +32,14 @@ class Feedback:
         learn_gain, learn_shift_rows: the swing leg's learnt feed-forward: share of a miss kept per step, and rows
             from a goal to the measurement it shows in.
         latency_s: how late the joint readings arrive [s] (whole control periods).
+        soft_kp: attitude error [rad] -> body turn [rad] added to ``kp`` in proportion to the servos' measured
+            softness (:mod:`.calibration`: all of it at 0.6 of the model's stiffness or softer, none at the model's).
+        calibrate: measure the servos' stiffness while standing and add the feed-forward softer servos lack.
+        accel_tau_s: the accelerometer's low-pass [s] (as a vector) before its tilt is taken; 0: each raw sample.
     """
 
     kp: tuple[float, float] = (0.0, 0.0)
-    ki: tuple[float, float] = (0.5, 0.0)
+    ki: tuple[float, float] = (0.0, 0.0)
     kd: tuple[float, float] = (0.0, 0.0)
     attitude_tau_s: float = 0.5
     gyro: tuple[float, float, float, float] = GYRO_GAINS_S
@@ -46,9 +50,12 @@ class Feedback:
     learn_gain: float = 0.3
     learn_shift_rows: int = 3
     latency_s: float = 0.016
+    soft_kp: tuple[float, float] = (0.6, 0.0)
+    calibrate: bool = True
+    accel_tau_s: float = 0.1
 
     def __post_init__(self) -> None:
-        for name in ("kp", "ki", "kd"):
+        for name in ("kp", "ki", "kd", "soft_kp"):
             values = getattr(self, name)
             if len(values) != 2 or not all(math.isfinite(v) and 0.0 <= v <= 100.0 for v in values):
                 raise InputError(f"expected two gains (pitch, roll) from 0 to 100, got {values!r}", name)
@@ -59,6 +66,10 @@ class Feedback:
                              f"{self.gyro!r}", "gyro")
         if not (isinstance(self.learn_shift_rows, int) and 0 <= self.learn_shift_rows <= 25):
             raise InputError(f"expected 0 to 25 rows, got {self.learn_shift_rows!r}", "learn_shift_rows")
+        if not isinstance(self.calibrate, bool):
+            raise InputError(f"expected true or false, got {self.calibrate!r}", "calibrate")
+        if not (math.isfinite(self.accel_tau_s) and 0.0 <= self.accel_tau_s <= 1.0):
+            raise InputError(f"expected 0 to 1 s, got {self.accel_tau_s!r}", "accel_tau_s")
         if not (math.isfinite(self.latency_s) and 0.0 <= self.latency_s <= 0.1):
             raise InputError(f"expected 0 to 0.1 s, got {self.latency_s!r}", "latency_s")
         if not (math.isfinite(self.learn_gain) and 0.0 <= self.learn_gain <= 1.0):
