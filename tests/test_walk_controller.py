@@ -34,6 +34,12 @@ def controller(spec):
     return WalkController.from_preset("forward", steps=SHORT_STEPS, spec=spec)
 
 
+@pytest.fixture(scope="module")
+def longer(spec):
+    """Eight steps: the six between the first and the closing one swing alike."""
+    return WalkController.from_preset("forward", steps=2 * SHORT_STEPS, spec=spec)
+
+
 def _foot_in_torso(controller, goals, side):
     leg = controller.legs[side]
     return leg_fk(leg, np.asarray(goals)[list(leg.index)])[1][0]
@@ -186,24 +192,24 @@ def test_a_steady_unplanned_turn_is_steered_back_and_its_sideways_error_counted(
     assert steer[-1] < plain[-1] < 0.0
 
 
-def test_the_learner_feeds_a_swing_legs_miss_forward_to_the_next_step_of_that_side(controller):
+def test_the_learner_feeds_a_swing_legs_miss_forward_to_the_next_step_of_that_side(longer):
     """What the swing leg missed in one left step, shifted by the servo lag, is added to the goals of the next left
     step (smoothed, bounded); the stance leg learns nothing; a reset forgets."""
     from op2motion.gait.learning import MAX_LEARNED_RAD, StepLearner
 
-    ctl = controller
+    ctl = longer
     legs = {side: np.array(leg.index) for side, leg in ctl.legs.items()}
     shift, gain, miss_rad = 2, 0.5, 0.02
     learner = StepLearner.of(ctl.gait, legs, gain, shift)
-    first, side = int(learner.first_row[0]), learner.side_of_step[0]
+    first, side = int(learner.first_row[1]), learner.side_of_step[1]
     other = "right" if side == "left" else "left"
     miss = np.full(learner.size, miss_rad)
-    for k in range(first, first + 2 * learner.rows):             # steps 0 and 1
+    for k in range(first, first + 2 * learner.rows):             # steps 1 and 2
         assert not learner.correction(k).any()                   # nothing learnt yet for either side
         learner.learn(k, miss)
-    step2 = int(learner.first_row[2])                            # the next step of the same side as step 0
-    assert learner.side_of_step[2] == side
-    middle = learner.correction(step2 + learner.rows // 2)
+    step3 = int(learner.first_row[3])                            # the next step of the same side as step 1
+    assert learner.side_of_step[3] == side
+    middle = learner.correction(step3 + learner.rows // 2)
     assert np.allclose(middle[legs[side]], gain * miss_rad, atol=1e-12)
     assert not middle[legs[other]].any() and not np.delete(middle, np.r_[legs["left"], legs["right"]]).any()
     for _ in range(200):                                         # a miss that never goes away stays bounded
@@ -267,3 +273,54 @@ def test_the_attitude_filter_is_not_biased_by_the_steps_impacts(spec, controller
 
     assert abs(mean_tilt(Feedback()) - TILT_RAD) < TILT_TOL_RAD
     assert abs(mean_tilt(replace(Feedback(), accel_tau_s=0.0)) - TILT_RAD) > WALK_BIAS_RAD
+
+
+SHIFT_M = 0.01              # a made-up landing miss
+ODOMETRY_TOL_M = 1e-9       # FK of exact joints recovers a miss to rounding
+
+
+def test_leg_odometry_measures_a_landing_miss_and_moves_the_next_swing_across_the_line(controller):
+    """Joints exactly as planned measure no miss; a foot that landed 10 mm to the left measures 10 mm; the next
+    swing foot moves against the part across the direction of travel only (a forward walk: y), at most 20 mm; the
+    closing step's miss is kept to hold that foot where it landed."""
+    from op2motion.gait.leg_ik import leg_ik
+    from op2motion.gait.odometry import MAX_PLACEMENT_M, FootOdometry, across, landing_rows
+
+    gait = controller.gait
+    rows = landing_rows(gait.timeline.contact, 4)
+    assert len(rows) == len(gait.plan.steps)
+    for k, (stance, landed) in rows.items():
+        assert gait.timeline.contact[k] == "double" and stance != landed
+    odo = FootOdometry.of(gait, controller.legs, 4)
+    k, (stance, landed) = next(iter(rows.items()))
+    odo.observe(k, gait.joints[k])
+    assert np.allclose(odo.error, 0.0, atol=ODOMETRY_TOL_M)
+    leg = controller.legs[landed]
+    pos, rot = gait.torso_pos[k], gait.torso_rot[k]
+    sole = gait.timeline.feet[landed][k, :3] + np.array([0.0, SHIFT_M, 0.0])
+    moved = gait.joints[k].copy()
+    moved[list(leg.index)] = leg_ik(leg, rot.T @ (sole - pos), rot.T @ np.eye(3))[0]
+    odo.observe(k, moved)
+    assert np.allclose(odo.error, [0.0, SHIFT_M], atol=1e-6)
+    shift = odo.shift(0.5, np.array([0.25, 0.0]))
+    assert np.allclose(shift, [0.0, -0.5 * SHIFT_M, 0.0], atol=1e-6)
+    assert np.allclose(across(np.array([0.03, 0.02]), np.array([0.25, 0.0])), [0.0, 0.02])
+    assert np.allclose(across(np.array([0.03, 0.02]), np.zeros(2)), [0.03, 0.02])   # in place: all of it
+    odo.error = np.array([0.0, 1.0])
+    assert np.hypot(*odo.shift(1.0, np.zeros(2))[:2]) == pytest.approx(MAX_PLACEMENT_M)
+    assert odo.last is None
+    odo.observe(max(rows), gait.joints[max(rows)])
+    assert odo.last is not None and odo.last[0] == rows[max(rows)][1]
+    odo.reset()
+    assert odo.last is None and not odo.error.any()
+
+
+def test_the_learner_leaves_out_the_first_and_the_closing_steps(longer):
+    """The first step starts beside the other foot and the closing step ends beside it: their swings are not like
+    the others, so they neither learn nor use what was learnt."""
+    alike = longer.learner.alike
+    assert not alike[0] and not alike[-1] and alike[1:-1].all()
+    first, last = int(longer.learner.first_row[0]), int(longer.learner.first_row[-1])
+    longer.learner.learn(first + 5, np.ones(longer.learner.size))
+    assert not longer.learner._pending["left"].any() and not longer.learner._pending["right"].any()
+    assert not longer.learner.correction(last + 3).any()

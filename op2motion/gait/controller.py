@@ -36,6 +36,7 @@ from op2motion.gait.feedback import GYRO_GAINS_S, OPEN_LOOP, STOCK_GYRO_GAINS_S,
 from op2motion.gait.generator import Gait
 from op2motion.gait.learning import StepLearner
 from op2motion.gait.leg_ik import Leg, leg_ik, leg_of, rot_x, rot_y, rot_z
+from op2motion.gait.odometry import MIN_TRACK_SPEED_M_S, FootOdometry
 from op2motion.gait.presets import load_preset
 from op2motion.gait.schedule import gait_plan
 from op2motion.physics import Plan, Schedule
@@ -46,8 +47,10 @@ from op2motion.robot.support import SIDES, Support
 REACH_SHARE = 0.999                # a corrected leg stretches at most to this share of its length
 MAX_HEADING_RAD = 0.2             # the swing foot is steered at most this far per step (11°)
 MAX_TRIM_RAD = 0.15                # a leg joint's integral trim stays within this [rad] (8.6°)
-MIN_TRACK_SPEED_M_S = 0.02        # below this planned speed there is no line to keep
 MAX_CORRECTION_RAD = 0.25          # the stabiliser turns the body at most this far (14°)
+LANDING_ROWS = 2                   # a landing is measured this many rows past the latency into its double support
+
+
 def attitude_of(rot: np.ndarray) -> np.ndarray:
     """Pitch and roll [rad] of a torso rotation: the tilt of its z axis towards +x (pitch: leaning forward > 0) and
     towards -y (roll: turned about +X > 0)."""
@@ -120,6 +123,7 @@ class WalkController:
                                       feedback.learn_gain, feedback.learn_shift_rows)
         self.delay_rows = int(round(feedback.latency_s / CONTROL_PERIOD_S))
         self.calibration = StiffnessCalibration.of(gait, self.leg_index)
+        self.odometry = FootOdometry.of(gait, self.legs, self.delay_rows + LANDING_ROWS)
         self.state = _State()
 
     @classmethod
@@ -143,6 +147,7 @@ class WalkController:
         self.state = _State()
         self.learner.reset()
         self.calibration.reset()
+        self.odometry.reset()
         return dict(self.schedule.start(joint_positions))
 
     def step(self, t_s: float, gyro_rad_s: np.ndarray, accel_m_s2: np.ndarray,
@@ -158,12 +163,14 @@ class WalkController:
         turn = np.clip(turn, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
         change = self._damping(np.asarray(gyro_rad_s, dtype=float))
         heading = self._heading(float(gyro_rad_s[2]), k)
-        if np.any(turn) or heading:
+        if np.any(turn) or heading or f.placement or f.accept_landing:
             change += self._leg_change(k, float(turn[0]), float(turn[1]), heading)
         goals = self.schedule.goals_at(t_s) + change
         if row >= self.lead:
             measured = np.array([joint_positions[name] for name in self.spec.joint_names])
             self._remember(k, self.gait.joints[k] + change, measured)
+            if f.placement or f.accept_landing:
+                self.odometry.observe(k, measured)
             if f.joint_ki:
                 goals += self._joint_trim(k, measured)
             goals += self.learner.correction(k)
@@ -256,6 +263,11 @@ class WalkController:
                 steer = rot_z(heading * self.swing_phase[k])
                 stance = self.gait.timeline.feet[contact][k, :3]
                 sole, sole_rot = stance + steer @ (sole - stance), steer @ sole_rot
+            last = self.odometry.last
+            if self.feedback.accept_landing and last is not None and last[0] == side:
+                sole, sole_rot = sole + np.array([*last[1], 0.0]), rot_z(last[2]) @ sole_rot
+            if contact not in ("double", side) and self.feedback.placement:
+                sole = sole + self.swing_phase[k] * self.odometry.shift(self.feedback.placement, self.plan_velocity[k])
             planned = leg_ik(leg, *_within_reach(leg, rot.T @ (planned_sole - pos), rot.T @ planned_rot))[0]
             moved = leg_ik(leg, *_within_reach(leg, moved_rot.T @ (sole - moved_pos), moved_rot.T @ sole_rot))[0]
             out[list(leg.index)] = moved - planned

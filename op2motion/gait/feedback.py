@@ -36,6 +36,10 @@ class Feedback:
             softness (:mod:`.calibration`: all of it at 0.6 of the model's stiffness or softer, none at the model's).
         calibrate: measure the servos' stiffness while standing and add the feed-forward softer servos lack.
         accel_tau_s: the accelerometer's low-pass [s] (as a vector) before its tilt is taken; 0: each raw sample.
+        placement: share of the feet's placement error across the direction of travel (leg odometry,
+            :mod:`.odometry`) the next swing foot is moved against.
+        accept_landing: after the closing step, hold the landed foot where it landed (no pull into the planned
+            stance).
     """
 
     kp: tuple[float, float] = (0.0, 0.0)
@@ -53,6 +57,8 @@ class Feedback:
     soft_kp: tuple[float, float] = (0.6, 0.0)
     calibrate: bool = True
     accel_tau_s: float = 0.1
+    placement: float = 0.5
+    accept_landing: bool = True
 
     def __post_init__(self) -> None:
         for name in ("kp", "ki", "kd", "soft_kp"):
@@ -74,6 +80,10 @@ class Feedback:
             raise InputError(f"expected 0 to 0.1 s, got {self.latency_s!r}", "latency_s")
         if not (math.isfinite(self.learn_gain) and 0.0 <= self.learn_gain <= 1.0):
             raise InputError(f"expected a share from 0 to 1, got {self.learn_gain!r}", "learn_gain")
+        if not isinstance(self.accept_landing, bool):
+            raise InputError(f"expected true or false, got {self.accept_landing!r}", "accept_landing")
+        if not (math.isfinite(self.placement) and 0.0 <= self.placement <= 1.0):
+            raise InputError(f"expected a share from 0 to 1, got {self.placement!r}", "placement")
         for name in ("heading", "heading_ki", "cross_track", "joint_ki"):
             value = getattr(self, name)
             if not (math.isfinite(value) and 0.0 <= value <= 100.0):
@@ -81,4 +91,5 @@ class Feedback:
 
 
 OPEN_LOOP = Feedback(ki=(0.0, 0.0), gyro=(0.0, 0.0, 0.0, 0.0), heading=0.0, heading_ki=0.0, cross_track=0.0,
-                     joint_ki=0.0, learn_gain=0.0)
+                     joint_ki=0.0, learn_gain=0.0, soft_kp=(0.0, 0.0), calibrate=False, placement=0.0,
+                     accept_landing=False)

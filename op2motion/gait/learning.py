@@ -21,6 +21,8 @@ import numpy as np
 from op2motion.gait.generator import Gait
 
 MAX_LEARNED_RAD = 0.15             # a learned correction stays within this per joint and row [rad] (8.6°)
+SHAPE_TOL_M = 0.005                # two steps whose swing starts and ends this close (stance frame) are alike
+SHAPE_TOL_RAD = 0.035              # ... and turn this alike (2°)
 SMOOTH_ROWS = 3                    # the moving average across rows that keeps the correction smooth
 
 
@@ -31,6 +33,8 @@ class StepLearner:
     Attributes:
         step_of_row: per gait row (K,), the step it belongs to (-1 before the first, n after the last).
         first_row: per step (n,), its first gait row.
+        alike: per step (n,), whether it swings its foot as the step of the same side before it did (the first and
+            the closing steps do not): only those learn and use what was learnt.
         side_of_step: per step (n,), the swinging side.
         rows: rows in one step (single support and the double support after it).
         joints: per side, the indices (into the servos) of that leg's joints.
@@ -42,6 +46,7 @@ class StepLearner:
 
     step_of_row: np.ndarray
     first_row: np.ndarray
+    alike: np.ndarray
     side_of_step: tuple[str, ...]
     rows: int
     joints: dict[str, np.ndarray]
@@ -60,7 +65,7 @@ class StepLearner:
         first = np.array([int(np.argmax(step == s)) for s in range(n)], dtype=int)
         ends = np.append(first, int(np.argmax(step == n))) if n else np.zeros(1, dtype=int)
         rows = max(int(np.min(np.diff(ends))), 1) if n else 1
-        learner = cls(step, first, tuple(s.side for s in gait.plan.steps), rows,
+        learner = cls(step, first, _alike(gait), tuple(s.side for s in gait.plan.steps), rows,
                       {side: np.asarray(index, dtype=int) for side, index in joints.items()}, gait.joints.shape[1],
                       gain, shift)
         learner.reset()
@@ -79,7 +84,7 @@ class StepLearner:
         if not 0 <= s < len(self.first_row):
             return None
         r = k - int(self.first_row[s])
-        return (self.side_of_step[s], r) if r < self.rows else None
+        return (self.side_of_step[s], r) if r < self.rows and self.alike[s] else None
 
     def correction(self, k: int) -> np.ndarray:
         """The learned change (size,) [rad] of the goals of gait row ``k`` (zero outside the steps). Call it once
@@ -110,3 +115,31 @@ class StepLearner:
         smooth = np.stack([np.convolve(padded[:, j], kernel, mode="valid") for j in range(self.size)], axis=1)
         self.memory[side] = np.clip(self.forget * self.memory[side] + smooth, -MAX_LEARNED_RAD, MAX_LEARNED_RAD)
         pending[:] = 0.0
+
+
+def _shape(gait: Gait, k: int) -> np.ndarray:
+    """Step ``k``'s swing in its stance foot's frame: start (x, y), end (x, y) [m], start and end yaw [rad]."""
+    stand, before = gait.plan.stance_before(k)
+    goal = gait.plan.steps[k]
+    c, s = np.cos(stand.yaw), np.sin(stand.yaw)
+    to_stance = np.array([[c, s], [-s, c]])
+    out = []
+    for foot in (before, goal):
+        out.extend(to_stance @ (np.array([foot.x, foot.y]) - np.array([stand.x, stand.y])))
+    out.extend([before.yaw - stand.yaw, goal.yaw - stand.yaw])
+    return np.array(out)
+
+
+def _alike(gait: Gait) -> np.ndarray:
+    """Per step, whether it swings like a step of the same side before or after it (the first and the closing steps
+    of a walk do not)."""
+    n = len(gait.plan.steps)
+    shapes = [_shape(gait, k) for k in range(n)]
+
+    def same(a: int, b: int) -> bool:
+        if not 0 <= b < n:
+            return False
+        diff = np.abs(shapes[a] - shapes[b])
+        return bool(np.all(diff[:4] <= SHAPE_TOL_M) and np.all(diff[4:] <= SHAPE_TOL_RAD))
+
+    return np.array([same(k, k - 2) or same(k, k + 2) for k in range(n)], dtype=bool)
