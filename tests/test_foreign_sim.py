@@ -14,7 +14,7 @@ from typing import Mapping
 
 import numpy as np
 import pytest
-from foreign_sim.harness import simulate
+from foreign_sim.harness import ServoModel, simulate
 
 from op2motion.gait.controller import WalkController
 from op2motion.model.urdf import build_urdf
@@ -61,6 +61,26 @@ def test_walk_controller_walks_in_the_foreign_simulator(foreign_urdf: str) -> No
     """Twelve forward steps, planned on the shipped spec, walked by the foreign body in the foreign simulator."""
     ctl = WalkController.from_preset("forward", steps=STEPS, spec=default_spec())
     result = simulate(foreign_urdf, ctl, seconds=ctl.plan.duration_s)
+    facts = {k: v for k, v in result.items() if k not in ("last_gyro", "last_accel")}
+    assert not result["fell"], f"fell at {result['fall_time_s']} s: {facts}"
+    assert result["distance_m"] >= MIN_DISTANCE_M, facts
+    assert abs(result["lateral_m"]) <= MAX_LATERAL_SHARE * result["distance_m"], facts
+    assert abs(result["end_yaw_deg"]) <= MAX_YAW_DEG, facts
+
+
+#: The foreign world's own uncertainty: its servos softer and stiffer than its model (P of 12.6 N·m/rad), a slippery
+#: and a grippy floor, readings two ticks (16 ms) late.
+VARIANTS = {"servos x0.6": {"servo": ServoModel(kp_nm_rad=0.6 * ServoModel().kp_nm_rad)},
+            "servos x1.6": {"servo": ServoModel(kp_nm_rad=1.6 * ServoModel().kp_nm_rad)},
+            "friction 0.5": {"friction": 0.5}, "friction 1.0": {"friction": 1.0},
+            "latency 16 ms": {"latency_ticks": 2}}
+
+
+@pytest.mark.parametrize("variant", sorted(VARIANTS))
+def test_walk_controller_walks_the_foreign_worlds_variants(foreign_urdf: str, variant: str) -> None:
+    """The same twelve steps with the foreign world's servos, floor or latency changed."""
+    ctl = WalkController.from_preset("forward", steps=STEPS, spec=default_spec())
+    result = simulate(foreign_urdf, ctl, seconds=ctl.plan.duration_s, **VARIANTS[variant])
     facts = {k: v for k, v in result.items() if k not in ("last_gyro", "last_accel")}
     assert not result["fell"], f"fell at {result['fall_time_s']} s: {facts}"
     assert result["distance_m"] >= MIN_DISTANCE_M, facts
