@@ -16,7 +16,9 @@ Inside, per tick (gains in :class:`Feedback`):
    measured softness (:mod:`.calibration`): soft servos let the body tip without it, stiff ones oscillate with it;
 4. **heading and line**: the integrated yaw rate against the plan's heading, plus the sideways error dead-reckoned
    from it (the plan's stride velocity turned by the heading error), steer the swing foot about the stance foot
-   (PI, in full at landing);
+   (PI, in full at landing); leg odometry (:mod:`.odometry`) measures each landing from the joints and moves the
+   next swing foot against the feet's error across the direction of travel, and holds the closing foot where it
+   landed;
 5. **the servos**: their stiffness measured while the robot stands before the first step, and the feed-forward a
    softer servo lacks added (:mod:`.calibration`); slow integral trims of the legs' sag; the swing leg's
    feed-forward learnt from the steps before (:mod:`.learning`), so the swing foot lands where planned whatever the
