@@ -122,6 +122,7 @@ CASES = [
     (["library", "build", "--x", "0.1", "0.1005", "2"], "same pose name"),
     (["library", "build", "--x", "0", "1", "1000", "--y", "0", "1", "1000"], "cap"),
     (["library", "build", "--seconds", "0", "--validate"], "--seconds"),
+    (["library", "build", "--robust"], "--validate"),
     (["library"], "SUBCOMMAND"),
     # export
     (["export", "--format", "action", "--time", "1e300", STAND, "-o", "x.bin"], "--time"),

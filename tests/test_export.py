@@ -156,6 +156,25 @@ def test_library_build_and_resume(spec, tmp_path):
     assert again.skipped == 4 and again.seconds < 1.0
 
 
+@pytest.mark.physics
+def test_a_robust_library_build_holds_each_pose_on_the_family_and_counts(spec, tmp_path):
+    """``--robust``: a pose that stands is held on every member of the robustness family; its index row says how
+    many runs passed and the worst, the summary how many poses did not stand in every run."""
+    from op2motion.physics import family
+    from op2motion.physics.plan import MIN_SECONDS
+    from op2motion.workflow import Validate
+
+    jobs = grid_jobs(["left"], ["left"], [0.7], [0.10], [0.05], [0.07])
+    settings = BuildSettings(PSOSettings(iterations=120), restarts=0, validate=Validate(MIN_SECONDS), robust=True)
+    summary = build_library(jobs, spec, tmp_path, settings, workers=1)
+    row = json.loads((tmp_path / "index.json").read_text(encoding="utf-8"))[0]
+    assert row["reached"] and row["stable"]
+    assert row["robust_runs"] == len(family(spec)) and 0 <= row["robust_passed"] <= row["robust_runs"]
+    assert (row["robust_worst"] == "") == (row["robust_passed"] == row["robust_runs"])
+    assert summary.robust_checked == 1 and summary.robust_failed == int(row["robust_passed"] < row["robust_runs"])
+    assert "robust_passed" in (tmp_path / "index.csv").read_text(encoding="utf-8").splitlines()[0]
+
+
 def test_killed_library_build_leaves_no_half_written_file(tmp_path):
     cmd = [sys.executable, "-m", "op2motion", "library", "build", "--x", "0.06", "0.14", "5", "--y", "0", "0.04",
            "2", "--z", "0.07", "0.07", "1", "--hands", "left", "--supports", "left", "--workers", "2",

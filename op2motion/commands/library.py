@@ -17,6 +17,7 @@ from op2motion.commands.common import (
     whole,
 )
 from op2motion.commands.posture import com_model_arg, solver_args
+from op2motion.errors import InputError
 from op2motion.library.build import MAX_WORKERS
 from op2motion.library.grid import MAX_AXIS
 from op2motion.robot.spec import Spec
@@ -52,6 +53,9 @@ def register(sub: Any) -> None:
                    help=f"worker processes, 0 = one per core (default 0, at most {MAX_WORKERS})")
     com_model_arg(p)
     solver_args(p)
+    p.add_argument("--robust", action="store_true",
+                   help="with --validate: also hold each pose that stands on every member of the robustness family "
+                        "(the check's engine); the index says how many runs it passed and the worst")
 
 
 def cmd_library_build(args: argparse.Namespace, spec: Spec) -> int:
@@ -64,15 +68,20 @@ def cmd_library_build(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.workflow import Validate
 
     check_workers(args.workers)
+    if args.robust and not args.validate:
+        raise InputError("expected --validate with --robust", "validate")
     x, y, z = (axis(start, stop, count, name) for name, (start, stop, count) in
                (("x", args.x), ("y", args.y), ("z", args.z)))
     jobs = grid_jobs(args.hands, args.supports, args.br, x, y, z, args.com_model)
     settings = BuildSettings(PSOSettings(args.particles, args.iters, seed=args.seed).validated(), args.restarts,
-                             Validate(args.seconds, args.engine) if args.validate else None)
+                             Validate(args.seconds, args.engine) if args.validate else None, args.robust)
     with tqdm(total=len(jobs), desc="library", unit="pose", disable=not progress_enabled(args)) as bar:
         summary = build_library(jobs, spec, args.out, settings, args.workers, args.spec,
                                 on_done=lambda row: bar.update())
     text = (f"{summary.targets} targets: {summary.solved} reached, {summary.failed} not, {summary.skipped} already "
             f"done; {summary.seconds:.1f} s; index {summary.index}")
+    if summary.robust_checked:
+        text += (f"; on the robustness family {summary.robust_checked - summary.robust_failed} of "
+                 f"{summary.robust_checked} poses stood in every run")
     emit(args, summary.as_dict(), text)
     return 0

@@ -18,7 +18,7 @@ import os
 import signal
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
@@ -39,16 +39,20 @@ _PR_SET_PDEATHSIG = 1   # linux/prctl.h
 
 @dataclass(frozen=True)
 class BuildSettings:
-    """How each target is solved: PSO settings, restarts, and the physics check of each reached pose (None: none)."""
+    """How each target is solved: PSO settings, restarts, the physics check of each reached pose (None: none) and
+    whether a pose that stands is also held on every member of the robustness family (``robust``, in the check's
+    engine)."""
 
     pso: PSOSettings = PSOSettings()
     restarts: int = DEFAULT_RESTARTS
     validate: Validate | None = None
+    robust: bool = False
 
 
 @dataclass(frozen=True)
 class BuildSummary:
-    """What a build did: targets in the grid, reached (and written), not reached, skipped (already done)."""
+    """What a build did: targets in the grid, reached (and written), not reached, skipped (already done), and of the
+    poses held on the robustness family, how many did not stand on every member (``robust_failed``)."""
 
     targets: int
     solved: int
@@ -56,6 +60,8 @@ class BuildSummary:
     skipped: int
     seconds: float
     index: str
+    robust_checked: int = 0
+    robust_failed: int = 0
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready dict."""
@@ -111,7 +117,21 @@ def _solve_job(task: tuple[Job, str | None, str, BuildSettings]) -> tuple[IndexR
     if not out.ok:
         return row, None
     pose = out.pose(job.name, spec, {"command": "op2motion library build", "seconds": seconds})
+    if settings.robust and settings.validate is not None:
+        row = _robust_row(row, pose.servo, job, spec, settings.validate)
     return row, pose_to_json(pose, spec)
+
+
+def _robust_row(row: IndexRow, servo: Any, job: Job, spec: Spec, validate: Validate) -> IndexRow:
+    """``row`` with the pose held on every member of the robustness family: runs passed, runs, the worst one."""
+    from op2motion.physics import Schedule, robust_check
+
+    report = robust_check(lambda: Schedule.hold(servo, job.support, spec, validate.seconds), spec,
+                          (validate.engine,))
+    failed = [r for r in report.runs if not r.passed]
+    worst = f"{failed[0].member.name}: {failed[0].problem}" if failed else ""
+    return replace(row, robust_passed=len(report.runs) - len(failed), robust_runs=len(report.runs),
+                   robust_worst=worst)
 
 
 @contextlib.contextmanager
@@ -163,8 +183,10 @@ def build_library(jobs: Sequence[Job], spec: Spec, out_dir: str | Path, settings
                           "same command again to resume")
     wanted = [rows[j.name] for j in jobs if j.name in rows]
     solved = sum(1 for r in wanted if r.reached)
+    held = [r for r in wanted if r.reached and r.robust_runs]
     return BuildSummary(len(jobs), solved, len(wanted) - solved, len(jobs) - len(todo),
-                        round(time.perf_counter() - t0, 2), str(out / "index.json"))
+                        round(time.perf_counter() - t0, 2), str(out / "index.json"), len(held),
+                        sum(1 for r in held if r.robust_passed != r.robust_runs))
 
 
 def _run(todo: Sequence[Job], spec: Spec, spec_path: str | None, settings: BuildSettings, workers: int, out: Path,

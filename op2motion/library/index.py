@@ -45,6 +45,9 @@ class IndexRow:
     seconds: float | None = None
     message: str = ""
     file: str = ""
+    robust_passed: int | None = None
+    robust_runs: int | None = None
+    robust_worst: str = ""
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready dict."""
