@@ -100,7 +100,8 @@ def test_swing_phase_runs_zero_to_one_in_each_single_support():
                                           ("joint_ki", 1e9), ("attitude_tau_s", 0.0), ("heading_ki", -1.0),
                                           ("cross_track", float("inf")), ("learn_gain", 1.5),
                                           ("learn_shift_rows", 2.5), ("latency_s", 1.0), ("soft_kp", (-0.1, 0.0)),
-                                          ("calibrate", 1), ("accel_tau_s", -0.1), ("accel_tau_s", 2.0)])
+                                          ("calibrate", 1), ("accel_tau_s", -0.1), ("accel_tau_s", 2.0),
+                                          ("soft_gyro", -1.0), ("placement", 2.0), ("accept_landing", "yes")])
 def test_bad_feedback_gains_are_refused_by_name(field, value):
     with pytest.raises(InputError) as err:
         Feedback(**{field: value})
@@ -324,3 +325,16 @@ def test_the_learner_leaves_out_the_first_and_the_closing_steps(longer):
     longer.learner.learn(first + 5, np.ones(longer.learner.size))
     assert not longer.learner._pending["left"].any() and not longer.learner._pending["right"].any()
     assert not longer.learner.correction(last + 3).any()
+
+
+def test_soft_servos_get_the_stock_gyro_gains(spec, controller):
+    """At the model's stiffness the damping is 0.6 of the stock gains; servos measured at 0.6 of it get all of them."""
+    from op2motion.gait.feedback import SOFT_GYRO
+
+    ctl = WalkController(controller.gait, spec)
+    rate = np.array([RATE_RAD_S, RATE_RAD_S, 0.0])
+    nominal = ctl._damping(rate)
+    ctl.calibration.sums = np.array([1.0 / 0.6, 1.0])                  # sag = feed-forward / 0.6
+    assert ctl.calibration.softness == pytest.approx(1.0)
+    assert np.allclose(ctl._damping(rate), (1.0 + SOFT_GYRO) * nominal)
+    assert np.allclose((1.0 + SOFT_GYRO) * np.array(Feedback().gyro), STOCK_GYRO_GAINS_S, atol=1e-3)

@@ -8,7 +8,7 @@ Inside, per tick (gains in :class:`Feedback`):
 1. **the plan** (:func:`.schedule.gait_plan`): the goals of this row (servo feed-forward included), the planned
    torso pose and soles;
 2. **gyro damping** as in the stock gait: hip roll and ankle roll against the roll rate, knee and ankle pitch
-   against the pitch rate;
+   against the pitch rate (0.6 of the stock gains, up to all of them as the servos' measured softness grows);
 3. **attitude**: a complementary filter of the gyro and the gravity in the accelerometer (low-passed as a vector
    first: the tilt of each raw sample, with the impacts of the steps in it, averaged 4° off while walking) estimates
    pitch and roll; against the plan's, the error (P, and optionally its integral) turns the whole body about the
@@ -237,7 +237,8 @@ class WalkController:
     def _damping(self, gyro: np.ndarray) -> np.ndarray:
         """The stock-style gyro damping (20,) [rad]: each leg's hip roll, knee, ankle pitch and ankle roll turned so
         that the body turns against its rate (natural angles, both legs)."""
-        hip_roll, knee, ankle_pitch, ankle_roll = self.feedback.gyro
+        scale = 1.0 + self.feedback.soft_gyro * self.calibration.softness        # soft servos: more damping
+        hip_roll, knee, ankle_pitch, ankle_roll = np.multiply(self.feedback.gyro, scale)
         natural = np.array([0.0, hip_roll * gyro[0], 0.0, knee * gyro[1], ankle_pitch * gyro[1], ankle_roll * gyro[0]])
         out = np.zeros(len(self.spec.joints))
         for leg in self.legs.values():

@@ -15,6 +15,10 @@ STOCK_GYRO_GAINS_S = (0.056, 0.034, 0.101, 0.113)
 #: servos 1.6 times stiffer than the model oscillate (PyBullet and MuJoCo alike); the swing leg's learnt
 #: feed-forward (:mod:`.learning`) gives soft servos back what the lower damping takes from them.
 GYRO_GAINS_S = (0.0336, 0.0204, 0.0606, 0.0678)
+#: How much the gyro gains grow for soft servos: by this share at full measured softness (:mod:`.calibration`), so
+#: 0.6 of the stock gains at the model's stiffness become the full stock gains at 0.6 of it. Soft servos turning in
+#: place fell to a 2 N push from the side with 0.6 of the stock gains and stand it with the stock gains.
+SOFT_GYRO = 1.0 / 0.6 - 1.0
 
 
 @dataclass(frozen=True)
@@ -36,6 +40,7 @@ class Feedback:
             softness (:mod:`.calibration`: all of it at 0.6 of the model's stiffness or softer, none at the model's).
         calibrate: measure the servos' stiffness while standing and add the feed-forward softer servos lack.
         accel_tau_s: the accelerometer's low-pass [s] (as a vector) before its tilt is taken; 0: each raw sample.
+        soft_gyro: share the gyro gains grow by at full measured softness (:data:`SOFT_GYRO`).
         placement: share of the feet's placement error across the direction of travel (leg odometry,
             :mod:`.odometry`) the next swing foot is moved against.
         accept_landing: after the closing step, hold the landed foot where it landed (no pull into the planned
@@ -58,6 +63,7 @@ class Feedback:
     calibrate: bool = True
     accel_tau_s: float = 0.1
     placement: float = 0.5
+    soft_gyro: float = SOFT_GYRO
     accept_landing: bool = True
 
     def __post_init__(self) -> None:
@@ -82,6 +88,8 @@ class Feedback:
             raise InputError(f"expected a share from 0 to 1, got {self.learn_gain!r}", "learn_gain")
         if not isinstance(self.accept_landing, bool):
             raise InputError(f"expected true or false, got {self.accept_landing!r}", "accept_landing")
+        if not (math.isfinite(self.soft_gyro) and 0.0 <= self.soft_gyro <= 10.0):
+            raise InputError(f"expected 0 to 10, got {self.soft_gyro!r}", "soft_gyro")
         if not (math.isfinite(self.placement) and 0.0 <= self.placement <= 1.0):
             raise InputError(f"expected a share from 0 to 1, got {self.placement!r}", "placement")
         for name in ("heading", "heading_ki", "cross_track", "joint_ki"):
