@@ -71,32 +71,26 @@ class Feedback:
             values = getattr(self, name)
             if len(values) != 2 or not all(math.isfinite(v) and 0.0 <= v <= 100.0 for v in values):
                 raise InputError(f"expected two gains (pitch, roll) from 0 to 100, got {values!r}", name)
-        if not (math.isfinite(self.attitude_tau_s) and 0.01 <= self.attitude_tau_s <= 10.0):
-            raise InputError(f"expected 0.01 to 10 s, got {self.attitude_tau_s!r}", "attitude_tau_s")
         if len(self.gyro) != 4 or not all(math.isfinite(v) and 0.0 <= v <= 1.0 for v in self.gyro):
             raise InputError(f"expected four gyro gains (hip roll, knee, ankle pitch, ankle roll) from 0 to 1 s, got "
                              f"{self.gyro!r}", "gyro")
         if not (isinstance(self.learn_shift_rows, int) and 0 <= self.learn_shift_rows <= 25):
             raise InputError(f"expected 0 to 25 rows, got {self.learn_shift_rows!r}", "learn_shift_rows")
-        if not isinstance(self.calibrate, bool):
-            raise InputError(f"expected true or false, got {self.calibrate!r}", "calibrate")
-        if not (math.isfinite(self.accel_tau_s) and 0.0 <= self.accel_tau_s <= 1.0):
-            raise InputError(f"expected 0 to 1 s, got {self.accel_tau_s!r}", "accel_tau_s")
-        if not (math.isfinite(self.latency_s) and 0.0 <= self.latency_s <= 0.1):
-            raise InputError(f"expected 0 to 0.1 s, got {self.latency_s!r}", "latency_s")
-        if not (math.isfinite(self.learn_gain) and 0.0 <= self.learn_gain <= 1.0):
-            raise InputError(f"expected a share from 0 to 1, got {self.learn_gain!r}", "learn_gain")
-        if not isinstance(self.accept_landing, bool):
-            raise InputError(f"expected true or false, got {self.accept_landing!r}", "accept_landing")
-        if not (math.isfinite(self.soft_gyro) and 0.0 <= self.soft_gyro <= 10.0):
-            raise InputError(f"expected 0 to 10, got {self.soft_gyro!r}", "soft_gyro")
-        if not (math.isfinite(self.placement) and 0.0 <= self.placement <= 1.0):
-            raise InputError(f"expected a share from 0 to 1, got {self.placement!r}", "placement")
-        for name in ("heading", "heading_ki", "cross_track", "joint_ki"):
+        for name in ("calibrate", "accept_landing"):
+            if not isinstance(getattr(self, name), bool):
+                raise InputError(f"expected true or false, got {getattr(self, name)!r}", name)
+        for name, (low, high, what) in _RANGES.items():
             value = getattr(self, name)
-            if not (math.isfinite(value) and 0.0 <= value <= 100.0):
-                raise InputError(f"expected a gain from 0 to 100, got {value!r}", name)
+            if not (math.isfinite(value) and low <= value <= high):
+                raise InputError(f"expected {what} from {low:g} to {high:g}, got {value!r}", name)
 
+
+#: The scalar gains' ranges: (lowest, highest, what it is).
+_RANGES = {"attitude_tau_s": (0.01, 10.0, "a time [s]"), "accel_tau_s": (0.0, 1.0, "a time [s]"),
+           "latency_s": (0.0, 0.1, "a time [s]"), "learn_gain": (0.0, 1.0, "a share"),
+           "placement": (0.0, 1.0, "a share"), "soft_gyro": (0.0, 10.0, "a share"),
+           "heading": (0.0, 100.0, "a gain"), "heading_ki": (0.0, 100.0, "a gain"),
+           "cross_track": (0.0, 100.0, "a gain"), "joint_ki": (0.0, 100.0, "a gain")}
 
 OPEN_LOOP = Feedback(ki=(0.0, 0.0), gyro=(0.0, 0.0, 0.0, 0.0), heading=0.0, heading_ki=0.0, cross_track=0.0,
                      joint_ki=0.0, learn_gain=0.0, soft_kp=(0.0, 0.0), calibrate=False, placement=0.0,
