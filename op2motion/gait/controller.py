@@ -10,7 +10,7 @@ Inside, per tick (gains in :class:`Feedback`):
 2. **gyro damping** as in the stock gait: hip roll and ankle roll against the roll rate, knee and ankle pitch
    against the pitch rate (0.6 of the stock gains, up to all of them as the servos' measured softness grows);
 3. **attitude**: a complementary filter of the gyro and the gravity in the accelerometer (low-passed as a vector
-   first: the tilt of each raw sample, with the impacts of the steps in it, averaged 4° off while walking) estimates
+   first: the tilt of each raw sample, with the impacts of the steps in it, averaged 3–6° off while walking) estimates
    pitch and roll; against the plan's, the error (P, and optionally its integral) turns the whole body about the
    support point (legs by the closed-form IK, soles where the plan puts them). The P gain follows the servos'
    measured softness (:mod:`.calibration`): soft servos let the body tip without it, stiff ones oscillate with it;
@@ -253,7 +253,8 @@ class WalkController:
     def _leg_change(self, k: int, pitch: float, roll: float, heading: float = 0.0) -> np.ndarray:
         """The servo change (20,) [rad] that turns the whole body by (pitch, roll) [rad] about the support point,
         the soles staying where the plan puts them, and the swing sole turned by ``heading`` [rad] about the stance
-        sole's centre (in full at landing)."""
+        sole's centre (in full at landing) and moved against the feet's placement error (leg odometry); after the
+        closing step, the landed sole where it landed."""
         pos, rot = self.gait.torso_pos[k], self.gait.torso_rot[k]
         pivot, turn = self._support_point(k), rot_y(pitch) @ rot_x(roll)
         moved_pos, moved_rot = pivot + turn @ (pos - pivot), turn @ rot
