@@ -38,7 +38,7 @@ from op2motion.gait.feedback import GYRO_GAINS_S, OPEN_LOOP, STOCK_GYRO_GAINS_S,
 from op2motion.gait.generator import Gait
 from op2motion.gait.learning import StepLearner
 from op2motion.gait.leg_ik import Leg, leg_ik, leg_of, rot_x, rot_y, rot_z
-from op2motion.gait.odometry import MIN_TRACK_SPEED_M_S, FootOdometry
+from op2motion.gait.odometry import FootOdometry, left_of
 from op2motion.gait.presets import load_preset
 from op2motion.gait.schedule import gait_plan
 from op2motion.physics import Plan, Schedule
@@ -199,9 +199,9 @@ class WalkController:
         error = s.yaw - self.plan_yaw[k]
         velocity = self.plan_velocity[k]
         s.offset += (rot_z(error)[:2, :2] @ velocity - velocity) * dt
-        speed = float(np.hypot(*velocity))
-        if speed > MIN_TRACK_SPEED_M_S:
-            error += f.cross_track * float(velocity[0] * s.offset[1] - velocity[1] * s.offset[0]) / speed
+        left = left_of(velocity)
+        if left is not None:
+            error += f.cross_track * float(s.offset @ left)
         s.yaw_integral = float(np.clip(s.yaw_integral + error * dt, -MAX_HEADING_RAD, MAX_HEADING_RAD))
         return float(np.clip(-f.heading * error - f.heading_ki * s.yaw_integral, -MAX_HEADING_RAD, MAX_HEADING_RAD))
 

@@ -48,14 +48,18 @@ def landing_rows(contact: tuple[str, ...], after: int) -> dict[int, tuple[str, s
     return out
 
 
+def left_of(velocity: np.ndarray) -> np.ndarray | None:
+    """The unit vector (2,) to the left of a planned velocity (2,) [m/s]; None below :data:`MIN_TRACK_SPEED_M_S`
+    (no direction of travel)."""
+    speed = float(np.hypot(*velocity))
+    return None if speed <= MIN_TRACK_SPEED_M_S else np.array([-velocity[1], velocity[0]]) / speed
+
+
 def across(error: np.ndarray, velocity: np.ndarray) -> np.ndarray:
     """The part (2,) of a plan-frame error [m] across a planned velocity (2,) [m/s] (all of it below
     :data:`MIN_TRACK_SPEED_M_S`)."""
-    speed = float(np.hypot(*velocity))
-    if speed <= MIN_TRACK_SPEED_M_S:
-        return error
-    normal = np.array([-velocity[1], velocity[0]]) / speed
-    return float(error @ normal) * normal
+    normal = left_of(velocity)
+    return error if normal is None else float(error @ normal) * normal
 
 
 @dataclass
