@@ -215,11 +215,11 @@ def test_the_default_problems_figure_shows_both_coms_and_the_verdict(capsys, tmp
     assert json.loads(out)["drawn"]["verdict"] == "STANDS in physics (recorded)"
 
 
-def test_skipping_hopeless_collision_checks_leaves_the_search_unchanged(spec, monkeypatch):
-    """The PSO checks self-collision only for particles that could beat their personal best; the swarm must move
-    exactly as with every particle checked."""
+def test_the_compiled_swarm_cost_and_skipped_collision_checks_leave_the_search_unchanged(spec, monkeypatch):
+    """The PSO runs on the compiled kernel and checks self-collision only for particles that could beat their
+    personal best; the swarm must move exactly as on the NumPy cost model with every particle checked."""
     problem = PostureProblem.from_scenario(DEFAULT_PROBLEM)
-    lazy = run_pso(problem, spec, PSOSettings(iterations=60))
+    fast = run_pso(problem, spec, PSOSettings(iterations=60))
     checked = []
     every = CostModel.__call__
 
@@ -228,6 +228,8 @@ def test_skipping_hopeless_collision_checks_leaves_the_search_unchanged(spec, mo
         checked.append(np.isfinite(terms.clearance).all())
         return terms
 
+    monkeypatch.setattr(CostModel, "kernel_plan", lambda self: None)      # the NumPy reference path
     monkeypatch.setattr(CostModel, "__call__", check_all)
-    full = run_pso(problem, spec, PSOSettings(iterations=60))
-    assert all(checked) and np.array_equal(lazy.x, full.x) and np.array_equal(lazy.history, full.history)
+    reference = run_pso(problem, spec, PSOSettings(iterations=60))
+    assert len(checked) == 60 and all(checked)
+    assert np.array_equal(fast.x, reference.x) and np.allclose(fast.history, reference.history, rtol=0, atol=1e-12)

@@ -28,10 +28,11 @@ from op2motion.robot.spec import Spec, rpy_matrix
 
 BROAD_PHASE_M = 0.03        # default: clearances beyond this are reported as lower bounds, not exactly
 SAMPLES, ROUNDS = 9, 4      # samples along a segment per round; rounds (the bracket shrinks to (1/4)^4 = 4e-3)
-_GRID = np.linspace(0.0, 1.0, SAMPLES)
-_CORNERS = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
-_EDGES = [(a, b) for a in range(8) for b in range(a + 1, 8) if np.sum(_CORNERS[a] != _CORNERS[b]) == 1]
-_EDGE_A, _EDGE_B = np.array([e[0] for e in _EDGES]), np.array([e[1] for e in _EDGES])
+SEGMENT_GRID = np.linspace(0.0, 1.0, SAMPLES)
+BOX_CORNERS = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
+BOX_EDGES = np.array([(a, b) for a in range(8) for b in range(a + 1, 8)
+                      if np.sum(BOX_CORNERS[a] != BOX_CORNERS[b]) == 1])        # (12, 2) corner indices
+_EDGE_A, _EDGE_B = BOX_EDGES[:, 0], BOX_EDGES[:, 1]
 
 
 @dataclass(frozen=True)
@@ -131,7 +132,7 @@ def _segment_box(a: np.ndarray, b: np.ndarray, half: np.ndarray) -> np.ndarray:
     best = np.full(a.shape[1], np.inf)
     columns = np.arange(a.shape[1])
     for _ in range(ROUNDS):
-        t = lo + width * _GRID[:, None]                                      # (SAMPLES, K)
+        t = lo + width * SEGMENT_GRID[:, None]                                      # (SAMPLES, K)
         f = _box_distance(a[0] + t * d[0], a[1] + t * d[1], a[2] + t * d[2], half)
         i = np.argmin(f, axis=0)
         best = np.minimum(best, f[i, columns])
@@ -194,8 +195,8 @@ def clearances(frames: np.ndarray, shapes: ShapeSet, within: float = BROAD_PHASE
     live, pose = np.nonzero(near[shapes.box_box[:, 0]])                      # box-box: the 8 corners, then edges
     if len(live):
         pair, src, box = shapes.box_box[live].T
-        corners = into_box(src, box, pose, _CORNERS[None] * shapes.half[src][:, None])       # (I, 8, 3)
-        n = len(_EDGES)
+        corners = into_box(src, box, pose, BOX_CORNERS[None] * shapes.half[src][:, None])       # (I, 8, 3)
+        n = len(BOX_EDGES)
         pieces.append((np.repeat(pair, n), np.repeat(pose, n), corners[:, _EDGE_A].reshape(-1, 3),
                        corners[:, _EDGE_B].reshape(-1, 3), np.repeat(shapes.half[box], n, axis=0),
                        np.zeros(n * len(pair))))

@@ -18,6 +18,7 @@ come from.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -39,8 +40,11 @@ from op2motion.robot.balance import (
     support_extents,
 )
 from op2motion.robot.joints import BookAngles
-from op2motion.robot.spec import Spec
+from op2motion.robot.spec import GRAVITY_M_S2, Spec
 from op2motion.robot.support import LIFTED_M, Support, other_side
+
+if TYPE_CHECKING:
+    from op2motion.posture.kernel_plan import KernelPlan
 
 W_VIOLATION = 10.0     # cost per metre by which a violated constraint is violated, on top of the book's 100
 W_MARGIN = 0.02        # cost per metre of stability margin below MARGIN_CAP
@@ -171,6 +175,20 @@ class CostModel:
         self.hand_row = row_of(problem.hand_point)
         first = ROW[f"{other_side(problem.support)}_foot_0"]
         self.swing_rows = slice(first, first + 4)
+
+    def kernel_plan(self) -> "KernelPlan | None":
+        """This cost's constants for the compiled swarm kernel (:mod:`.kernel`), None where it does not apply
+        (the projection model)."""
+        if self.problem.model != "dh":
+            return None
+        from op2motion.posture.kernel_plan import kernel_plan
+
+        consts = {"penalty": PENALTY, "w_violation": W_VIOLATION, "w_margin": W_MARGIN, "margin_cap_m": MARGIN_CAP_M,
+                  "w_upright": W_UPRIGHT, "sag_tilt_limit_rad": SAG_TILT_LIMIT_RAD,
+                  "self_clearance_m": SELF_CLEARANCE_M, "lifted_m": LIFTED_M, "floor_tolerance_m": FLOOR_TOLERANCE_M,
+                  "gravity_m_s2": GRAVITY_M_S2}
+        return kernel_plan(self.spec, self.problem.support, self.problem.hand_point, self.target, self.extents,
+                           self.full, consts)
 
     def __call__(self, angles: BookAngles, only_below: np.ndarray | None = None) -> CostTerms:
         """All cost terms for a batch of poses (book variables, support = the problem's).

@@ -130,22 +130,30 @@ def run_pso(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSett
     v_max = settings.velocity_fraction * (hi - lo)
     best, best_hand, hand_history = [math.inf], [math.inf], []
     cost_model = CostModel(problem, spec)
+    plan = cost_model.kernel_plan()
     personal = np.full(settings.particles, np.inf)   # each particle's best cost, as pyswarms keeps it
     support = Support.single(problem.support)
+    if plan is not None:
+        from op2motion.posture.kernel import HAND_ERROR, TOTAL, swarm_terms
 
     def objective(swarm: np.ndarray) -> np.ndarray:
         x = swarm if dims == full else np.hstack([swarm, np.zeros((swarm.shape[0], full - dims))])
         # a particle that cannot beat its personal best skips the self-collision check (the search is unchanged)
-        terms = cost_model(BookAngles(x[:, :N_TH], x[:, N_TH:N_TH + N_PHI], x[:, N_TH + N_PHI:], support),
-                           only_below=personal)
-        np.minimum(personal, terms.total, out=personal)
-        i = int(np.argmin(terms.total))
-        if terms.total[i] < best[0]:
-            best[0], best_hand[0] = float(terms.total[i]), float(terms.hand_error[i])
+        if plan is not None:                          # the compiled loop (same terms as the NumPy model)
+            terms = swarm_terms(plan, x, personal)
+            total, hand = terms[:, TOTAL], terms[:, HAND_ERROR]
+        else:
+            numpy_terms = cost_model(BookAngles(x[:, :N_TH], x[:, N_TH:N_TH + N_PHI], x[:, N_TH + N_PHI:], support),
+                                     only_below=personal)
+            total, hand = numpy_terms.total, numpy_terms.hand_error
+        np.minimum(personal, total, out=personal)
+        i = int(np.argmin(total))
+        if total[i] < best[0]:
+            best[0], best_hand[0] = float(total[i]), float(hand[i])
         hand_history.append(best_hand[0])
         if on_iteration is not None:
             on_iteration(best[0])
-        return terms.total
+        return total
 
     state = np.random.get_state()
     np.random.seed(settings.seed)  # pyswarms draws from NumPy's global generator

@@ -1,0 +1,387 @@
+"""The posture cost of a whole swarm in one compiled loop (numba, cached on disk): the PSO's hot path.
+
+It computes what :class:`~op2motion.posture.cost.CostModel` computes for the D-H model (chain frames, body points,
+the full-inertia CoM settled on compliant servos or the book's lumped CoM, the swing foot's sag, stability margin,
+torso tilt, self-clearance) pose by pose, with no NumPy call per term: a swarm of 50 costs about as much as the
+arithmetic. The constants come from :func:`.kernel_plan.kernel_plan`, read off the same plans the NumPy model uses;
+tests compare every term of both on random swarms. Self-clearance is searched exactly only below the penalty's
+threshold (a pair whose bounding spheres are farther apart reports that lower bound), which gives the same cost.
+
+Importing this module imports numba (about 0.15 s); the first call in a fresh install compiles the loop (a few
+seconds, then cached beside the module or in numba's user cache).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from op2motion.posture.kernel_plan import KernelPlan
+
+TERMS = ("total", "book", "hand_error", "margin", "swing_min_z", "tilt", "collision", "sag_tilt", "clearance",
+         "swing_lift")
+
+(_T_TOTAL, _T_BOOK, _T_HAND_ERROR, _T_MARGIN, _T_SWING_MIN_Z, _T_TILT, _T_COLLISION, _T_SAG_TILT, _T_CLEARANCE,
+ _T_SWING_LIFT) = range(len(TERMS))                  # the columns, as compile-time integers
+TOTAL, HAND_ERROR = _T_TOTAL, _T_HAND_ERROR
+_C_PENALTY, _C_VIOL, _C_MARGIN, _C_CAP, _C_UPRIGHT, _C_SAG, _C_CLEAR, _C_LIFTED, _C_FLOOR, _C_G = range(10)
+
+
+@njit(cache=True, error_model="numpy")
+def _mul(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
+    """out = a @ b for 4x4 rigid transforms (bottom rows 0 0 0 1, which stay as they are)."""
+    for r in range(3):
+        a0, a1, a2 = a[r, 0], a[r, 1], a[r, 2]
+        for c in range(3):
+            out[r, c] = a0 * b[0, c] + a1 * b[1, c] + a2 * b[2, c]
+        out[r, 3] = a0 * b[0, 3] + a1 * b[1, 3] + a2 * b[2, 3] + a[r, 3]
+    out[3, 0], out[3, 1], out[3, 2], out[3, 3] = 0.0, 0.0, 0.0, 1.0
+
+
+@njit(cache=True, error_model="numpy")
+def _box_distance(x: float, y: float, z: float, half: np.ndarray) -> float:
+    """Signed distance [m] of a point in a box's frame to the box of half extents ``half``."""
+    qx, qy, qz = abs(x) - half[0], abs(y) - half[1], abs(z) - half[2]
+    inside = min(max(max(qx, qy), qz), 0.0)
+    ox, oy, oz = max(qx, 0.0), max(qy, 0.0), max(qz, 0.0)
+    return math.sqrt(ox * ox + oy * oy + oz * oz) + inside
+
+
+@njit(cache=True, error_model="numpy")
+def _segment_box(a: np.ndarray, b: np.ndarray, half: np.ndarray, rim: float, within: float, grid: np.ndarray,
+                 rounds: int) -> float:
+    """Clearance [m] of a segment a-b swept by ``rim`` to a box (both in the box frame): the segment's bounding box
+    first, then (below ``within``) the sampled search of :func:`op2motion.kinematics.shapes._segment_box`."""
+    sq = 0.0
+    for k in range(3):
+        o = max(max(min(a[k], b[k]) - half[k], -half[k] - max(a[k], b[k])), 0.0)
+        sq += o * o
+    value = math.sqrt(sq) - rim
+    if value >= within:
+        return value
+    d0, d1, d2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    lo, width, best = 0.0, 1.0, np.inf
+    samples = grid.shape[0]
+    for _ in range(rounds):
+        i_best, f_best = 0, np.inf
+        for i in range(samples):
+            t = lo + width * grid[i]
+            f = _box_distance(a[0] + t * d0, a[1] + t * d1, a[2] + t * d2, half)
+            if f < f_best:
+                i_best, f_best = i, f
+        best = min(best, f_best)
+        step = width / (samples - 1)
+        lo = min(max(lo + (i_best - 1) * step, 0.0), 1.0 - 2.0 * step)
+        width = 2.0 * step
+    return best - rim
+
+
+@njit(cache=True, error_model="numpy")
+def _segment_segment(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> float:
+    """Distance [m] between segments p1-q1 and p2-q2 (as :func:`op2motion.kinematics.shapes._segment_segment`)."""
+    tiny = 1e-15
+    a = e = b = c = f = 0.0
+    for k in range(3):
+        d1, d2, r = q1[k] - p1[k], q2[k] - p2[k], p1[k] - p2[k]
+        a += d1 * d1
+        e += d2 * d2
+        b += d1 * d2
+        c += d1 * r
+        f += d2 * r
+    denom = a * e - b * b
+    s = min(max((b * f - c * e) / max(denom, tiny), 0.0), 1.0) if denom > tiny else 0.0
+    t = (b * s + f) / max(e, tiny) if e > tiny else 0.0
+    if t < 0.0:
+        s = min(max(-c / max(a, tiny), 0.0), 1.0) if a > tiny else 0.0
+    elif t > 1.0:
+        s = min(max((b - c) / max(a, tiny), 0.0), 1.0) if a > tiny else 0.0
+    t = min(max(t, 0.0), 1.0)
+    sq = 0.0
+    for k in range(3):
+        g = (p1[k] + s * (q1[k] - p1[k])) - (p2[k] + t * (q2[k] - p2[k]))
+        sq += g * g
+    return math.sqrt(sq)
+
+
+@njit(cache=True, error_model="numpy")
+def _into(world: np.ndarray, box: np.ndarray, out: np.ndarray) -> None:
+    """A world point into a shape's frame (4, 4): out = R^T (world - o)."""
+    for k in range(3):
+        out[k] = ((world[0] - box[0, 3]) * box[0, k] + (world[1] - box[1, 3]) * box[1, k]
+                  + (world[2] - box[2, 3]) * box[2, k])
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _clearance(frames: np.ndarray, plan: KernelPlan, within: float, shape_w: np.ndarray) -> float:
+    """The least clearance [m] between the collision shapes of one pose (chain ``frames``; ``shape_w`` (H, 4, 4)
+    receives the shapes' frames): exact below ``within``, a lower bound above it."""
+    corners, ends, a, b = np.empty((8, 3)), np.empty((4, 3)), np.empty(3), np.empty(3)
+    sh_slots, sh_local = plan.sh_slots, plan.sh_local
+    pairs, sh_bound, sh_box, sh_half = plan.pairs, plan.sh_bound, plan.sh_box, plan.sh_half
+    for h in range(sh_slots.shape[0]):
+        _mul(frames[sh_slots[h]], sh_local[h], shape_w[h])
+    best = np.inf
+    for p in range(pairs.shape[0]):
+        i, j = pairs[p, 0], pairs[p, 1]
+        wi, wj = shape_w[i], shape_w[j]
+        gx, gy, gz = wi[0, 3] - wj[0, 3], wi[1, 3] - wj[1, 3], wi[2, 3] - wj[2, 3]
+        value = math.sqrt(gx * gx + gy * gy + gz * gz) - (sh_bound[i] + sh_bound[j])
+        if value < within:
+            if sh_box[i] and sh_box[j]:
+                value = min(_box_box(shape_w[i], shape_w[j], sh_half[i], sh_half[j], plan, within, corners),
+                            _box_box(shape_w[j], shape_w[i], sh_half[j], sh_half[i], plan, within, corners))
+            else:
+                value = _with_segment(shape_w, i, j, plan, within, ends, a, b)
+        best = min(best, value)
+    return best
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _box_box(ws: np.ndarray, wb: np.ndarray, half: np.ndarray, box_half: np.ndarray, plan: KernelPlan,
+             within: float, corners: np.ndarray) -> float:
+    """Clearance [m] of the twelve edges of a box (frame ``ws``, half extents ``half``) to another (``wb``,
+    ``box_half``); ``corners`` (8, 3) is scratch."""
+    box_corners, box_edges, grid, rounds = plan.box_corners, plan.box_edges, plan.grid, plan.rounds
+    for c in range(8):
+        x = box_corners[c, 0] * half[0]
+        y = box_corners[c, 1] * half[1]
+        z = box_corners[c, 2] * half[2]
+        for k in range(3):                                     # R_b^T (o_s + R_s x - o_b)
+            corners[c, k] = ((ws[0, 3] + ws[0, 0] * x + ws[0, 1] * y + ws[0, 2] * z - wb[0, 3]) * wb[0, k]
+                             + (ws[1, 3] + ws[1, 0] * x + ws[1, 1] * y + ws[1, 2] * z - wb[1, 3]) * wb[1, k]
+                             + (ws[2, 3] + ws[2, 0] * x + ws[2, 1] * y + ws[2, 2] * z - wb[2, 3]) * wb[2, k])
+    sq = 0.0                                                   # the corners' bounding box against the box: a
+    for k in range(3):                                         # lower bound that settles most pairs at once
+        lo, hi = corners[0, k], corners[0, k]
+        for c in range(1, 8):
+            lo, hi = min(lo, corners[c, k]), max(hi, corners[c, k])
+        o = max(max(lo - box_half[k], -box_half[k] - hi), 0.0)
+        sq += o * o
+    if math.sqrt(sq) >= within:
+        return math.sqrt(sq)
+    value = np.inf
+    for e in range(box_edges.shape[0]):
+        value = min(value, _segment_box(corners[box_edges[e, 0]], corners[box_edges[e, 1]], box_half, 0.0, within,
+                                        grid, rounds))
+    return value
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _with_segment(shape_w: np.ndarray, i: int, j: int, plan: KernelPlan, within: float, ends: np.ndarray,
+                  a: np.ndarray, b: np.ndarray) -> float:
+    """Clearance [m] of shapes ``i`` and ``j``, at least one a swept segment (``ends``, ``a``, ``b``: scratch)."""
+    sh_reach, sh_box, sh_half, sh_radius = plan.sh_reach, plan.sh_box, plan.sh_half, plan.sh_radius
+    grid, rounds = plan.grid, plan.rounds
+    for n, s in enumerate((i, j)):                             # segment ends in the world: o -+ reach z
+        w = shape_w[s]
+        for k in range(3):
+            ends[2 * n, k] = w[k, 3] - sh_reach[s] * w[k, 2]
+            ends[2 * n + 1, k] = w[k, 3] + sh_reach[s] * w[k, 2]
+    if sh_box[i] or sh_box[j]:
+        seg, box, first = (j, i, 2) if sh_box[i] else (i, j, 0)
+        _into(ends[first], shape_w[box], a)
+        _into(ends[first + 1], shape_w[box], b)
+        return _segment_box(a, b, sh_half[box], sh_radius[seg], within, grid, rounds)
+    return _segment_segment(ends[0], ends[1], ends[2], ends[3]) - (sh_radius[i] + sh_radius[j])
+
+
+@njit(cache=True, error_model="numpy")
+def _solve(m: np.ndarray, rhs: np.ndarray, n: int, out: np.ndarray) -> float:
+    """Solve the leading n x n system in place (Gaussian elimination, partial pivoting) into ``out``; return its
+    determinant."""
+    det = 1.0
+    for col in range(n):
+        pivot = col
+        for r in range(col + 1, n):
+            if abs(m[r, col]) > abs(m[pivot, col]):
+                pivot = r
+        if m[pivot, col] == 0.0:
+            return 0.0
+        if pivot != col:
+            det = -det
+            for c in range(n):
+                m[col, c], m[pivot, c] = m[pivot, c], m[col, c]
+            rhs[col], rhs[pivot] = rhs[pivot], rhs[col]
+        det *= m[col, col]
+        for r in range(col + 1, n):
+            factor = m[r, col] / m[col, col]
+            for c in range(col, n):
+                m[r, c] -= factor * m[col, c]
+            rhs[r] -= factor * rhs[col]
+    for r in range(n - 1, -1, -1):
+        acc = rhs[r]
+        for c in range(r + 1, n):
+            acc -= m[r, c] * out[c]
+        out[r] = acc / m[r, r]
+    return det
+
+
+@njit(cache=True, error_model="numpy")
+def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, out: np.ndarray) -> None:
+    """Every cost term of poses ``q`` (N, 20) [rad] into ``out`` (N, len(TERMS)); see :func:`swarm_terms`.
+
+    One loop on purpose: with every array local, LLVM keeps the small systems in registers (split into helpers
+    that share scratch arrays, the same arithmetic ran 2.5 times slower)."""
+    (parent, slot_joint, slot_fixed, var, sign, offset, basis, fixed_local, root, row_slot, row_point, const_rows,
+     pelvis, lumped, com_slots, com_mass, com_weighted, total_mass, ch_rows, ch_size, ch_s0, ch_sz, ch_rx,
+     ch_axis_rows, sw_slots, sw_local, sw_axes, sw_kp, sw_link_slots, sw_link_com, sw_link_mass, _, _, _, _, _, _,
+     _, _, hand_row, ankle_row, swing_first, torso_rows, torso_ab, target, extents, full, consts, _, _, _, _) = plan
+    u, legs = ch_s0.shape[1], sw_slots.shape[0]
+    frames, local, pts = np.empty((parent.shape[0], 4, 4)), np.empty((4, 4)), np.empty((row_slot.shape[0], 3))
+    system, rhs, sol, thetas = np.empty((u, u)), np.empty(u), np.empty(u), np.zeros((2, u))
+    joint, origin, axis, theta = np.empty((4, 4)), np.empty((legs, 3)), np.empty((legs, 3)), np.empty(legs)
+    link_c, com, settled, sag = np.empty((legs, 3)), np.empty(3), np.empty(2), np.empty(2)
+    shape_w = np.empty((plan.sh_slots.shape[0], 4, 4))
+    top = ch_rx.shape[1] - 1                                   # where the CoM's coefficients sit
+    flat = local.reshape(16)
+    for i in range(q.shape[0]):
+        frames[0] = root                                       # the D-H chain, parents before children
+        for s in range(1, parent.shape[0]):
+            j = slot_joint[s]
+            if j >= 0:
+                delta = sign[j] * q[i, var[j]] + offset[j]
+                c, sn = math.cos(delta), math.sin(delta)
+                for e in range(16):
+                    flat[e] = c * basis[j, 0, e] + sn * basis[j, 1, e] + basis[j, 2, e]
+                _mul(frames[parent[s]], local, frames[s])
+            else:
+                _mul(frames[parent[s]], fixed_local[slot_fixed[s]], frames[s])
+        for r in range(row_slot.shape[0]):                     # body points
+            s = row_slot[r]
+            for k in range(3):
+                if s >= 0:
+                    pts[r, k] = (frames[s, k, 0] * row_point[r, 0] + frames[s, k, 1] * row_point[r, 1]
+                                 + frames[s, k, 2] * row_point[r, 2] + frames[s, k, 3])
+                elif s == -1:
+                    pts[r, k] = const_rows[r, k]
+                else:                                          # the pelvis: the hips' midpoint
+                    pts[r, k] = 0.5 * (frames[pelvis[1], k, 3] + frames[pelvis[2], k, 3])
+        sq = 0.0
+        for k in range(3):
+            sq += (pts[hand_row, k] - target[k]) * (pts[hand_row, k] - target[k])
+        hand_error = math.sqrt(sq)
+        f = swing_first
+        swing_min_z = min(min(pts[f, 2], pts[f + 1, 2]), min(pts[f + 2, 2], pts[f + 3, 2]))
+        com_x, com_y, sag_tilt = 0.0, 0.0, 0.0
+        if full:                                               # the body physics simulates: full inertia
+            com[:] = 0.0                                       # sum of R (M c) + M o over the link inertials
+            for m in range(com_slots.shape[0]):
+                for k in range(3):
+                    com[k] += (frames[com_slots[m], k, 0] * com_weighted[m, 0]
+                               + frames[com_slots[m], k, 1] * com_weighted[m, 1]
+                               + frames[com_slots[m], k, 2] * com_weighted[m, 2]
+                               + com_mass[m] * frames[com_slots[m], k, 3])
+            for k in range(3):
+                com[k] /= total_mass
+            settled_ok = True                                  # the compliance systems, pitch in x, roll in y
+            for ch in range(2):
+                n = ch_size[ch]
+                for a in range(n):
+                    rhs[a] = com[ch] * ch_rx[ch, top, a]
+                    for b in range(n):
+                        system[a, b] = ch_s0[ch, a, b] + com[2] * ch_sz[ch, top, a, b]
+                for t in range(ch_rows.shape[1]):
+                    r = ch_rows[ch, t]
+                    if r >= 0:
+                        for a in range(n):
+                            rhs[a] += pts[r, ch] * ch_rx[ch, t, a]
+                            for b in range(n):
+                                system[a, b] += pts[r, 2] * ch_sz[ch, t, a, b]
+                if _solve(system, rhs, n, sol) > 0.0:          # the servos outweigh gravity's negative stiffness
+                    settled[ch], sag[ch] = sol[0] / total_mass, 0.0
+                    for a in range(1, n):
+                        thetas[ch, a - 1] = sol[a]
+                        sag[ch] += sol[a]
+                else:
+                    settled_ok = False
+                    settled[ch] = math.copysign(np.inf, com[ch] - pts[ankle_row, ch])
+                    sag[ch] = np.inf
+            com_x, com_y, sag_tilt = settled[0], settled[1], math.hypot(sag[0], sag[1])
+            lowest = swing_min_z
+            if settled_ok:                                     # the swing leg hangs on its springs
+                for leg in range(legs):
+                    _mul(frames[sw_slots[leg]], sw_local[leg], joint)
+                    for k in range(3):
+                        origin[leg, k] = joint[k, 3]
+                        axis[leg, k] = (joint[k, 0] * sw_axes[leg, 0] + joint[k, 1] * sw_axes[leg, 1]
+                                        + joint[k, 2] * sw_axes[leg, 2])
+                        lf = sw_link_slots[leg]
+                        link_c[leg, k] = (frames[lf, k, 0] * sw_link_com[leg, 0] + frames[lf, k, 1] * sw_link_com[
+                            leg, 1] + frames[lf, k, 2] * sw_link_com[leg, 2] + frames[lf, k, 3])
+                mass, mx, my = 0.0, 0.0, 0.0
+                for leg in range(legs - 1, -1, -1):            # links j..end: their mass and moment
+                    mass += sw_link_mass[leg]
+                    mx += sw_link_mass[leg] * link_c[leg, 0]
+                    my += sw_link_mass[leg] * link_c[leg, 1]
+                    lever_x, lever_y = mx - mass * origin[leg, 0], my - mass * origin[leg, 1]
+                    theta[leg] = -consts[_C_G] * (axis[leg, 0] * lever_y - axis[leg, 1] * lever_x) / sw_kp[leg]
+                lowest = np.inf
+                for corner in range(swing_first, swing_first + 4):
+                    z = pts[corner, 2]
+                    for ch in range(2):
+                        for a in range(ch_size[ch] - 1):
+                            z -= thetas[ch, a] * (pts[corner, ch] - pts[ch_axis_rows[ch, a], ch])
+                    for leg in range(legs):
+                        rel_x, rel_y = pts[corner, 0] - origin[leg, 0], pts[corner, 1] - origin[leg, 1]
+                        z += theta[leg] * (axis[leg, 0] * rel_y - axis[leg, 1] * rel_x)
+                    lowest = min(lowest, z)
+            lift = lowest - consts[_C_LIFTED]
+        else:                                                  # the book's lumped masses on rigid joints
+            for r in range(row_slot.shape[0]):
+                com_x += lumped[r] * pts[r, 0]
+                com_y += lumped[r] * pts[r, 1]
+            lift = swing_min_z + consts[_C_FLOOR]
+        margin = _margin(com_x, com_y, extents)
+        sag_excess = max(min(sag_tilt, 1.0) - consts[_C_SAG], 0.0)
+        book = hand_error + (consts[_C_PENALTY] if lift < 0.0 else 0.0) + (
+            consts[_C_PENALTY] if margin < 0.0 or sag_excess > 0.0 else 0.0)
+        slope = consts[_C_VIOL] * (max(-lift, 0.0) + min(max(-margin, 0.0), 1.0) + 0.1 * sag_excess)
+        tilt = _torso_tilt(pts, torso_rows, torso_ab)
+        total = (book + slope + consts[_C_MARGIN] * (consts[_C_CAP] - min(margin, consts[_C_CAP]))
+                 + consts[_C_UPRIGHT] * tilt * tilt)
+        collision, clearance = 0.0, np.nan
+        if total < only_below[i]:
+            clearance = _clearance(frames, plan, consts[_C_CLEAR], shape_w)
+            deficit = max(consts[_C_CLEAR] - clearance, 0.0)
+            collision = (consts[_C_PENALTY] if deficit > 0.0 else 0.0) + consts[_C_VIOL] * deficit
+        out[i, _T_TOTAL], out[i, _T_BOOK], out[i, _T_HAND_ERROR], out[i, _T_MARGIN] = (
+            total + collision, book, hand_error, margin)
+        out[i, _T_SWING_MIN_Z], out[i, _T_TILT], out[i, _T_COLLISION], out[i, _T_SAG_TILT] = (
+            swing_min_z, tilt, collision, sag_tilt)
+        out[i, _T_CLEARANCE], out[i, _T_SWING_LIFT] = clearance, lift
+
+
+@njit(cache=True, error_model="numpy")
+def _margin(x: float, y: float, extents: np.ndarray) -> float:
+    """:func:`op2motion.robot.balance.rectangle_margin` of one point [m]."""
+    front, back, left, right = extents[0], extents[1], extents[2], extents[3]
+    inside = min(min(front - x, x + back), min(left - y, y + right))
+    if inside >= 0.0:
+        return inside
+    return -math.hypot(max(max(x - front, -back - x), 0.0), max(max(y - left, -right - y), 0.0))
+
+
+@njit(cache=True, error_model="numpy")
+def _torso_tilt(pts: np.ndarray, rows: np.ndarray, ab: np.ndarray) -> float:
+    """:func:`op2motion.posture.cost.torso_tilt` of one pose [rad] (``rows``: neck, pelvis, shoulders)."""
+    neck, pelvis, lsho, rsho = rows[0], rows[1], rows[2], rows[3]
+    y0, y1, y2 = pts[lsho, 0] - pts[rsho, 0], pts[lsho, 1] - pts[rsho, 1], pts[lsho, 2] - pts[rsho, 2]
+    u0, u1, u2 = pts[pelvis, 0] - pts[neck, 0], pts[pelvis, 1] - pts[neck, 1], pts[pelvis, 2] - pts[neck, 2]
+    ny, nu = math.sqrt(y0 * y0 + y1 * y1 + y2 * y2), math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+    w_z = (y0 / ny) * (u1 / nu) - (y1 / ny) * (u0 / nu)
+    return math.acos(min(max(ab[1] * (u2 / nu) - ab[0] * w_z, -1.0), 1.0))
+
+
+def swarm_terms(plan: KernelPlan, q: np.ndarray, only_below: np.ndarray | None = None) -> np.ndarray:
+    """Every cost term (columns :data:`TERMS`) of poses ``q`` (N, 20) [rad, book variables], (N, len(TERMS)).
+
+    The self-clearance of pose i is searched only where its other terms cost less than ``only_below[i]`` (a PSO
+    particle that cannot beat its personal best): elsewhere its clearance is NaN and its collision penalty 0, as
+    :class:`~op2motion.posture.cost.CostModel` reports them."""
+    q = np.ascontiguousarray(q, dtype=float)
+    limit = np.full(q.shape[0], np.inf) if only_below is None else np.ascontiguousarray(only_below, dtype=float)
+    out = np.empty((q.shape[0], len(TERMS)))
+    _swarm(q, limit, plan, out)
+    return out
