@@ -63,7 +63,7 @@ def _upright_deg(rot: np.ndarray) -> float:
 @pytest.mark.parametrize("engine", ENGINES)
 def test_the_controller_is_called_every_8_ms_with_an_imu_at_rest(spec, engine):
     recorder = Recorder(Schedule.hold(servo_pose(spec), "double", spec, HOLD_S))
-    run = check(recorder, spec, (engine,)).run
+    run = check(recorder, spec, (engine,), setup=Setup(full_length=True)).run
     assert run.stable and recorder.starts == 1
     times = np.array([c[0] for c in recorder.calls])
     assert times[0] == pytest.approx(CONTROL_PERIOD_S) and np.diff(times) == pytest.approx(CONTROL_PERIOD_S)
@@ -127,7 +127,7 @@ def test_sensor_latency_delays_every_reading_by_whole_periods(spec):
     seen = {}
     for latency in (0.0, 0.016):
         recorder = Recorder(Schedule.hold(servo_pose(spec), "double", spec, HOLD_S))
-        check(recorder, spec, setup=Setup(sensors=Sensors(latency_s=latency)))
+        check(recorder, spec, setup=Setup(sensors=Sensors(latency_s=latency), full_length=True))
         seen[latency] = np.array([np.concatenate([g, a]) for _, g, a in recorder.calls])
     assert np.array_equal(seen[0.016][2:], seen[0.0][:-2])
 
@@ -137,7 +137,7 @@ def test_sensor_noise_is_seeded_and_of_its_size(spec):
     runs = []
     for seed in (1, 1, 2):
         recorder = Recorder(Schedule.hold(servo_pose(spec), "double", spec, HOLD_S))
-        check(recorder, spec, setup=Setup(sensors=Sensors(gyro_noise_rad_s=gyro_noise, seed=seed)))
+        check(recorder, spec, setup=Setup(sensors=Sensors(gyro_noise_rad_s=gyro_noise, seed=seed), full_length=True))
         runs.append(np.array([g for t, g, _ in recorder.calls if t > HOLD_S - 1.0]))
     assert np.array_equal(runs[0], runs[1]) and not np.array_equal(runs[0], runs[2])
     assert np.std(runs[0]) == pytest.approx(gyro_noise, rel=0.2)        # the robot itself is still

@@ -30,10 +30,10 @@ ENGINE_MARGIN_M = 0.002         # the two engines' settled margins agree this we
 KP_P32_NM_RAD = 0.158 * 32 * 2.5
 
 
-def _run(servo, support, spec, seconds=3.0, engine="pybullet", p_gains=None, voltage=None):
+def _run(servo, support, spec, seconds=3.0, engine="pybullet", p_gains=None, voltage=None, full_length=False):
     """The main run of a held pose in one engine."""
     schedule = Schedule.hold(servo, support, spec, seconds, p_gains)
-    return check(schedule, spec, (engine,), setup=Setup(voltage=voltage)).run
+    return check(schedule, spec, (engine,), setup=Setup(voltage=voltage, full_length=full_length)).run
 
 
 # --- the servo model -------------------------------------------------------------------------------------------
@@ -140,8 +140,11 @@ def test_one_leg_squat_beyond_stall_is_torque_saturation(spec, engine):
 @pytest.mark.physics
 @pytest.mark.parametrize("engine", ENGINES)
 def test_lean_past_the_edge_tilts(spec, engine):
-    v = _run(servo_pose(spec, l_ank_pitch=35, r_ank_pitch=-35), "double", spec, 3.0, engine)
+    pose = servo_pose(spec, l_ank_pitch=35, r_ank_pitch=-35)
+    v = _run(pose, "double", spec, 3.0, engine, full_length=True)
     assert v.reasons[0] == "tilt" and v.max_tilt_deg > 30 and "ground_contact" in v.reasons
+    early = _run(pose, "double", spec, 3.0, engine)            # ends once its CoM has sunk: it fell
+    assert early.reasons == ["tilt", "com_drop"] and early.ended == "fell" and early.seconds < 1.0
 
 
 @pytest.mark.physics

@@ -234,7 +234,7 @@ def render_cost_curve(attempts: Sequence[Sequence[float] | np.ndarray],
         a.grid(True, which="both", alpha=0.3)
         a.legend(fontsize=8)
     fig.suptitle(title)
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.06, right=0.99, bottom=0.11, top=0.8, wspace=0.22)   # fixed: tight_layout took 0.3 s
     return _png(fig)
 
 

@@ -17,12 +17,12 @@ import numpy as np
 from op2motion.physics.loop import StartFacts
 from op2motion.physics.plan import RAMP_S, STEADY_S, Plan
 from op2motion.physics.report import Failure
+from op2motion.physics.stopping import COM_DROP_FRACTION
 from op2motion.physics.track import Track
 from op2motion.robot.spec import Spec
 
 TILT_LIMIT_DEG = 10.0
 LOADING_TILT_LIMIT_DEG = 20.0   # while gravity ramps in, a turn this large from the start is a fall
-COM_DROP_FRACTION = 0.25
 SATURATION_FRACTION = 0.95
 SATURATION_SHARE = 0.5
 LIMIT_AT_RAD = 0.0175           # 1°: a joint this close to its stop lies on it

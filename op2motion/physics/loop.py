@@ -30,6 +30,7 @@ from op2motion.physics.controller import Controller, Goals
 from op2motion.physics.engine import Engine
 from op2motion.physics.plan import RAMP_S, PlannedStates, planned_states
 from op2motion.physics.sensors import Imu, Reading, Sensors
+from op2motion.physics.stopping import FULL, EarlyStop
 from op2motion.physics.track import SAMPLE_S, Recorder, Track, foot_loads
 from op2motion.robot.framework import CONTROL_PERIOD_S
 
@@ -48,21 +49,24 @@ class Push:
 @dataclass(frozen=True)
 class RunSetup:
     """What differs between the runs of one check: a push, joint offsets (20,) [rad] at the start (a perturbed
-    start: the joints start that far from where the plan puts them), and the sensors' latency and noise."""
+    start: the joints start that far from where the plan puts them), the sensors' latency and noise, and
+    ``full_length``: run the plan's whole duration even when the verdict is known earlier."""
 
     push: Push | None = None
     start_offset: np.ndarray | None = None
     sensors: Sensors = Sensors()
+    full_length: bool = False
 
 
 @dataclass(frozen=True)
 class StartFacts:
-    """Where a run started: the body state, the planned states (with the start's flat foot and gap), and whether
-    gravity was ramped in."""
+    """Where a run started: the body state, the planned states (with the start's flat foot and gap), whether
+    gravity was ramped in, and why the run ended (:mod:`.stopping`: ``full``, ``settled`` or ``fell``)."""
 
     state: BodyState
     planned: PlannedStates
     ramped: bool
+    ended: str = FULL
 
 
 def start_pose(body: Body, controller: Controller, servo: ServoModel
@@ -124,8 +128,9 @@ class _Servos:
 
 def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoModel, setup: RunSetup = RunSetup(),
              on_tick: Callable[[float], object] | None = None) -> tuple[Track, StartFacts]:
-    """One run of ``controller`` for its plan's duration (see the module docstring); ``on_tick`` gets the
-    simulated time [s] after every control period. Returns the samples and where the run started."""
+    """One run of ``controller`` for its plan's duration, or until its verdict is known (:mod:`.stopping`; not
+    with ``setup.full_length``); ``on_tick`` gets the simulated time [s] after every control period. Returns the
+    samples and where the run started (with why it ended)."""
     plan = controller.plan
     q0, base_pos, base_rot, planned, ramp = start_pose(body, controller, servo)
     engine.reset(base_pos, base_rot, q0 + (0.0 if setup.start_offset is None else setup.start_offset))
@@ -137,6 +142,7 @@ def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoMod
     force = None if push is None else push.force
     pushing = range(0) if push is None else range(int(round(push.start_s / dt)),
                                                    int(round((push.start_s + push.duration_s) / dt)))
+    stop = EarlyStop(plan, ramp, 0.0 if push is None else push.start_s + push.duration_s, not setup.full_length)
     servos, imu, recorder = _Servos(controller, body, servo), Imu(setup.sensors), Recorder(body, servo)
     gravity = 1.0
     for k in range(steps):
@@ -144,14 +150,22 @@ def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoMod
         if t <= RAMP_S + dt:
             gravity = min(1.0, t / RAMP_S) if ramp else 1.0
             engine.set_gravity(gravity)
-        q, _ = engine.state()
+        q, dq = engine.state()
         if k == 0:
             servos.start(imu.read(engine, q, gravity)[2])
         elif (k - phase) % per_tick == 0 and not controller.done:
             servos.tick(engine, t, imu.read(engine, q, gravity))
         engine.step(servo.active_torque(servos.goals, q, servos.kp), force if k in pushing else None)
-        if k % every == every - 1 or k == steps - 1:
-            recorder.sample(engine, (k + 1) * dt, plan.row(t), servos.goals, servos.kp)
-        if on_tick is not None and (k - phase) % per_tick == per_tick - 1:
-            on_tick((k + 1) * dt)
-    return recorder.track(), StartFacts(body.state(base_pos, base_rot, q0), planned, ramp)
+        last = k == steps - 1
+        if (k - phase) % per_tick == per_tick - 1:
+            if on_tick is not None:
+                on_tick((k + 1) * dt)
+            if (k + 1) * dt >= stop.events_s:                   # still after everything the plan does?
+                last = last or stop.tick((k + 1) * dt, dq, *engine.base_velocity()[::-1])
+        if k % every == every - 1 or last:
+            row = plan.row(t)
+            recorder.sample(engine, (k + 1) * dt, row, servos.goals, servos.kp)
+            last = last or stop.sample(float(recorder.lists["com"][-1][2]), float(planned.states[row].com[2]))
+        if last:
+            break
+    return recorder.track(), StartFacts(body.state(base_pos, base_rot, q0), planned, ramp, stop.ended)

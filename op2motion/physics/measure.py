@@ -115,7 +115,8 @@ def run_report(track: Track, start: StartFacts, plan: Plan, spec: Spec, judged: 
     cops = [c for c, s in zip(track.cop, steady) if s and c is not None]
     com = track.com
     return RunReport(
-        engine=setup.engine, servo=setup.servo.describe(), time_step_s=setup.time_step_s, seconds=plan.duration_s,
+        engine=setup.engine, servo=setup.servo.describe(), time_step_s=setup.time_step_s,
+        seconds=round(float(track.times[-1]), 3), planned_seconds=plan.duration_s, ended=start.ended,
         failures=judged.failures, support_margin_m=_r(margin_to(last, final, com[-1, :2])),
         margin_at_load_m=_r(margin_to(load_state, plan.supports[0], load_state.com[:2])),
         cop_xy=None if not cops else _xy(np.mean(cops, axis=0)),

@@ -135,6 +135,8 @@ class RunReport:
     peak_torque_nm: float
     sag_deg: dict[str, float]        # steady-window joint angle minus goal
     swing_foot_min_z_m: float | None = None         # one-foot support: the swing foot's lowest corner at the end
+    planned_seconds: float = 0.0     # the plan's duration; ``seconds`` is what was simulated
+    ended: str = "full"              # why the run ended: full (its duration), settled or fell (physics.stopping)
     feet: dict[str, FootLoad] = field(default_factory=dict)
     motion: MotionMeasures | None = None
     walk: WalkMeasures | None = None
@@ -191,7 +193,8 @@ class RunReport:
         verdict = "STABLE" if self.stable else "NOT STABLE (" + ", ".join(self.reasons) + ")"
         feet = "; ".join(f"{side} {f.load_share * 100:.0f} % of the load, its CoP {f.cop_margin_m * 1000:+.1f} mm "
                          f"from its edge" for side, f in self.feet.items())
-        return (f"{self.engine}, {self.seconds:g} s at {1 / self.time_step_s:.0f} Hz: {verdict}\n"
+        early = "" if self.ended == "full" else f" ({self.ended}: ended early, of {self.planned_seconds:g} s)"
+        return (f"{self.engine}, {self.seconds:g} s at {1 / self.time_step_s:.0f} Hz{early}: {verdict}\n"
                 f"  margin {self.support_margin_m * 1000:+.1f} mm (settled full-inertia CoM to the support polygon's "
                 f"edge), tilt max {self.max_tilt_deg:.1f}°, torque {self.max_torque_nm:.2f} N·m at "
                 f"{self.worst_joint} ({self.torque_ratio * 100:.0f} % of available)"

@@ -43,7 +43,8 @@ class Setup:
     """What every run of a check shares: the servo model (Kp scaled by ``stiffness``, a rated supply ``voltage`` [V],
     None: the spec's), the floor's Coulomb ``friction``, the ``sensors``' latency and noise; ``snapshot`` keeps a
     picture of the main run's end (the first engine's), ``keep_track`` each main run's samples
-    (:class:`.track.Track`, e.g. to plot the joints)."""
+    (:class:`.track.Track`, e.g. to plot the joints); ``full_length`` plays every run for the plan's whole
+    duration (by default a run ends once settled or fallen, :mod:`.stopping`)."""
 
     stiffness: float = 1.0
     voltage: float | None = None
@@ -51,6 +52,7 @@ class Setup:
     keep_track: bool = False
     friction: float = FLOOR_FRICTION
     sensors: Sensors = Sensors()
+    full_length: bool = False
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.friction) and 0.0 < self.friction <= MAX_FRICTION):
@@ -139,7 +141,7 @@ class _Runner:
             keep_track: bool = False) -> RunReport:
         """One run in a fresh world, judged and measured."""
         engine = make_engine(engine_name, self.spec, self.servo, self.setup.friction)
-        run = replace(run, sensors=self.setup.sensors)
+        run = replace(run, sensors=self.setup.sensors, full_length=run.full_length or self.setup.full_length)
         plan = self.controller.plan
         try:
             track, start = simulate(engine, self.body, self.controller, self.servo, run, self._tick)
