@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+from dataclasses import fields
+
 import numpy as np
 import pytest
 
-from op2motion.posture.cost import SELF_CLEARANCE_M, CostModel, PostureProblem
+from op2motion.posture.cost import CLEARANCE_EXACT_M, SELF_CLEARANCE_M, CostModel, CostTerms, PostureProblem
 from op2motion.posture.kernel import TERMS, swarm_terms
 from op2motion.posture.pso import variable_bounds
 from op2motion.robot.balance import COM_MODEL_FULL, COM_MODEL_LUMPED
@@ -28,7 +30,7 @@ def test_every_term_matches_the_numpy_cost_model(spec, support, hand, com_model)
     q = lo + (hi - lo) * rng.random((SWARM, lo.size))
     q[0] = np.clip(BookAngles.standing(support).vector()[0], lo, hi)          # a pose that stands
     got = swarm_terms(plan, q)
-    ref = model(BookAngles.from_vector(q, support))
+    ref = model.reference(BookAngles.from_vector(q, support))
     near = ref.clearance < SELF_CLEARANCE_M
     assert near.any() and (~near).any(), "the sample must hold colliding and clear poses"
     for j, name in enumerate(TERMS):
@@ -42,6 +44,21 @@ def test_every_term_matches_the_numpy_cost_model(spec, support, hand, com_model)
         tol = SAME_COST if name in ("total", "book", "collision") else SAME_M
         assert np.allclose(have[finite], want[finite], rtol=0, atol=tol), name
         assert np.array_equal(have[~finite], want[~finite]), name
+
+
+def test_the_cost_model_runs_on_the_kernel_with_the_references_clearances(spec):
+    """CostModel itself evaluates the D-H model with the kernel, clearances exact where the reference is (below
+    CLEARANCE_EXACT_M), so the refinement's clearance constraint sees the same values."""
+    assert TERMS == tuple(f.name for f in fields(CostTerms))
+    problem = PostureProblem("left", "left", (0.1, 0.05, 0.07))
+    model = CostModel(problem, spec)
+    lo, hi = variable_bounds(problem, spec)
+    q = lo + (hi - lo) * np.random.default_rng(3).random((SWARM, lo.size))
+    got, want = model(BookAngles.from_vector(q, "left")), model.reference(BookAngles.from_vector(q, "left"))
+    exact = want.clearance < CLEARANCE_EXACT_M
+    assert exact.any() and np.allclose(got.clearance[exact], want.clearance[exact], rtol=0, atol=SAME_M)
+    assert np.all(got.clearance[~exact] >= CLEARANCE_EXACT_M - SAME_M)
+    assert np.allclose(got.total, want.total, rtol=0, atol=SAME_COST)
 
 
 def test_skipped_clearance_is_reported_as_such(spec):

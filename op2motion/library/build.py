@@ -92,6 +92,25 @@ def _worker_init(parent: int) -> None:
     threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
 
 
+THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
+
+
+@contextlib.contextmanager
+def _one_thread_each() -> Iterator[None]:
+    """Workers started in here run their maths libraries on one thread each: the workers fill the cores already,
+    and BLAS threads spinning against other processes made a target take eight times as long."""
+    saved = {name: os.environ.get(name) for name in THREAD_VARIABLES}
+    os.environ.update({name: "1" for name in THREAD_VARIABLES})
+    try:
+        yield
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
 def _row(job: Job, reached: bool, message: str, **extra: Any) -> IndexRow:
     x, y, z = job.target
     return IndexRow(job.name, job.hand, job.support, job.br, x, y, z, reached, message=message, **extra)
@@ -195,7 +214,8 @@ def _run(todo: Sequence[Job], spec: Spec, spec_path: str | None, settings: Build
     main = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None  # workers inherit Ctrl-C ignored
     try:
-        pool = ctx.Pool(workers, initializer=_worker_init, initargs=(os.getpid(),))
+        with _one_thread_each():
+            pool = ctx.Pool(workers, initializer=_worker_init, initargs=(os.getpid(),))
     finally:
         if main:
             signal.signal(signal.SIGINT, previous)

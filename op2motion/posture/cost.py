@@ -175,12 +175,18 @@ class CostModel:
         self.hand_row = row_of(problem.hand_point)
         first = ROW[f"{other_side(problem.support)}_foot_0"]
         self.swing_rows = slice(first, first + 4)
+        self._plan: KernelPlan | None = None
 
     def kernel_plan(self) -> "KernelPlan | None":
         """This cost's constants for the compiled swarm kernel (:mod:`.kernel`), None where it does not apply
-        (the projection model)."""
+        (the projection model). Made once per model."""
         if self.problem.model != "dh":
             return None
+        if self._plan is None:
+            self._plan = self._build_kernel_plan()
+        return self._plan
+
+    def _build_kernel_plan(self) -> "KernelPlan":
         from op2motion.posture.kernel_plan import kernel_plan
 
         consts = {"penalty": PENALTY, "w_violation": W_VIOLATION, "w_margin": W_MARGIN, "margin_cap_m": MARGIN_CAP_M,
@@ -191,7 +197,18 @@ class CostModel:
                            self.full, consts)
 
     def __call__(self, angles: BookAngles, only_below: np.ndarray | None = None) -> CostTerms:
-        """All cost terms for a batch of poses (book variables, support = the problem's).
+        """All cost terms for a batch of poses (book variables, support = the problem's): on the D-H model by the
+        compiled kernel (clearances exact below :data:`CLEARANCE_EXACT_M`), else by :meth:`reference`."""
+        plan = self.kernel_plan()
+        if plan is None or angles.support != self.problem.support:
+            return self.reference(angles, only_below)
+        from op2motion.posture.kernel import swarm_terms
+
+        terms = swarm_terms(plan, angles.vector(), only_below, CLEARANCE_EXACT_M)
+        return CostTerms(*terms.T)
+
+    def reference(self, angles: BookAngles, only_below: np.ndarray | None = None) -> CostTerms:
+        """All cost terms for a batch of poses in NumPy (the reference the compiled kernel is tested against).
 
         ``only_below`` (N,) skips the self-collision check of the poses whose other terms already cost at least
         that much (a PSO particle that cannot beat its personal best): their ``collision`` is 0 and their

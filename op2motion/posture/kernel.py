@@ -113,7 +113,7 @@ def _into(world: np.ndarray, box: np.ndarray, out: np.ndarray) -> None:
                   + (world[2] - box[2, 3]) * box[2, k])
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _clearance(frames: np.ndarray, plan: KernelPlan, within: float, shape_w: np.ndarray) -> float:
     """The least clearance [m] between the collision shapes of one pose (chain ``frames``; ``shape_w`` (H, 4, 4)
     receives the shapes' frames): exact below ``within``, a lower bound above it."""
@@ -138,7 +138,7 @@ def _clearance(frames: np.ndarray, plan: KernelPlan, within: float, shape_w: np.
     return best
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _box_box(ws: np.ndarray, wb: np.ndarray, half: np.ndarray, box_half: np.ndarray, plan: KernelPlan,
              within: float, corners: np.ndarray) -> float:
     """Clearance [m] of the twelve edges of a box (frame ``ws``, half extents ``half``) to another (``wb``,
@@ -168,7 +168,7 @@ def _box_box(ws: np.ndarray, wb: np.ndarray, half: np.ndarray, box_half: np.ndar
     return value
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _with_segment(shape_w: np.ndarray, i: int, j: int, plan: KernelPlan, within: float, ends: np.ndarray,
                   a: np.ndarray, b: np.ndarray) -> float:
     """Clearance [m] of shapes ``i`` and ``j``, at least one a swept segment (``ends``, ``a``, ``b``: scratch)."""
@@ -219,8 +219,9 @@ def _solve(m: np.ndarray, rhs: np.ndarray, n: int, out: np.ndarray) -> float:
 
 
 @njit(cache=True, error_model="numpy")
-def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, out: np.ndarray) -> None:
-    """Every cost term of poses ``q`` (N, 20) [rad] into ``out`` (N, len(TERMS)); see :func:`swarm_terms`.
+def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, within: float, out: np.ndarray) -> None:
+    """Every cost term of poses ``q`` (N, 20) [rad] into ``out`` (N, len(TERMS)), clearances exact below
+    ``within`` [m]; see :func:`swarm_terms`.
 
     One loop on purpose: with every array local, LLVM keeps the small systems in registers (split into helpers
     that share scratch arrays, the same arithmetic ran 2.5 times slower)."""
@@ -343,7 +344,7 @@ def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, out: np.ndar
                  + consts[_C_UPRIGHT] * tilt * tilt)
         collision, clearance = 0.0, np.nan
         if total < only_below[i]:
-            clearance = _clearance(frames, plan, consts[_C_CLEAR], shape_w)
+            clearance = _clearance(frames, plan, within, shape_w)
             deficit = max(consts[_C_CLEAR] - clearance, 0.0)
             collision = (consts[_C_PENALTY] if deficit > 0.0 else 0.0) + consts[_C_VIOL] * deficit
         out[i, _T_TOTAL], out[i, _T_BOOK], out[i, _T_HAND_ERROR], out[i, _T_MARGIN] = (
@@ -374,14 +375,17 @@ def _torso_tilt(pts: np.ndarray, rows: np.ndarray, ab: np.ndarray) -> float:
     return math.acos(min(max(ab[1] * (u2 / nu) - ab[0] * w_z, -1.0), 1.0))
 
 
-def swarm_terms(plan: KernelPlan, q: np.ndarray, only_below: np.ndarray | None = None) -> np.ndarray:
+def swarm_terms(plan: KernelPlan, q: np.ndarray, only_below: np.ndarray | None = None,
+                exact_below_m: float | None = None) -> np.ndarray:
     """Every cost term (columns :data:`TERMS`) of poses ``q`` (N, 20) [rad, book variables], (N, len(TERMS)).
 
     The self-clearance of pose i is searched only where its other terms cost less than ``only_below[i]`` (a PSO
     particle that cannot beat its personal best): elsewhere its clearance is NaN and its collision penalty 0, as
-    :class:`~op2motion.posture.cost.CostModel` reports them."""
+    :class:`~op2motion.posture.cost.CostModel` reports them. Clearances are exact below ``exact_below_m`` [m]
+    (default: the penalty's threshold, all the cost needs) and lower bounds above it."""
     q = np.ascontiguousarray(q, dtype=float)
     limit = np.full(q.shape[0], np.inf) if only_below is None else np.ascontiguousarray(only_below, dtype=float)
     out = np.empty((q.shape[0], len(TERMS)))
-    _swarm(q, limit, plan, out)
+    within = plan.consts[_C_CLEAR] if exact_below_m is None else float(exact_below_m)
+    _swarm(q, limit, plan, within, out)
     return out
