@@ -80,14 +80,9 @@ def register(sub: Any) -> None:
 
 def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion optimize``: solve, optionally validate, then write pose, figure and cost curve together."""
-    from tqdm import tqdm
-
-    from op2motion.errors import CheckFailed
-    from op2motion.figures.pose import outcome_figures
+    from op2motion.figures.background import Renderers
     from op2motion.fileio import OutputSet
-    from op2motion.formats.posefile import pose_to_json
     from op2motion.posture.cost import PostureProblem
-    from op2motion.workflow import Validate, solve
 
     target = vec3(args.target, "target") or book.DEFAULT_PROBLEM.target
     problem = PostureProblem(args.support, args.hand, target, args.br, args.model, args.com_model).validated()
@@ -96,6 +91,21 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     out = Path(args.out) if args.out else Path("poses") / f"{name}.json"
     png = Path(args.plot) if args.plot else out.with_suffix(".png")
     outputs = OutputSet({"out": out, "plot": png, "cost curve": out.with_name(out.stem + "_cost.png")})
+    with Renderers(2) as renderers:          # they load matplotlib while the swarm searches
+        return _optimize(args, spec, problem, settings, name, outputs, renderers)
+
+
+def _optimize(args: argparse.Namespace, spec: Spec, problem: Any, settings: PSOSettings, name: str,
+              outputs: Any, renderers: Any) -> int:
+    """The work of :func:`cmd_optimize`, its figures drawn by ``renderers``."""
+    from tqdm import tqdm
+
+    from op2motion.errors import CheckFailed
+    from op2motion.figures.pose import outcome_cost_curve, outcome_pose_figure
+    from op2motion.formats.posefile import pose_to_json
+    from op2motion.workflow import Validate, solve
+
+    target = problem.target
     with tqdm(total=settings.iterations * (1 + args.restarts), desc="PSO", unit="it", leave=False,
               disable=not progress_enabled(args)) as bar:
         outcome = solve(problem, spec, settings, restarts=args.restarts, refine=not args.no_refine,
@@ -121,7 +131,9 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     if not outcome.ok:
         emit(args, result, "\n".join(lines))
         raise CheckFailed(f"{r.message}; nothing written")
-    figure, cost_curve, drawn = outcome_figures(outcome, name, spec)
+    jobs = renderers.submit(outcome_pose_figure, outcome, name, spec), renderers.submit(outcome_cost_curve, outcome,
+                                                                                          name)
+    (figure, drawn), cost_curve = renderers.result(jobs[0]), renderers.result(jobs[1])
     outputs.put("out", pose_to_json(pose, spec))
     outputs.put("plot", figure)
     outputs.put("cost curve", cost_curve)

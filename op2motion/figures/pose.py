@@ -99,8 +99,8 @@ def pose_figure(name: str, angles: BookAngles, spec: Spec, drawing: Drawing = Dr
     return png, drawn, reports
 
 
-def outcome_figures(outcome: Outcome, name: str, spec: Spec) -> tuple[bytes, bytes, dict[str, Any]]:
-    """PNG bytes of the pose figure and of the cost curves of an ``optimize`` outcome, and the pose report."""
+def outcome_pose_figure(outcome: Outcome, name: str, spec: Spec) -> tuple[bytes, dict[str, Any]]:
+    """PNG bytes of the pose figure of an ``optimize`` outcome and the report of what was drawn."""
     r = outcome.result
     p = r.problem
     lines = [f"{p.hand} hand to ({', '.join(f'{v:.3f}' for v in p.target)}) m: {r.message}",
@@ -108,7 +108,18 @@ def outcome_figures(outcome: Outcome, name: str, spec: Spec) -> tuple[bytes, byt
              f"refinement {r.method}"]
     png, drawn, _ = pose_figure(name, r.angles, spec, Drawing(br=p.br, target=p.target, lines=lines),
                                 outcome.validation)
+    return png, drawn
+
+
+def outcome_cost_curve(outcome: Outcome, name: str) -> bytes:
+    """PNG bytes of the PSO cost curves of an ``optimize`` outcome (every attempt)."""
+    r = outcome.result
     attempts = r.attempt_pso or (r.pso,)
-    cost = render_cost_curve([a.history for a in attempts], [a.hand_error_history for a in attempts], r.tolerance_m,
+    return render_cost_curve([a.history for a in attempts], [a.hand_error_history for a in attempts], r.tolerance_m,
                              f"PSO cost, {name} ({len(attempts)} attempt(s))", r.chosen_attempt)
-    return png, cost, drawn
+
+
+def outcome_figures(outcome: Outcome, name: str, spec: Spec) -> tuple[bytes, bytes, dict[str, Any]]:
+    """PNG bytes of the pose figure and of the cost curves of an ``optimize`` outcome, and the pose report."""
+    png, drawn = outcome_pose_figure(outcome, name, spec)
+    return png, outcome_cost_curve(outcome, name), drawn

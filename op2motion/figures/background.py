@@ -1,0 +1,105 @@
+"""Figures rendered beside the work that produces their data.
+
+Loading matplotlib takes about 0.4 s and drawing a pose figure another 0.4 s, as long as the whole optimisation.
+:class:`Renderers` forks processes that load matplotlib while the caller computes, then each draws one figure on its
+own core when the data is ready, so the figures of ``optimize`` cost about as much as the slowest of them. Where
+processes cannot be forked (no ``fork`` start method) or a renderer fails, the figure is drawn here instead: the
+bytes are the same either way.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import multiprocessing
+import signal
+from typing import Any, Callable
+
+_WAIT_S = 60.0      # a renderer that has not answered in this long is given up (the figure is drawn here)
+
+
+def _serve(conn: Any) -> None:
+    """In a renderer: load matplotlib, then draw the one figure asked for and send it back."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)            # the parent decides what Ctrl-C ends
+    with contextlib.suppress(Exception):
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot  # noqa: F401
+        import mpl_toolkits.mplot3d  # noqa: F401
+    try:
+        job = conn.recv()
+    except (EOFError, OSError):
+        return
+    if job is None:
+        return
+    fn, args = job
+    try:
+        conn.send(("ok", fn(*args)))
+    except Exception as exc:                                 # the parent draws it again and sees the error itself
+        with contextlib.suppress(Exception):
+            conn.send(("error", repr(exc)))
+
+
+class Renderers:
+    """Up to ``count`` forked renderers (see the module docstring); use as a context manager, :meth:`submit` a
+    figure function with its (picklable) arguments, then :meth:`result` each in turn."""
+
+    def __init__(self, count: int):
+        self._idle: list[tuple[Any, Any]] = []
+        self._procs: list[Any] = []
+        self._jobs: list[tuple[Any, Callable[..., Any], tuple]] = []
+        if "fork" not in multiprocessing.get_all_start_methods():
+            return
+        ctx = multiprocessing.get_context("fork")
+        for _ in range(count):
+            with contextlib.suppress(OSError):
+                parent, child = ctx.Pipe()
+                proc = ctx.Process(target=_serve, args=(child,), daemon=True)
+                proc.start()
+                child.close()
+                self._idle.append((proc, parent))
+                self._procs.append(proc)
+
+    def __enter__(self) -> "Renderers":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def submit(self, fn: Callable[..., Any], *args: Any) -> int:
+        """Hand ``fn(*args)`` to an idle renderer (or keep it to draw here); returns the job's number."""
+        conn = None
+        if self._idle:
+            proc, conn = self._idle.pop(0)
+            try:
+                conn.send((fn, args))
+            except Exception:                                  # unpicklable or a dead renderer: draw it here
+                proc.kill()
+                conn = None
+        self._jobs.append((conn, fn, args))
+        return len(self._jobs) - 1
+
+    def result(self, job: int) -> Any:
+        """What job ``job`` returned (drawn here if its renderer failed)."""
+        conn, fn, args = self._jobs[job]
+        if conn is not None:
+            with contextlib.suppress(EOFError, OSError):
+                if conn.poll(_WAIT_S):
+                    status, value = conn.recv()
+                    if status == "ok":
+                        return value
+        return fn(*args)
+
+    def close(self) -> None:
+        """End every renderer."""
+        for _, conn in self._idle:
+            with contextlib.suppress(Exception):
+                conn.send(None)
+        for proc in self._procs:
+            proc.join(timeout=0.2)
+            if proc.is_alive():
+                proc.kill()
+                proc.join()
+        for conn in [c for _, c in self._idle] + [c for c, _, _ in self._jobs if c is not None]:
+            conn.close()
+        self._idle, self._procs = [], []
