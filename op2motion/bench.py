@@ -14,6 +14,7 @@ from typing import Any, Callable
 import numpy as np
 
 from op2motion import book
+from op2motion.bench_wall import wall_figures
 from op2motion.formats.action import ActionFile
 from op2motion.kinematics import forward
 from op2motion.kinematics.dh_chain import matrix_frames
@@ -96,13 +97,16 @@ def _walk_figures(spec: Spec, repeat: int) -> dict[str, Any]:
     plan_ms = _best_ms(lambda: out.update(g=plan_gait(params, spec)), min(repeat, 3))
     schedule = gait_schedule(out["g"], spec)
     walk_ms = _best_ms(lambda: out.update(w=check(schedule, spec).run), 1)
-    run = out["w"]
-    return {"walk_plan_ms": round(plan_ms, 1), "walk_validate_ms": round(walk_ms, 1), "walk_steps": 20,
-            "check_walk_fell": bool(run.fell), "check_walk_speed_mps": round(run.walk.mean_speed_mps, 4)}
+    walk_mujoco_ms = _best_ms(lambda: out.update(m=check(schedule, spec, ("mujoco",)).run), 1)
+    run, other = out["w"], out["m"]
+    return {"walk_plan_ms": round(plan_ms, 1), "walk_validate_ms": round(walk_ms, 1),
+            "walk_validate_mujoco_ms": round(walk_mujoco_ms, 1), "walk_steps": 20,
+            "walk_simulated_s": run.seconds, "check_walk_fell": bool(run.fell or other.fell),
+            "check_walk_speed_mps": round(min(run.walk.mean_speed_mps, other.walk.mean_speed_mps), 4)}
 
 
 def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
-              action: ActionFile | None = None) -> dict[str, Any]:
+              action: ActionFile | None = None, wall_runs: int = 0) -> dict[str, Any]:
     """Time batched forward kinematics + CoM for ``n`` poses with each model, one physics validation, one PSO
     solve and (given an action file's bytes) one page played and validated; figures in milliseconds (scaled to
     40 000 poses), with their correctness checks."""
@@ -119,7 +123,8 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
     stand = book_to_servo(BookAngles.standing("left"), spec)[0]
     verdict: dict[str, RunReport] = {}
     hold = Schedule.hold(stand, "double", spec, DEFAULT_SECONDS)
-    validate_ms = _best_ms(lambda: verdict.update(v=check(hold, spec).run), 1)
+    validate_ms = _best_ms(lambda: verdict.update(v=check(hold, spec).run), 3)
+    validate_mujoco_ms = _best_ms(lambda: verdict.update(m=check(hold, spec, ("mujoco",)).run), 3)
     swarm = BookAngles.random(PSOSettings().particles, rng, "left")
     frames, shapes = matrix_frames(swarm.vector(), spec, "left"), shape_set(spec, "left")
     clearance_ms = _best_ms(lambda: clearances(frames, shapes, CLEARANCE_EXACT_M), repeat)
@@ -135,17 +140,21 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
         "fk_dh_full_com_40k_ms": round(dh_full_ms, 2),
         "pinocchio_com_40k_ms": round(pin_ms, 1),
         "validate_ms": round(validate_ms, 1),
+        "validate_mujoco_ms": round(validate_mujoco_ms, 1),
         "validate_seconds": DEFAULT_SECONDS,
+        "validate_simulated_s": verdict["v"].seconds,
+        "validate_ended": verdict["v"].ended,
         "self_clearance_swarm_ms": round(clearance_ms, 2),
         "pso_solve_ms": round(pso_ms, 1),
         "book_matlab_pb_40k_ms": book.MATLAB_40K_MS["pb"],
         "book_matlab_dh_40k_ms": book.MATLAB_40K_MS["dh"],
         "check_dh_vs_pinocchio_m": _dh_vs_pinocchio_m(spec, poses_dh),
         "check_full_com_vs_pinocchio_m": _full_com_vs_pinocchio_m(spec, poses_dh),
-        "check_standing_stands": bool(verdict["v"].stable),
+        "check_standing_stands": bool(verdict["v"].stable and verdict["m"].stable),
         "check_standing_clearance_m": float(clearances(standing, shapes).min()),
         "check_pso_hand_error_m": float(evaluate_cost(BookAngles.from_vector(pso["r"].x), problem,
                                                       spec).hand_error[0]),
         **_motion_figures(spec, action, repeat),
         **_walk_figures(spec, repeat),
+        **(wall_figures(wall_runs) if wall_runs else {}),
     }

@@ -23,7 +23,7 @@ LAYERS = [
     {"motion"},
     {"gait"},
     {"workflow"},
-    {"figures", "library", "bench"},
+    {"figures", "library", "bench", "bench_wall"},
     {"commands"},
     {"cli"},
     {"__main__", "__init__"},

@@ -51,6 +51,11 @@ def register(sub: Any) -> None:
     p.add_argument("--out", type=output_path, default="poses/library", help="library folder (default poses/library)")
     p.add_argument("--workers", type=whole(0, MAX_WORKERS), default=0,
                    help=f"worker processes, 0 = one per core (default 0, at most {MAX_WORKERS})")
+    p.add_argument("--executor", choices=("process", "ray"), default="process",
+                   help="process: a pool of worker processes here (default); ray: Ray tasks (pip install "
+                        "'.[cluster]'), on this machine or, with --address, on a running cluster")
+    p.add_argument("--address", metavar="ADDR", help="with --executor ray: the cluster's head, e.g. 10.0.0.5:6379 "
+                                                     "or auto (default: start Ray on this machine)")
     com_model_arg(p)
     solver_args(p)
     p.add_argument("--robust", action="store_true",
@@ -62,12 +67,13 @@ def cmd_library_build(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion library build``."""
     from tqdm import tqdm
 
-    from op2motion.library.build import BuildSettings, build_library, check_workers
+    from op2motion.library.build import BuildSettings, Executor, build_library, check_workers
     from op2motion.library.grid import axis, grid_jobs
     from op2motion.posture.pso import PSOSettings
     from op2motion.workflow import Validate
 
     check_workers(args.workers)
+    executor = Executor(args.executor, args.address)
     if args.robust and not args.validate:
         raise InputError("expected --validate with --robust", "validate")
     x, y, z = (axis(start, stop, count, name) for name, (start, stop, count) in
@@ -77,7 +83,7 @@ def cmd_library_build(args: argparse.Namespace, spec: Spec) -> int:
                              Validate(args.seconds, args.engine) if args.validate else None, args.robust)
     with tqdm(total=len(jobs), desc="library", unit="pose", disable=not progress_enabled(args)) as bar:
         summary = build_library(jobs, spec, args.out, settings, args.workers, args.spec,
-                                on_done=lambda row: bar.update())
+                                on_done=lambda row: bar.update(), executor=executor)
     text = (f"{summary.targets} targets: {summary.solved} reached, {summary.failed} not, {summary.skipped} already "
             f"done; {summary.seconds:.1f} s; index {summary.index}")
     if summary.robust_checked:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
 import multiprocessing
 import os
 import signal
@@ -29,7 +30,7 @@ from op2motion.library.grid import Job
 from op2motion.library.index import INDEX_JSON, IndexRow, load_index, reconcile, write_index
 from op2motion.posture.pso import PSOSettings
 from op2motion.robot.spec import Spec
-from op2motion.robot.specfile import load_spec
+from op2motion.robot.specfile import load_spec, parse_spec, spec_text
 from op2motion.workflow import DEFAULT_RESTARTS, Validate, solve
 
 MAX_WORKERS = 64
@@ -47,6 +48,21 @@ class BuildSettings:
     restarts: int = DEFAULT_RESTARTS
     validate: Validate | None = None
     robust: bool = False
+
+
+@dataclass(frozen=True)
+class Executor:
+    """Where the targets are solved: ``process`` (a pool on this machine) or ``ray`` (tasks on Ray: ``address`` of
+    a running cluster, or None to start Ray here)."""
+
+    kind: str = "process"
+    address: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("process", "ray"):
+            raise InputError(f"expected process or ray, got {self.kind!r}", "executor")
+        if self.address is not None and self.kind != "ray":
+            raise InputError("expected --executor ray with --address", "address")
 
 
 @dataclass(frozen=True)
@@ -116,12 +132,13 @@ def _row(job: Job, reached: bool, message: str, **extra: Any) -> IndexRow:
     return IndexRow(job.name, job.hand, job.support, job.br, x, y, z, reached, message=message, **extra)
 
 
-def _solve_job(task: tuple[Job, str | None, str, BuildSettings]) -> tuple[IndexRow, str | None]:
-    """Worker: solve one target; returns its index row and, when reached, the pose file text."""
-    job, spec_path, sha, settings = task
+def solve_job(task: tuple[Job, str | None, str, BuildSettings, str | None]) -> tuple[IndexRow, str | None]:
+    """Worker: solve one target; returns its index row and, when reached, the pose file text. The task names the
+    spec by its file (same machine) or carries its text (another machine), with its SHA-256."""
+    job, spec_path, sha, settings, text = task
     t0 = time.perf_counter()
     try:
-        spec = load_spec(spec_path)
+        spec = _worker_spec(text) if text is not None else load_spec(spec_path)
         if spec.sha256 != sha:
             return _row(job, False, "error: the spec file changed during the build"), None
         out = solve(job.problem, spec, settings.pso, restarts=settings.restarts, validate=settings.validate)
@@ -139,6 +156,11 @@ def _solve_job(task: tuple[Job, str | None, str, BuildSettings]) -> tuple[IndexR
     if settings.robust and settings.validate is not None:
         row = _robust_row(row, pose.servo, job, spec, settings.validate)
     return row, pose_to_json(pose, spec)
+
+
+@functools.lru_cache(maxsize=4)
+def _worker_spec(text: str) -> Spec:
+    return parse_spec(text)
 
 
 def _robust_row(row: IndexRow, servo: Any, job: Job, spec: Spec, validate: Validate) -> IndexRow:
@@ -172,8 +194,9 @@ def _sigterm_as_interrupt() -> Iterator[None]:
 
 def build_library(jobs: Sequence[Job], spec: Spec, out_dir: str | Path, settings: BuildSettings = BuildSettings(),
                   workers: int = 0, spec_path: str | None = None,
-                  on_done: Callable[[IndexRow], Any] | None = None) -> BuildSummary:
-    """Solve every job not already in ``out_dir``'s index (see the module docstring); returns the summary.
+                  on_done: Callable[[IndexRow], Any] | None = None, executor: Executor | None = None) -> BuildSummary:
+    """Solve every job not already in ``out_dir``'s index (see the module docstring) in worker processes, or as
+    Ray tasks (``executor``: :class:`Executor`); returns the summary.
 
     Raises :class:`Interrupted` (exit code 130) when interrupted (Ctrl-C, SIGTERM), after the workers are ended
     and a complete index is written.
@@ -190,8 +213,14 @@ def build_library(jobs: Sequence[Job], spec: Spec, out_dir: str | Path, settings
     interrupted = False
     try:
         with _sigterm_as_interrupt():
-            if todo:
-                _run(todo, spec, spec_path, settings, min(workers, len(todo)), out, rows, on_done)
+            record = Recorder(out, rows, on_done)
+            if todo and executor is not None and executor.kind == "ray":
+                from op2motion.library.cluster import run_on_ray
+
+                run_on_ray(todo, spec, spec_text(spec_path), settings, min(workers, len(todo)), record,
+                           executor.address)
+            elif todo:
+                _run(todo, spec, spec_path, settings, min(workers, len(todo)), record)
     except KeyboardInterrupt:
         interrupted = True
     finally:   # every exit path: the index describes exactly the pose files present
@@ -208,8 +237,23 @@ def build_library(jobs: Sequence[Job], spec: Spec, out_dir: str | Path, settings
                         sum(1 for r in held if r.robust_passed != r.robust_runs))
 
 
-def _run(todo: Sequence[Job], spec: Spec, spec_path: str | None, settings: BuildSettings, workers: int, out: Path,
-         rows: dict[str, IndexRow], on_done: Callable[[IndexRow], Any] | None) -> None:
+class Recorder:
+    """The driver's side of a build: each finished target's pose file (atomically), then the index."""
+
+    def __init__(self, out: Path, rows: dict[str, IndexRow], on_done: Callable[[IndexRow], Any] | None):
+        self.out, self.rows, self.on_done = out, rows, on_done
+
+    def __call__(self, row: IndexRow, pose_text: str | None) -> None:
+        if pose_text is not None:
+            write_atomic(self.out / row.file, pose_text)
+        self.rows[row.name] = row
+        write_index(self.out, self.rows)
+        if self.on_done is not None:
+            self.on_done(row)
+
+
+def _run(todo: Sequence[Job], spec: Spec, spec_path: str | None, settings: BuildSettings, workers: int,
+         record: Recorder) -> None:
     ctx = multiprocessing.get_context("spawn")  # fresh interpreters: no inherited threads or pyswarms state
     main = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None  # workers inherit Ctrl-C ignored
@@ -220,14 +264,9 @@ def _run(todo: Sequence[Job], spec: Spec, spec_path: str | None, settings: Build
         if main:
             signal.signal(signal.SIGINT, previous)
     try:
-        tasks = [(job, spec_path, spec.sha256, settings) for job in todo]
-        for row, pose_text in pool.imap_unordered(_solve_job, tasks):
-            if pose_text is not None:
-                write_atomic(out / row.file, pose_text)
-            rows[row.name] = row
-            write_index(out, rows)
-            if on_done is not None:
-                on_done(row)
+        tasks = [(job, spec_path, spec.sha256, settings, None) for job in todo]
+        for row, pose_text in pool.imap_unordered(solve_job, tasks):
+            record(row, pose_text)
         pool.close()
     finally:
         pool.terminate()   # on Ctrl-C: pending targets cancelled, workers ended at once

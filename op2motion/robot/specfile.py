@@ -369,6 +369,11 @@ def load_spec(path: str | Path | None = None) -> Spec:
     return parse_spec(read_text(path, "spec file", SpecError), str(path))
 
 
+def spec_text(path: str | Path | None = None) -> str:
+    """The TOML text of a spec file (``None``: the shipped OP2 spec), e.g. to send to another machine."""
+    return _shipped_spec_text() if path is None else read_text(path, "spec file", SpecError)
+
+
 def _shipped_spec_text() -> str:
     """``specs/op2.toml``: installed as package data ``op2motion.specs``, or beside the package in a source tree."""
     source_tree = Path(__file__).resolve().parents[2] / "specs" / "op2.toml"

@@ -1,0 +1,87 @@
+"""library build on a Ray cluster: a local Ray head on this machine (started with Ray's own CLI), a small grid
+built through it, compared with the process pool; resumable with the same index."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
+
+import pytest
+
+pytestmark = pytest.mark.slow
+ray = pytest.importorskip("ray")
+GRID = ["--hands", "left", "--supports", "left", "--x", "0.08", "0.12", "2", "--y", "0.03", "0.03", "1",
+        "--z", "0.07", "0.07", "1", "--iters", "60"]
+SAME_DEG = 1e-9
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture
+def ray_head():
+    """A Ray head on this machine (token authentication off: a test cluster on loopback; a short temp folder:
+    Ray's sockets must fit in 107 bytes)."""
+    env = {**os.environ, "RAY_AUTH_MODE": "disabled", "RAY_USAGE_STATS_ENABLED": "0"}
+    temp = tempfile.mkdtemp(prefix="ray", dir="/tmp")
+    port = _free_port()
+    cli = [sys.executable, "-c", "from ray.scripts.scripts import main; main()"]
+    started = subprocess.run([*cli, "start", "--head", f"--port={port}", "--num-cpus=2", "--include-dashboard=false",
+                              "--disable-usage-stats", f"--temp-dir={temp}"], env=env, capture_output=True,
+                             text=True, timeout=120)
+    assert started.returncode == 0, started.stderr
+    try:
+        yield f"127.0.0.1:{port}", env
+    finally:
+        subprocess.run([*cli, "stop", "--force"], env=env, capture_output=True, timeout=120)
+        shutil.rmtree(temp, ignore_errors=True)
+
+
+def _build(cwd, env, out, *extra):
+    done = subprocess.run([sys.executable, "-m", "op2motion", "library", "build", *GRID, "--out", out, "--json",
+                           *extra], cwd=cwd, env=env, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)
+
+
+def _poses(folder):
+    rows = {r["name"]: r for r in json.loads((folder / "index.json").read_text())}
+    servo = {name: json.loads((folder / r["file"]).read_text())["servo_deg"] for name, r in rows.items() if r["file"]}
+    return {name: (r["reached"], r["attempts"]) for name, r in rows.items()}, servo
+
+
+def test_a_grid_built_on_a_ray_cluster_equals_the_process_pool(tmp_path, ray_head):
+    address, env = ray_head
+    on_ray = _build(tmp_path, env, "ray_lib", "--executor", "ray", "--address", address)
+    pooled = _build(tmp_path, env, "pool_lib", "--workers", "2")
+    assert on_ray["targets"] == pooled["targets"] == 2 and on_ray["solved"] == pooled["solved"] > 0
+    rows_ray, servo_ray = _poses(tmp_path / "ray_lib")
+    rows_pool, servo_pool = _poses(tmp_path / "pool_lib")
+    assert rows_ray == rows_pool and servo_ray.keys() == servo_pool.keys()
+    for name in servo_ray:                       # {joint: degrees}
+        assert servo_ray[name] == pytest.approx(servo_pool[name], abs=SAME_DEG)
+    again = _build(tmp_path, env, "ray_lib", "--executor", "ray", "--address", address)   # resumable: all done
+    assert again["skipped"] == 2 and again["solved"] == on_ray["solved"]
+
+
+def test_ray_asked_of_a_cluster_that_is_not_there(tmp_path):
+    done = subprocess.run([sys.executable, "-m", "op2motion", "library", "build", *GRID, "--out", "lib",
+                           "--executor", "ray", "--address", f"127.0.0.1:{_free_port()}"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=300,
+                          env={**os.environ, "RAY_AUTH_MODE": "disabled", "RAY_USAGE_STATS_ENABLED": "0"})
+    assert done.returncode == 2 and "--address" in done.stderr and "Traceback" not in done.stderr
+    assert not (tmp_path / "lib" / "reach-ll-80-30-70-br70.json").exists()
+
+
+def test_address_without_ray_is_refused(tmp_path):
+    done = subprocess.run([sys.executable, "-m", "op2motion", "library", "build", *GRID, "--address", "auto"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and "--executor ray" in done.stderr
