@@ -17,7 +17,6 @@ from op2motion.library.build import THREAD_VARIABLES, BuildSettings, Recorder, s
 from op2motion.library.grid import Job
 from op2motion.robot.spec import Spec
 
-
 CONNECT_TIMEOUT_S = 5.0     # a cluster's head that does not answer a TCP connection in this long is not there
 
 
