@@ -15,7 +15,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "op2motion"
 #: Layers, lowest first. A module may import modules of lower layers and of its own package; never higher ones.
 LAYERS = [
     {"errors", "version"},
-    {"book", "fileio"},
+    {"book", "fileio", "bench_wall"},
     {"robot"},
     {"kinematics", "formats"},
     {"model"},
@@ -23,7 +23,7 @@ LAYERS = [
     {"motion"},
     {"gait"},
     {"workflow"},
-    {"figures", "library", "bench", "bench_wall"},
+    {"figures", "library", "bench"},
     {"commands"},
     {"cli"},
     {"__main__", "__init__"},

@@ -1,6 +1,6 @@
 """``library build --executor ray``: the same targets solved as Ray tasks, on this machine or a cluster.
 
-Each target is one task running the same worker function as the process pool (:func:`.build.solve_job`); the
+Each target is one task running the same worker function as the process pool (:func:`.jobs.solve_job`); the
 driver stays the only writer (pose files atomically, then the index after every target), so a build is resumable
 with the same index whichever executor ran it. Tasks carry the spec's text, not its path: a cluster's nodes need
 op2motion installed (``pip install 'op2motion[cluster]'``, the same version), not the driver's files. Ray is an
@@ -13,8 +13,8 @@ import socket
 from typing import Any, Sequence
 
 from op2motion.errors import InputError
-from op2motion.library.build import THREAD_VARIABLES, BuildSettings, Recorder, solve_job
 from op2motion.library.grid import Job
+from op2motion.library.jobs import THREAD_VARIABLES, BuildSettings, Recorder, solve_job
 from op2motion.robot.spec import Spec
 
 CONNECT_TIMEOUT_S = 5.0     # a cluster's head that does not answer a TCP connection in this long is not there
