@@ -1,5 +1,5 @@
 """``python -m op2motion``: the command-line interface."""
 
-from op2motion.cli import main
+from op2motion.cli import entry
 
-raise SystemExit(main())
+entry()
