@@ -106,7 +106,7 @@ def _walk_figures(spec: Spec, repeat: int) -> dict[str, Any]:
 
 
 def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
-              action: ActionFile | None = None, wall_runs: int = 0) -> dict[str, Any]:
+              action: ActionFile | None = None, wall_runs: int = 0, wall_library: bool = True) -> dict[str, Any]:
     """Time batched forward kinematics + CoM for ``n`` poses with each model, one physics validation, one PSO
     solve and (given an action file's bytes) one page played and validated; figures in milliseconds (scaled to
     40 000 poses), with their correctness checks."""
@@ -156,5 +156,5 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
                                                       spec).hand_error[0]),
         **_motion_figures(spec, action, repeat),
         **_walk_figures(spec, repeat),
-        **(wall_figures(wall_runs) if wall_runs else {}),
+        **(wall_figures(wall_runs, wall_library) if wall_runs else {}),
     }

@@ -13,7 +13,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 WALL_TIMEOUT_S = 600.0
 
@@ -38,9 +38,10 @@ def _median(argv: list[str], runs: int) -> tuple[float, dict[str, Any], bool]:
     return statistics.median(times), doc, ok
 
 
-def wall_figures(runs: int = 3, library: bool = True) -> dict[str, Any]:
+def wall_figures(runs: int = 3, library: bool = True, grid: Sequence[str] = ()) -> dict[str, Any]:
     """``help_wall_s``, ``optimize_wall_s``, ``optimize_validate_wall_s`` (default problem) and, with ``library``,
-    ``library_poses_per_min`` (the default grid with ``--validate --workers 2``), each with its check."""
+    ``library_poses_per_min`` (``--validate --workers 2`` on the default grid, or the ``grid`` flags given), each
+    with its check."""
     help_s, _, help_ok = _median(["--help"], runs)
     opt_s, opt, opt_ok = _median(["optimize", "--json"], runs)
     val_s, val, val_ok = _median(["optimize", "--validate", "--json"], runs)
@@ -52,8 +53,8 @@ def wall_figures(runs: int = 3, library: bool = True) -> dict[str, Any]:
     }
     if library:
         with tempfile.TemporaryDirectory(prefix="op2motion-bench-") as tmp:
-            seconds, done = _timed(["library", "build", "--validate", "--workers", "2", "--out", "lib", "--json"],
-                                   Path(tmp))
+            seconds, done = _timed(["library", "build", *grid, "--validate", "--workers", "2", "--out", "lib",
+                                    "--json"], Path(tmp))
         summary = json.loads(done.stdout) if done.returncode == 0 else {}
         solved = int(summary.get("solved", 0))
         out.update(library_poses_per_min=round(60.0 * solved / seconds, 1), library_wall_s=round(seconds, 1),
