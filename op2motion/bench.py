@@ -65,6 +65,21 @@ def _full_com_vs_pinocchio_m(spec: Spec, poses: BookAngles) -> float:
     return max(float(np.linalg.norm(full[:, i] - dyn.com(servo[i], poses.support))) for i in range(n))
 
 
+def _studio_figures(spec: Spec, repeat: int) -> dict[str, Any]:
+    """``studio_update_ms``: one joint edit in the pose studio and everything the page shows after it (both CoMs,
+    margins, the settled CoM, swing-foot clearance, self-clearance, ticks); the check: the readout of the edit."""
+    from op2motion.robot.pose import Pose
+    from op2motion.studio.session import Session
+
+    session = Session(spec, Pose("bench", Support.LEFT, book_to_servo(BookAngles.standing("left"), spec)[0]))
+    angles = iter(np.tile(np.linspace(-30.0, 30.0, 7), 100))
+    out: dict[str, Any] = {}
+    update_ms = _best_ms(lambda: out.update(r=session.set_joint("l_sho_pitch", next(angles))), max(repeat, 3))
+    r = out["r"]
+    return {"studio_update_ms": round(update_ms, 2),
+            "check_studio_readout": bool(np.isfinite(r.margin_full_m) and np.isfinite(r.self_clearance_m))}
+
+
 BENCH_PAGE = 4            # the stock "hi" page: 464 ticks from the init pose, three pages chained
 
 
@@ -154,6 +169,7 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
         "check_standing_clearance_m": float(clearances(standing, shapes).min()),
         "check_pso_hand_error_m": float(evaluate_cost(BookAngles.from_vector(pso["r"].x), problem,
                                                       spec).hand_error[0]),
+        **_studio_figures(spec, repeat),
         **_motion_figures(spec, action, repeat),
         **_walk_figures(spec, repeat),
         **(wall_figures(wall_runs, wall_library) if wall_runs else {}),

@@ -23,6 +23,7 @@ LAYERS = [
     {"motion"},
     {"gait"},
     {"workflow"},
+    {"studio"},
     {"figures", "library", "bench"},
     {"commands"},
     {"cli"},

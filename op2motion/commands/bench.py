@@ -51,6 +51,7 @@ def cmd_bench(args: argparse.Namespace, spec: Spec) -> int:
     lines += [f"walk planned ({r['walk_steps']} steps of the forward preset): {r['walk_plan_ms']:.0f} ms; walked "
               f"({r['walk_simulated_s']:g} s simulated): PyBullet {r['walk_validate_ms']:.0f} ms, MuJoCo "
               f"{r['walk_validate_mujoco_ms']:.0f} ms ({r['check_walk_speed_mps']:.3f} m/s steady)"]
+    lines.append(f"pose studio: one joint edit and its readout {r['studio_update_ms']:.2f} ms")
     if "help_wall_s" in r:
         lines += [f"from the shell (median of {r['wall_runs']}): --help {r['help_wall_s']:.2f} s, optimize "
                   f"{r['optimize_wall_s']:.2f} s, optimize --validate {r['optimize_validate_wall_s']:.2f} s",

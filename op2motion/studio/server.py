@@ -1,0 +1,203 @@
+"""The pose studio's page: viser serves a three.js view of the robot and the controls; :class:`Studio` wires them to
+a :class:`~.session.Session`.
+
+The robot is drawn from the generated URDF (its collision shapes: the bodies physics simulates), placed with its
+stance sole on the floor at the origin; beside it the support polygon, both centres of mass with their ground
+projections, and the readout (margins, swing-foot clearance, the closest links, red on a collision). Per joint a
+slider over its mechanical range and jog buttons; a typed entry (joint, degrees) for exact values; the support
+choice; "check in physics" runs the check on a worker thread (the page stays live) and draws the settled pose as a
+grey ghost; "save pose" writes the pose file atomically. Every edit the page makes is recorded in
+:attr:`Studio.events` (what the Python side saw), and refused edits show their message in the page.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import tempfile
+import threading
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from op2motion.errors import Op2MotionError
+from op2motion.kinematics.tree import link_frames
+from op2motion.model.urdf import build_urdf
+from op2motion.robot.spec import Spec
+from op2motion.studio.session import Readout, Session
+
+JOG_STEPS = ("-5°", "-1°", "+1°", "+5°")
+CHECK_SECONDS = 3.0
+PURPLE, GREEN, RED, GREY = (0.55, 0.25, 0.75), (0.1, 0.6, 0.1), (0.8, 0.1, 0.1), (0.6, 0.6, 0.6)
+
+
+def _wxyz(rot: np.ndarray) -> tuple[float, float, float, float]:
+    from scipy.spatial.transform import Rotation
+
+    x, y, z, w = Rotation.from_matrix(rot).as_quat()
+    return float(w), float(x), float(y), float(z)
+
+
+def root_in_sole(spec: Spec, servo: np.ndarray, stance: str) -> tuple[np.ndarray, np.ndarray]:
+    """The torso (URDF root) frame in the stance sole frame: rotation (3, 3) and origin (3,) [m]."""
+    rot, origin = link_frames(spec, servo)[spec.joint(f"{stance[0]}_ank_roll").child]
+    sole = origin + rot @ np.array([0.0, 0.0, -spec.foot.sole_below_ankle])
+    return rot.T, -rot.T @ sole
+
+
+class Studio:
+    """A running studio page on ``host:port`` (port 0: a free one, read back in :attr:`port`)."""
+
+    def __init__(self, spec: Spec, session: Session, host: str = "127.0.0.1", port: int = 0):
+        import viser
+        import yourdfpy
+        from viser.extras import ViserUrdf
+
+        self.spec, self.session = spec, session
+        self.events: list[tuple[str, str]] = []
+        self._lock, self._quiet = threading.Lock(), False
+        with contextlib.redirect_stdout(io.StringIO()):        # viser's banner: the CLI prints its own line
+            self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self.port = int(self.server.get_port())
+        self.server.scene.configure_environment_map(hdri=None)
+        with tempfile.TemporaryDirectory(prefix="op2motion-studio-") as tmp:
+            path = Path(tmp) / "op2.urdf"
+            path.write_text(build_urdf(spec), encoding="utf-8")
+            urdf = yourdfpy.URDF.load(str(path), build_collision_scene_graph=True, load_collision_meshes=True)
+        self._robot = ViserUrdf(self.server, urdf, root_node_name="/robot", load_meshes=False,
+                                load_collision_meshes=True, collision_mesh_color_override=(0.75, 0.75, 0.8))
+        self._ghost: Any = None
+        self._urdf = urdf
+        self._order = list(self._robot.get_actuated_joint_names())
+        self.server.scene.add_grid("/floor", width=0.6, height=0.6, cell_size=0.05)
+        self._build_gui()
+        self.server.initial_camera.position = (0.55, 0.45, 0.35)
+        self.server.initial_camera.look_at = (0.0, 0.0, 0.18)
+        self._show(session.readout())
+
+    # -- the page ------------------------------------------------------------------------------------------------
+    def _build_gui(self) -> None:
+        gui = self.server.gui
+        self._readout = gui.add_markdown("")
+        self._message = gui.add_markdown("")
+        self._support = gui.add_dropdown("support", ("left", "right", "double"),
+                                         initial_value=self.session.support.value)
+        self._support.on_update(lambda _: self._edit("support", lambda: self.session.set_support(self._support.value)))
+        check = gui.add_button("check in physics")
+        check.on_click(lambda _: self._start_check())
+        self._verdict = gui.add_markdown("physics: not checked")
+        with gui.add_folder("type a value"):
+            self._joint = gui.add_dropdown("joint", tuple(self.spec.joint_names))
+            self._value = gui.add_text("degrees", "")
+            gui.add_button("set").on_click(lambda _: self._edit(
+                "set", lambda: self.session.set_joint(self._joint.value, self._value.value)))
+        with gui.add_folder("save"):
+            self._path = gui.add_text("pose file", f"poses/{self.session.name}.json")
+            gui.add_button("save pose").on_click(lambda _: self._save())
+        self._sliders: dict[str, Any] = {}
+        with gui.add_folder("joints"):
+            for joint, state in zip(self.spec.joints, self.session.readout().joints):
+                lo, hi = state.mechanical
+                slider = gui.add_slider(joint.name, min=lo, max=hi, step=0.5, initial_value=state.degrees)
+                slider.on_update(self._slider_handler(joint.name, slider))
+                jog = gui.add_button_group(f"{joint.name} jog", JOG_STEPS)
+                jog.on_click(self._jog_handler(joint.name))
+                self._sliders[joint.name] = slider
+
+    def _slider_handler(self, name: str, slider: Any) -> Any:
+        def moved(_: Any) -> None:
+            if not self._quiet:                   # not when the page follows the pose
+                self._edit("slider", lambda: self.session.set_joint(name, slider.value))
+        return moved
+
+    def _jog_handler(self, name: str) -> Any:
+        def jogged(event: Any) -> None:
+            self._edit("jog", lambda: self.session.jog(name, float(str(event.target.value).rstrip("°"))))
+        return jogged
+
+    def _edit(self, kind: str, action: Any) -> None:
+        """Apply one edit; a refused one leaves the pose and shows why."""
+        with self._lock:
+            try:
+                readout = action()
+            except Op2MotionError as exc:
+                self.events.append((kind, f"refused: {exc}"))
+                self._message.content = f"**refused**: {exc}"
+                return
+            self.events.append((kind, "applied"))
+            self._message.content = ""
+            self._show(readout)
+
+    def _show(self, readout: Readout) -> None:
+        """Draw the pose and its readout."""
+        s = self.session
+        rot, origin = root_in_sole(self.spec, s.servo, s.support.stance)
+        self.server.scene.add_frame("/robot", wxyz=_wxyz(rot), position=tuple(origin), show_axes=False)
+        by_name = dict(zip(self.spec.joint_names, s.servo))
+        self._robot.update_cfg(np.array([by_name[n] for n in self._order]))
+        for name, com, rgb in (("full", readout.com_full, PURPLE), ("lumped", readout.com_lumped, GREEN)):
+            self.server.scene.add_icosphere(f"/com/{name}", radius=0.008, color=rgb, position=com)
+            self.server.scene.add_icosphere(f"/com/{name}_ground", radius=0.004, color=rgb,
+                                            position=(com[0], com[1], 0.0))
+        self._quiet = True                    # the sliders follow the pose without editing it again
+        try:
+            for state in readout.joints:
+                if abs(self._sliders[state.name].value - state.degrees) > 1e-6:
+                    self._sliders[state.name].value = state.degrees
+        finally:
+            self._quiet = False
+        marks = [f"{j.name} {j.degrees:+.1f}° ({j.ticks}){' outside cable-safe' if j.outside_cable_safe else ''}"
+                 for j in readout.joints if j.outside_cable_safe]
+        tint = "red" if readout.colliding else "green"
+        self._readout.content = ("\n\n".join(readout.lines()) + f"\n\n<span style='color:{tint}'>"
+                                 f"{'self-collision' if readout.colliding else 'no self-collision'}</span>"
+                                 + ("\n\n" + "\n\n".join(marks) if marks else ""))
+
+    # -- long work ----------------------------------------------------------------------------------------------
+    def _start_check(self) -> None:
+        self.events.append(("check", "started"))
+        self._verdict.content = "physics: checking…"
+        threading.Thread(target=self._check, daemon=True).start()
+
+    def _check(self) -> None:
+        from op2motion.physics import Schedule, Setup, check
+
+        s = self.session
+        try:
+            run = check(Schedule.hold(s.servo.copy(), s.support, self.spec, CHECK_SECONDS), self.spec,
+                        setup=Setup(keep_track=True)).run
+        except Op2MotionError as exc:
+            self._verdict.content = f"physics: **could not check**: {exc}"
+            self.events.append(("check", f"refused: {exc}"))
+            return
+        verdict = "STANDS" if run.stable else "FALLS" if run.fell else "FAILS"
+        self._verdict.content = (f"physics: **{verdict}** ({', '.join(run.reasons) or 'no failure'}), margin "
+                                 f"{run.support_margin_m * 1000:+.1f} mm, {run.engine} {run.seconds:g} s ({run.ended})")
+        self._draw_ghost(run.track.q[-1])
+        self.events.append(("check", verdict))
+
+    def _draw_ghost(self, settled: np.ndarray) -> None:
+        from viser.extras import ViserUrdf
+
+        if self._ghost is None:
+            self._ghost = ViserUrdf(self.server, self._urdf, root_node_name="/ghost", load_meshes=False,
+                                    load_collision_meshes=True, collision_mesh_color_override=(*GREY, 0.35))
+        rot, origin = root_in_sole(self.spec, settled, self.session.support.stance)
+        self.server.scene.add_frame("/ghost", wxyz=_wxyz(rot), position=tuple(origin), show_axes=False)
+        by_name = dict(zip(self.spec.joint_names, settled))
+        self._ghost.update_cfg(np.array([by_name[n] for n in self._order]))
+
+    def _save(self) -> None:
+        try:
+            path = self.session.save(self._path.value)
+        except (Op2MotionError, OSError) as exc:
+            self._message.content = f"**not saved**: {exc}"
+            self.events.append(("save", f"refused: {exc}"))
+            return
+        self._message.content = f"saved {path}"
+        self.events.append(("save", str(path)))
+
+    def stop(self) -> None:
+        """End the server."""
+        self.server.stop()

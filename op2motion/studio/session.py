@@ -1,0 +1,169 @@
+"""The pose studio's model: one pose being edited, and what it looks like after every edit.
+
+A :class:`Session` holds servo angles (20,) [rad] and a support (left, right or double). Edits go through it
+(:meth:`Session.set_joint`, :meth:`Session.jog`, :meth:`Session.set_support`): a value outside the joint's
+mechanical range or not a finite number is refused with an :class:`~op2motion.errors.InputError` naming the joint
+and the range, and the pose is left as it was. After each edit :meth:`Session.readout` says what the page shows:
+both centres of mass with their margins (the book's lumped CoM against its foot rectangle; the full-inertia CoM
+against the real support polygon, on one foot also where it settles on the compliant servos), the swing foot's
+clearance, the least clearance between the collision shapes (and which links), and each joint in degrees and ticks
+with its cable-safe range. Nothing is written unless :meth:`Session.save` is called. World frame: the stance
+foot's sole centre, X forward, Y left, Z up.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from op2motion.errors import InputError
+from op2motion.fileio import write_atomic
+from op2motion.formats.posefile import pose_to_json
+from op2motion.kinematics.dh_chain import matrix_frames
+from op2motion.kinematics.report import evaluate
+from op2motion.kinematics.shapes import self_clearance, shape_set
+from op2motion.model.compliance import Compliance
+from op2motion.robot.balance import COM_MODEL_FULL, polygon_margin, rectangle_margin, support_extents
+from op2motion.robot.joints import joint_range, servo_to_book, servo_to_ticks
+from op2motion.robot.pose import Pose
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import SIDES, Support
+
+CLEARANCE_WARN_M = 0.004      # links closer than this are highlighted (the optimiser's self-clearance floor)
+
+
+@dataclass(frozen=True)
+class JointState:
+    """One joint as the page shows it: angle [deg], ticks, and the ranges [deg]."""
+
+    name: str
+    degrees: float
+    ticks: int
+    cable_safe: tuple[float, float]
+    mechanical: tuple[float, float]
+
+    @property
+    def outside_cable_safe(self) -> bool:
+        """Beyond the cable-safe range (allowed, marked)."""
+        return not self.cable_safe[0] <= self.degrees <= self.cable_safe[1]
+
+
+@dataclass(frozen=True)
+class Readout:
+    """What the page shows after an edit (lengths [m], world = stance sole frame)."""
+
+    support: str
+    com_lumped: tuple[float, float, float]
+    com_full: tuple[float, float, float]
+    margin_lumped_m: float               # lumped CoM to the book's foot rectangle (single support; NaN on two feet)
+    margin_full_m: float                 # full-inertia CoM to the real support polygon (rigid servos)
+    margin_settled_m: float              # one foot: where it settles on the compliant servos (NaN on two feet)
+    swing_clearance_m: float             # one foot: the lifted foot's lowest corner above the floor (NaN on two)
+    self_clearance_m: float
+    closest_links: tuple[str, str]
+    joints: tuple[JointState, ...] = field(repr=False)
+
+    @property
+    def colliding(self) -> bool:
+        """Links closer than :data:`CLEARANCE_WARN_M`."""
+        return self.self_clearance_m < CLEARANCE_WARN_M
+
+    def lines(self) -> list[str]:
+        """The readout in words (one fact a line)."""
+        mm = lambda v: "n/a" if not math.isfinite(v) else f"{v * 1000:+.1f} mm"  # noqa: E731
+        out = [f"support: {self.support}",
+               f"CoM full inertia ({self.com_full[0]:+.3f}, {self.com_full[1]:+.3f}, {self.com_full[2]:.3f}) m, "
+               f"margin {mm(self.margin_full_m)}" + ("" if math.isnan(self.margin_settled_m) else
+                                                      f", settled on the servos {mm(self.margin_settled_m)}"),
+               f"CoM lumped (book) ({self.com_lumped[0]:+.3f}, {self.com_lumped[1]:+.3f}, {self.com_lumped[2]:.3f}) m"
+               + ("" if math.isnan(self.margin_lumped_m) else f", margin {mm(self.margin_lumped_m)}")]
+        if math.isfinite(self.swing_clearance_m):
+            out.append(f"swing foot {mm(self.swing_clearance_m)} above the floor")
+        state = "COLLISION" if self.colliding else "clear"
+        out.append(f"self-clearance {mm(self.self_clearance_m)} ({' / '.join(self.closest_links)}): {state}")
+        return out
+
+
+class Session:
+    """One pose under edit (see the module docstring)."""
+
+    def __init__(self, spec: Spec, pose: Pose):
+        self.spec, self.name = spec, pose.name
+        self.servo = np.array(pose.servo, dtype=float)
+        self.support = Support.of(pose.support)
+        self._index = {n: i for i, n in enumerate(spec.joint_names)}
+        self._compliance = Compliance(spec)
+
+    def joint_index(self, name: str) -> int:
+        """The servo index of joint ``name``; :class:`InputError` for an unknown name."""
+        if name not in self._index:
+            raise InputError(f"expected one of {', '.join(self.spec.joint_names)}, got {name!r}", "joint")
+        return self._index[name]
+
+    def set_joint(self, name: str, degrees: object) -> Readout:
+        """Set one joint [deg] within its mechanical range; the pose is unchanged when refused."""
+        i = self.joint_index(name)
+        try:
+            value = float(degrees)  # type: ignore[arg-type]
+        except (TypeError, ValueError):
+            raise InputError(f"expected a number of degrees, got {degrees!r}", name) from None
+        lo, hi = (math.degrees(v) for v in joint_range(self.spec.joints[i], "mechanical"))
+        if not (math.isfinite(value) and lo - 1e-9 <= value <= hi + 1e-9):
+            raise InputError(f"expected {lo:.1f}° to {hi:.1f}° (its mechanical range), got {degrees!r}", name)
+        self.servo[i] = math.radians(value)
+        return self.readout()
+
+    def jog(self, name: str, delta_deg: float) -> Readout:
+        """Move one joint by ``delta_deg`` [deg], stopping at its mechanical range."""
+        i = self.joint_index(name)
+        lo, hi = (math.degrees(v) for v in joint_range(self.spec.joints[i], "mechanical"))
+        return self.set_joint(name, min(max(math.degrees(self.servo[i]) + float(delta_deg), lo), hi))
+
+    def set_support(self, support: str) -> Readout:
+        """Stand on ``left``, ``right`` or ``double``."""
+        self.support = Support.of(support)
+        return self.readout()
+
+    def pose(self) -> Pose:
+        """The pose as it is now."""
+        return Pose(self.name, self.support, self.servo.copy(), provenance={"command": "op2motion studio"})
+
+    def save(self, path: str | Path) -> Path:
+        """Write the pose file atomically; returns its path."""
+        target = Path(path)
+        write_atomic(target, pose_to_json(self.pose(), self.spec))
+        return target
+
+    def readout(self) -> Readout:
+        """What the page shows for the pose as it is (see :class:`Readout`)."""
+        spec, stance = self.spec, self.support.stance
+        angles = servo_to_book(self.servo[None], stance, spec)
+        report = evaluate(angles, spec, "dh")
+        points, full = report.points, report.com_full
+        frames = matrix_frames(angles.vector(), spec, stance)
+        clearance, pair = self_clearance(frames, shape_set(spec, stance))
+        links = shape_set(spec, stance).pair_names()[int(pair[0])]
+        nan = float("nan")
+        if self.support.is_double:
+            hull = Support.DOUBLE.polygon({s: points.foot_corners(s)[0] for s in SIDES})
+            margin_full, margin_lumped, settled_margin, swing = float(polygon_margin(full[:2], hull)[0]), nan, nan, nan
+        else:
+            margin_full = float(rectangle_margin(np.array([full[0]]), np.array([full[1]]),
+                                                 support_extents(spec, stance, 1.0, COM_MODEL_FULL))[0])
+            margin_lumped = report.stability_margin_m
+            settled = self._compliance.settle(points, full[:, None]).com_xy[:, 0]
+            settled_margin = float(rectangle_margin(settled[:1], settled[1:],
+                                                    support_extents(spec, stance, 1.0, COM_MODEL_FULL))[0])
+            swing = report.swing_foot_min_z
+        return Readout(self.support.value, tuple(report.com), tuple(full), margin_lumped, margin_full,
+                       settled_margin, swing, float(clearance[0]), links, self._joints())
+
+    def _joints(self) -> tuple[JointState, ...]:
+        ticks = servo_to_ticks(self.servo, self.spec)
+        return tuple(JointState(j.name, round(math.degrees(q), 3), int(t),
+                                tuple(round(math.degrees(v), 2) for v in joint_range(j, "cable-safe")),  # type: ignore[arg-type]
+                                tuple(round(math.degrees(v), 2) for v in joint_range(j, "mechanical")))  # type: ignore[arg-type]
+                     for j, q, t in zip(self.spec.joints, self.servo, ticks))

@@ -1,0 +1,143 @@
+"""The pose studio: its model (edits, refusals, readout), and the page in a real headless Chromium (Debian's, driven by
+Playwright with the system browser; nothing downloaded): the robot drawn, a joint slider moved, "check in physics"
+clicked, both seen by the Python side, the verdict on the page, the view changed where the robot is."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from op2motion.errors import InputError
+from op2motion.formats.posefile import read_pose
+from op2motion.studio.session import CLEARANCE_WARN_M, Session
+
+ROOT = os.path.join(os.path.dirname(__file__), "..")
+WALKREADY = os.path.join(ROOT, "poses", "walkready.json")
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+BROWSER_ARGS = ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+                "--disable-background-networking", "--disable-component-update", "--disable-sync", "--no-first-run",
+                "--disable-quic"]
+VIEW = (0, 0, 900, 800)            # the 3D view (x0, y0, x1, y1) [px]: left of the control panel
+CHANGED_PIXELS = 2000              # a joint moved 40° changes at least this many pixels of the view
+WAIT_S = 60.0
+
+
+def test_edits_are_checked_and_the_readout_follows(spec, tmp_path):
+    session = Session(spec, read_pose(WALKREADY, spec))
+    before = session.servo.copy()
+    for bad in (500, "abc", float("nan")):
+        with pytest.raises(InputError, match="l_sho_pitch"):
+            session.set_joint("l_sho_pitch", bad)
+    with pytest.raises(InputError, match="joint"):
+        session.set_joint("no_such_joint", 0)
+    assert np.array_equal(session.servo, before)
+    assert not (tmp_path / "x.json").exists()
+    readout = session.readout()
+    assert readout.support == "double" and readout.margin_full_m > 0.02 and not readout.colliding
+    clash = session.set_joint("l_sho_roll", 75)                      # the upper arm swung into the torso
+    assert clash.colliding and clash.self_clearance_m < CLEARANCE_WARN_M and "body_link" in clash.closest_links
+    one_leg = Session(spec, read_pose(os.path.join(ROOT, "poses", "book_2_44.json"), spec)).readout()
+    assert one_leg.support == "left" and one_leg.swing_clearance_m > 0.01 and one_leg.margin_settled_m > 0.0
+    saved = session.save(tmp_path / "x.json")
+    assert read_pose(saved, spec).servo[spec.joint_names.index("l_sho_roll")] == pytest.approx(np.radians(75))
+
+
+def test_a_port_in_use_is_one_line(tmp_path):
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        done = subprocess.run([sys.executable, "-m", "op2motion", "studio", "--port", str(port)], cwd=tmp_path,
+                              capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "--port" in done.stderr and "in use" in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1
+
+
+def _stable_view(page) -> bytes:
+    """A screenshot of the 3D view once two in a row are equal (software WebGL fades colours in)."""
+    previous, deadline = b"", time.monotonic() + WAIT_S
+    while time.monotonic() < deadline:
+        shot = page.screenshot(clip={"x": VIEW[0], "y": VIEW[1], "width": VIEW[2] - VIEW[0],
+                                     "height": VIEW[3] - VIEW[1]})
+        if shot == previous:
+            return shot
+        previous = shot
+        time.sleep(0.5)
+    return previous
+
+
+def _pixels(png: bytes) -> np.ndarray:
+    import io
+
+    from PIL import Image
+
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=int)
+
+
+def _wait(condition, what: str) -> None:
+    deadline = time.monotonic() + WAIT_S
+    while time.monotonic() < deadline:
+        if condition():
+            return
+        time.sleep(0.1)
+    raise AssertionError(f"timed out waiting for {what}")
+
+
+@pytest.mark.physics
+def test_the_page_moves_a_joint_and_checks_in_physics(spec, tmp_path):
+    playwright = pytest.importorskip("playwright.sync_api")
+    if not os.path.exists(CHROMIUM):
+        pytest.skip("Debian's chromium is not installed (the CI script installs it)")
+    from op2motion.studio.server import Studio
+
+    studio = Studio(spec, Session(spec, read_pose(WALKREADY, spec)))
+    try:
+        with playwright.sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=BROWSER_ARGS, headless=True)
+            page = browser.new_page(viewport={"width": 1280, "height": 800})
+            page.goto(f"http://127.0.0.1:{studio.port}")
+            page.wait_for_selector("canvas", timeout=WAIT_S * 1000)
+            before = _stable_view(page)
+            label = page.get_by_text("l_sho_pitch", exact=True).first
+            box = label.locator("xpath=ancestor::div[.//input][1]").locator("input[type=text]").last
+            box.fill("-20")                                           # the left arm from 41° to -20°
+            box.press("Enter")
+            _wait(lambda: ("slider", "applied") in studio.events, "the slider edit on the Python side")
+            assert studio.session.servo[spec.joint_names.index("l_sho_pitch")] == pytest.approx(np.radians(-20))
+            page.get_by_text("check in physics", exact=True).click()
+            _wait(lambda: any(k == "check" and v in ("STANDS", "FALLS", "FAILS") for k, v in studio.events),
+                  "the physics check")
+            page.get_by_text("STANDS").first.wait_for(timeout=WAIT_S * 1000)
+            after = _stable_view(page)
+            if os.environ.get("OP2MOTION_STUDIO_SHOT"):                  # the README's picture
+                page.screenshot(path=os.environ["OP2MOTION_STUDIO_SHOT"])
+            browser.close()
+        changed = np.any(np.abs(_pixels(after) - _pixels(before)) > 30, axis=2)
+        assert changed.sum() > CHANGED_PIXELS, changed.sum()
+        assert _pixels(after).std() > 10                                # not blank
+        assert ("check", "started") in studio.events
+    finally:
+        studio.stop()
+
+
+def test_ctrl_c_ends_the_server_within_3_s(tmp_path):
+    import signal
+
+    proc = subprocess.Popen([sys.executable, "-m", "op2motion", "studio", WALKREADY, "--port", "0"], cwd=tmp_path,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        line = proc.stdout.readline()
+        assert "http://127.0.0.1:" in line and ":0 " not in line, line
+        proc.send_signal(signal.SIGINT)
+        t0 = time.monotonic()
+        assert proc.wait(timeout=10) == 0 and time.monotonic() - t0 < 3.0
+        assert "Traceback" not in proc.stderr.read()
+    finally:
+        proc.kill()
