@@ -45,6 +45,11 @@ def test_edits_are_checked_and_the_readout_follows(spec, tmp_path):
     assert clash.colliding and clash.self_clearance_m < CLEARANCE_WARN_M and "body_link" in clash.closest_links
     one_leg = Session(spec, read_pose(os.path.join(ROOT, "poses", "book_2_44.json"), spec)).readout()
     assert one_leg.support == "left" and one_leg.swing_clearance_m > 0.01 and one_leg.margin_settled_m > 0.0
+    hand = np.array(session.readout().hands["right_hand"])
+    moved, left = session.reach("right", hand + (0.02, 0.0, 0.02))   # the arm IK: 2 cm forward and up
+    assert left < 0.002 and np.linalg.norm(np.array(moved.hands["right_hand"]) - hand - (0.02, 0.0, 0.02)) < 0.002
+    with pytest.raises(InputError, match="target"):
+        session.reach("right", ("a", 0, 0))
     saved = session.save(tmp_path / "x.json")
     assert read_pose(saved, spec).servo[spec.joint_names.index("l_sho_roll")] == pytest.approx(np.radians(75))
 
@@ -111,6 +116,9 @@ def test_the_page_moves_a_joint_and_checks_in_physics(spec, tmp_path):
             box.press("Enter")
             _wait(lambda: ("slider", "applied") in studio.events, "the slider edit on the Python side")
             assert studio.session.servo[spec.joint_names.index("l_sho_pitch")] == pytest.approx(np.radians(-20))
+            page.get_by_text("optimise to the hand target", exact=True).click()    # on two feet: refused
+            _wait(lambda: ("optimise", "refused: double support") in studio.events, "the optimiser's refusal")
+            page.get_by_text("choose left or right support").first.wait_for(timeout=WAIT_S * 1000)
             page.get_by_text("check in physics", exact=True).click()
             _wait(lambda: any(k == "check" and v in ("STANDS", "FALLS", "FAILS") for k, v in studio.events),
                   "the physics check")

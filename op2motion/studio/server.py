@@ -71,7 +71,10 @@ class Studio:
         self._urdf = urdf
         self._order = list(self._robot.get_actuated_joint_names())
         self.server.scene.add_grid("/floor", width=0.6, height=0.6, cell_size=0.05)
+        self._targets: dict[str, Any] = {}
+        self._dragging = False
         self._build_gui()
+        self._build_targets(session.readout())
         self.server.initial_camera.position = (0.55, 0.45, 0.35)
         self.server.initial_camera.look_at = (0.0, 0.0, 0.18)
         self._show(session.readout())
@@ -87,6 +90,11 @@ class Studio:
         check = gui.add_button("check in physics")
         check.on_click(lambda _: self._start_check())
         self._verdict = gui.add_markdown("physics: not checked")
+        self._target_goal: dict[str, tuple[float, float, float]] = {}
+        with gui.add_folder("optimise"):
+            self._hand = gui.add_dropdown("hand", ("left", "right"))
+            gui.add_button("optimise to the hand target").on_click(lambda _: self._start_optimise())
+            self._progress = gui.add_progress_bar(0.0, visible=False)
         with gui.add_folder("type a value"):
             self._joint = gui.add_dropdown("joint", tuple(self.spec.joint_names))
             self._value = gui.add_text("degrees", "")
@@ -104,6 +112,30 @@ class Studio:
                 jog = gui.add_button_group(f"{joint.name} jog", JOG_STEPS)
                 jog.on_click(self._jog_handler(joint.name))
                 self._sliders[joint.name] = slider
+
+    def _build_targets(self, readout: Readout) -> None:
+        """A draggable target at each hand: dragging moves that arm by the arm IK."""
+        for hand in ("left", "right"):
+            control = self.server.scene.add_transform_controls(f"/target/{hand}", scale=0.06, disable_rotations=True,
+                                                               position=readout.hands[f"{hand}_hand"])
+            control.on_update(self._target_handler(hand, control))
+            self._targets[hand] = control
+
+    def _target_handler(self, hand: str, control: Any) -> Any:
+        def dragged(_: Any) -> None:
+            self._dragging = True
+            try:
+                self._edit("target", lambda: self._reach(hand, tuple(control.position)))
+            finally:
+                self._dragging = False
+        return dragged
+
+    def _reach(self, hand: str, target: tuple[float, float, float]) -> Readout:
+        readout, left = self.session.reach(hand, target)
+        self._target_goal[hand] = target
+        self._verdict.content = (f"{hand} hand {left * 1000:.1f} mm from its target"
+                                 + ("" if left < 0.002 else " (out of the arm's reach: optimise to get there)"))
+        return readout
 
     def _slider_handler(self, name: str, slider: Any) -> Any:
         def moved(_: Any) -> None:
@@ -136,6 +168,13 @@ class Studio:
         self.server.scene.add_frame("/robot", wxyz=_wxyz(rot), position=tuple(origin), show_axes=False)
         by_name = dict(zip(self.spec.joint_names, s.servo))
         self._robot.update_cfg(np.array([by_name[n] for n in self._order]))
+        ring = np.array([(x, y, 0.001) for x, y in readout.polygon])
+        if len(ring):
+            self.server.scene.add_line_segments("/support", np.stack([ring, np.roll(ring, -1, axis=0)], axis=1),
+                                                colors=PURPLE, thickness=3.0)
+        for hand, control in self._targets.items():
+            if not self._dragging:                  # the targets follow the hands unless one is being dragged
+                control.position = readout.hands[f"{hand}_hand"]
         for name, com, rgb in (("full", readout.com_full, PURPLE), ("lumped", readout.com_lumped, GREEN)):
             self.server.scene.add_icosphere(f"/com/{name}", radius=0.008, color=rgb, position=com)
             self.server.scene.add_icosphere(f"/com/{name}_ground", radius=0.004, color=rgb,
@@ -176,6 +215,48 @@ class Studio:
                                  f"{run.support_margin_m * 1000:+.1f} mm, {run.engine} {run.seconds:g} s ({run.ended})")
         self._draw_ghost(run.track.q[-1])
         self.events.append(("check", verdict))
+
+    def _start_optimise(self) -> None:
+        hand = self._hand.value
+        target = self._target_goal.get(hand, tuple(self._targets[hand].position))
+        if self.session.support.is_double:
+            self._message.content = "**refused**: the optimiser stands on one foot: choose left or right support"
+            self.events.append(("optimise", "refused: double support"))
+            return
+        self.events.append(("optimise", "started"))
+        self._progress.visible = True
+        self._progress.value = 0.0  # type: ignore[misc]
+        threading.Thread(target=self._optimise, args=(hand, target), daemon=True).start()
+
+    def _optimise(self, hand: str, target: tuple[float, float, float]) -> None:
+        from op2motion.posture.cost import PostureProblem
+        from op2motion.posture.pso import PSOSettings
+        from op2motion.workflow import solve
+
+        settings, done = PSOSettings(), [0]
+
+        def tick(_: float) -> None:
+            done[0] += 1
+            if done[0] % 10 == 0:
+                self._progress.value = min(100.0, 100.0 * done[0] / settings.iterations)  # type: ignore[misc]
+        try:
+            problem = PostureProblem(self.session.support.value, hand, target, 1.0)
+            outcome = solve(problem, self.spec, settings, restarts=0, on_iteration=tick)
+        except Op2MotionError as exc:
+            self._message.content = f"**could not optimise**: {exc}"
+            self.events.append(("optimise", f"refused: {exc}"))
+            return
+        finally:
+            self._progress.visible = False
+        result = outcome.result
+        self._verdict.content = f"optimiser: {result.message}"
+        if outcome.ok:
+            self._edit("optimise", lambda: self._adopt(outcome.pose(self.session.name, self.spec).servo))
+        self.events.append(("optimise", "reached" if outcome.ok else "not reached"))
+
+    def _adopt(self, servo: np.ndarray) -> Readout:
+        self.session.servo = np.array(servo, dtype=float)
+        return self.session.readout()
 
     def _draw_ghost(self, settled: np.ndarray) -> None:
         from viser.extras import ViserUrdf

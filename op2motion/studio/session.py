@@ -26,8 +26,14 @@ from op2motion.kinematics.dh_chain import matrix_frames
 from op2motion.kinematics.report import evaluate
 from op2motion.kinematics.shapes import self_clearance, shape_set
 from op2motion.model.compliance import Compliance
-from op2motion.robot.balance import COM_MODEL_FULL, polygon_margin, rectangle_margin, support_extents
-from op2motion.robot.joints import joint_range, servo_to_book, servo_to_ticks
+from op2motion.robot.balance import (
+    COM_MODEL_FULL,
+    polygon_margin,
+    rectangle_margin,
+    support_extents,
+    support_polygon,
+)
+from op2motion.robot.joints import book_to_servo, joint_range, servo_to_book, servo_to_ticks
 from op2motion.robot.pose import Pose
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import SIDES, Support
@@ -65,6 +71,8 @@ class Readout:
     self_clearance_m: float
     closest_links: tuple[str, str]
     joints: tuple[JointState, ...] = field(repr=False)
+    polygon: tuple[tuple[float, float], ...] = ()   # the support polygon's corners (x, y) [m] on the floor
+    hands: dict[str, tuple[float, float, float]] = field(default_factory=dict)   # left_hand, right_hand [m]
 
     @property
     def colliding(self) -> bool:
@@ -147,19 +155,45 @@ class Session:
         clearance, pair = self_clearance(frames, shape_set(spec, stance))
         links = shape_set(spec, stance).pair_names()[int(pair[0])]
         nan = float("nan")
+        hands = {h: (float(p[0]), float(p[1]), float(p[2])) for h, p in
+                 ((h, points.point(h)[0]) for h in ("left_hand", "right_hand"))}
         if self.support.is_double:
             hull = Support.DOUBLE.polygon({s: points.foot_corners(s)[0] for s in SIDES})
+            polygon = hull
             margin_full, margin_lumped, settled_margin, swing = float(polygon_margin(full[:2], hull)[0]), nan, nan, nan
         else:
             margin_full = float(rectangle_margin(np.array([full[0]]), np.array([full[1]]),
                                                  support_extents(spec, stance, 1.0, COM_MODEL_FULL))[0])
             margin_lumped = report.stability_margin_m
+            polygon = support_polygon(spec, stance, 1.0, com_model=COM_MODEL_FULL)
             settled = self._compliance.settle(points, full[:, None]).com_xy[:, 0]
             settled_margin = float(rectangle_margin(settled[:1], settled[1:],
                                                     support_extents(spec, stance, 1.0, COM_MODEL_FULL))[0])
             swing = report.swing_foot_min_z
         return Readout(self.support.value, tuple(report.com), tuple(full), margin_lumped, margin_full,
-                       settled_margin, swing, float(clearance[0]), links, self._joints())
+                       settled_margin, swing, float(clearance[0]), links, self._joints(),
+                       tuple((float(x), float(y)) for x, y in np.asarray(polygon)[:, :2]), hands)
+
+    def reach(self, hand: str, target: object) -> tuple[Readout, float]:
+        """Move one hand towards ``target`` (x, y, z) [m] with its arm's three joints (the project's arm IK, within
+        the cable-safe ranges); returns the readout and the distance [m] left to the target."""
+        if hand not in ("left", "right"):
+            raise InputError(f"expected left or right, got {hand!r}", "hand")
+        try:
+            goal = np.asarray(target, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            goal = np.full(1, np.nan)
+        if goal.shape != (3,) or not np.all(np.isfinite(goal)):
+            raise InputError(f"expected 3 finite numbers [m], got {target!r}", "target")
+        from op2motion.kinematics import forward
+        from op2motion.kinematics.arm_ik import solve_arm_ik
+
+        stance = self.support.stance
+        angles = servo_to_book(self.servo[None], stance, self.spec)
+        now = forward(angles, self.spec, "dh").point(f"{hand}_hand")[0]
+        ik = solve_arm_ik(angles, hand, goal - now, self.spec, model="dh")
+        self.servo = book_to_servo(ik.angles, self.spec)[0]
+        return self.readout(), ik.error_m
 
     def _joints(self) -> tuple[JointState, ...]:
         ticks = servo_to_ticks(self.servo, self.spec)
