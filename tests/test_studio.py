@@ -54,6 +54,37 @@ def test_edits_are_checked_and_the_readout_follows(spec, tmp_path):
     assert read_pose(saved, spec).servo[spec.joint_names.index("l_sho_roll")] == pytest.approx(np.radians(75))
 
 
+def test_an_action_file_is_played_scrubbed_and_written_only_when_saved(spec, tmp_path):
+    stock = os.path.join(ROOT, "tests", "data", "motion_4096.bin")
+    session = Session(spec, read_pose(WALKREADY, spec))
+    with pytest.raises(InputError, match="action file"):
+        session.play(15)
+    assert session.open_action(stock) > 0
+    length = session.play(15)                                       # sit down
+    assert length > 1.0
+    start, end = session.scrub(0.0), session.scrub(length)
+    assert start.com_full[2] > end.com_full[2] + 0.03                # it sat down: the CoM came down
+    free = session.action.first_empty_run(1)
+    assert session.add_to_page(free, 0.5) == free
+    with pytest.raises(InputError, match="force|overwrite|hold actions"):
+        session.add_to_page(15, 0.5)                                # an occupied page, not confirmed
+    with pytest.raises(InputError, match="24 ms"):
+        session.add_to_page(free + 1, 0.01)                         # shorter than the robot moves
+    assert not list(tmp_path.iterdir())                             # nothing written yet
+    saved = session.save_action(tmp_path / "mine.bin")
+    from op2motion.formats.action import ActionFile
+
+    again = ActionFile.read(saved)
+    assert not again.is_empty(free) and again.data[:free * 512] == ActionFile.read(stock).data[:free * 512]
+
+
+def test_a_pose_file_that_does_not_load_is_one_line(tmp_path):
+    (tmp_path / "bad.json").write_text("{not json", encoding="utf-8")
+    done = subprocess.run([sys.executable, "-m", "op2motion", "studio", "bad.json", "--port", "0"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "bad.json" in done.stderr and len(done.stderr.strip().splitlines()) == 1
+
+
 def test_a_port_in_use_is_one_line(tmp_path):
     with socket.socket() as busy:
         busy.bind(("127.0.0.1", 0))

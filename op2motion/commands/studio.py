@@ -18,7 +18,9 @@ def register(sub: Any) -> None:
                     "Serve the pose studio on a local web page (viser; install with pip install '.[studio]'): "
                     "the robot from the generated URDF, a slider and jog buttons per joint, the support, both "
                     "centres of mass and their margins, the closest links, check in physics, save. Ctrl-C ends it.")
-    p.add_argument("pose", nargs="?", metavar="POSE", help="pose file to start from (default: the standing pose)")
+    p.add_argument("pose", nargs="?", metavar="POSE|ACTION_FILE",
+                   help="pose file to start from, or a ROBOTIS action file (.bin) to play and edit pages of (starting "
+                        "from its page 1's last step); default: the standing pose")
     p.add_argument("--port", type=whole(0, 65535), default=8080, help="port (0: a free one, printed; default 8080)")
     p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1, this machine only)")
 
@@ -42,14 +44,23 @@ def cmd_studio(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.robot.support import Support
     from op2motion.studio.session import Session
 
-    pose = (read_pose(args.pose, spec) if args.pose else
-            Pose("standing", Support.DOUBLE, book_to_servo(BookAngles.standing("left"), spec)[0]))
+    action = args.pose is not None and args.pose.lower().endswith(".bin")
+    if action:
+        from op2motion.formats.action import ActionFile
+
+        pose = ActionFile.read(args.pose).pose(1, spec)
+    else:
+        pose = (read_pose(args.pose, spec) if args.pose else
+                Pose("standing", Support.DOUBLE, book_to_servo(BookAngles.standing("left"), spec)[0]))
     _port_free(args.host, args.port)
     try:
         from op2motion.studio.server import Studio
     except ImportError as exc:
         raise InputError(f"expected the studio extra (pip install '.[studio]'): {exc}", "studio") from None
-    studio = Studio(spec, Session(spec, pose), args.host, args.port)
+    session = Session(spec, pose)
+    if action:
+        session.open_action(args.pose)
+    studio = Studio(spec, session, args.host, args.port, action_path=args.pose if action else "")
     print(f"op2motion studio: http://{args.host}:{studio.port} (Ctrl-C ends it)", flush=True)
     try:
         while True:

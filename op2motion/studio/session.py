@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -104,6 +105,8 @@ class Session:
         self.support = Support.of(pose.support)
         self._index = {n: i for i, n in enumerate(spec.joint_names)}
         self._compliance = Compliance(spec)
+        self.action: Any = None           # an open action file (op2motion.formats.action.ActionFile), in memory
+        self.played: Any = None           # the played page's trajectory
 
     def joint_index(self, name: str) -> int:
         """The servo index of joint ``name``; :class:`InputError` for an unknown name."""
@@ -173,6 +176,51 @@ class Session:
         return Readout(self.support.value, tuple(report.com), tuple(full), margin_lumped, margin_full,
                        settled_margin, swing, float(clearance[0]), links, self._joints(),
                        tuple((float(x), float(y)) for x, y in np.asarray(polygon)[:, :2]), hands)
+
+    # -- action files -------------------------------------------------------------------------------------------
+    def open_action(self, path: str | Path) -> int:
+        """Open a ROBOTIS action file (kept in memory; nothing is written); returns its number of pages in use."""
+        from op2motion.formats.action import ActionFile
+        from op2motion.formats.actionlayout import NUM_PAGES
+
+        self.action = ActionFile.read(path)
+        return sum(1 for i in range(1, NUM_PAGES) if not self.action.is_empty(i))
+
+    def _opened(self) -> Any:
+        if self.action is None:
+            raise InputError("expected an action file: open one first", "action file")
+        return self.action
+
+    def play(self, page: int) -> float:
+        """Play ``page`` of the open file as the robot does (8 ms goals); returns its length [s]. The pose follows
+        :meth:`scrub`."""
+        from op2motion.motion.pipeline import play_page
+
+        played = play_page(self._opened(), int(page), self.spec)
+        self.played = played.trajectory
+        return (len(self.played.goals) - 1) * self.played.dt
+
+    def scrub(self, t_s: float) -> Readout:
+        """The pose at time ``t_s`` [s] of the played page (its goal of that 8 ms tick)."""
+        played = self.played
+        if played is None:
+            raise InputError("expected a played page: play one first", "page")
+        row = int(min(max(round(float(t_s) / played.dt), 0), len(played.goals) - 1))
+        self.servo, self.support = np.array(played.goals[row], dtype=float), Support.of(played.supports[row])
+        return self.readout()
+
+    def add_to_page(self, page: int, seconds: float, overwrite: bool = False) -> int:
+        """Put the pose as a one-step page of ``seconds`` (at least 24 ms) at ``page`` of the open file (in memory);
+        an occupied page only with ``overwrite``. Returns the page."""
+        action, first = self._opened().with_poses([self.pose()], self.spec, int(page), float(seconds), overwrite)
+        self.action = action
+        return first
+
+    def save_action(self, path: str | Path) -> Path:
+        """Write the open action file atomically."""
+        target = Path(path)
+        write_atomic(target, self._opened().data)
+        return target
 
     def reach(self, hand: str, target: object) -> tuple[Readout, float]:
         """Move one hand towards ``target`` (x, y, z) [m] with its arm's three joints (the project's arm IK, within
