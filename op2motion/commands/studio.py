@@ -61,8 +61,8 @@ def cmd_studio(args: argparse.Namespace, spec: Spec) -> int:
     if action:
         session.open_action(args.pose)
     studio = Studio(spec, session, args.host, args.port, action_path=args.pose if action else "")
-    print(f"op2motion studio: http://{args.host}:{studio.port} (Ctrl-C ends it)", flush=True)
-    try:
+    try:                                  # Ctrl-C from the moment the address is printed ends it cleanly
+        print(f"op2motion studio: http://{args.host}:{studio.port} (Ctrl-C ends it)", flush=True)
         while True:
             time.sleep(0.2)
     except KeyboardInterrupt:
