@@ -21,6 +21,25 @@ def compile_package(root: Path) -> None:
     import compileall
 
     compileall.compile_dir(str(root / "op2motion"), quiet=2)
+    share_numba_cache(root)
+
+
+def share_numba_cache(root: Path) -> None:
+    """Let a copy of the package at ``root`` reuse this tree's compiled kernels: numba keys its on-disk cache by the
+    source file's timestamp and size, so copy the cache files and the sources' timestamps (when there are any)."""
+    import os
+    import shutil
+
+    if root.resolve() == ROOT:
+        return
+    for cache in (ROOT / "op2motion").rglob("__pycache__/*.nb[ic]"):
+        rel = cache.relative_to(ROOT)
+        (root / rel).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(cache, root / rel)
+        source = rel.parent.parent / (cache.name.split(".")[0] + ".py")
+        if (root / source).is_file():
+            stat = (ROOT / source).stat()
+            os.utime(root / source, ns=(stat.st_atime_ns, stat.st_mtime_ns))
 
 
 def pose_path(name: str) -> str:
