@@ -7,7 +7,8 @@ arithmetic. The constants come from :func:`.kernel_plan.kernel_plan`, read off t
 tests compare every term of both on random swarms. Self-clearance is searched exactly only below the penalty's
 threshold (a pair whose bounding spheres are farther apart reports that lower bound), which gives the same cost.
 
-Importing this module imports numba (about 0.15 s); the first call in a fresh install compiles the loop (a few
+The collision geometry (segments, boxes, the least clearance of a pose) is in :mod:`.kernel_geometry`. Importing
+this module imports numba (about 0.15 s); the first call in a fresh install compiles the loop (a few
 seconds, then cached beside the module or in numba's user cache).
 """
 
@@ -18,6 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
+from op2motion.posture.kernel_geometry import clearance_of, mul
 from op2motion.posture.kernel_plan import KernelPlan
 
 TERMS = ("total", "book", "hand_error", "margin", "swing_min_z", "tilt", "collision", "sag_tilt", "clearance",
@@ -27,164 +29,6 @@ TERMS = ("total", "book", "hand_error", "margin", "swing_min_z", "tilt", "collis
  _T_SWING_LIFT) = range(len(TERMS))                  # the columns, as compile-time integers
 TOTAL, HAND_ERROR = _T_TOTAL, _T_HAND_ERROR
 _C_PENALTY, _C_VIOL, _C_MARGIN, _C_CAP, _C_UPRIGHT, _C_SAG, _C_CLEAR, _C_LIFTED, _C_FLOOR, _C_G = range(10)
-
-
-@njit(cache=True, error_model="numpy")
-def _mul(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
-    """out = a @ b for 4x4 rigid transforms (bottom rows 0 0 0 1, which stay as they are)."""
-    for r in range(3):
-        a0, a1, a2 = a[r, 0], a[r, 1], a[r, 2]
-        for c in range(3):
-            out[r, c] = a0 * b[0, c] + a1 * b[1, c] + a2 * b[2, c]
-        out[r, 3] = a0 * b[0, 3] + a1 * b[1, 3] + a2 * b[2, 3] + a[r, 3]
-    out[3, 0], out[3, 1], out[3, 2], out[3, 3] = 0.0, 0.0, 0.0, 1.0
-
-
-@njit(cache=True, error_model="numpy")
-def _box_distance(x: float, y: float, z: float, half: np.ndarray) -> float:
-    """Signed distance [m] of a point in a box's frame to the box of half extents ``half``."""
-    qx, qy, qz = abs(x) - half[0], abs(y) - half[1], abs(z) - half[2]
-    inside = min(max(max(qx, qy), qz), 0.0)
-    ox, oy, oz = max(qx, 0.0), max(qy, 0.0), max(qz, 0.0)
-    return math.sqrt(ox * ox + oy * oy + oz * oz) + inside
-
-
-@njit(cache=True, error_model="numpy")
-def _segment_box(a: np.ndarray, b: np.ndarray, half: np.ndarray, rim: float, within: float, grid: np.ndarray,
-                 rounds: int) -> float:
-    """Clearance [m] of a segment a-b swept by ``rim`` to a box (both in the box frame): the segment's bounding box
-    first, then (below ``within``) the sampled search of :func:`op2motion.kinematics.shapes._segment_box`."""
-    sq = 0.0
-    for k in range(3):
-        o = max(max(min(a[k], b[k]) - half[k], -half[k] - max(a[k], b[k])), 0.0)
-        sq += o * o
-    value = math.sqrt(sq) - rim
-    if value >= within:
-        return value
-    d0, d1, d2 = b[0] - a[0], b[1] - a[1], b[2] - a[2]
-    lo, width, best = 0.0, 1.0, np.inf
-    samples = grid.shape[0]
-    for _ in range(rounds):
-        i_best, f_best = 0, np.inf
-        for i in range(samples):
-            t = lo + width * grid[i]
-            f = _box_distance(a[0] + t * d0, a[1] + t * d1, a[2] + t * d2, half)
-            if f < f_best:
-                i_best, f_best = i, f
-        best = min(best, f_best)
-        step = width / (samples - 1)
-        lo = min(max(lo + (i_best - 1) * step, 0.0), 1.0 - 2.0 * step)
-        width = 2.0 * step
-    return best - rim
-
-
-@njit(cache=True, error_model="numpy")
-def _segment_segment(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> float:
-    """Distance [m] between segments p1-q1 and p2-q2 (as :func:`op2motion.kinematics.shapes._segment_segment`)."""
-    tiny = 1e-15
-    a = e = b = c = f = 0.0
-    for k in range(3):
-        d1, d2, r = q1[k] - p1[k], q2[k] - p2[k], p1[k] - p2[k]
-        a += d1 * d1
-        e += d2 * d2
-        b += d1 * d2
-        c += d1 * r
-        f += d2 * r
-    denom = a * e - b * b
-    s = min(max((b * f - c * e) / max(denom, tiny), 0.0), 1.0) if denom > tiny else 0.0
-    t = (b * s + f) / max(e, tiny) if e > tiny else 0.0
-    if t < 0.0:
-        s = min(max(-c / max(a, tiny), 0.0), 1.0) if a > tiny else 0.0
-    elif t > 1.0:
-        s = min(max((b - c) / max(a, tiny), 0.0), 1.0) if a > tiny else 0.0
-    t = min(max(t, 0.0), 1.0)
-    sq = 0.0
-    for k in range(3):
-        g = (p1[k] + s * (q1[k] - p1[k])) - (p2[k] + t * (q2[k] - p2[k]))
-        sq += g * g
-    return math.sqrt(sq)
-
-
-@njit(cache=True, error_model="numpy")
-def _into(world: np.ndarray, box: np.ndarray, out: np.ndarray) -> None:
-    """A world point into a shape's frame (4, 4): out = R^T (world - o)."""
-    for k in range(3):
-        out[k] = ((world[0] - box[0, 3]) * box[0, k] + (world[1] - box[1, 3]) * box[1, k]
-                  + (world[2] - box[2, 3]) * box[2, k])
-
-
-@njit(cache=True, error_model="numpy")
-def _clearance(frames: np.ndarray, plan: KernelPlan, within: float, shape_w: np.ndarray) -> float:
-    """The least clearance [m] between the collision shapes of one pose (chain ``frames``; ``shape_w`` (H, 4, 4)
-    receives the shapes' frames): exact below ``within``, a lower bound above it."""
-    corners, ends, a, b = np.empty((8, 3)), np.empty((4, 3)), np.empty(3), np.empty(3)
-    sh_slots, sh_local = plan.sh_slots, plan.sh_local
-    pairs, sh_bound, sh_box, sh_half = plan.pairs, plan.sh_bound, plan.sh_box, plan.sh_half
-    for h in range(sh_slots.shape[0]):
-        _mul(frames[sh_slots[h]], sh_local[h], shape_w[h])
-    best = np.inf
-    for p in range(pairs.shape[0]):
-        i, j = pairs[p, 0], pairs[p, 1]
-        wi, wj = shape_w[i], shape_w[j]
-        gx, gy, gz = wi[0, 3] - wj[0, 3], wi[1, 3] - wj[1, 3], wi[2, 3] - wj[2, 3]
-        value = math.sqrt(gx * gx + gy * gy + gz * gz) - (sh_bound[i] + sh_bound[j])
-        if value < within:
-            if sh_box[i] and sh_box[j]:
-                value = min(_box_box(shape_w[i], shape_w[j], sh_half[i], sh_half[j], plan, within, corners),
-                            _box_box(shape_w[j], shape_w[i], sh_half[j], sh_half[i], plan, within, corners))
-            else:
-                value = _with_segment(shape_w, i, j, plan, within, ends, a, b)
-        best = min(best, value)
-    return best
-
-
-@njit(cache=True, error_model="numpy")
-def _box_box(ws: np.ndarray, wb: np.ndarray, half: np.ndarray, box_half: np.ndarray, plan: KernelPlan,
-             within: float, corners: np.ndarray) -> float:
-    """Clearance [m] of the twelve edges of a box (frame ``ws``, half extents ``half``) to another (``wb``,
-    ``box_half``); ``corners`` (8, 3) is scratch."""
-    box_corners, box_edges, grid, rounds = plan.box_corners, plan.box_edges, plan.grid, plan.rounds
-    for c in range(8):
-        x = box_corners[c, 0] * half[0]
-        y = box_corners[c, 1] * half[1]
-        z = box_corners[c, 2] * half[2]
-        for k in range(3):                                     # R_b^T (o_s + R_s x - o_b)
-            corners[c, k] = ((ws[0, 3] + ws[0, 0] * x + ws[0, 1] * y + ws[0, 2] * z - wb[0, 3]) * wb[0, k]
-                             + (ws[1, 3] + ws[1, 0] * x + ws[1, 1] * y + ws[1, 2] * z - wb[1, 3]) * wb[1, k]
-                             + (ws[2, 3] + ws[2, 0] * x + ws[2, 1] * y + ws[2, 2] * z - wb[2, 3]) * wb[2, k])
-    sq = 0.0                                                   # the corners' bounding box against the box: a
-    for k in range(3):                                         # lower bound that settles most pairs at once
-        lo, hi = corners[0, k], corners[0, k]
-        for c in range(1, 8):
-            lo, hi = min(lo, corners[c, k]), max(hi, corners[c, k])
-        o = max(max(lo - box_half[k], -box_half[k] - hi), 0.0)
-        sq += o * o
-    if math.sqrt(sq) >= within:
-        return math.sqrt(sq)
-    value = np.inf
-    for e in range(box_edges.shape[0]):
-        value = min(value, _segment_box(corners[box_edges[e, 0]], corners[box_edges[e, 1]], box_half, 0.0, within,
-                                        grid, rounds))
-    return value
-
-
-@njit(cache=True, error_model="numpy")
-def _with_segment(shape_w: np.ndarray, i: int, j: int, plan: KernelPlan, within: float, ends: np.ndarray,
-                  a: np.ndarray, b: np.ndarray) -> float:
-    """Clearance [m] of shapes ``i`` and ``j``, at least one a swept segment (``ends``, ``a``, ``b``: scratch)."""
-    sh_reach, sh_box, sh_half, sh_radius = plan.sh_reach, plan.sh_box, plan.sh_half, plan.sh_radius
-    grid, rounds = plan.grid, plan.rounds
-    for n, s in enumerate((i, j)):                             # segment ends in the world: o -+ reach z
-        w = shape_w[s]
-        for k in range(3):
-            ends[2 * n, k] = w[k, 3] - sh_reach[s] * w[k, 2]
-            ends[2 * n + 1, k] = w[k, 3] + sh_reach[s] * w[k, 2]
-    if sh_box[i] or sh_box[j]:
-        seg, box, first = (j, i, 2) if sh_box[i] else (i, j, 0)
-        _into(ends[first], shape_w[box], a)
-        _into(ends[first + 1], shape_w[box], b)
-        return _segment_box(a, b, sh_half[box], sh_radius[seg], within, grid, rounds)
-    return _segment_segment(ends[0], ends[1], ends[2], ends[3]) - (sh_radius[i] + sh_radius[j])
 
 
 @njit(cache=True, error_model="numpy")
@@ -246,9 +90,9 @@ def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, within: floa
                 c, sn = math.cos(delta), math.sin(delta)
                 for e in range(16):
                     flat[e] = c * basis[j, 0, e] + sn * basis[j, 1, e] + basis[j, 2, e]
-                _mul(frames[parent[s]], local, frames[s])
+                mul(frames[parent[s]], local, frames[s])
             else:
-                _mul(frames[parent[s]], fixed_local[slot_fixed[s]], frames[s])
+                mul(frames[parent[s]], fixed_local[slot_fixed[s]], frames[s])
         for r in range(row_slot.shape[0]):                     # body points
             s = row_slot[r]
             for k in range(3):
@@ -303,7 +147,7 @@ def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, within: floa
             lowest = swing_min_z
             if settled_ok:                                     # the swing leg hangs on its springs
                 for leg in range(legs):
-                    _mul(frames[sw_slots[leg]], sw_local[leg], joint)
+                    mul(frames[sw_slots[leg]], sw_local[leg], joint)
                     for k in range(3):
                         origin[leg, k] = joint[k, 3]
                         axis[leg, k] = (joint[k, 0] * sw_axes[leg, 0] + joint[k, 1] * sw_axes[leg, 1]
@@ -344,7 +188,7 @@ def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, within: floa
                  + consts[_C_UPRIGHT] * tilt * tilt)
         collision, clearance = 0.0, np.nan
         if total < only_below[i]:
-            clearance = _clearance(frames, plan, within, shape_w)
+            clearance = clearance_of(frames, plan, within, shape_w)
             deficit = max(consts[_C_CLEAR] - clearance, 0.0)
             collision = (consts[_C_PENALTY] if deficit > 0.0 else 0.0) + consts[_C_VIOL] * deficit
         out[i, _T_TOTAL], out[i, _T_BOOK], out[i, _T_HAND_ERROR], out[i, _T_MARGIN] = (
