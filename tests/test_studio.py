@@ -54,6 +54,21 @@ def test_edits_are_checked_and_the_readout_follows(spec, tmp_path):
     assert read_pose(saved, spec).servo[spec.joint_names.index("l_sho_roll")] == pytest.approx(np.radians(75))
 
 
+def test_balance_keeps_the_hand_and_the_pins_and_restores_the_margin(spec):
+    session = Session(spec, read_pose(os.path.join(ROOT, "poses", "book_2_44.json"), spec))
+    for joint, degrees in (("r_hip_pitch", -50), ("r_knee", 0), ("l_sho_pitch", -60)):   # a leg out, an arm up
+        edited = session.set_joint(joint, degrees)
+    hip = session.servo[spec.joint_names.index("r_hip_pitch")]
+    balanced, message = session.balance("left", ["r_hip_pitch", "r_knee"])
+    assert message.startswith("reached") and balanced.margin_settled_m > edited.margin_settled_m + 0.005
+    assert session.servo[spec.joint_names.index("r_hip_pitch")] == pytest.approx(hip, abs=1e-6)
+    assert np.linalg.norm(np.subtract(balanced.hands["left_hand"], edited.hands["left_hand"])) < 0.001
+    with pytest.raises(InputError, match="joint"):
+        session.balance("left", ["no_such_joint"])
+    with pytest.raises(InputError, match="one foot"):
+        Session(spec, read_pose(WALKREADY, spec)).balance("left", [])
+
+
 def test_an_action_file_is_played_scrubbed_and_written_only_when_saved(spec, tmp_path):
     stock = os.path.join(ROOT, "tests", "data", "motion_4096.bin")
     session = Session(spec, read_pose(WALKREADY, spec))

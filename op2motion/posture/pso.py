@@ -64,6 +64,22 @@ class PSOSettings:
 
 
 @dataclass(frozen=True)
+class SearchSpace:
+    """Where a swarm searches instead of the default box: ``bounds`` (lo, hi) (20,) each [rad, book variables]
+    (a variable pinned by lo == hi) and, optionally, a ``start`` vector (20,) that is one of the first particles."""
+
+    bounds: tuple[np.ndarray, np.ndarray]
+    start: np.ndarray | None = None
+
+    def pinned(self, width: float = 1e-7) -> tuple[np.ndarray, np.ndarray]:
+        """The bounds with each pinned variable given a width of ``width`` [rad] (a swarm needs lo < hi)."""
+        lo, hi = (np.asarray(b, dtype=float).copy() for b in self.bounds)
+        tight = hi - lo < width
+        lo[tight], hi[tight] = lo[tight] - width / 2, hi[tight] + width / 2
+        return lo, hi
+
+
+@dataclass(frozen=True)
 class PSOResult:
     """Best vector [rad] (book layout, 20 values), its cost, the best cost after each iteration and the hand error
     [m] of the best particle so far after each iteration."""
@@ -120,10 +136,11 @@ def variable_bounds(problem: PostureProblem, spec: Spec) -> tuple[np.ndarray, np
 
 
 def run_pso(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSettings(),
-            on_iteration: Callable[[float], Any] | None = None) -> PSOResult:
-    """Minimise the posture cost with pyswarms' GlobalBestPSO; ``on_iteration(best_cost)`` is called each step."""
+            on_iteration: Callable[[float], Any] | None = None, space: SearchSpace | None = None) -> PSOResult:
+    """Minimise the posture cost with pyswarms' GlobalBestPSO; ``on_iteration(best_cost)`` is called each step;
+    ``space`` narrows the box (pinned variables) and seeds a particle at its start."""
     problem, settings = problem.validated(), settings.validated()
-    lo, hi = variable_bounds(problem, spec)
+    lo, hi = variable_bounds(problem, spec) if space is None else space.pinned()
     full = lo.size
     dims = N_TH + N_PHI if problem.model == "pb" else full  # the projection model has psi = 0
     lo, hi = lo[:dims], hi[:dims]
@@ -161,9 +178,14 @@ def run_pso(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSett
         with contained_pyswarms():
             from pyswarms.single import GlobalBestPSO
 
+            init = None
+            if space is not None and space.start is not None:     # the start among uniform draws in the box
+                init = lo + (hi - lo) * np.random.uniform(size=(settings.particles, dims))
+                init[0] = np.clip(np.asarray(space.start, dtype=float)[:dims], lo, hi)
             optimizer = GlobalBestPSO(n_particles=settings.particles, dimensions=dims,
                                       options={"w": settings.w, "c1": settings.c1, "c2": settings.c2},
-                                      bounds=(lo, hi), velocity_clamp=(-v_max, v_max), bh_strategy="nearest")
+                                      bounds=(lo, hi), velocity_clamp=(-v_max, v_max), bh_strategy="nearest",
+                                      init_pos=init)
         with contained_pyswarms():
             cost, pos = optimizer.optimize(objective, iters=settings.iterations, verbose=False)
     finally:

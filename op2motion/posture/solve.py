@@ -11,7 +11,7 @@ import numpy as np
 
 from op2motion.kinematics import forward
 from op2motion.posture.cost import SAG_TILT_LIMIT_RAD, CostModel, CostTerms, PostureProblem
-from op2motion.posture.pso import PSOResult, PSOSettings, run_pso, variable_bounds
+from op2motion.posture.pso import PSOResult, PSOSettings, SearchSpace, run_pso, variable_bounds
 from op2motion.posture.refine import REFINE_TOL_M, feasible, refine
 from op2motion.robot.balance import COM_MODEL_FULL, COM_MODEL_LUMPED, rectangle_margin
 from op2motion.robot.joints import BookAngles
@@ -102,17 +102,19 @@ Check = Callable[[PostureResult], tuple[bool, str]]
 
 def optimize_posture(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSettings(),
                      refine_result: bool = True, on_iteration: Callable[[float], Any] | None = None,
-                     restarts: int = 0, check: Check | None = None) -> PostureResult:
+                     restarts: int = 0, check: Check | None = None, space: SearchSpace | None = None
+                     ) -> PostureResult:
     """Find a balanced whole-body pose that puts ``problem.hand`` on ``problem.target``.
 
     A swarm can settle on the edge of the stability region where refinement stalls, or on a pose the model calls
     balanced but ``check`` (e.g. the physics validation) rejects; ``restarts`` further solves with the next seeds
     are tried until one passes. The best attempt is returned (passing first, then reached, then residual).
+    ``space`` narrows the search (pinned variables, a start pose; :class:`.pso.SearchSpace`).
     """
     t0 = time.perf_counter()
 
     def attempt(seed: int) -> PostureResult:
-        res = _solve_once(problem, spec, replace(settings, seed=seed), refine_result, on_iteration)
+        res = _solve_once(problem, spec, replace(settings, seed=seed), refine_result, on_iteration, space)
         if res.reached and check is not None:
             ok, why = check(res)
             if not ok:
@@ -150,11 +152,11 @@ def _verdict(terms: CostTerms, tol: float) -> tuple[bool, str]:
 
 
 def _solve_once(problem: PostureProblem, spec: Spec, settings: PSOSettings, refine_result: bool,
-                on_iteration: Callable[[float], Any] | None) -> PostureResult:
+                on_iteration: Callable[[float], Any] | None, space: SearchSpace | None = None) -> PostureResult:
     t0 = time.perf_counter()
-    pso = run_pso(problem, spec, settings, on_iteration)
+    pso = run_pso(problem, spec, settings, on_iteration, space)
     if refine_result:
-        ref = refine(pso.x, problem, spec, variable_bounds(problem, spec))
+        ref = refine(pso.x, problem, spec, variable_bounds(problem, spec) if space is None else space.pinned())
         x, method, terms, tol = ref.x, ref.method, ref.terms, REFINE_TOL_M
     else:
         x, method, tol = pso.x, "none", PSO_TOL_M

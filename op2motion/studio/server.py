@@ -22,31 +22,18 @@ from typing import Any
 import numpy as np
 
 from op2motion.errors import Op2MotionError
-from op2motion.kinematics.tree import link_frames
 from op2motion.model.urdf import build_urdf
 from op2motion.robot.spec import Spec
+from op2motion.studio.actions import ActionPanel
+from op2motion.studio.place import root_in_sole, wxyz
 from op2motion.studio.session import Readout, Session
+from op2motion.studio.work import LongWork
 
 JOG_STEPS = ("-5°", "-1°", "+1°", "+5°")
-CHECK_SECONDS = 3.0
-PURPLE, GREEN, RED, GREY = (0.55, 0.25, 0.75), (0.1, 0.6, 0.1), (0.8, 0.1, 0.1), (0.6, 0.6, 0.6)
+PURPLE, GREEN = (0.55, 0.25, 0.75), (0.1, 0.6, 0.1)
 
 
-def _wxyz(rot: np.ndarray) -> tuple[float, float, float, float]:
-    from scipy.spatial.transform import Rotation
-
-    x, y, z, w = Rotation.from_matrix(rot).as_quat()
-    return float(w), float(x), float(y), float(z)
-
-
-def root_in_sole(spec: Spec, servo: np.ndarray, stance: str) -> tuple[np.ndarray, np.ndarray]:
-    """The torso (URDF root) frame in the stance sole frame: rotation (3, 3) and origin (3,) [m]."""
-    rot, origin = link_frames(spec, servo)[spec.joint(f"{stance[0]}_ank_roll").child]
-    sole = origin + rot @ np.array([0.0, 0.0, -spec.foot.sole_below_ankle])
-    return rot.T, -rot.T @ sole
-
-
-class Studio:
+class Studio(LongWork, ActionPanel):
     """A running studio page on ``host:port`` (port 0: a free one, read back in :attr:`port`)."""
 
     def __init__(self, spec: Spec, session: Session, host: str = "127.0.0.1", port: int = 0, action_path: str = ""):
@@ -94,6 +81,8 @@ class Studio:
         with gui.add_folder("optimise"):
             self._hand = gui.add_dropdown("hand", ("left", "right"))
             gui.add_button("optimise to the hand target").on_click(lambda _: self._start_optimise())
+            self._pins = gui.add_text("pinned joints", "", hint="comma-separated joint names kept as they are")
+            gui.add_button("balance (keep the hand and the pins)").on_click(lambda _: self._start_balance())
             self._progress = gui.add_progress_bar(0.0, visible=False)
         with gui.add_folder("type a value"):
             self._joint = gui.add_dropdown("joint", tuple(self.spec.joint_names))
@@ -113,54 +102,6 @@ class Studio:
                 jog = gui.add_button_group(f"{joint.name} jog", JOG_STEPS)
                 jog.on_click(self._jog_handler(joint.name))
                 self._sliders[joint.name] = slider
-
-    def _build_action_gui(self) -> None:
-        """Open an action file, play and scrub a page, put the pose on a page and save the file."""
-        gui = self.server.gui
-        with gui.add_folder("action file"):
-            self._action_path = gui.add_text("file", self._opened_path)
-            gui.add_button("open").on_click(lambda _: self._action_step("open", lambda: self._open()))
-            self._page = gui.add_number("page", 1, min=1, max=255, step=1)
-            gui.add_button("play page").on_click(lambda _: self._action_step("play", lambda: self._play()))
-            self._time = gui.add_slider("time [s]", min=0.0, max=1.0, step=0.008, initial_value=0.0)
-            self._time.on_update(lambda _: None if self._quiet else self._edit(
-                "scrub", lambda: self.session.scrub(self._time.value)))
-            self._step_s = gui.add_number("step [s]", 1.0, min=0.024, max=2.04, step=0.008)
-            self._overwrite = gui.add_checkbox("overwrite an occupied page", False)
-            gui.add_button("put the pose on the page").on_click(lambda _: self._action_step("add", self._add))
-            gui.add_button("save action file").on_click(lambda _: self._action_step("save action", lambda: (
-                f"saved {self.session.save_action(self._action_path.value)}")))
-
-    def _add(self) -> str:
-        page = self.session.add_to_page(int(self._page.value), float(self._step_s.value), bool(self._overwrite.value))
-        return f"the pose is page {page} (not saved yet: save the action file)"
-
-    def _open(self) -> str:
-        used = self.session.open_action(self._action_path.value)
-        return f"opened {self._action_path.value}: {used} pages in use"
-
-    def _play(self) -> str:
-        length = self.session.play(int(self._page.value))
-        self._quiet = True
-        try:
-            self._time.max = max(length, 0.008)
-            self._time.value = 0.0  # type: ignore[misc]
-        finally:
-            self._quiet = False
-        self._show(self.session.scrub(0.0))
-        return f"page {int(self._page.value)}: {length:.2f} s of 8-ms goals; scrub with the time slider"
-
-    def _action_step(self, kind: str, action: Any) -> None:
-        """One action-file step; a refused one shows why and changes nothing."""
-        with self._lock:
-            try:
-                text = action()
-            except (Op2MotionError, OSError) as exc:
-                self.events.append((kind, f"refused: {exc}"))
-                self._message.content = f"**refused**: {exc}"
-                return
-            self.events.append((kind, "applied"))
-            self._message.content = text
 
     def _build_targets(self, readout: Readout) -> None:
         """A draggable target at each hand: dragging moves that arm by the arm IK."""
@@ -214,7 +155,7 @@ class Studio:
         """Draw the pose and its readout."""
         s = self.session
         rot, origin = root_in_sole(self.spec, s.servo, s.support.stance)
-        self.server.scene.add_frame("/robot", wxyz=_wxyz(rot), position=tuple(origin), show_axes=False)
+        self.server.scene.add_frame("/robot", wxyz=wxyz(rot), position=tuple(origin), show_axes=False)
         by_name = dict(zip(self.spec.joint_names, s.servo))
         self._robot.update_cfg(np.array([by_name[n] for n in self._order]))
         ring = np.array([(x, y, 0.001) for x, y in readout.polygon])
@@ -241,82 +182,6 @@ class Studio:
         self._readout.content = ("\n\n".join(readout.lines()) + f"\n\n<span style='color:{tint}'>"
                                  f"{'self-collision' if readout.colliding else 'no self-collision'}</span>"
                                  + ("\n\n" + "\n\n".join(marks) if marks else ""))
-
-    # -- long work ----------------------------------------------------------------------------------------------
-    def _start_check(self) -> None:
-        self.events.append(("check", "started"))
-        self._verdict.content = "physics: checking…"
-        threading.Thread(target=self._check, daemon=True).start()
-
-    def _check(self) -> None:
-        from op2motion.physics import Schedule, Setup, check
-
-        s = self.session
-        try:
-            run = check(Schedule.hold(s.servo.copy(), s.support, self.spec, CHECK_SECONDS), self.spec,
-                        setup=Setup(keep_track=True)).run
-        except Op2MotionError as exc:
-            self._verdict.content = f"physics: **could not check**: {exc}"
-            self.events.append(("check", f"refused: {exc}"))
-            return
-        verdict = "STANDS" if run.stable else "FALLS" if run.fell else "FAILS"
-        self._verdict.content = (f"physics: **{verdict}** ({', '.join(run.reasons) or 'no failure'}), margin "
-                                 f"{run.support_margin_m * 1000:+.1f} mm, {run.engine} {run.seconds:g} s ({run.ended})")
-        self._draw_ghost(run.track.q[-1])
-        self.events.append(("check", verdict))
-
-    def _start_optimise(self) -> None:
-        hand = self._hand.value
-        target = self._target_goal.get(hand, tuple(self._targets[hand].position))
-        if self.session.support.is_double:
-            self._message.content = "**refused**: the optimiser stands on one foot: choose left or right support"
-            self.events.append(("optimise", "refused: double support"))
-            return
-        self.events.append(("optimise", "started"))
-        self._progress.visible = True
-        self._progress.value = 0.0  # type: ignore[misc]
-        threading.Thread(target=self._optimise, args=(hand, target), daemon=True).start()
-
-    def _optimise(self, hand: str, target: tuple[float, float, float]) -> None:
-        from op2motion.posture.cost import PostureProblem
-        from op2motion.posture.pso import PSOSettings
-        from op2motion.workflow import solve
-
-        settings, done = PSOSettings(), [0]
-
-        def tick(_: float) -> None:
-            done[0] += 1
-            if done[0] % 10 == 0:
-                self._progress.value = min(100.0, 100.0 * done[0] / settings.iterations)  # type: ignore[misc]
-        try:
-            problem = PostureProblem(self.session.support.value, hand, target, 1.0)
-            outcome = solve(problem, self.spec, settings, restarts=0, on_iteration=tick)
-        except Op2MotionError as exc:
-            self._message.content = f"**could not optimise**: {exc}"
-            self.events.append(("optimise", f"refused: {exc}"))
-            return
-        finally:
-            self._progress.visible = False
-        result = outcome.result
-        self._verdict.content = f"optimiser: {result.message}"
-        if outcome.ok:
-            self._edit("optimise", lambda: self._adopt(outcome.pose(self.session.name, self.spec).servo))
-        self.events.append(("optimise", "reached" if outcome.ok else "not reached"))
-
-    def _adopt(self, servo: np.ndarray) -> Readout:
-        self.session.servo = np.array(servo, dtype=float)
-        return self.session.readout()
-
-    def _draw_ghost(self, settled: np.ndarray) -> None:
-        from viser.extras import ViserUrdf
-
-        if self._ghost is None:
-            self._ghost = ViserUrdf(self.server, self._urdf, root_node_name="/ghost", load_meshes=False,
-                                    load_collision_meshes=True, collision_mesh_color_override=(*GREY, 0.35))
-        rot, origin = root_in_sole(self.spec, settled, self.session.support.stance)
-        self.server.scene.add_frame("/ghost", wxyz=_wxyz(rot), position=tuple(origin), show_axes=False)
-        by_name = dict(zip(self.spec.joint_names, settled))
-        self._ghost.update_cfg(np.array([by_name[n] for n in self._order]))
 
     def _save(self) -> None:
         try:

@@ -222,6 +222,37 @@ class Session:
         write_atomic(target, self._opened().data)
         return target
 
+    def balance(self, hand: str, pinned: list[str], on_iteration: Any = None) -> tuple[Readout, str]:
+        """Re-solve the body with the optimiser from the pose as it is: the ``hand`` kept where it is, the
+        ``pinned`` joints kept at their angles, the rest free within the optimiser's box; the pose is adopted only
+        when the optimiser reaches (hand within 1 mm, balanced, clear of itself). Returns the readout and the
+        optimiser's message. One foot only."""
+        if self.support.is_double:
+            raise InputError("expected one foot: the optimiser balances on the left or the right foot", "support")
+        if hand not in ("left", "right"):
+            raise InputError(f"expected left or right, got {hand!r}", "hand")
+        for name in pinned:
+            self.joint_index(name)
+        from op2motion.posture.cost import PostureProblem
+        from op2motion.posture.pso import PSOSettings, SearchSpace, variable_bounds
+        from op2motion.posture.solve import optimize_posture
+        from op2motion.robot.spec import BOOK_VARS
+
+        support = self.support.value
+        start = servo_to_book(self.servo[None], support, self.spec).vector()[0]
+        target = self.readout().hands[f"{hand}_hand"]
+        problem = PostureProblem(support, hand, target, 1.0)
+        lo, hi = variable_bounds(problem, self.spec)
+        lo, hi = np.minimum(lo, start), np.maximum(hi, start)         # the pose as it is lies in the box
+        for name in pinned:
+            k = BOOK_VARS.index(self.spec.joint(name).book[support].var)
+            lo[k] = hi[k] = start[k]
+        result = optimize_posture(problem, self.spec, PSOSettings(), on_iteration=on_iteration,
+                                  space=SearchSpace((lo, hi), start))
+        if result.reached:
+            self.servo = book_to_servo(result.angles, self.spec)[0]
+        return self.readout(), result.message
+
     def reach(self, hand: str, target: object) -> tuple[Readout, float]:
         """Move one hand towards ``target`` (x, y, z) [m] with its arm's three joints (the project's arm IK, within
         the cable-safe ranges); returns the readout and the distance [m] left to the target."""
