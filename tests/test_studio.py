@@ -161,6 +161,7 @@ def test_the_page_moves_a_joint_and_checks_in_physics(spec, tmp_path):
             box.fill("-20")                                           # the left arm from 41° to -20°
             box.press("Enter")
             _wait(lambda: ("slider", "applied") in studio.events, "the slider edit on the Python side")
+            assert "| l_sho_pitch | -20.0 |" in studio._table.content          # degrees and ticks per joint
             assert studio.session.servo[spec.joint_names.index("l_sho_pitch")] == pytest.approx(np.radians(-20))
             page.get_by_text("optimise to the hand target", exact=True).click()    # on two feet: refused
             _wait(lambda: ("optimise", "refused: double support") in studio.events, "the optimiser's refusal")

@@ -93,6 +93,8 @@ class Studio(LongWork, ActionPanel):
             self._path = gui.add_text("pose file", f"poses/{self.session.name}.json")
             gui.add_button("save pose").on_click(lambda _: self._save())
         self._build_action_gui()
+        with gui.add_folder("joint table", expand_by_default=False):
+            self._table = gui.add_markdown("")
         self._sliders: dict[str, Any] = {}
         with gui.add_folder("joints"):
             for joint, state in zip(self.spec.joints, self.session.readout().joints):
@@ -178,6 +180,9 @@ class Studio(LongWork, ActionPanel):
             self._quiet = False
         marks = [f"{j.name} {j.degrees:+.1f}° ({j.ticks}){' outside cable-safe' if j.outside_cable_safe else ''}"
                  for j in readout.joints if j.outside_cable_safe]
+        self._table.content = "| joint | deg | ticks | cable-safe |\n|---|---|---|---|\n" + "\n".join(
+            f"| {j.name} | {j.degrees:+.1f} | {j.ticks} | {j.cable_safe[0]:.0f}..{j.cable_safe[1]:.0f}"
+            f"{' **outside**' if j.outside_cable_safe else ''} |" for j in readout.joints)
         tint = "red" if readout.colliding else "green"
         self._readout.content = ("\n\n".join(readout.lines()) + f"\n\n<span style='color:{tint}'>"
                                  f"{'self-collision' if readout.colliding else 'no self-collision'}</span>"
