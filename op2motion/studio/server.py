@@ -149,9 +149,9 @@ class Studio(LongWork, ActionPanel):
                 self.events.append((kind, f"refused: {exc}"))
                 self._message.content = f"**refused**: {exc}"
                 return
-            self.events.append((kind, "applied"))
             self._message.content = ""
             self._show(readout)
+            self.events.append((kind, "applied"))          # after the page shows it
 
     def _show(self, readout: Readout) -> None:
         """Draw the pose and its readout."""
