@@ -82,18 +82,12 @@ class LongWork:
         from op2motion.posture.pso import PSOSettings
         from op2motion.workflow import solve
 
-        settings, done = PSOSettings(), [0]
-
-        def tick(_: float) -> None:
-            done[0] += 1
-            if done[0] % 10 == 0:
-                self._progress.value = min(100.0, 100.0 * done[0] / settings.iterations)
+        settings = PSOSettings()
         try:
             problem = PostureProblem(self.session.support.value, hand, target, 1.0)
-            outcome = solve(problem, self.spec, settings, restarts=0, on_iteration=tick)
+            outcome = solve(problem, self.spec, settings, restarts=0, on_iteration=self._ticker(settings.iterations))
         except Op2MotionError as exc:
-            self._message.content = f"**could not optimise**: {exc}"
-            self.events.append(("optimise", f"refused: {exc}"))
+            self._refuse("optimise", exc, "could not optimise")
             return
         finally:
             self._progress.visible = False
@@ -109,19 +103,29 @@ class LongWork:
         self._progress.visible = True
         threading.Thread(target=self._balance, args=(self._hand.value, pins), daemon=True).start()
 
-    def _balance(self, hand: str, pins: list[str]) -> None:
+    def _refuse(self, kind: str, exc: Exception, what: str = "refused") -> None:
+        """Show why a piece of work did not happen, and record it."""
+        self._message.content = f"**{what}**: {exc}"
+        self.events.append((kind, f"refused: {exc}"))
+
+    def _ticker(self, iterations: int) -> Any:
+        """An ``on_iteration`` callback that moves the progress bar (every tenth iteration of one solve)."""
         done = [0]
 
         def tick(_: float) -> None:
             done[0] += 1
             if done[0] % 10 == 0:
-                self._progress.value = min(100.0, done[0] / 2.0)
+                self._progress.value = min(100.0, 100.0 * done[0] / iterations)
+        return tick
+
+    def _balance(self, hand: str, pins: list[str]) -> None:
+        from op2motion.posture.pso import PSOSettings
+
         with self._lock:
             try:
-                readout, message = self.session.balance(hand, pins, tick)
+                readout, message = self.session.balance(hand, pins, self._ticker(PSOSettings().iterations))
             except Op2MotionError as exc:
-                self._message.content = f"**refused**: {exc}"
-                self.events.append(("balance", f"refused: {exc}"))
+                self._refuse("balance", exc)
                 return
             finally:
                 self._progress.visible = False
