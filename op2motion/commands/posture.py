@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from op2motion import book
 from op2motion.commands.common import (
@@ -27,6 +27,11 @@ from op2motion.posture.pso import MAX_ITERATIONS, MAX_PARTICLES, MAX_SEED, PSOSe
 from op2motion.robot.balance import COM_MODEL_FULL, COM_MODELS
 from op2motion.robot.spec import Spec
 from op2motion.workflow import DEFAULT_RESTARTS, MAX_RESTARTS
+
+if TYPE_CHECKING:
+    from op2motion.figures.background import Renderers
+    from op2motion.fileio import OutputSet
+    from op2motion.posture.cost import PostureProblem
 
 SECONDS = number(MIN_SECONDS, MAX_SECONDS, "s")
 
@@ -95,8 +100,8 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
         return _optimize(args, spec, problem, settings, name, outputs, renderers)
 
 
-def _optimize(args: argparse.Namespace, spec: Spec, problem: Any, settings: PSOSettings, name: str,
-              outputs: Any, renderers: Any) -> int:
+def _optimize(args: argparse.Namespace, spec: Spec, problem: PostureProblem, settings: PSOSettings, name: str,
+              outputs: OutputSet, renderers: Renderers) -> int:
     """The work of :func:`cmd_optimize`, its figures drawn by ``renderers``."""
     from tqdm import tqdm
 

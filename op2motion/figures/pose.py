@@ -2,8 +2,8 @@
 
 ``pose_figure`` draws one pose on one or both kinematic models with its title block: the pose and support, both
 centres of mass with their margins, the hand and swing-foot numbers, and the physics verdict (run now, or recorded
-in the pose file's metrics, or "not checked"). ``outcome_figures`` draws what ``optimize`` writes: the pose and the
-cost curves of every attempt.
+in the pose file's metrics, or "not checked"). ``outcome_pose_figure`` and ``outcome_cost_curve`` draw what
+``optimize`` writes: the pose and the cost curves of every attempt.
 """
 
 from __future__ import annotations
@@ -117,9 +117,3 @@ def outcome_cost_curve(outcome: Outcome, name: str) -> bytes:
     attempts = r.attempt_pso or (r.pso,)
     return render_cost_curve([a.history for a in attempts], [a.hand_error_history for a in attempts], r.tolerance_m,
                              f"PSO cost, {name} ({len(attempts)} attempt(s))", r.chosen_attempt)
-
-
-def outcome_figures(outcome: Outcome, name: str, spec: Spec) -> tuple[bytes, bytes, dict[str, Any]]:
-    """PNG bytes of the pose figure and of the cost curves of an ``optimize`` outcome, and the pose report."""
-    png, drawn = outcome_pose_figure(outcome, name, spec)
-    return png, outcome_cost_curve(outcome, name), drawn

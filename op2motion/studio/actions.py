@@ -3,7 +3,7 @@ on a page and save the file (atomically; nothing is written before). A mixin of 
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 from op2motion.errors import Op2MotionError
 from op2motion.studio.session import Readout, Session
@@ -20,11 +20,8 @@ class ActionPanel:
     _quiet: bool
     _opened_path: str
 
-    def _show(self, readout: Readout) -> None:
-        raise NotImplementedError
-
-    def _edit(self, kind: str, action: Any) -> None:
-        raise NotImplementedError
+    _show: Callable[[Readout], None]               # the page's own, from Studio
+    _edit: Callable[[str, Any], None]
 
     def _build_action_gui(self) -> None:
         """Open an action file, play and scrub a page, put the pose on a page and save the file."""

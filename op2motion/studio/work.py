@@ -5,7 +5,7 @@ keeping a hand and the pinned joints). A mixin of :class:`.server.Studio`."""
 from __future__ import annotations
 
 import threading
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -37,11 +37,8 @@ class LongWork:
     _urdf: Any
     _order: list[str]
 
-    def _show(self, readout: Readout) -> None:
-        raise NotImplementedError
-
-    def _edit(self, kind: str, action: Any) -> None:
-        raise NotImplementedError
+    _show: Callable[[Readout], None]               # the page's own, from Studio
+    _edit: Callable[[str, Any], None]
 
     def _start_check(self) -> None:
         self.events.append(("check", "started"))
