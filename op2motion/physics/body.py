@@ -19,6 +19,7 @@ import numpy as np
 
 from op2motion.model.dynamics import dynamics_for
 from op2motion.model.urdf import foot_box_corners, foot_link
+from op2motion.robot.balance import polygon_margin
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import SIDES, Support
 
@@ -92,3 +93,8 @@ def placement(body: Body, q: np.ndarray, support: str) -> tuple[np.ndarray, np.n
         options.append((gap, side, pos + np.array([0.0, 0.0, lift]), rot))
     gap, side, pos, rot = min(options, key=lambda o: o[0])   # the lower, more level sole: the smallest gap
     return pos, rot, side, gap
+
+
+def margin_to(state: BodyState, support: Support, xy: np.ndarray) -> float:
+    """Margin [m] of a point (2,) to the support polygon of ``support`` in ``state`` (positive inside)."""
+    return float(polygon_margin(xy, support.polygon(state.corners))[0])

@@ -25,7 +25,7 @@ import numpy as np
 from op2motion.errors import InputError
 from op2motion.model.equilibrium import sagged_angles
 from op2motion.model.servo import ServoModel
-from op2motion.physics.body import Body, BodyState, placement
+from op2motion.physics.body import Body, BodyState, margin_to, placement
 from op2motion.physics.controller import Controller, Goals
 from op2motion.physics.engine import Engine
 from op2motion.physics.plan import RAMP_S, PlannedStates, planned_states
@@ -165,7 +165,9 @@ def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoMod
         if k % every == every - 1 or last:
             row = plan.row(t)
             recorder.sample(engine, (k + 1) * dt, row, servos.goals, servos.kp)
-            last = last or stop.sample(float(recorder.lists["com"][-1][2]), float(planned.states[row].com[2]))
+            state = recorder.lists["states"][-1]
+            last = stop.sample((k + 1) * dt, float(state.com[2]), float(planned.states[row].com[2]),
+                               margin_to(state, plan.supports[row], state.com[:2])) or last
         if last:
             break
     return recorder.track(), StartFacts(body.state(base_pos, base_rot, q0), planned, ramp, stop.ended)

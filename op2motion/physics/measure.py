@@ -15,7 +15,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from op2motion.model.servo import ServoModel
-from op2motion.physics.body import BodyState
+from op2motion.physics.body import margin_to
 from op2motion.physics.judge import LOADING_TILT_LIMIT_DEG, Judgement, steady_window
 from op2motion.physics.loop import StartFacts
 from op2motion.physics.plan import Plan
@@ -47,11 +47,6 @@ def _xy(v: Sequence[float] | np.ndarray) -> tuple[float, float]:
 
 def _xyz(v: Sequence[float] | np.ndarray) -> tuple[float, float, float]:
     return _r(v[0]), _r(v[1]), _r(v[2])
-
-
-def margin_to(state: BodyState, support: Support, xy: np.ndarray) -> float:
-    """Margin [m] of a point (2,) to the support polygon of ``support`` in ``state`` (positive inside)."""
-    return float(polygon_margin(xy, support.polygon(state.corners))[0])
 
 
 def feet_report(track: Track, steady: np.ndarray) -> dict[str, FootLoad]:

@@ -21,8 +21,8 @@ import math
 import numpy as np
 
 from op2motion.errors import InputError
+from op2motion.physics.body import margin_to
 from op2motion.physics.loop import StartFacts
-from op2motion.physics.measure import margin_to
 from op2motion.physics.plan import Plan, WalkClock
 from op2motion.physics.report import WalkMeasures, WorstTorque
 from op2motion.physics.track import Track
