@@ -18,7 +18,7 @@ from op2motion.commands.common import (
 )
 from op2motion.errors import CheckFailed, InputError
 from op2motion.formats.actionlayout import NUM_PAGES
-from op2motion.formats.motionfile import PROFILES
+from op2motion.formats.motionfile import PLANNERS, PROFILES
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support
 
@@ -35,6 +35,13 @@ def _physics_args(p: argparse.ArgumentParser) -> None:
     physics_args(p, True, "with --validate: push the torso N newtons for 0.1 s halfway through (four directions)")
     p.add_argument("--plot", type=output_path, metavar="PNG", help="q, q̇, q̈ per joint and the CoM/ZMP/CoP tracks")
     p.add_argument("--csv", type=output_path, metavar="CSV", help="the goals every 8 ms as CSV")
+
+
+def _planner_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--planner", choices=PLANNERS, default="rrt",
+                   help="where the straight line between two poses collides: plan around it in joint space "
+                        "(rrt, default) or refuse (none)")
+    p.add_argument("--seed", type=whole(0, 2 ** 31 - 1), default=0, help="seed of the path planner (default 0)")
 
 
 def register(sub: Any) -> None:
@@ -62,6 +69,7 @@ def register(sub: Any) -> None:
                                                                                  "robot's trapezoid")
     p.add_argument("--name", help="motion name (default: the output file's stem)")
     p.add_argument("--out", type=output_path, metavar="MOTION", help="write the motion file (atomically)")
+    _planner_args(p)
     _physics_args(p)
     p = add_command(inner, "export", cmd_export, "a motion file -> action pages, Webots motion or CSV")
     p.add_argument("motion", metavar="MOTION", help="motion file (schema op2motion.motion/1)")
@@ -70,6 +78,7 @@ def register(sub: Any) -> None:
     p.add_argument("--page", type=PAGE, help="first page (default: the first run of empty pages)")
     p.add_argument("--force", action="store_true", help="overwrite pages that hold actions")
     p.add_argument("-o", "--output", type=output_path, required=True, metavar="OUT", help="file to write")
+    _planner_args(p)
 
 
 def _physics(args: argparse.Namespace, trajectory: Trajectory, spec: Spec) -> CheckReport | None:
@@ -193,7 +202,7 @@ def cmd_plan(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.motion.pipeline import plan_motion
 
     motion = _motion_from_args(args, spec)
-    trajectory = plan_motion(motion, spec)
+    trajectory = plan_motion(motion, spec, args.planner, args.seed)
     if args.out:
         outputs = OutputSet({"out": args.out})
         outputs.put("out", motion_to_json(motion, spec, args.out))
@@ -220,12 +229,12 @@ def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
     result: dict[str, Any] = {"name": motion.name, "format": args.format}
     if args.format == "action":
         base = ActionFile.read(args.base) if args.base else ActionFile.blank()
-        written, pages, notes = motion_to_action(motion, spec, base, args.page, args.force)
+        written, pages, notes = motion_to_action(motion, spec, base, args.page, args.force, args.planner, args.seed)
         outputs.put("output", written.data)
         result["pages"] = pages
         text = f"pages {pages[0]}..{pages[-1]} (play page {pages[0]})"
     else:
-        trajectory = plan_motion(motion, spec)
+        trajectory = plan_motion(motion, spec, args.planner, args.seed)
         notes = list(trajectory.notes)
         if args.format == "csv":
             outputs.put("output", goals_csv(trajectory.times, trajectory.goals, trajectory.supports, spec))

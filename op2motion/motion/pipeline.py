@@ -48,22 +48,24 @@ def waypoints_of(motion: Motion) -> list[Waypoint]:
     return [Waypoint(s.pose.name, s.pose.servo, s.duration_s, s.pause_s, s.pose.support) for s in motion.steps]
 
 
-def plan_motion(motion: Motion, spec: Spec) -> Trajectory:
-    """A motion's goals every 8 ms with its profile and P gain, weight shifts inserted; refused (naming segment,
-    time and links) where links would pass through each other."""
-    trajectory = plan(waypoints_of(motion), spec, motion.profile, motion.p_gain)
+def plan_motion(motion: Motion, spec: Spec, planner: str = "rrt", seed: int = 0) -> Trajectory:
+    """A motion's goals every 8 ms with its profile and P gain, weight shifts inserted, segments whose straight
+    line collides planned around (``planner`` "rrt", seeded by ``seed``: :mod:`.route`); refused (naming segment,
+    time and links) where links would still pass through each other (``planner`` "none")."""
+    trajectory = plan(waypoints_of(motion), spec, motion.profile, motion.p_gain, planner=planner, seed=seed)
     require_clear(trajectory, spec)
     return trajectory
 
 
 def motion_to_action(motion: Motion, spec: Spec, base: ActionFile, first: int | None = None,
-                     force: bool = False) -> tuple[ActionFile, list[int], list[str]]:
+                     force: bool = False, planner: str = "rrt", seed: int = 0
+                     ) -> tuple[ActionFile, list[int], list[str]]:
     """``base`` with the motion written as chained pages (at most 7 steps each, linked by ``next``) from ``first``
-    on (default: the first run of empty pages; occupied pages refused unless ``force``); the pages written and the
-    planner's notes."""
+    on (default: the first run of empty pages; occupied pages refused unless ``force``), colliding segments planned
+    around as :func:`plan_motion` does; the pages written and the planner's notes."""
     waypoints = waypoints_of(motion)
-    count = len(action_pages(waypoints, spec, motion.name, 1, motion.p_gain)[0])
+    count = len(action_pages(waypoints, spec, motion.name, 1, motion.p_gain, planner=planner, seed=seed)[0])
     first = base.first_empty_run(count) if first is None else first
-    pages, notes = action_pages(waypoints, spec, motion.name, first, motion.p_gain)
+    pages, notes = action_pages(waypoints, spec, motion.name, first, motion.p_gain, planner=planner, seed=seed)
     written, first = base.with_pages(pages, first, force)
     return written, list(range(first, first + len(pages))), notes

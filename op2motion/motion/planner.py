@@ -23,13 +23,15 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from op2motion.errors import InputError
+from op2motion.errors import CheckFailed, InputError
 from op2motion.formats.action import ActionFile
 from op2motion.formats.actionlayout import MAX_BYTE, MAX_STEPS, NUM_PAGES, PageHeader, StepBytes, encode_page
 from op2motion.formats.motionfile import PROFILES
 from op2motion.motion.player import play, start_ticks, step_calls
+from op2motion.motion.route import route, routed_clearance, with_stops
 from op2motion.motion.shift import balanced, settled_swing_heights, with_weight_shifts
 from op2motion.motion.trajectory import Trajectory, from_playback
+from op2motion.posture.cost import SELF_CLEARANCE_M
 from op2motion.motion.waypoint import Waypoint, check_waypoints
 from op2motion.robot.framework import CONTROL_PERIOD_S, DEFAULT_P_GAIN, slope_of_p_gain
 from op2motion.robot.joints import servo_to_ticks
@@ -44,11 +46,12 @@ def _units(seconds: float) -> int:
     return max(1, int(math.ceil(seconds / CONTROL_PERIOD_S - 1e-9)))
 
 
-def _through_velocities(q: np.ndarray, durations: np.ndarray, pauses: np.ndarray) -> np.ndarray:
-    """Velocity [rad/s] (n, 20) at each waypoint: 0 at rest points, else the smaller neighbouring mean speed."""
+def _through_velocities(q: np.ndarray, durations: np.ndarray, rests: np.ndarray) -> np.ndarray:
+    """Velocity [rad/s] (n, 20) at each waypoint: 0 at rest points (``rests`` (n,) bool), else the smaller
+    neighbouring mean speed."""
     v = np.zeros_like(q)
     for i in range(1, len(q) - 1):
-        if pauses[i] > 0.0:
+        if rests[i]:
             continue
         before = (q[i] - q[i - 1]) / durations[i]
         after = (q[i + 1] - q[i]) / durations[i + 1]
@@ -100,13 +103,14 @@ def _units_array(seconds: np.ndarray) -> np.ndarray:
 def _quintic_rows(waypoints: Sequence[Waypoint], v_max: float) -> tuple[np.ndarray, np.ndarray, list[str]]:
     q = np.array([w.servo for w in waypoints])
     pauses = np.array([w.pause_s for w in waypoints])
+    rests = np.array([w.pause_s > 0.0 or w.stop for w in waypoints])
 
     def peak(durations: np.ndarray) -> np.ndarray:
-        v = _through_velocities(q, durations, pauses)
+        v = _through_velocities(q, durations, rests)
         return np.array([_peak_speed(q[i], q[i + 1], v[i], v[i + 1], durations[i + 1]) for i in range(len(q) - 1)])
 
     durations, notes = _timed(waypoints, v_max, peak)
-    v = _through_velocities(q, durations, pauses)
+    v = _through_velocities(q, durations, rests)
     rows, segment = [q[:1]], [-1]
     if pauses[0] > 0:
         rows.append(np.repeat(q[:1], _units(pauses[0]), axis=0))
@@ -197,37 +201,57 @@ def row_supports(goals: np.ndarray, segment: np.ndarray, waypoints: Sequence[Way
     return tuple(out)
 
 
+def _rows(waypoints: Sequence[Waypoint], spec: Spec, profile: str, p_gain: int
+          ) -> tuple[np.ndarray, np.ndarray, list[str], np.ndarray]:
+    """Goals (K, 20), the segment of each row, the timing notes and the P gains (K, 20) of ``profile``."""
+    v_max = SPEED_FRACTION * spec.servo.no_load_speed_rad_s
+    if profile == "quintic":
+        goals, segment, notes = _quintic_rows(waypoints, v_max)
+        return balanced(goals, segment, waypoints, spec), segment, notes, np.full(goals.shape, float(p_gain))
+    return _robot_rows(waypoints, spec, v_max)
+
+
 def plan(waypoints: Sequence[Waypoint], spec: Spec, profile: str = "quintic",
-         p_gain: int = DEFAULT_P_GAIN, shift_weight: bool = True) -> Trajectory:
+         p_gain: int = DEFAULT_P_GAIN, shift_weight: bool = True, planner: str = "rrt", seed: int = 0) -> Trajectory:
     """Joint goals every 8 ms through ``waypoints`` with ``profile`` (``quintic`` or ``robot``); with
-    ``shift_weight``, a weight shift goes in wherever the sequence changes between two feet and one."""
+    ``shift_weight``, a weight shift goes in wherever the sequence changes between two feet and one; with
+    ``planner`` "rrt", a segment whose straight line collides is planned around (:mod:`.route`, seeded by
+    ``seed``): the motion flows through the via poses where that keeps every row
+    :data:`~.body_checks.SELF_CLEARANCE_M` clear, else it comes to rest at each."""
     check_waypoints(waypoints)
     if profile not in PROFILES:
         raise InputError(f"expected one of {', '.join(PROFILES)}, got {profile!r}", "profile")
     shift_notes: list[str] = []
     if shift_weight:
         waypoints, shift_notes = with_weight_shifts(waypoints, spec)
-    v_max = SPEED_FRACTION * spec.servo.no_load_speed_rad_s
-    if profile == "quintic":
-        goals, segment, notes = _quintic_rows(waypoints, v_max)
-        goals = balanced(goals, segment, waypoints, spec)
-        gains = np.full(goals.shape, float(p_gain))
-    else:
-        goals, segment, notes, gains = _robot_rows(waypoints, spec, v_max)
+    routed = route(waypoints, spec, planner, seed)
+    waypoints = routed.waypoints
+    goals, segment, notes, gains = _rows(waypoints, spec, profile, p_gain)
+    if routed.segments and routed_clearance(goals, segment, routed, spec) < SELF_CLEARANCE_M:
+        waypoints = with_stops(routed)
+        goals, segment, notes, gains = _rows(waypoints, spec, profile, p_gain)
+        least = routed_clearance(goals, segment, routed, spec)
+        if least < SELF_CLEARANCE_M:
+            raise CheckFailed(f"the planned path keeps only {least * 1000:.1f} mm between links once timed (expected "
+                              f"at least {SELF_CLEARANCE_M * 1000:.0f} mm): try another --seed")
+        notes.append("the motion comes to rest at each via pose (flowing through them came too close)")
     names = tuple(f"{a.name} -> {b.name}" for a, b in zip(waypoints, waypoints[1:]))
     return Trajectory(goals, gains, row_supports(goals, segment, waypoints, spec), segment, names,
-                      notes=tuple(shift_notes + notes))
-
+                      notes=tuple(shift_notes + routed.notes + notes))
 
 
 def action_pages(waypoints: Sequence[Waypoint], spec: Spec, name: str, first_page: int,
-                 p_gain: int = DEFAULT_P_GAIN, shift_weight: bool = True) -> tuple[list[bytes], list[str]]:
+                 p_gain: int = DEFAULT_P_GAIN, shift_weight: bool = True, planner: str = "rrt",
+                 seed: int = 0) -> tuple[list[bytes], list[str]]:
     """The motion as chained action pages from ``first_page`` on (the robot's profile: what the robot plays),
-    weight shifts inserted as :func:`plan` does, every joint's slope set for ``p_gain``; and the notes."""
+    weight shifts inserted and colliding segments planned around as :func:`plan` does, every joint's slope set for
+    ``p_gain``; and the notes."""
     check_waypoints(waypoints)
     notes: list[str] = []
     if shift_weight:
         waypoints, notes = with_weight_shifts(waypoints, spec)
+    routed = route(waypoints, spec, planner, seed)
+    waypoints, notes = routed.waypoints, notes + routed.notes
     steps, timing, _ = robot_steps(waypoints, spec, SPEED_FRACTION * spec.servo.no_load_speed_rad_s)
     slopes = {j.id: slope_of_p_gain(p_gain) for j in spec.joints} if p_gain != DEFAULT_P_GAIN else None
     return robot_pages(name, steps, first_page, slopes), notes + timing

@@ -175,7 +175,7 @@ def with_weight_shifts(waypoints: Sequence[Waypoint], spec: Spec) -> tuple[list[
     return out, notes
 
 
-def _segment_side(a: Waypoint, b: Waypoint) -> str | None:
+def segment_side(a: Waypoint, b: Waypoint) -> str | None:
     """The foot a segment stands on when one of its ends is a single-support pose (None for two feet)."""
     singles = [w.support for w in (a, b) if not w.support.is_double]
     if len(set(singles)) > 1:
@@ -193,7 +193,7 @@ def balanced(goals: np.ndarray, segment: np.ndarray, waypoints: Sequence[Waypoin
     model = Compliance(spec)
     out = np.array(goals, dtype=float)
     for i, (a, b) in enumerate(zip(waypoints, waypoints[1:])):
-        side = _segment_side(a, b)
+        side = segment_side(a, b)
         rows = np.flatnonzero(segment == i)
         if side is None or rows.size == 0:
             continue

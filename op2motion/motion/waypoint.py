@@ -19,13 +19,15 @@ MAX_SEGMENT_S = 60.0
 @dataclass(frozen=True)
 class Waypoint:
     """A pose to reach: its name, servo angles (20,) [rad], the time to reach it from the previous one [s] (0 for
-    the first), how long to hold it [s], and its support (``left``, ``right`` or ``double``)."""
+    the first), how long to hold it [s], and its support (``left``, ``right`` or ``double``); ``stop``: the motion
+    comes to rest here even without a pause (else it flows through where a joint keeps its direction)."""
 
     name: str
     servo: np.ndarray
     duration_s: float
     pause_s: float
     support: Support
+    stop: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "support", Support.of(self.support))

@@ -1,0 +1,144 @@
+"""Motions that go around: RRT-Connect (op2motion.motion.rrt) and the OP2's joint-space routing (motion.route):
+pose pairs whose straight interpolation drives links through each other are planned around with clearance at every
+row, deterministically; an impossible pair is refused; the CLI writes nothing then."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from helpers import POSES, run_cli
+
+from op2motion.errors import CheckFailed
+from op2motion.formats.posefile import read_pose, write_pose
+from op2motion.motion.body_checks import PLAN_CLEARANCE_M, BodyChecks
+from op2motion.motion.checks import check_trajectory, clearance, require_clear
+from op2motion.motion.planner import plan
+from op2motion.motion.route import route_segment
+from op2motion.motion.rrt import Box, RrtSettings, edge_points, rrt_connect, shortcut
+from op2motion.motion.waypoint import Waypoint
+from op2motion.posture.cost import SELF_CLEARANCE_M
+from op2motion.robot.pose import Pose
+from op2motion.robot.support import Support
+
+OBSTACLE_RADIUS = 0.3
+DENSE_RAD = 0.005            # the routed edges are re-checked this finely [rad of the fastest joint]
+MIN_MARGIN_M = 0.0           # the CoM never leaves the support along a routed path
+# Pairs found by a seeded search: ends at least 8 mm clear, the straight line overlapping by 10-35 mm.
+ARM_THROUGH_TORSO = {"r_sho_pitch": (69.0, -178.0), "r_sho_roll": (-63.0, -51.0), "r_el": (-29.0, -24.0)}
+ARM_THROUGH_HIP = {"r_sho_pitch": (117.0, -170.0), "r_sho_roll": (-51.0, -76.0), "r_el": (-44.0, -41.0)}
+ARMS_CROSSING = {"r_sho_pitch": (-22.0, -8.0), "r_sho_roll": (7.0, 36.0), "r_el": (55.0, 18.0),
+                 "l_sho_pitch": (-24.0, 104.0), "l_sho_roll": (59.0, 62.0), "l_el": (28.0, 39.0)}
+PAIRS = {"arm through torso": ARM_THROUGH_TORSO, "arm through hip": ARM_THROUGH_HIP, "arms crossing": ARMS_CROSSING}
+
+
+def _pair(spec, change: dict, duration_s: float = 2.0) -> tuple[Waypoint, Waypoint]:
+    init = read_pose(POSES / "init.json", spec).servo
+    a, b = init.copy(), init.copy()
+    for joint, (x, y) in change.items():
+        a[spec.joint_names.index(joint)], b[spec.joint_names.index(joint)] = np.radians(x), np.radians(y)
+    return Waypoint("a", a, 0.0, 0.0, "double"), Waypoint("b", b, duration_s, 0.0, "double")
+
+
+def _disc_world():
+    box = Box(np.zeros(2), np.ones(2), np.ones(2))
+
+    def valid(p: np.ndarray) -> np.ndarray:
+        return np.hypot(p[:, 0] - 0.5, p[:, 1] - 0.5) > OBSTACLE_RADIUS
+
+    return box, valid
+
+
+def test_rrt_connect_goes_around_an_obstacle_and_repeats_with_its_seed():
+    box, valid = _disc_world()
+    start, goal = np.array([0.1, 0.5]), np.array([0.9, 0.5])
+    settings = RrtSettings(step=0.1, resolution=0.005)
+    paths = [rrt_connect(start, goal, valid, box, np.random.default_rng(3), settings) for _ in range(2)]
+    assert paths[0] is not None and len(paths[0]) > 2
+    assert all(np.array_equal(p, q) for p, q in zip(*paths))
+    short = shortcut(paths[0], valid, box, np.random.default_rng(3), settings)
+    for path in (paths[0], short):
+        assert np.array_equal(path[0], start) and np.array_equal(path[-1], goal)
+        assert all(valid(edge_points(a, b, box, 0.001)).all() for a, b in zip(path, path[1:]))
+    length = lambda p: sum(float(box.distance(a, b)) for a, b in zip(p, p[1:]))  # noqa: E731
+    assert length(short) <= length(paths[0]) + 1e-12
+    assert length(short) < 1.2 * np.pi * OBSTACLE_RADIUS + 0.4      # about half round the disc, not a detour
+
+
+def test_rrt_connect_gives_up_on_an_enclosed_goal():
+    box, _ = _disc_world()
+
+    def pocket(p: np.ndarray) -> np.ndarray:       # free inside r < 0.1 and outside r > 0.3: a closed ring between
+        r = np.hypot(p[:, 0] - 0.5, p[:, 1] - 0.5)
+        return (r < 0.1) | (r > OBSTACLE_RADIUS)
+
+    path = rrt_connect(np.array([0.05, 0.05]), np.array([0.5, 0.5]), pocket, box, np.random.default_rng(0),
+                       RrtSettings(max_samples=300, budget_s=2.0))
+    assert path is None
+
+
+@pytest.mark.parametrize("name", sorted(PAIRS))
+def test_colliding_pairs_are_planned_around_with_clearance_at_every_row(spec, name):
+    a, b = _pair(spec, PAIRS[name])
+    with pytest.raises(CheckFailed, match="passes"):
+        require_clear(plan([a, b], spec, planner="none"), spec)
+    pieces, why = route_segment(a, b, spec, seed=0)
+    assert why is not None and "overlap" in why and len(pieces) >= 2
+    checks = BodyChecks(spec, None)
+    poses = [a.servo] + [p.servo for p in pieces]
+    for x, y in zip(poses, poses[1:]):
+        n = int(np.ceil(np.abs(y - x).max() / DENSE_RAD)) + 1
+        m = checks.measure(x + np.linspace(0.0, 1.0, n)[:, None] * (y - x))
+        assert m.clearance.min() >= PLAN_CLEARANCE_M - 1e-9 and m.margin.min() > MIN_MARGIN_M
+    traj = plan([a, b], spec, seed=0)
+    assert clearance(traj.goals, spec)[0].min() >= SELF_CLEARANCE_M
+    assert check_trajectory(traj, spec).summary()["min_clearance_m"] >= SELF_CLEARANCE_M - 5e-6
+    assert any("planned around" in n for n in traj.notes)
+    again = plan([a, b], spec, seed=0)
+    assert np.array_equal(traj.goals, again.goals)
+    assert np.array_equal(traj.goals[-1], b.servo) and np.array_equal(traj.goals[0], a.servo)
+
+
+def test_a_goal_inside_the_body_has_no_path(spec):
+    init = read_pose(POSES / "init.json", spec).servo
+    inside = init.copy()
+    for joint, deg in (("r_sho_pitch", -45.0), ("r_sho_roll", -90.0), ("r_el", 0.0)):
+        inside[spec.joint_names.index(joint)] = np.radians(deg)
+    with pytest.raises(CheckFailed, match="no path from init to arm_in: arm_in itself has links"):
+        plan([Waypoint("init", init, 0.0, 0.0, "double"), Waypoint("arm_in", inside, 1.0, 0.0, "double")], spec)
+
+
+def _write_pair(tmp_path, spec, change: dict) -> list[str]:
+    a, b = _pair(spec, change)
+    paths = []
+    for w in (a, b):
+        write_pose(Pose(f"pair_{w.name}", Support.DOUBLE, w.servo), tmp_path / f"{w.name}.json", spec)
+        paths.append(str(tmp_path / f"{w.name}.json"))
+    return paths
+
+
+def test_cli_plans_around_and_refuses_with_planner_none(tmp_path, spec, capsys):
+    paths = _write_pair(tmp_path, spec, ARM_THROUGH_TORSO)
+    out = tmp_path / "m.json"
+    code, stdout, _ = run_cli(capsys, "motion", "plan", *paths, "--durations", "2", "--seed", "4", "--out", out,
+                              "--json")
+    result = json.loads(stdout)
+    assert code == 0 and out.is_file()
+    assert result["checks"]["min_clearance_m"] >= SELF_CLEARANCE_M and any("via pose" in n for n in result["notes"])
+    refused = tmp_path / "refused.json"
+    code, _, err = run_cli(capsys, "motion", "plan", *paths, "--durations", "2", "--planner", "none", "--out", refused)
+    assert code == 1 and not refused.exists() and "passes" in err
+
+
+def test_cli_refuses_a_pair_with_no_path_writing_nothing(tmp_path, spec, capsys):
+    init = read_pose(POSES / "init.json", spec)
+    inside = init.servo.copy()
+    for joint, deg in (("r_sho_pitch", -45.0), ("r_sho_roll", -90.0), ("r_el", 0.0)):
+        inside[spec.joint_names.index(joint)] = np.radians(deg)
+    write_pose(Pose("arm_in", Support.DOUBLE, inside), tmp_path / "in.json", spec)
+    out = tmp_path / "m.json"
+    code, _, err = run_cli(capsys, "motion", "plan", POSES / "init.json", tmp_path / "in.json", "--durations", "1",
+                           "--out", out, "--csv", tmp_path / "m.csv")
+    assert code == 1 and not out.exists() and not (tmp_path / "m.csv").exists()
+    assert err.count("\n") == 1 and "no path" in err and "Traceback" not in err
