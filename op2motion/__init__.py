@@ -9,6 +9,8 @@ The public API (imported on first use, so ``import op2motion`` does no work)::
     report = op2.check(op2.Schedule.hold(pose.servo, pose.support, spec), spec)    # physics
     outcome = op2.solve(op2.PostureProblem("left", "left", (0.10, 0.05, 0.07)), spec)
     played = op2.play_page(op2.ActionFile.read("motion_4096.bin"), 9, spec)        # an action page
+    traj = op2.plan_waypoints([op2.Waypoint("a", qa, 0, 0, "double"), op2.Waypoint("b", qb, 2, 0, "double")], spec)
+    line = op2.line_move(pose, op2.LineRequest("right", 1.0, delta_m=(0.05, 0, 0)), spec)    # a hand in a line
     gait = op2.plan_gait(op2.load_preset("forward"), spec)        # a walk; op2.gait_schedule(gait, spec) plays it
 """
 
@@ -49,6 +51,11 @@ _API = {
     "read_motion": ("formats.motionfile", "read_motion"),
     "play_page": ("motion.pipeline", "play_page"),
     "plan_motion": ("motion.pipeline", "plan_motion"),
+    "Waypoint": ("motion.waypoint", "Waypoint"),
+    "plan_waypoints": ("motion.planner", "plan"),
+    "route": ("motion.route", "route"),
+    "LineRequest": ("motion.cartesian", "LineRequest"),
+    "line_move": ("motion.cartesian", "line_move"),
     "load_preset": ("gait", "load_preset"),
     "plan_gait": ("gait", "plan_gait"),
     "gait_schedule": ("gait", "gait_schedule"),

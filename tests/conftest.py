@@ -28,5 +28,20 @@ def stock_action_bytes() -> bytes:
     return STOCK.read_bytes()
 
 
+@pytest.fixture(scope="module")
+def pybullet_robot(spec):
+    """A PyBullet client (no GUI) with the spec's URDF loaded with self-collision, for exact distances."""
+    import pybullet as pb
+    from pybullet_utils import bullet_client
+
+    from op2motion.model.urdf import build_urdf
+    from op2motion.physics.pybullet_engine import load_robot
+
+    client = bullet_client.BulletClient(connection_mode=pb.DIRECT)
+    robot = load_robot(client, build_urdf(spec), pb.URDF_USE_SELF_COLLISION | pb.URDF_USE_SELF_COLLISION_EXCLUDE_PARENT)
+    yield client, robot
+    client.disconnect()
+
+
 def pytest_sessionstart(session: pytest.Session) -> None:
     compile_package(ROOT)

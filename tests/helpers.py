@@ -61,3 +61,22 @@ def page_last_step_ticks(data: bytes, page: int) -> np.ndarray:
     step = base + 64 + 64 * (steps - 1)
     words = np.frombuffer(data[step:step + 62], dtype="<u2")
     return words[1:21].astype(int)
+
+
+def pybullet_pair_distances(client, robot, spec, servo_rows: np.ndarray, pairs, reach_m: float):
+    """PyBullet's exact closest distances [m] between link pairs ``pairs`` (a list of (row, (link a, link b)))
+    with the robot set to ``servo_rows`` (K, 20) [rad]; ``2 * reach_m`` where nothing is that close. A list of
+    (row, link a, link b, distance)."""
+    link_index = {client.getJointInfo(robot, j)[12].decode(): j for j in range(client.getNumJoints(robot))}
+    link_index[client.getBodyInfo(robot)[0].decode()] = -1
+    joint_index = {client.getJointInfo(robot, j)[1].decode(): j for j in range(client.getNumJoints(robot))}
+    out, current = [], None
+    for k, (a, b) in pairs:
+        if k != current:
+            for name, q in zip(spec.joint_names, servo_rows[k]):
+                client.resetJointState(robot, joint_index[name], q)
+            client.performCollisionDetection()
+            current = k
+        points = client.getClosestPoints(robot, robot, 2 * reach_m, link_index[a], link_index[b])
+        out.append((k, a, b, min((c[8] for c in points), default=2 * reach_m)))
+    return out

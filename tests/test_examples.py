@@ -16,6 +16,8 @@ PROMISES = {
     "plan_and_check_a_walk.py": ("PyBullet: walked", ["walk.csv"], True),
     "build_a_small_library.py": ("3 targets: 3 reached", ["library/index.json", "library/index.csv"], False),
     "closed_loop_controller.py": ("closed loop on the accelerometer", [], True),
+    "go_around_and_move_in_a_line.py": ("physics: pybullet: stands | mujoco: stands",
+                                        ["route.png", "line.png", "line.json"], True),
 }
 
 

@@ -13,11 +13,11 @@ from helpers import run_cli
 from op2motion.errors import InputError
 from op2motion.gait import PRESETS, GaitParams, gait_schedule, plan_gait, preset_path, read_preset, walk_summary
 from op2motion.gait.footsteps import plan_footsteps
-from op2motion.gait.leg_ik import leg_fk, leg_ik, leg_of
 from op2motion.gait.preview import preview_gains, track_reference
 from op2motion.gait.timeline import build_timeline
 from op2motion.kinematics.dh import forward_dh_frames
 from op2motion.kinematics.dh_chain import matrix_plan
+from op2motion.kinematics.leg_ik import leg_fk, leg_ik, leg_of
 from op2motion.physics import check
 from op2motion.physics.body import Body
 from op2motion.robot.joints import servo_to_book

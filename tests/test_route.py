@@ -8,23 +8,30 @@ import json
 
 import numpy as np
 import pytest
-from helpers import POSES, run_cli
+from helpers import POSES, pybullet_pair_distances, run_cli
 
 from op2motion.errors import CheckFailed
 from op2motion.formats.posefile import read_pose, write_pose
+from op2motion.kinematics.dh import forward_dh_frames
+from op2motion.kinematics.shapes import clearances, shape_set
 from op2motion.motion.body_checks import PLAN_CLEARANCE_M, BodyChecks
 from op2motion.motion.checks import check_trajectory, clearance, require_clear
 from op2motion.motion.planner import plan
 from op2motion.motion.route import route_segment
 from op2motion.motion.rrt import Box, RrtSettings, edge_points, rrt_connect, shortcut
 from op2motion.motion.waypoint import Waypoint
+from op2motion.physics import check
 from op2motion.posture.cost import SELF_CLEARANCE_M
+from op2motion.robot.joints import servo_to_book
 from op2motion.robot.pose import Pose
 from op2motion.robot.support import Support
 
 OBSTACLE_RADIUS = 0.3
 DENSE_RAD = 0.005            # the routed edges are re-checked this finely [rad of the fastest joint]
 MIN_MARGIN_M = 0.0           # the CoM never leaves the support along a routed path
+NEAR_M = 0.025               # pairs compared with PyBullet where our clearance is below this
+SHAPE_APPROX_M = 0.003       # the shapes on the chain against PyBullet's exact distances (as tests/test_shapes.py)
+ROWS_COMPARED = 40
 # Pairs found by a seeded search: ends at least 8 mm clear, the straight line overlapping by 10-35 mm.
 ARM_THROUGH_TORSO = {"r_sho_pitch": (69.0, -178.0), "r_sho_roll": (-63.0, -51.0), "r_el": (-29.0, -24.0)}
 ARM_THROUGH_HIP = {"r_sho_pitch": (117.0, -170.0), "r_sho_roll": (-51.0, -76.0), "r_el": (-44.0, -41.0)}
@@ -142,3 +149,28 @@ def test_cli_refuses_a_pair_with_no_path_writing_nothing(tmp_path, spec, capsys)
                            "--out", out, "--csv", tmp_path / "m.csv")
     assert code == 1 and not out.exists() and not (tmp_path / "m.csv").exists()
     assert err.count("\n") == 1 and "no path" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("name", sorted(PAIRS))
+def test_planned_rows_clearance_agrees_with_pybullets_closest_points(spec, pybullet_robot, name):
+    client, robot = pybullet_robot
+    traj = plan(list(_pair(spec, PAIRS[name])), spec, seed=0)
+    rows = traj.goals[np.linspace(0, len(traj.goals) - 1, ROWS_COMPARED).astype(int)]
+    shapes = shape_set(spec, "left")
+    _, frames = forward_dh_frames(servo_to_book(rows, "left", spec), spec)
+    ours = clearances(frames, shapes)
+    names = shapes.pair_names()
+    near = [(k, p) for k in range(len(rows)) for p in range(len(names)) if ours[p, k] <= NEAR_M]
+    exact = pybullet_pair_distances(client, robot, spec, rows, [(k, names[p]) for k, p in near], NEAR_M)
+    assert len(near) > 10
+    for (k, p), (_, a, b, d) in zip(near, exact):
+        assert abs(ours[p, k] - d) <= SHAPE_APPROX_M, (k, a, b, ours[p, k], d)
+        assert d >= SELF_CLEARANCE_M - SHAPE_APPROX_M
+
+
+@pytest.mark.physics
+@pytest.mark.parametrize("name", sorted(PAIRS))
+def test_planned_motions_stand_in_both_engines(spec, name):
+    traj = plan(list(_pair(spec, PAIRS[name])), spec, seed=0)
+    report = check(traj.schedule(spec), spec, ("pybullet", "mujoco"))
+    assert report.agree and report.stable, [e.run.reasons for e in report.engines.values()]

@@ -7,18 +7,14 @@ import glob
 import os
 
 import numpy as np
-import pybullet as pb
 import pytest
-from helpers import POSES
-from pybullet_utils import bullet_client
+from helpers import POSES, pybullet_pair_distances
 
 from op2motion.formats.posefile import read_pose
 from op2motion.kinematics.dh_chain import matrix_frames
 from op2motion.kinematics.links import attachments
 from op2motion.kinematics.shapes import clearances, shape_set
 from op2motion.kinematics.tree import link_frames
-from op2motion.model.urdf import build_urdf
-from op2motion.physics.pybullet_engine import load_robot
 from op2motion.posture.cost import SELF_CLEARANCE_M
 from op2motion.robot.joints import BookAngles, book_to_servo, servo_to_book
 
@@ -29,40 +25,24 @@ DEEP_M = -0.003              # deeper overlaps are depths of an edge, not PyBull
 FRAME_TOL_M = 1e-9
 
 
-@pytest.fixture(scope="module")
-def pybullet_robot(spec):
-    client = bullet_client.BulletClient(connection_mode=pb.DIRECT)
-    robot = load_robot(client, build_urdf(spec), pb.URDF_USE_SELF_COLLISION | pb.URDF_USE_SELF_COLLISION_EXCLUDE_PARENT)
-    yield client, robot
-    client.disconnect()
-
-
 @pytest.mark.parametrize("support", ["left", "right"])
 def test_clearance_agrees_with_pybullets_closest_points(spec, pybullet_robot, support):
     client, robot = pybullet_robot
-    link_index = {client.getJointInfo(robot, j)[12].decode(): j for j in range(client.getNumJoints(robot))}
-    link_index[client.getBodyInfo(robot)[0].decode()] = -1
-    joint_index = {client.getJointInfo(robot, j)[1].decode(): j for j in range(client.getNumJoints(robot))}
     angles = BookAngles.random(POSES_CHECKED, np.random.default_rng(7), support)
     servo = book_to_servo(angles, spec)
     shapes = shape_set(spec, support)
     ours = clearances(matrix_frames(angles.vector(), spec, support), shapes)
+    names = shapes.pair_names()
+    near = [(k, p) for k in range(POSES_CHECKED) for p in range(len(names)) if ours[p, k] <= NEAR_M]
+    exact = pybullet_pair_distances(client, robot, spec, servo, [(k, names[p]) for k, p in near], NEAR_M)
     compared = overlapping = 0
-    for k in range(POSES_CHECKED):
-        for name, q in zip(spec.joint_names, servo[k]):
-            client.resetJointState(robot, joint_index[name], q)
-        client.performCollisionDetection()
-        for p, (a, b) in enumerate(shapes.pair_names()):
-            if ours[p, k] > NEAR_M:
-                continue
-            points = client.getClosestPoints(robot, robot, 2 * NEAR_M, link_index[a], link_index[b])
-            exact = min((c[8] for c in points), default=2 * NEAR_M)
-            if exact > DEEP_M:
-                assert abs(ours[p, k] - exact) <= SHAPE_APPROX_M, (k, a, b, ours[p, k], exact)
-                compared += 1
-            else:
-                assert ours[p, k] < 0.0, (k, a, b, ours[p, k], exact)
-                overlapping += 1
+    for (k, p), (_, a, b, d) in zip(near, exact):
+        if d > DEEP_M:
+            assert abs(ours[p, k] - d) <= SHAPE_APPROX_M, (k, a, b, ours[p, k], d)
+            compared += 1
+        else:
+            assert ours[p, k] < 0.0, (k, a, b, ours[p, k], d)
+            overlapping += 1
     assert compared > 200 and overlapping > 5      # the random poses exercise both sides of contact
 
 

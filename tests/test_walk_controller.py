@@ -12,8 +12,8 @@ from helpers import run_cli
 from op2motion.errors import InputError
 from op2motion.gait import load_preset
 from op2motion.gait.controller import OPEN_LOOP, STOCK_GYRO_GAINS_S, Feedback, WalkController, _swing_phase
-from op2motion.gait.leg_ik import leg_fk
 from op2motion.gait.speeds import SPEED_SHARE, plan_within_speed, speed_check
+from op2motion.kinematics.leg_ik import leg_fk
 from op2motion.physics import family
 from op2motion.physics.robust import FRICTION_RANGE, LATENCY_S, STIFFNESS_RANGE, UNSTATED_TORSO
 from op2motion.robot.spec import GRAVITY_M_S2
@@ -284,8 +284,8 @@ def test_leg_odometry_measures_a_landing_miss_and_moves_the_next_swing_across_th
     """Joints exactly as planned measure no miss; a foot that landed 10 mm to the left measures 10 mm; the next
     swing foot moves against the part across the direction of travel only (a forward walk: y), at most 20 mm; the
     closing step's miss is kept to hold that foot where it landed."""
-    from op2motion.gait.leg_ik import leg_ik
     from op2motion.gait.odometry import MAX_PLACEMENT_M, FootOdometry, across, landing_rows
+    from op2motion.kinematics.leg_ik import leg_ik
 
     gait = controller.gait
     rows = landing_rows(gait.timeline.contact, 4)

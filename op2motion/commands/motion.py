@@ -5,36 +5,20 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING, Any, Sequence, TypeVar
 
-from op2motion.commands.common import (
-    add_command,
-    emit,
-    engines_of,
-    number,
-    output_path,
-    physics_args,
-    progress,
-    warn,
-    whole,
-)
-from op2motion.errors import CheckFailed, InputError
+from op2motion.commands.common import add_command, emit, number, output_path, warn, whole
+from op2motion.commands.motion_run import finish, motion_physics_args
+from op2motion.errors import InputError
 from op2motion.formats.actionlayout import NUM_PAGES
 from op2motion.formats.motionfile import PLANNERS, PROFILES
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support
 
 if TYPE_CHECKING:
-    from op2motion.motion.trajectory import Trajectory
-    from op2motion.physics import CheckReport
+    pass
 
 PAGE = whole(1, NUM_PAGES - 1)
 T = TypeVar("T")
 SECONDS = number(0.0, 60.0, "s")
-
-
-def _physics_args(p: argparse.ArgumentParser) -> None:
-    physics_args(p, True, "with --validate: push the torso N newtons for 0.1 s halfway through (four directions)")
-    p.add_argument("--plot", type=output_path, metavar="PNG", help="q, q̇, q̈ per joint and the CoM/ZMP/CoP tracks")
-    p.add_argument("--csv", type=output_path, metavar="CSV", help="the goals every 8 ms as CSV")
 
 
 def _planner_args(p: argparse.ArgumentParser) -> None:
@@ -57,7 +41,7 @@ def register(sub: Any) -> None:
     p.add_argument("file", metavar="FILE", help="action file (motion_4096.bin)")
     p.add_argument("--page", type=PAGE, required=True, help="page to play")
     p.add_argument("--start", metavar="POSE", help="pose file the robot stands in (default: page 1's last step)")
-    _physics_args(p)
+    motion_physics_args(p)
     p = add_command(inner, "plan", cmd_plan, "plan a motion through poses (or a motion file) and check it")
     p.add_argument("poses", nargs="+", metavar="POSE", help="pose files in order, or one motion file")
     p.add_argument("--durations", type=SECONDS, nargs="+", metavar="S",
@@ -70,7 +54,7 @@ def register(sub: Any) -> None:
     p.add_argument("--name", help="motion name (default: the output file's stem)")
     p.add_argument("--out", type=output_path, metavar="MOTION", help="write the motion file (atomically)")
     _planner_args(p)
-    _physics_args(p)
+    motion_physics_args(p)
     p = add_command(inner, "export", cmd_export, "a motion file -> action pages, Webots motion or CSV")
     p.add_argument("motion", metavar="MOTION", help="motion file (schema op2motion.motion/1)")
     p.add_argument("--format", choices=("action", "webots", "csv"), required=True, help="output format")
@@ -79,63 +63,9 @@ def register(sub: Any) -> None:
     p.add_argument("--force", action="store_true", help="overwrite pages that hold actions")
     p.add_argument("-o", "--output", type=output_path, required=True, metavar="OUT", help="file to write")
     _planner_args(p)
+    from op2motion.commands.motion_line import register_line
 
-
-def _physics(args: argparse.Namespace, trajectory: Trajectory, spec: Spec) -> CheckReport | None:
-    """With ``--validate``: the trajectory's goals played in physics in the engines asked for."""
-    from op2motion.physics import Pushes, check
-
-    if not args.validate:
-        return None
-    with progress(args, "physics", "s") as on_progress:
-        return check(trajectory.schedule(spec), spec, engines_of(args), Pushes(args.push) if args.push else None,
-                     on_progress=on_progress)
-
-
-def _physics_lines(report: CheckReport) -> list[str]:
-    lines = []
-    for engine, e in report.engines.items():
-        m = e.run.motion
-        worst = f"{m.worst_torque.torque_nm:.2f} N·m at {m.worst_torque.joint}" if m else "-"
-        tracking = max(m.tracking_max_deg.values()) if m else 0.0
-        lines.append(f"  {engine}: {e.run.summary()}; tracking error <= {tracking:.1f}°, worst torque {worst}")
-    return lines
-
-
-def _finish(args: argparse.Namespace, spec: Spec, trajectory: Trajectory, title: str, result: dict[str, Any],
-            lines: list[str]) -> int:
-    """Checks, physics, plot and CSV common to play and plan; raises CheckFailed (exit 1) when physics says no."""
-    from op2motion.figures.motion import render_motion
-    from op2motion.fileio import OutputSet
-    from op2motion.formats.tables import goals_csv
-    from op2motion.motion.checks import check_trajectory
-
-    outputs = OutputSet({k: getattr(args, k) for k in ("plot", "csv") if getattr(args, k)})
-    report = _physics(args, trajectory, spec)
-    checks = check_trajectory(trajectory, spec, foot=report.run.flat_foot if report else None)
-    result["checks"] = checks.summary()
-    if report is not None:
-        result["physics"] = {"engines": {e: r.as_dict() for e, r in report.engines.items()}, "agree": report.agree,
-                             "stable": report.agree and report.stable and report.pushes_stood}
-    if args.plot:
-        verdict = "not checked in physics" if report is None else " | ".join(
-            f"{e}: {'stable' if r.run.stable else ', '.join(r.run.reasons)}" for e, r in report.engines.items())
-        cop = report.run.motion.cop_track if report is not None and report.run.motion else None
-        outputs.put("plot", render_motion(trajectory, checks, spec, title, cop, verdict))
-    if args.csv:
-        outputs.put("csv", goals_csv(trajectory.times, trajectory.goals, trajectory.supports, spec))
-    written = outputs.commit()
-    result["files"] = {k: str(v) for k, v in written.items()}
-    s = checks.summary()
-    lines.append(f"  checks: least clearance {s['min_clearance_m'] * 1000:.1f} mm "
-                 f"({' / '.join(s['min_clearance_links'])}), ZMP margin >= {s['zmp_margin_min_m'] * 1000:.1f} mm, "
-                 f"torque <= {s['torque_ratio_max']:.0%} of available ({s['torque_joint']})")
-    lines += ([] if report is None else _physics_lines(report)) + [f"  wrote {p}" for p in written.values()]
-    emit(args, result, "\n".join(lines))
-    problem = None if report is None else report.problem("does not get through")
-    if problem:
-        raise CheckFailed(f"{title}: {problem}")
-    return 0
+    register_line(inner)
 
 
 def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
@@ -153,7 +83,7 @@ def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
                               "goals": playback.goals.astype(int).tolist()}
     lines = [f"page {args.page} ({name}) from {played.start.name}: {playback.calls} ticks, {duration:.3f} s, pages "
              f"{' -> '.join(map(str, playback.pages))}"]
-    return _finish(args, spec, played.trajectory, f"page {args.page} ({name})", result, lines)
+    return finish(args, spec, played.trajectory, f"page {args.page} ({name})", result, lines)
 
 
 def _broadcast(values: Sequence[T] | None, n: int, default: T | None, flag: str) -> list[T]:
@@ -213,7 +143,7 @@ def cmd_plan(args: argparse.Namespace, spec: Spec) -> int:
     warn(args, result, list(trajectory.notes))
     lines = [f"{motion.name}: {len(motion.steps)} poses, {trajectory.duration_s:.3f} s ({motion.profile})"
              + (f", wrote {args.out}" if args.out else "")]
-    return _finish(args, spec, trajectory, motion.name, result, lines)
+    return finish(args, spec, trajectory, motion.name, result, lines)
 
 
 def cmd_export(args: argparse.Namespace, spec: Spec) -> int:

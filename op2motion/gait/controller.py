@@ -37,10 +37,10 @@ from op2motion.gait.calibration import StiffnessCalibration
 from op2motion.gait.feedback import GYRO_GAINS_S, OPEN_LOOP, STOCK_GYRO_GAINS_S, Feedback
 from op2motion.gait.generator import Gait
 from op2motion.gait.learning import StepLearner
-from op2motion.gait.leg_ik import Leg, leg_ik, leg_of, rot_x, rot_y, rot_z
 from op2motion.gait.odometry import FootOdometry, left_of
 from op2motion.gait.presets import load_preset
 from op2motion.gait.schedule import gait_plan
+from op2motion.kinematics.leg_ik import leg_ik, leg_of, rot_x, rot_y, rot_z, within_reach
 from op2motion.physics import Plan, Schedule
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
@@ -58,18 +58,6 @@ def attitude_of(rot: np.ndarray) -> np.ndarray:
     towards -y (roll: turned about +X > 0)."""
     z = rot[:, 2]
     return np.array([math.atan2(z[0], z[2]), math.atan2(-z[1], math.hypot(z[0], z[2]))])
-
-
-def _within_reach(leg: Leg, sole: np.ndarray, rot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The sole target (3,) [m] pulled towards the hip along the hip–ankle line where it lies beyond the straight
-    leg (a correction must never ask for more leg than there is); its rotation unchanged."""
-    ankle = sole + rot @ np.array([0.0, 0.0, leg.ankle_to_sole])
-    span = ankle - leg.hip
-    reach = (leg.thigh + leg.calf) * REACH_SHARE
-    length = float(np.linalg.norm(span))
-    if length <= reach:
-        return sole, rot
-    return sole - span * (1.0 - reach / length), rot
 
 
 def _stride_velocity(gait: Gait) -> np.ndarray:
@@ -272,7 +260,9 @@ class WalkController:
                 sole, sole_rot = sole + np.array([*last[1], 0.0]), rot_z(last[2]) @ sole_rot
             if contact not in ("double", side) and self.feedback.placement:
                 sole = sole + self.swing_phase[k] * self.odometry.shift(self.feedback.placement, self.plan_velocity[k])
-            planned = leg_ik(leg, *_within_reach(leg, rot.T @ (planned_sole - pos), rot.T @ planned_rot))[0]
-            moved = leg_ik(leg, *_within_reach(leg, moved_rot.T @ (sole - moved_pos), moved_rot.T @ sole_rot))[0]
+            planned = leg_ik(leg, *within_reach(leg, rot.T @ (planned_sole - pos), rot.T @ planned_rot,
+                                                REACH_SHARE))[0]
+            moved = leg_ik(leg, *within_reach(leg, moved_rot.T @ (sole - moved_pos), moved_rot.T @ sole_rot,
+                                              REACH_SHARE))[0]
             out[list(leg.index)] = moved - planned
         return out

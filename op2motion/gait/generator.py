@@ -24,10 +24,10 @@ from typing import Any, Callable
 import numpy as np
 
 from op2motion.gait.footsteps import FootPlan, Footstep, plan_footsteps, sole_rectangle
-from op2motion.gait.leg_ik import leg_ik, leg_of, rot_y, rot_z
 from op2motion.gait.params import GaitParams
 from op2motion.gait.preview import preview_gains, track_reference
 from op2motion.gait.timeline import Timeline, build_timeline
+from op2motion.kinematics.leg_ik import leg_ik, leg_of, rot_y, rot_z
 from op2motion.model.dynamics import dynamics_for
 from op2motion.model.servo import ServoModel
 from op2motion.motion.checks import SMOOTH_ROWS, contact_torques, multibody_zmp, smoothed

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from op2motion.gait.generator import Gait
-from op2motion.gait.leg_ik import Leg, leg_fk, rot_z
+from op2motion.kinematics.leg_ik import Leg, leg_fk, rot_z
 
 MAX_PLACEMENT_M = 0.02      # a swing foot is moved at most this far from its plan to keep the line
 MIN_TRACK_SPEED_M_S = 0.02  # below this planned speed there is no direction of travel

@@ -31,8 +31,8 @@ from op2motion.motion.player import play, start_ticks, step_calls
 from op2motion.motion.route import route, routed_clearance, with_stops
 from op2motion.motion.shift import balanced, settled_swing_heights, with_weight_shifts
 from op2motion.motion.trajectory import Trajectory, from_playback
-from op2motion.posture.cost import SELF_CLEARANCE_M
 from op2motion.motion.waypoint import Waypoint, check_waypoints
+from op2motion.posture.cost import SELF_CLEARANCE_M
 from op2motion.robot.framework import CONTROL_PERIOD_S, DEFAULT_P_GAIN, slope_of_p_gain
 from op2motion.robot.joints import servo_to_ticks
 from op2motion.robot.spec import Spec

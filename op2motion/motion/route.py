@@ -7,9 +7,10 @@ hand, elbow, knee, the head or the pelvis goes below the floor, or on one foot t
 floor (its lowest corner within :data:`~op2motion.robot.support.LIFTED_M`, the sag counted) while neither end has it
 there. Such a segment is planned again in joint space (:func:`.rrt.rrt_connect`, then :func:`.rrt.shortcut`):
 
-* what may move: both arms and the head, and on one foot the swing leg; the rest (the standing leg or legs) moves
-  along its straight line, the progress along it being one more coordinate of the search, weighted by how far
-  those joints travel; so on two feet the legs stay as the straight plan has them;
+* what may move: first only those of the joints below whose ends differ, then (if that finds nothing in
+  :data:`NARROW_SHARE` of the budget) both arms and the head, and on one foot the swing leg; the rest (the standing
+  leg or legs) moves along its straight line, the progress along it being one more coordinate of the search,
+  weighted by how far those joints travel; so on two feet the legs stay as the straight plan has them;
 * every state checked (:mod:`.body_checks`): joints inside their mechanical range, self-clearance at least
   :data:`~.body_checks.PLAN_CLEARANCE_M` (4 mm, plus 2 mm for the smoothing and the balance leans that follow),
   the CoM at least :data:`~.body_checks.PLAN_MARGIN_M` inside the support (on one foot: where it settles on the
@@ -42,6 +43,8 @@ from op2motion.robot.support import Support
 LINE_STEP_RAD = 0.01                # the straight line is checked every 0.6° of the fastest joint
 ARMS_AND_HEAD = ("r_sho_pitch", "l_sho_pitch", "r_sho_roll", "l_sho_roll", "r_el", "l_el", "head_pan", "head_tilt")
 MIN_PROGRESS_WEIGHT = 0.05          # the progress coordinate's weight when the held joints hardly move [rad]
+MOVING_RAD = 1e-3                   # a joint whose ends differ by more than this moves in the segment
+NARROW_SHARE = 0.4                  # the share of the budget tried with only the moving joints free
 
 
 @dataclass(frozen=True)
@@ -58,14 +61,16 @@ class Routed:
 class _Segment:
     """One segment's search space: the free joints plus the progress along the straight line of the rest."""
 
-    def __init__(self, a: Waypoint, b: Waypoint, spec: Spec):
+    def __init__(self, a: Waypoint, b: Waypoint, spec: Spec, only_moving: bool = False):
         self.a, self.b, self.spec = a, b, spec
         self.side = segment_side(a, b)
         names = list(ARMS_AND_HEAD)
         if self.side is not None:
             swing = "r" if self.side == "left" else "l"
             names += [f"{swing}_{j}" for j in LEG_JOINTS]
-        self.free = np.array([spec.joint_names.index(n) for n in names])
+        free = [spec.joint_names.index(n) for n in names]
+        moving = [i for i in free if abs(b.servo[i] - a.servo[i]) > MOVING_RAD]
+        self.free = np.array(moving if only_moving and moving else free)
         held = np.setdiff1d(np.arange(len(spec.joints)), self.free)
         travel = float(np.linalg.norm(b.servo[held] - a.servo[held]))
         safe = np.array([joint_range(spec.joints[i], "cable-safe") for i in self.free])
@@ -109,7 +114,19 @@ def _collision(seg: _Segment, ends: Limits) -> str | None:
 def _durations(points: list[np.ndarray], total_s: float, box: Box) -> list[float]:
     lengths = np.array([float(box.distance(p, q)) for p, q in zip(points, points[1:])])
     share = lengths / max(float(lengths.sum()), 1e-12)
-    return [max(MIN_SEGMENT_S, total_s * s) for s in share]
+    return [max(MIN_SEGMENT_S, float(total_s * s)) for s in share]
+
+
+def _plan(seg: _Segment, limits: Limits, rng: np.random.Generator, search: RrtSettings,
+          settings: RrtSettings) -> list[np.ndarray] | None:
+    """RRT-Connect then shortcuts in ``seg``'s space with every state within ``limits``; None if none found."""
+
+    def valid(states: np.ndarray) -> np.ndarray:
+        poses = seg.servo(states)
+        return seg.checks.within_joint_limits(poses) & limits.allows(seg.checks.measure(poses))
+
+    path = rrt_connect(seg.start, seg.goal, valid, seg.box, rng, search)
+    return None if path is None else shortcut(path, valid, seg.box, rng, settings)
 
 
 def route_segment(a: Waypoint, b: Waypoint, spec: Spec, seed: int, settings: RrtSettings = RrtSettings()
@@ -127,18 +144,19 @@ def route_segment(a: Waypoint, b: Waypoint, spec: Spec, seed: int, settings: Rrt
             raise CheckFailed(f"no path from {a.name} to {b.name}: {w.name} itself has links {-clear * 1000:.0f} mm "
                               f"through each other")
     limits = Limits().relaxed_to(ends)
-
-    def valid(states: np.ndarray) -> np.ndarray:
-        poses = seg.servo(states)
-        return seg.checks.within_joint_limits(poses) & limits.allows(seg.checks.measure(poses))
-
     rng = np.random.default_rng(seed)
-    path = rrt_connect(seg.start, seg.goal, valid, seg.box, rng, settings)
+    narrow = _Segment(a, b, spec, only_moving=True)
+    path = None
+    if len(narrow.free) < len(seg.free):          # first with only the joints that move anyway, then with all
+        path = _plan(narrow, limits, rng, replace(settings, budget_s=settings.budget_s * NARROW_SHARE,
+                                                  max_samples=int(settings.max_samples * NARROW_SHARE)), settings)
+        seg = narrow if path is not None else seg
+    if path is None:
+        path = _plan(seg, limits, rng, settings, settings)
     if path is None:
         raise CheckFailed(f"no path from {a.name} to {b.name} within {settings.budget_s:g} s and "
                           f"{settings.max_samples} samples ({why}): keeping {limits.clearance * 1000:.0f} mm between "
                           f"links, the CoM {limits.margin * 1000:.0f} mm inside the support; add a pose in between")
-    path = shortcut(path, valid, seg.box, rng, settings)
     durations = _durations(path, b.duration_s, seg.box)
     support = Support.of(seg.side) if seg.side else Support.DOUBLE
     vias = [Waypoint(f"{b.name}~via{k}", seg.servo(p)[0], d, 0.0, support)
@@ -151,7 +169,9 @@ def route(waypoints: Sequence[Waypoint], spec: Spec, planner: str = "rrt", seed:
     """``waypoints`` with every colliding segment planned around (``planner`` "rrt"), or as they are ("none")."""
     if planner not in PLANNERS:
         raise InputError(f"expected one of {', '.join(PLANNERS)}, got {planner!r}", "planner")
-    out, notes, segments, vias = [waypoints[0]], [], [], []
+    out, notes = [waypoints[0]], list[str]()
+    segments: list[int] = []
+    vias: list[int] = []
     if planner == "none":
         return Routed(list(waypoints), notes, segments, vias)
     for i, (a, b) in enumerate(zip(waypoints, waypoints[1:])):

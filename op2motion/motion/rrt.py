@@ -136,7 +136,8 @@ def rrt_connect(start: np.ndarray, goal: np.ndarray, valid: Validity, box: Box, 
         sample = box.lower + rng.random(len(start)) * (box.upper - box.lower)
         near = grow.nearest(sample, box)
         gap = float(box.distance(grow.nodes[near], sample))
-        toward = sample if gap <= settings.step else grow.nodes[near] + (sample - grow.nodes[near]) * settings.step / gap
+        toward = sample if gap <= settings.step else (
+            grow.nodes[near] + (sample - grow.nodes[near]) * settings.step / gap)
         if not edge_valid(grow.nodes[near], toward, valid, box, settings.resolution):
             continue
         new = grow.add(toward, near)

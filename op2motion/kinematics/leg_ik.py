@@ -103,6 +103,18 @@ def leg_fk(leg: Leg, servo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return ankle_pos + rot @ (down * leg.ankle_to_sole), rot
 
 
+def within_reach(leg: Leg, sole: np.ndarray, rot: np.ndarray, share: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Sole targets (N, 3) [m] pulled towards the hip along the hip–ankle line where they lie beyond ``share`` of
+    the straight leg (a correction must never ask for more leg than there is); the rotations (N, 3, 3) unchanged."""
+    sole = np.asarray(sole, dtype=float).reshape(-1, 3)
+    rot = np.asarray(rot, dtype=float).reshape(-1, 3, 3)
+    span = sole + rot @ np.array([0.0, 0.0, leg.ankle_to_sole]) - leg.hip
+    reach = (leg.thigh + leg.calf) * share
+    length = np.linalg.norm(span, axis=1)
+    scale = np.where(length > reach, 1.0 - reach / np.maximum(length, 1e-12), 0.0)
+    return sole - span * scale[:, None], rot
+
+
 def leg_ik(leg: Leg, sole: np.ndarray, rot: np.ndarray) -> np.ndarray:
     """Leg servo angles (N, 6) [rad] that put the sole centre at ``sole`` (N, 3) [m] with rotation ``rot``
     (N, 3, 3), both in the torso frame. Raises :class:`InputError` naming the first row beyond the leg's reach."""

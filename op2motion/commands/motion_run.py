@@ -1,0 +1,81 @@
+"""What ``motion play``, ``motion plan`` and ``motion line`` share: the physics flags, and the finish (checks along
+the trajectory, physics, plot, CSV, the report)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING, Any, Callable
+
+from op2motion.commands.common import emit, engines_of, output_path, physics_args, progress
+from op2motion.errors import CheckFailed
+from op2motion.robot.spec import Spec
+
+if TYPE_CHECKING:
+    from op2motion.motion.trajectory import Trajectory
+    from op2motion.physics import CheckReport
+
+
+def motion_physics_args(p: argparse.ArgumentParser) -> None:
+    """--validate, --engine, --push, --plot and --csv."""
+    physics_args(p, True, "with --validate: push the torso N newtons for 0.1 s halfway through (four directions)")
+    p.add_argument("--plot", type=output_path, metavar="PNG", help="q, q̇, q̈ per joint and the CoM/ZMP/CoP tracks")
+    p.add_argument("--csv", type=output_path, metavar="CSV", help="the goals every 8 ms as CSV")
+
+
+def _physics(args: argparse.Namespace, trajectory: Trajectory, spec: Spec) -> CheckReport | None:
+    """With ``--validate``: the trajectory's goals played in physics in the engines asked for."""
+    from op2motion.physics import Pushes, check
+
+    if not args.validate:
+        return None
+    with progress(args, "physics", "s") as on_progress:
+        return check(trajectory.schedule(spec), spec, engines_of(args), Pushes(args.push) if args.push else None,
+                     on_progress=on_progress)
+
+
+def _physics_lines(report: CheckReport) -> list[str]:
+    lines = []
+    for engine, e in report.engines.items():
+        m = e.run.motion
+        worst = f"{m.worst_torque.torque_nm:.2f} N·m at {m.worst_torque.joint}" if m else "-"
+        tracking = max(m.tracking_max_deg.values()) if m else 0.0
+        lines.append(f"  {engine}: {e.run.summary()}; tracking error <= {tracking:.1f}°, worst torque {worst}")
+    return lines
+
+
+def finish(args: argparse.Namespace, spec: Spec, trajectory: Trajectory, title: str, result: dict[str, Any],
+            lines: list[str], figure: Callable[[str], bytes] | None = None) -> int:
+    """Checks, physics, plot and CSV common to play, plan and line; raises CheckFailed (exit 1) when physics says
+    no. ``figure`` draws the plot from the verdict's words (default: the joint curves and balance tracks)."""
+    from op2motion.figures.motion import render_motion
+    from op2motion.fileio import OutputSet
+    from op2motion.formats.tables import goals_csv
+    from op2motion.motion.checks import check_trajectory
+
+    outputs = OutputSet({k: getattr(args, k) for k in ("plot", "csv") if getattr(args, k)})
+    report = _physics(args, trajectory, spec)
+    checks = check_trajectory(trajectory, spec, foot=report.run.flat_foot if report else None)
+    result["checks"] = checks.summary()
+    if report is not None:
+        result["physics"] = {"engines": {e: r.as_dict() for e, r in report.engines.items()}, "agree": report.agree,
+                             "stable": report.agree and report.stable and report.pushes_stood}
+    if args.plot:
+        verdict = "not checked in physics" if report is None else " | ".join(
+            f"{e}: {'stable' if r.run.stable else ', '.join(r.run.reasons)}" for e, r in report.engines.items())
+        cop = report.run.motion.cop_track if report is not None and report.run.motion else None
+        outputs.put("plot", figure(verdict) if figure else render_motion(trajectory, checks, spec, title, cop,
+                                                                          verdict))
+    if args.csv:
+        outputs.put("csv", goals_csv(trajectory.times, trajectory.goals, trajectory.supports, spec))
+    written = outputs.commit()
+    result["files"] = {k: str(v) for k, v in written.items()}
+    s = checks.summary()
+    lines.append(f"  checks: least clearance {s['min_clearance_m'] * 1000:.1f} mm "
+                 f"({' / '.join(s['min_clearance_links'])}), ZMP margin >= {s['zmp_margin_min_m'] * 1000:.1f} mm, "
+                 f"torque <= {s['torque_ratio_max']:.0%} of available ({s['torque_joint']})")
+    lines += ([] if report is None else _physics_lines(report)) + [f"  wrote {p}" for p in written.values()]
+    emit(args, result, "\n".join(lines))
+    problem = None if report is None else report.problem("does not get through")
+    if problem:
+        raise CheckFailed(f"{title}: {problem}")
+    return 0

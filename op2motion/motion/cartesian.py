@@ -1,0 +1,237 @@
+"""Cartesian moves: a hand along a straight line while the whole body keeps its balance (the teach pendant's linear jog
+on a humanoid).
+
+:func:`line_move` puts the hand's target on the line from where it starts to where it should end, with a
+minimum-jerk progress (10 s³ - 15 s⁴ + 6 s⁵ of the time share s), every 8 ms row; the whole-body IK
+(:mod:`.whole_body`) takes each row from the last (feet fixed, CoM held softly, torso upright, joints in range).
+The least clearance reported is exact (:func:`.checks.clearance`). A pointing direction of the forearm may be held
+(``keep``) or turned to a new one by quaternion slerp. The result is refused
+(:class:`~op2motion.errors.CheckFailed`) where the hand leaves the line by more than :data:`LINE_TOL_M`, links come
+closer than :data:`~op2motion.posture.cost.SELF_CLEARANCE_M` or the CoM nearer than :data:`LINE_MARGIN_M` to the
+support's edge (each lowered to what the start pose has); a duration too short for the servos is bad input naming
+the joint. Frames: the stance sole's (world = support foot: X forward, Y left, Z up; on both feet the left sole's).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from op2motion.errors import CheckFailed, InputError
+from op2motion.formats.motionfile import Motion, MotionStep
+from op2motion.motion.body_checks import BodyChecks
+from op2motion.motion.checks import clearance
+from op2motion.motion.planner import SPEED_FRACTION
+from op2motion.motion.trajectory import Trajectory
+from op2motion.motion.waypoint import MAX_SEGMENT_S
+from op2motion.motion.whole_body import WholeBodyIk
+from op2motion.posture.cost import SELF_CLEARANCE_M, TARGET_LIMIT_M
+from op2motion.robot.framework import CONTROL_PERIOD_S, DEFAULT_P_GAIN
+from op2motion.robot.pose import Pose
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
+
+LINE_TOL_M = 0.002          # the hand may leave the line by this much
+LINE_MARGIN_M = 0.005       # the CoM stays this far inside the support (settled on one foot)
+MIN_LINE_S = 0.1            # the shortest move [s]
+MAX_LINE_M = 0.3            # the longest line [m]: about the OP2's arm span
+ROW_STRIDE = 3              # a motion-file step every 3 rows (24 ms, the robot's shortest step)
+SPEED_LAG_SHARE = 0.99      # a hand off the line while an arm joint ran this close to its limit: too fast
+ORIENTATIONS = ("free", "keep")
+
+
+@dataclass(frozen=True)
+class LineRequest:
+    """Which ``hand`` moves, to ``target_m`` (3,) [m] in the stance sole's frame or by ``delta_m`` (3,) [m] (one of
+    the two), in ``duration_s`` [s]; ``orientation``: ``free``, ``keep`` (the forearm's direction held) or a
+    direction (3,) to turn the forearm to; ``back``: then back to the start along the line in as long again."""
+
+    hand: str
+    duration_s: float
+    target_m: tuple[float, float, float] | None = None
+    delta_m: tuple[float, float, float] | None = None
+    orientation: str | tuple[float, float, float] = "free"
+    back: bool = False
+
+    def validated(self) -> "LineRequest":
+        """Check the fields; raise :class:`InputError` naming the flag."""
+        if self.hand not in ("left", "right"):
+            raise InputError(f"expected 'left' or 'right', got {self.hand!r}", "hand")
+        if (self.target_m is None) == (self.delta_m is None):
+            raise InputError("expected exactly one of a target point or a displacement", "to")
+        for name, v in (("to", self.target_m), ("by", self.delta_m)):
+            if v is not None and (len(v) != 3 or not all(math.isfinite(c) and abs(c) <= TARGET_LIMIT_M for c in v)):
+                raise InputError(f"expected 3 finite numbers within ±{TARGET_LIMIT_M:g} m, got {list(v)}", name)
+        if not (math.isfinite(self.duration_s) and MIN_LINE_S <= self.duration_s <= MAX_SEGMENT_S):
+            raise InputError(f"expected {MIN_LINE_S:g} to {MAX_SEGMENT_S:g} s, got {self.duration_s}", "duration")
+        o = self.orientation
+        if isinstance(o, str) and o not in ORIENTATIONS or not isinstance(o, str) and (
+                len(o) != 3 or not all(math.isfinite(c) for c in o) or np.linalg.norm(o) < 1e-6):
+            raise InputError(f"expected free, keep or a direction DX DY DZ, got {o!r}", "orientation")
+        return self
+
+
+@dataclass(frozen=True)
+class LineMove:
+    """A planned line: the goals (K, 20) [rad] every 8 ms, the hand's line (start, end) [m], its path (K, 3) [m]
+    and distance from the line (K,) [m], the CoM margin (K,) [m] and least clearance (K,) [m] along the way, the
+    joint speeds (K, 20) [rad/s] and the forearm's angle from its commanded direction (K,) [rad] (None: free)."""
+
+    pose: Pose
+    hand: str
+    start_m: np.ndarray
+    end_m: np.ndarray
+    goals: np.ndarray
+    hand_path: np.ndarray
+    deviation_m: np.ndarray
+    com_margin_m: np.ndarray
+    clearance_m: np.ndarray
+    speeds: np.ndarray
+    pointing_error_rad: np.ndarray | None
+
+    @property
+    def times(self) -> np.ndarray:
+        """Time of each row [s] (K,)."""
+        return np.arange(len(self.goals)) * CONTROL_PERIOD_S
+
+    def summary(self, spec: Spec) -> dict[str, Any]:
+        """The figures of the move, for reports."""
+        worst = np.unravel_index(int(np.argmax(np.abs(self.speeds))), self.speeds.shape)
+        out = {"hand": self.hand, "hand_start_m": [round(float(v), 5) for v in self.start_m],
+               "hand_end_m": [round(float(v), 5) for v in self.end_m],
+               "length_m": round(float(np.linalg.norm(self.end_m - self.start_m)), 5),
+               "line_deviation_max_m": round(float(self.deviation_m.max()), 6),
+               "com_margin_min_m": round(float(self.com_margin_m.min()), 5),
+               "min_clearance_m": round(float(self.clearance_m.min()), 5),
+               "joint_speed_max_rad_s": round(float(abs(self.speeds[worst])), 4),
+               "joint_speed_joint": spec.joint_names[int(worst[1])]}
+        if self.pointing_error_rad is not None:
+            out["pointing_error_max_deg"] = round(math.degrees(float(self.pointing_error_rad.max())), 3)
+        return out
+
+    def trajectory(self, p_gain: int = DEFAULT_P_GAIN) -> Trajectory:
+        """The goals as a trajectory on the pose's support (for the checks and physics)."""
+        k = len(self.goals)
+        segment = np.zeros(k, dtype=int)
+        segment[0] = -1
+        return Trajectory(self.goals, np.full(self.goals.shape, float(p_gain)), (str(self.pose.support),) * k,
+                          segment, (f"{self.hand} hand line",))
+
+    def motion(self, name: str, p_gain: int = DEFAULT_P_GAIN) -> Motion:
+        """The move as a motion file's steps: the start pose, then every :data:`ROW_STRIDE`-th row inline."""
+        last_row = len(self.goals) - 1
+        rows = [r for r in range(ROW_STRIDE, last_row, ROW_STRIDE) if last_row - r >= ROW_STRIDE] + [last_row]
+        steps = [MotionStep(self.pose, None, 0.0, 0.0)]
+        last = 0
+        for k, r in enumerate(rows, start=1):
+            pose = Pose(f"{name}{k}", self.pose.support, self.goals[r])
+            steps.append(MotionStep(pose, None, (r - last) * CONTROL_PERIOD_S, 0.0))
+            last = r
+        return Motion(name, tuple(steps), "quintic", p_gain)
+
+
+def _slerp_directions(a: np.ndarray, b: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """Unit vectors (K, 3) turned from ``a`` towards ``b`` by the shares ``s`` (K,): the quaternion of the shortest
+    rotation from a to b, slerped from the identity (for a single rotation that is the rotation by s times its
+    angle about its axis)."""
+    a, b = a / np.linalg.norm(a), b / np.linalg.norm(b)
+    axis = np.cross(a, b)
+    sin, cos = np.linalg.norm(axis), float(a @ b)
+    if sin < 1e-12:
+        return np.repeat(a[None], len(s), axis=0)
+    axis, angle = axis / sin, math.atan2(sin, cos)
+    theta = s[:, None] * angle                  # slerp(1, q, s) = cos(s θ/2) + sin(s θ/2) u
+    return (a * np.cos(theta) + np.cross(axis, a) * np.sin(theta) + axis * (axis @ a) * (1 - np.cos(theta)))
+
+
+def _progress(k: int) -> np.ndarray:
+    tau = np.linspace(0.0, 1.0, k)
+    return 10 * tau ** 3 - 15 * tau ** 4 + 6 * tau ** 5
+
+
+def _distance_to_segment(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    span = b - a
+    t = np.clip((points - a) @ span / max(float(span @ span), 1e-18), 0.0, 1.0)
+    return np.linalg.norm(points - (a + t[:, None] * span), axis=1)
+
+
+def _targets(request: LineRequest, start: np.ndarray, end: np.ndarray, pointing: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """The progress (K,), the hand's targets (K, 3) [m] and the forearm's directions (K, 3) (None: free) per row."""
+    s = _progress(int(math.ceil(request.duration_s / CONTROL_PERIOD_S - 1e-9)) + 1)
+    if request.back:
+        s = np.concatenate([s, s[-2::-1]])
+    o = request.orientation
+    points = None if o == "free" else _slerp_directions(pointing, pointing if o == "keep"
+                                                          else np.asarray(o, dtype=float), s)
+    return s, start + s[:, None] * (end - start), points
+
+
+def _refuse_off_line(request: LineRequest, off: np.ndarray, share: np.ndarray, speeds: np.ndarray,
+                     arm: np.ndarray, spec: Spec) -> None:
+    """Bad input where the servos are too slow for the duration; a failed check where the hand leaves the line."""
+    worst = int(np.argmax(off))
+    limit = SPEED_FRACTION * spec.servo.no_load_speed_rad_s
+    lagging = np.abs(speeds[:worst + 1, arm]).max(axis=0)
+    if off[worst] > LINE_TOL_M and lagging.max() > SPEED_LAG_SHARE * limit:
+        raise InputError(f"expected more than {request.duration_s:g} s: the hand lags the line by "
+                         f"{off[worst] * 1000:.1f} mm at {worst * CONTROL_PERIOD_S:.2f} s with "
+                         f"{spec.joint_names[int(arm[np.argmax(lagging)])]} at its speed limit ({limit:.2f} rad/s, "
+                         f"{SPEED_FRACTION:.0%} of the MX-28's no-load speed)", "duration")
+    if off[worst] > LINE_TOL_M:
+        raise CheckFailed(f"the {request.hand} hand cannot follow the line: {off[worst] * 1000:.1f} mm off at "
+                          f"{worst * CONTROL_PERIOD_S:.2f} s ({share[worst]:.0%} of the way, expected at most "
+                          f"{LINE_TOL_M * 1000:.0f} mm): the arm's three joints and the legs cannot hold it there")
+    fastest = np.unravel_index(int(np.argmax(np.abs(speeds))), speeds.shape)
+    if abs(speeds[fastest]) > limit:
+        need = request.duration_s * abs(speeds[fastest]) / limit
+        raise InputError(f"expected at least {need:.2f} s: in {request.duration_s:g} s "
+                         f"{spec.joint_names[int(fastest[1])]} would turn at {abs(speeds[fastest]):.2f} rad/s (over "
+                         f"{limit:.2f} rad/s, {SPEED_FRACTION:.0%} of the MX-28's no-load speed)", "duration")
+
+
+def _refuse_unbalanced(margin: np.ndarray, close: np.ndarray) -> None:
+    """A failed check where the CoM margin (K,) [m] or the clearance (K,) [m] falls below the limits (or below
+    what the first row has)."""
+    margin_floor = min(LINE_MARGIN_M, float(margin[0]))
+    clear_floor = min(SELF_CLEARANCE_M, float(close[0]))
+    if margin.min() < margin_floor:
+        i = int(np.argmin(margin))
+        raise CheckFailed(f"the centre of mass comes {margin[i] * 1000:.1f} mm from the support's edge at "
+                          f"{i * CONTROL_PERIOD_S:.2f} s (expected at least {margin_floor * 1000:.1f} mm)")
+    if close.min() < clear_floor:
+        i = int(np.argmin(close))
+        raise CheckFailed(f"links come {close[i] * 1000:.1f} mm close at {i * CONTROL_PERIOD_S:.2f} s "
+                          f"(expected at least {clear_floor * 1000:.1f} mm): move the hand another way")
+
+
+def line_move(pose: Pose, request: LineRequest, spec: Spec) -> LineMove:
+    """The hand of ``request`` moved along a straight line from ``pose`` (see the module docstring)."""
+    request = request.validated()
+    ik = WholeBodyIk(spec, str(pose.support), request.hand, pose.servo)
+    first = ik.features(pose.servo[None])
+    start = first["hand"][0]
+    end = np.asarray(request.target_m, dtype=float) if request.target_m is not None else start + request.delta_m
+    if np.linalg.norm(end - start) > MAX_LINE_M:
+        raise InputError(f"expected a line of at most {MAX_LINE_M:g} m, got {np.linalg.norm(end - start):.3f} m",
+                         "to" if request.target_m is not None else "by")
+    share, targets, points = _targets(request, start, end, first["point"][0])
+    x, rows = ik.x0.copy(), [pose.servo.copy()]
+    for i in range(1, len(targets)):
+        x, _ = ik.solve(x, targets[i], None if points is None else points[i])
+        rows.append(ik.servo(x[None])[0])
+    goals = np.array(rows)
+    reached = ik.features(goals)
+    speeds = np.gradient(goals, CONTROL_PERIOD_S, axis=0)
+    _refuse_off_line(request, np.linalg.norm(reached["hand"] - targets, axis=1), share, speeds, ik.arm, spec)
+    measured = BodyChecks(spec, None if Support.of(pose.support).is_double else str(pose.support)).measure(goals)
+    _refuse_unbalanced(measured.margin, measured.clearance)
+    pointing = None
+    if points is not None:
+        pointing = np.arccos(np.clip(np.einsum("ij,ij->i", reached["point"], points), -1.0, 1.0))
+    return LineMove(pose, request.hand, start, end, goals, reached["hand"],
+                    _distance_to_segment(reached["hand"], start, end), measured.margin, clearance(goals, spec)[0],
+                    speeds, pointing)

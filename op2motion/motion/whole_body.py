@@ -1,0 +1,186 @@
+"""Whole-body differential IK: one hand to a point while the feet stay put, the CoM holds and the torso stays upright.
+
+The unknowns are the torso's pose in the stance sole's frame (world = support foot: X forward, Y left, Z up; a
+shift [m] and a small rotation vector [rad] from where it started) and the moving hand's three arm joints; the
+standing leg (on both feet: both legs) follows from the closed-form leg IK (:mod:`op2motion.kinematics.leg_ik`), so the
+soles stay exactly where they are (a bent leg stretches to at most :data:`MAX_REACH_SHARE` of its length, away
+from the straight knee's singularity; a sole beyond that is pulled in, and the feet task sees it); on one foot
+the swing leg keeps its joints. Levenberg-Marquardt on weighted tasks, each an error in the stance sole's
+frame measured on the D-H chain, the Jacobian by forward differences with all the perturbed poses in one batch:
+
+* the hand point [m] (weight :data:`W_HAND`);
+* on both feet, the other sole's four corners [m] where they started (:data:`W_FEET`);
+* the full-inertia CoM's x, y [m] where it started (:data:`W_COM`);
+* links apart: how far the least clearance between the collision shapes is below :data:`CLEAR_TASK_M`
+  (:data:`W_CLEAR`);
+* the torso's x and z axes where they started (:data:`W_TORSO`), and optionally the forearm's direction (the
+  elbow-to-hand unit vector: the OP2's 3-joint arm can hold a pointing direction, not a full orientation)
+  (:data:`W_POINT`);
+* regulation: the unknowns pulled towards the start (:data:`W_POSTURE`: the torso moves only where the arm alone
+  cannot do it, by about a millimetre of hand error per centimetre), damping from :data:`DAMPING`;  one
+  call moves the unknowns no more than :data:`ROW_STEP` (what one 8 ms row may: the hand lags rather than the body
+  jumping) and keeps every joint :data:`LIMIT_MARGIN_RAD` inside its mechanical range (widened to include the
+  start).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from op2motion.kinematics import forward
+from op2motion.kinematics.leg_ik import Leg, leg_fk, leg_ik, leg_of, within_reach
+from op2motion.kinematics.points import row_of
+from op2motion.posture.cost import CostModel, PostureProblem, torso_axes
+from op2motion.robot.joints import joint_range, servo_to_book
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support, other_side
+
+W_HAND = 1.0
+W_FEET = 10.0
+W_COM = 0.01
+W_TORSO = 0.005
+W_POINT = 0.01
+W_CLEAR = 1.0
+CLEAR_TASK_M = 0.008        # links closer than this push apart (the check after wants SELF_CLEARANCE_M)
+W_POSTURE = np.array([1e-3, 1e-3, 1e-1] + [1e-4] * 3 + [1e-6] * 3)  # per m² of torso shift (rising and sinking
+#                            most), rad² of its turn, rad² of the arm
+MAX_REACH_SHARE = 0.985     # a bent leg stretches to at most this share of its length (the knee stays ~20° bent)
+DAMPING = 1e-7
+SOLVE_TOL_M = 2e-5
+MAX_ITERATIONS = 15
+FD_STEP = 1e-6                # [m] for the torso shift, [rad] for its rotation and the arm
+ROW_STEP = np.array([0.001] * 3 + [0.002] * 3 + [0.023] * 3)  # per 8 ms row at most: torso [m], its turn and
+#                            the arm [rad] (0.25 m/s, 2.5 rad/s, 2.9 rad/s: half the MX-28's no-load speed)
+LIMIT_MARGIN_RAD = 0.035      # joints stay 2° inside their mechanical range
+ARM_JOINTS = ("sho_pitch", "sho_roll", "el")
+
+
+def rotation(vectors: np.ndarray) -> np.ndarray:
+    """Rotation matrices (N, 3, 3) of rotation vectors (N, 3) [rad] (Rodrigues)."""
+    v = np.atleast_2d(vectors)
+    angle = np.linalg.norm(v, axis=1)
+    axis = v / np.maximum(angle, 1e-12)[:, None]
+    k = np.zeros((len(v), 3, 3))
+    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -axis[:, 2], axis[:, 1], -axis[:, 0]
+    k = k - k.transpose(0, 2, 1)
+    s, c = np.sin(angle)[:, None, None], np.cos(angle)[:, None, None]
+    return np.eye(3) + s * k + (1.0 - c) * k @ k
+
+
+class WholeBodyIk:
+    """The IK of one hand on a robot standing on ``support`` (``left``, ``right`` or ``double``: then the left sole
+    is the frame), prepared at the pose ``start`` (20,) [rad]."""
+
+    def __init__(self, spec: Spec, support: str, hand: str, start: np.ndarray):
+        self.spec, self.hand = spec, hand
+        sup = Support.of(support)
+        self.frame = "left" if sup.is_double else str(sup)
+        self.double = sup.is_double
+        self.start = np.asarray(start, dtype=float).copy()
+        self.arm = np.array([spec.joint_names.index(f"{hand[0]}_{j}") for j in ARM_JOINTS])
+        self.legs: list[Leg] = [leg_of(spec, s) for s in (("left", "right") if self.double else (self.frame,))]
+        stance = leg_of(spec, self.frame)
+        sole, rot = leg_fk(stance, self.start[list(stance.index)])      # the stance sole in the torso frame
+        self.torso_rot = rot[0].T                                         # the torso in the stance sole's frame
+        self.torso_pos = -self.torso_rot @ sole[0]
+        self.soles_world = {}
+        for leg in self.legs:                                              # each sole in the stance sole's frame
+            p, r = leg_fk(leg, self.start[list(leg.index)])
+            self.soles_world[leg.side] = (self.torso_rot @ p[0] + self.torso_pos, self.torso_rot @ r[0])
+        self.reach = {}
+        for leg in self.legs:                                              # how far each leg may stretch
+            p, r = self.soles_world[leg.side]
+            local = self.torso_rot.T @ (p - self.torso_pos)
+            ankle = local + (self.torso_rot.T @ r) @ np.array([0.0, 0.0, leg.ankle_to_sole])
+            share = float(np.linalg.norm(ankle - leg.hip)) / (leg.thigh + leg.calf)
+            self.reach[leg.side] = max(share, MAX_REACH_SHARE)
+        moved = np.concatenate([self.arm] + [np.array(leg.index) for leg in self.legs])
+        hard = np.array([joint_range(spec.joints[i], "mechanical") for i in moved])
+        self._moved = moved
+        self.lower = np.minimum(hard[:, 0] + LIMIT_MARGIN_RAD, self.start[moved])
+        self.upper = np.maximum(hard[:, 1] - LIMIT_MARGIN_RAD, self.start[moved])
+        self._clearance = CostModel(PostureProblem(self.frame, hand, (0.0, 0.0, 0.2), 1.0), spec)
+        self._hand_row = row_of(f"{hand}_hand")
+        self._elbow_row = row_of(f"{hand[0]}_el")
+        first = row_of(f"{other_side(self.frame)}_foot_0")
+        self._foot_rows = slice(first, first + 4)
+        self.x0 = np.concatenate([np.zeros(6), self.start[self.arm]])
+        ref = self.features(self.servo(self.x0[None]))
+        self.feet0, self.com0, self.torso0 = ref["feet"][0], ref["com"][0], ref["torso"][0]
+
+    def servo(self, x: np.ndarray) -> np.ndarray:
+        """Poses (N, 20) [rad] of unknowns (N, 9): torso shift [m], torso rotation vector [rad], arm joints [rad]."""
+        x = np.atleast_2d(x)
+        rot = rotation(x[:, 3:6]) @ self.torso_rot                         # the torso in the world
+        pos = self.torso_pos + x[:, :3]
+        out = np.repeat(self.start[None], len(x), axis=0)
+        out[:, self.arm] = x[:, 6:9]
+        for leg in self.legs:
+            p, r = self.soles_world[leg.side]
+            local = np.einsum("nji,nj->ni", rot, p - pos)                   # the sole in the torso frame
+            local_rot = rot.transpose(0, 2, 1) @ r
+            out[:, list(leg.index)] = leg_ik(leg, *within_reach(leg, local, local_rot, self.reach[leg.side]))
+        out[:, self._moved] = np.clip(out[:, self._moved], self.lower, self.upper)
+        return out
+
+    def features(self, q: np.ndarray) -> dict[str, np.ndarray]:
+        """Hand (N, 3), forearm direction (N, 3), other sole's corners (N, 12), CoM x, y (N, 2), torso x, z
+        axes (N, 6) and how far links are inside :data:`CLEAR_TASK_M` of each other (N, 1) of poses (N, 20)
+        [rad, m]."""
+        angles = servo_to_book(q, self.frame, self.spec)
+        points = forward(angles, self.spec, "dh", full_com=True)
+        clearance = self._clearance(angles).clearance
+        data = points.data
+        hand, elbow = data[self._hand_row].T, data[self._elbow_row].T
+        forearm = hand - elbow
+        axes = torso_axes(data, self.spec)
+        return {"hand": hand, "point": forearm / np.linalg.norm(forearm, axis=1, keepdims=True),
+                "feet": data[self._foot_rows].transpose(2, 0, 1).reshape(len(q), -1),
+                "com": points.full()[:2].T, "torso": np.concatenate([axes[0].T, axes[2].T], axis=1),
+                "close": np.maximum(CLEAR_TASK_M - clearance, 0.0)[:, None]}
+
+    def _stack(self, f: dict[str, np.ndarray], hand: np.ndarray, point: np.ndarray | None) -> tuple[np.ndarray,
+                                                                                                    np.ndarray]:
+        """Task values (N, m) and their targets (m,), each scaled by the square root of its weight."""
+        parts = [(f["hand"], hand, W_HAND), (f["com"], self.com0, W_COM), (f["torso"], self.torso0, W_TORSO),
+                 (f["close"], np.zeros(1), W_CLEAR)]
+        if self.double:
+            parts.append((f["feet"], self.feet0, W_FEET))
+        if point is not None:
+            parts.append((f["point"], point, W_POINT))
+        values = np.concatenate([v * np.sqrt(w) for v, _, w in parts], axis=1)
+        target = np.concatenate([t * np.sqrt(w) for _, t, w in parts])
+        return values, target
+
+    def _cost(self, x: np.ndarray, hand: np.ndarray, point: np.ndarray | None) -> float:
+        values, target = self._stack(self.features(self.servo(x[None])), hand, point)
+        return float(np.sum((target - values[0]) ** 2) + np.sum(W_POSTURE * (x - self.x0) ** 2))
+
+    def solve(self, x: np.ndarray, hand: np.ndarray, point: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+        """Unknowns (9,) from ``x`` that put the hand at ``hand`` (3,) [m] (and the forearm along ``point`` (3,), if
+        given) with the other tasks held, and the hand's remaining error [m]. A step that does not lower the
+        weighted error is retried with more damping."""
+        x = np.asarray(x, dtype=float).copy()
+        n, low, high = len(x), x - ROW_STEP, x + ROW_STEP
+        damping, cost = DAMPING, self._cost(x, hand, point)
+        for _ in range(MAX_ITERATIONS):
+            batch = np.repeat(x[None], n + 1, axis=0) + np.vstack([np.zeros(n), np.eye(n) * FD_STEP])
+            f = self.features(self.servo(batch))
+            error = float(np.linalg.norm(f["hand"][0] - hand))
+            feet = float(np.abs(f["feet"][0] - self.feet0).max()) if self.double else 0.0
+            if error < SOLVE_TOL_M and feet < SOLVE_TOL_M:
+                break
+            values, target = self._stack(f, hand, point)
+            jac = (values[1:] - values[0]).T / FD_STEP                 # (m, n)
+            normal = jac.T @ jac + np.diag(W_POSTURE)
+            rhs = jac.T @ (target - values[0]) - W_POSTURE * (x - self.x0)
+            for _ in range(8):
+                trial = np.clip(x + np.linalg.solve(normal + damping * np.eye(n), rhs), low, high)
+                trial_cost = self._cost(trial, hand, point)
+                if trial_cost < cost:
+                    x, cost, damping = trial, trial_cost, max(damping / 3.0, DAMPING)
+                    break
+                damping *= 10.0
+            else:
+                break
+        return x, float(np.linalg.norm(self.features(self.servo(x[None]))["hand"][0] - hand))

@@ -1,0 +1,106 @@
+"""Cartesian moves (op2motion.motion.cartesian, .whole_body): a hand along a straight line with the whole body
+balanced: on the line within 2 mm, the feet where they were, the CoM inside the support, in physics too."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from helpers import POSES, run_cli
+
+from op2motion.errors import CheckFailed
+from op2motion.formats.motionfile import read_motion
+from op2motion.formats.posefile import read_pose
+from op2motion.motion.cartesian import LINE_MARGIN_M, LINE_TOL_M, LineRequest, _slerp_directions, line_move
+from op2motion.motion.pipeline import plan_motion
+from op2motion.motion.whole_body import WholeBodyIk
+from op2motion.physics import check
+from op2motion.posture.cost import SELF_CLEARANCE_M
+
+MOVE_M = 0.05
+FEET_TOL_M = 1e-4            # the other sole's corners stay this close to where they were
+END_TOL_M = 0.001            # the hand ends this close to the line's end (or its start, going back)
+REPLAY_TOL_M = LINE_TOL_M    # the motion file, planned again, keeps the hand as close to the line
+POINT_TOL_RAD = np.radians(1.0)
+AXES = {f"{sign}{axis}": sign_v * np.eye(3)[k] * MOVE_M for k, axis in enumerate("XYZ")
+        for sign, sign_v in (("+", 1.0), ("-", -1.0))}
+
+
+def _move(spec, pose: str, hand: str, delta, back: bool = True, duration_s: float = 1.0, orientation="free"):
+    return line_move(read_pose(POSES / f"{pose}.json", spec),
+                     LineRequest(hand, duration_s, delta_m=tuple(delta), orientation=orientation, back=back), spec)
+
+
+@pytest.mark.parametrize("hand", ["left", "right"])
+@pytest.mark.parametrize("axis", sorted(AXES))
+def test_five_centimetres_each_way_from_walkready_and_back(spec, hand, axis):
+    move = _move(spec, "walkready", hand, AXES[axis])
+    assert move.deviation_m.max() <= LINE_TOL_M
+    assert move.com_margin_m.min() >= LINE_MARGIN_M and move.clearance_m.min() >= SELF_CLEARANCE_M
+    half = len(move.goals) // 2
+    assert np.linalg.norm(move.hand_path[half] - move.end_m) < END_TOL_M
+    assert np.linalg.norm(move.hand_path[-1] - move.start_m) < END_TOL_M
+    ik = WholeBodyIk(spec, "double", hand, move.goals[0])
+    feet = ik.features(move.goals)["feet"]
+    assert np.abs(feet - feet[0]).max() < FEET_TOL_M                     # both soles stay where they stood
+    assert np.abs(move.speeds).max() <= 0.5 * spec.servo.no_load_speed_rad_s + 1e-9
+
+
+@pytest.mark.parametrize("axis", ["+X", "+Y", "-Y"])
+def test_from_the_straight_legged_standing_pose(spec, axis):
+    move = _move(spec, "standing", "right", AXES[axis], back=False)
+    assert move.deviation_m.max() <= LINE_TOL_M and move.com_margin_m.min() >= LINE_MARGIN_M
+
+
+def test_a_line_beyond_the_arm_is_refused_saying_where(spec):
+    with pytest.raises(CheckFailed, match=r"the right hand cannot follow the line: .* mm off at"):
+        _move(spec, "standing", "right", (0.0, 0.0, MOVE_M), back=False)
+
+
+def test_the_forearm_keeps_or_turns_its_direction(spec):
+    keep = _move(spec, "walkready", "left", (0.0, MOVE_M, 0.0), back=False, orientation="keep")
+    assert keep.pointing_error_rad is not None and keep.pointing_error_rad.max() < POINT_TOL_RAD
+    a, b = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 1.0])
+    turned = _slerp_directions(a, b, np.linspace(0.0, 1.0, 11))
+    angles = np.arccos(np.clip(turned @ a, -1.0, 1.0))
+    assert np.allclose(np.linalg.norm(turned, axis=1), 1.0) and np.allclose(np.diff(angles), angles[-1] / 10)
+    assert np.allclose(turned[-1], b / np.linalg.norm(b))
+
+
+def test_cli_writes_a_motion_that_replays_on_the_line(tmp_path, spec, capsys):
+    out = tmp_path / "line.json"
+    code, stdout, _ = run_cli(capsys, "motion", "line", POSES / "walkready.json", "--hand", "right", "--by", "0.05",
+                              "0", "0", "--duration", "1", "--out", out, "--json")
+    result = json.loads(stdout)
+    assert code == 0 and result["line_deviation_max_m"] <= LINE_TOL_M and result["com_margin_min_m"] >= LINE_MARGIN_M
+    motion = read_motion(out, spec)
+    replay = plan_motion(motion, spec)
+    ik = WholeBodyIk(spec, "double", "right", replay.goals[0])
+    hand = ik.features(replay.goals)["hand"]
+    start, end = np.array(result["hand_start_m"]), np.array(result["hand_end_m"])
+    span = end - start
+    t = np.clip((hand - start) @ span / (span @ span), 0.0, 1.0)
+    assert np.linalg.norm(hand - (start + t[:, None] * span), axis=1).max() <= REPLAY_TOL_M
+
+
+@pytest.mark.parametrize("argv, flag", [
+    (["--to", "0.1", "0", "0.2", "--by", "0", "0", "0.01"], "--by"),
+    (["--by", "0", "0", "0.05", "--orientation", "sideways"], "--orientation"),
+    (["--by", "0", "0", "2"], "--by"),
+    (["--by", "0.05", "0", "0", "--duration", "0.2"], "--duration"),
+])
+def test_cli_bad_input_is_one_line_exit_2_nothing_written(tmp_path, capsys, argv, flag):
+    out = tmp_path / "m.json"
+    args = ["motion", "line", POSES / "walkready.json", "--hand", "right", *argv, "--out", out]
+    if "--duration" not in argv:
+        args += ["--duration", "1"]
+    code, _, err = run_cli(capsys, *args)
+    assert code == 2 and not out.exists() and flag in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+@pytest.mark.physics
+def test_a_line_and_back_stands_in_both_engines(spec):
+    move = _move(spec, "walkready", "right", (0.0, 0.0, -MOVE_M))
+    report = check(move.trajectory().schedule(spec), spec, ("pybullet", "mujoco"))
+    assert report.agree and report.stable, [e.run.reasons for e in report.engines.values()]
