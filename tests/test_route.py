@@ -36,13 +36,13 @@ END_TOL_RAD = 1e-3           # the planned rows start and end on the poses (the 
 # Pairs found by a seeded search: ends at least 8 mm clear, the straight line overlapping by 10-35 mm.
 ARM_THROUGH_TORSO = {"r_sho_pitch": (69.0, -178.0), "r_sho_roll": (-63.0, -51.0), "r_el": (-29.0, -24.0)}
 ARM_THROUGH_HIP = {"r_sho_pitch": (117.0, -170.0), "r_sho_roll": (-51.0, -76.0), "r_el": (-44.0, -41.0)}
-ARMS_CROSSING = {"r_sho_pitch": (-22.0, -8.0), "r_sho_roll": (7.0, 36.0), "r_el": (55.0, 18.0),
+LEFT_ARM_THROUGH_HIP = {"r_sho_pitch": (-22.0, -8.0), "r_sho_roll": (7.0, 36.0), "r_el": (55.0, 18.0),
                  "l_sho_pitch": (-24.0, 104.0), "l_sho_roll": (59.0, 62.0), "l_el": (28.0, 39.0)}
 # On the left foot (book_2_44), the right leg from behind the left foot (crossed over) to behind its own side: the
 # straight line brings the swing foot down onto the floor (9.2 mm lifted at both ends).
 LEG_BEHIND = {"r_hip_yaw": (2.0, 54.0), "r_hip_roll": (-42.0, -27.0), "r_hip_pitch": (-33.0, -20.0),
               "r_knee": (53.0, 22.0), "r_ank_pitch": (-40.0, 6.0), "r_ank_roll": (-23.0, -48.0)}
-PAIRS = {"arm through torso": ARM_THROUGH_TORSO, "arm through hip": ARM_THROUGH_HIP, "arms crossing": ARMS_CROSSING,
+PAIRS = {"arm through torso": ARM_THROUGH_TORSO, "arm through hip": ARM_THROUGH_HIP, "left elbow through hip": LEFT_ARM_THROUGH_HIP,
          "crossed leg through the floor": LEG_BEHIND}
 ONE_FOOT = {"crossed leg through the floor": ("book_2_44", "left")}
 

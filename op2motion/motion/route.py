@@ -151,8 +151,11 @@ def route_segment(a: Waypoint, b: Waypoint, spec: Spec, seed: int, settings: Rrt
         path = _plan(narrow, limits, rng, replace(settings, budget_s=settings.budget_s * NARROW_SHARE,
                                                   max_samples=int(settings.max_samples * NARROW_SHARE)), settings)
         seg = narrow if path is not None else seg
-    if path is None:
-        path = _plan(seg, limits, rng, settings, settings)
+    if path is None:                              # the rest of the budget with every free joint
+        rest = settings if len(narrow.free) == len(seg.free) else replace(
+            settings, budget_s=settings.budget_s * (1.0 - NARROW_SHARE),
+            max_samples=settings.max_samples - int(settings.max_samples * NARROW_SHARE))
+        path = _plan(seg, limits, rng, rest, settings)
     if path is None:
         raise CheckFailed(f"no path from {a.name} to {b.name} within {settings.budget_s:g} s and "
                           f"{settings.max_samples} samples ({why}): keeping {limits.clearance * 1000:.0f} mm between "
