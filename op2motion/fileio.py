@@ -17,18 +17,25 @@ from typing import Mapping, Type
 
 from op2motion.errors import InputError, Op2MotionError, OutputError
 
+MAX_INPUT_BYTES = 16 * 2 ** 20    # every file op2motion reads is far smaller (an action file: 128 KiB)
+
 
 def read_bytes(path: str | Path, what: str, error: Type[Op2MotionError] = InputError) -> bytes:
-    """The bytes of ``path``; errors (``error`` class) say what file was expected and why it cannot be read."""
+    """The bytes of ``path``; errors (``error`` class) say what file was expected and why it cannot be read. At most
+    :data:`MAX_INPUT_BYTES` are read: a larger file (or an endless one such as ``/dev/zero``) is refused."""
     p = Path(path)
     try:
-        return p.read_bytes()
+        with p.open("rb") as f:
+            data = f.read(MAX_INPUT_BYTES + 1)
     except FileNotFoundError:
         raise error(f"no such {what}", str(p)) from None
     except IsADirectoryError:
         raise error(f"expected a {what}, got a directory", str(p)) from None
     except OSError as exc:
         raise error(f"cannot read {what}: {exc.strerror or exc}", str(p)) from None
+    if len(data) > MAX_INPUT_BYTES:
+        raise error(f"expected at most {MAX_INPUT_BYTES // 2 ** 20} MiB ({what}), got more", str(p))
+    return data
 
 
 def read_text(path: str | Path, what: str, error: Type[Op2MotionError] = InputError) -> str:

@@ -24,6 +24,7 @@ def _fixtures(root: Path) -> dict[str, str]:
     d = root / "in"
     d.mkdir()
     (d / "folder").mkdir()
+    (d / "folder.png").mkdir()
     files = {
         "not_json": b'{"schema": "op2motion.pose/1", "servo_',
         "random": bytes(range(256)) * 8,
@@ -84,7 +85,8 @@ CASES = [
     (["convert", "--servo-deg", f"{IN}/random"], "UTF-8"),
     (["convert", "--servo-deg", f"{IN}/beyond_stop.json", *BOOK], "not several"),
     # plot
-    (["plot", "-o", f"{IN}/folder"], "directory"),
+    (["plot", "-o", f"{IN}/folder.png"], "directory"),
+    (["plot", "-o", "w.jpg"], "ending in .png"),
     (["plot", "-o", ""], "empty"),
     (["plot", "-o", f"{IN}/existing.json/x.png"], "not a directory"),
     (["plot", "--target", "0", "0", "nan", "-o", "x.png"], "--target"),
@@ -93,7 +95,8 @@ CASES = [
     (["arm-ik", "--hand", "left", "--delta", "nan", "0", "0", *BOOK], "--delta"),
     (["arm-ik", "--hand", "left", "--delta", "5", "0", "0", *BOOK], "--delta"),
     (["arm-ik", "--hand", "left", "--delta", "0.01", "0", "0", "--tol-mm", "0", *BOOK], "--tol-mm"),
-    (["arm-ik", "--hand", "left", "--delta", "0.01", "0", "0", "--plot", f"{IN}/folder", *BOOK], "directory"),
+    (["arm-ik", "--hand", "left", "--delta", "0.01", "0", "0", "--plot", f"{IN}/folder.png", *BOOK],
+     "directory"),
     (["arm-ik", "--hand", "left", "--delta", "0.01", "0", "0"], "--th"),
     (["arm-ik", "--hand", "both", "--delta", "0.01", "0", "0", *BOOK], "--hand"),
     # optimize
@@ -110,8 +113,8 @@ CASES = [
     (["optimize", "--target", "5", "0", "0"], "--target"),
     (["optimize", "--br", "0"], "--br"),
     (["optimize", "--out", f"{IN}/folder"], "directory"),
-    (["optimize", "--plot", f"{IN}/folder"], "directory"),
-    (["optimize", "--out", "x.json", "--plot", "x.json"], "the same file"),
+    (["optimize", "--plot", f"{IN}/folder.png"], "directory"),
+    (["optimize", "--out", "x.png", "--plot", "x.png"], "another output"),
     # library build
     (["library", "build", "--x", "0.1", "0.2", "1000000000"], "--x"),
     (["library", "build", "--x", "0.1", "0.2", "2.5"], "--x"),
@@ -120,7 +123,7 @@ CASES = [
     (["library", "build", "--out", f"{IN}/existing.json"], "--out"),
     (["library", "build", "--br", "0.7", "0.7"], "same pose name"),
     (["library", "build", "--x", "0.1", "0.1005", "2"], "same pose name"),
-    (["library", "build", "--x", "0", "1", "1000", "--y", "0", "1", "1000"], "cap"),
+    (["library", "build", "--x", "0", "1", "1000", "--y", "0", "1", "1000"], "at most 10000 targets"),
     (["library", "build", "--seconds", "0", "--validate"], "--seconds"),
     (["library", "build", "--robust"], "--validate"),
     (["library"], "SUBCOMMAND"),
@@ -146,7 +149,7 @@ CASES = [
     (["validate", f"{IN}/folder"], "got a directory"),
     (["validate", WALKREADY, "--seconds", "inf"], "--seconds"),
     (["validate", WALKREADY, "--seconds", "1000"], "--seconds"),
-    (["validate", WALKREADY, "--gui-png", f"{IN}/folder"], "directory"),
+    (["validate", WALKREADY, "--gui-png", f"{IN}/folder.png"], "directory"),
     (["validate", f"{IN}/beyond_stop.json"], "mechanical range"),
     # outputs the OS refuses (/proc takes no new files, even from root)
     (["plot", "-o", "/proc/op2motion/x.png"], "cannot write"),

@@ -61,7 +61,7 @@ def test_plot_writes_a_png(capsys, tmp_path):
     (["fk", "--model", "pb", *CODE_2_6, "--psi", "5", "0", "0"], "--model: the projection model assumes psi = 0"),
     (["fk", "--br", "0", "--th", *STAND_TH, "--phi", *STAND_PHI], "br"),
     (["convert", "--servo-deg", '{"l_knee": 0}'], "missing"),
-    (["plot", "/no/such/pose.json", "-o", "OUT"], "no such pose file"),
+    (["plot", "/no/such/pose.json", "-o", "OUT.png"], "no such pose file"),
     (["--spec", "/no/spec.toml", "fk"], "no such spec file"),
     (["frobnicate"], "invalid choice"),
     (["validate", STANDING_POSE, "--seconds", "nan"], "--seconds"),

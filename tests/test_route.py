@@ -42,8 +42,8 @@ LEFT_ARM_THROUGH_HIP = {"r_sho_pitch": (-22.0, -8.0), "r_sho_roll": (7.0, 36.0),
 # straight line brings the swing foot down onto the floor (9.2 mm lifted at both ends).
 LEG_BEHIND = {"r_hip_yaw": (2.0, 54.0), "r_hip_roll": (-42.0, -27.0), "r_hip_pitch": (-33.0, -20.0),
               "r_knee": (53.0, 22.0), "r_ank_pitch": (-40.0, 6.0), "r_ank_roll": (-23.0, -48.0)}
-PAIRS = {"arm through torso": ARM_THROUGH_TORSO, "arm through hip": ARM_THROUGH_HIP, "left elbow through hip": LEFT_ARM_THROUGH_HIP,
-         "crossed leg through the floor": LEG_BEHIND}
+PAIRS = {"arm through torso": ARM_THROUGH_TORSO, "arm through hip": ARM_THROUGH_HIP,
+         "left elbow through hip": LEFT_ARM_THROUGH_HIP, "crossed leg through the floor": LEG_BEHIND}
 ONE_FOOT = {"crossed leg through the floor": ("book_2_44", "left")}
 
 

@@ -10,10 +10,12 @@ import argparse
 import contextlib
 import json
 import math
+import os
+import re
 import sys
 from typing import Any, Callable, Iterator, Sequence
 
-from op2motion.errors import InputError, render_refs
+from op2motion.errors import InputError, OutputError, ref, render_refs
 from op2motion.robot.spec import Spec
 
 Handler = Callable[[argparse.Namespace, Spec], int]
@@ -25,11 +27,12 @@ class Parser(argparse.ArgumentParser):
     """argparse that reports usage errors as one-line :class:`InputError` instead of exiting."""
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        raise InputError(f"{self.prog}: {message}")
+        command = self.prog.split(" ", 1)[1] if " " in self.prog else ""     # not the program's name again
+        raise InputError(f"{command}: {message}" if command else message)
 
     def flag_of(self, param: str) -> str:
         """The flag of this (sub)command that sets library parameter ``param`` (the parameter name if none)."""
-        dest = FLAG_ALIASES.get(param, param)
+        dest = FLAG_ALIASES.get(param, re.sub(r"^out\d+$", "out", param))
         for action in self._actions:
             if action.dest == dest and action.option_strings:
                 return max(action.option_strings, key=len)
@@ -192,6 +195,43 @@ def output_path(text: str) -> str:
     if not text.strip():
         raise argparse.ArgumentTypeError("expected a file path, got an empty string")
     return text
+
+
+#: Arguments that name files a command reads (their dests), so that no output may land on one of them.
+INPUT_DESTS = ("spec", "pose", "poses", "pose_positional", "file", "motion", "base", "start", "action")
+
+
+def _values(value: Any) -> list[str]:
+    if value is None:
+        return []
+    return [str(v) for v in value] if isinstance(value, (list, tuple)) else [str(value)]
+
+
+def check_paths(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Refuse (bad input, naming the flag) an output file that is also an input file or another output of the same
+    command: writing it would destroy the input or one of the two results."""
+    seen: dict[str, str] = {}
+    for dest in INPUT_DESTS:
+        for value in _values(getattr(args, dest, None)):
+            seen.setdefault(os.path.realpath(value), dest)
+    for action in parser._actions:
+        if action.type not in (output_path, png_path):
+            continue
+        for value in _values(getattr(args, action.dest, None)):
+            where = os.path.realpath(value)
+            if where in seen:
+                other = seen[where]
+                what = "an input file" if other in INPUT_DESTS else "another output"
+                raise OutputError(f"expected a file other than {what} ({ref(other)}), got {value}", action.dest)
+            seen[where] = action.dest
+
+
+def png_path(text: str) -> str:
+    """An argparse type: a PNG file to write (the name must end in .png: the bytes written are PNG)."""
+    path = output_path(text)
+    if not path.lower().endswith(".png"):
+        raise argparse.ArgumentTypeError(f"expected a file name ending in .png, got {text}")
+    return path
 
 
 def pose_name(text: str) -> str:

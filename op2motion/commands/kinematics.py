@@ -18,7 +18,7 @@ from op2motion.commands.common import (
     book_args,
     emit,
     number,
-    output_path,
+    png_path,
     vec3,
 )
 from op2motion.errors import InputError
@@ -53,7 +53,7 @@ def register(sub: Any) -> None:
                    help="kinematic model(s) to draw (both: one row each)")
     p.add_argument("--br", type=BOUNDARY_RATIO, default=1.0, help="boundary ratio of the drawn support rectangle")
     p.add_argument("--target", type=TARGET_M, nargs=3, metavar=("X", "Y", "Z"), help="mark a target [m]")
-    p.add_argument("-o", "--output", type=output_path, required=True, metavar="PNG", help="where to write the PNG")
+    p.add_argument("-o", "--output", type=png_path, required=True, metavar="PNG", help="where to write the PNG")
     p.add_argument("--validate", action="store_true", help="check the pose in physics and show the verdict")
     p.add_argument("--seconds", type=SECONDS, default=DEFAULT_SECONDS,
                    help=f"simulated time of --validate [s] (default {DEFAULT_SECONDS:g})")
@@ -68,7 +68,7 @@ def register(sub: Any) -> None:
                    help="model to iterate on: pb (book, default) or dh (true geometry, for the real robot)")
     p.add_argument("--tol-mm", type=TOL_MM, default=0.1, help="iterated mode: target tolerance [mm] (default 0.1)")
     p.add_argument("--allow-limits", action="store_true", help="accept a result outside the servo limits")
-    p.add_argument("--plot", type=output_path, metavar="PNG", help="draw the initial and the changed pose")
+    p.add_argument("--plot", type=png_path, metavar="PNG", help="draw the initial and the changed pose")
 
 
 def cmd_fk(args: argparse.Namespace, spec: Spec) -> int:

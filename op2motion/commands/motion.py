@@ -68,6 +68,17 @@ def register(sub: Any) -> None:
     register_line(inner)
 
 
+def _chain(pages: Sequence[int]) -> str:
+    """The pages played, a run of one page written once with its count (``4 x255 -> 5``)."""
+    runs: list[list[int]] = []
+    for p in pages:
+        if runs and runs[-1][0] == p:
+            runs[-1][1] += 1
+        else:
+            runs.append([p, 1])
+    return " -> ".join(f"{p} x{n}" if n > 1 else str(p) for p, n in runs)
+
+
 def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion motion play``."""
     from op2motion.formats.action import ActionFile
@@ -82,7 +93,7 @@ def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
                               "duration_s": round(duration, 3), "pages_played": list(playback.pages), "ids": list(IDS),
                               "goals": playback.goals.astype(int).tolist()}
     lines = [f"page {args.page} ({name}) from {played.start.name}: {playback.calls} ticks, {duration:.3f} s, pages "
-             f"{' -> '.join(map(str, playback.pages))}"]
+             f"{_chain(playback.pages)}"]
     return finish(args, spec, played.trajectory, f"page {args.page} ({name})", result, lines)
 
 
@@ -101,7 +112,7 @@ def _broadcast(values: Sequence[T] | None, n: int, default: T | None, flag: str)
 def _motion_from_args(args: argparse.Namespace, spec: Spec) -> Any:
     from pathlib import Path
 
-    from op2motion.formats.motionfile import is_motion_file, motion_of, read_motion, relative_source
+    from op2motion.formats.motionfile import is_motion_file, motion_of, read_motion, rebased, relative_source
     from op2motion.formats.posefile import read_pose
     from op2motion.robot.pose import Pose
 
@@ -109,6 +120,8 @@ def _motion_from_args(args: argparse.Namespace, spec: Spec) -> Any:
         if args.durations or args.pauses or args.support:
             raise InputError("a motion file carries its own durations, pauses and supports", "durations")
         motion = read_motion(args.poses[0], spec)
+        if args.out:
+            motion = rebased(motion, args.poses[0], args.out)
         return motion if args.profile is None else type(motion)(motion.name, motion.steps, args.profile,
                                                                 motion.p_gain)
     poses = [read_pose(p, spec) for p in args.poses]
@@ -127,23 +140,18 @@ def _motion_from_args(args: argparse.Namespace, spec: Spec) -> Any:
 
 def cmd_plan(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion motion plan``."""
-    from op2motion.fileio import OutputSet
     from op2motion.formats.motionfile import motion_to_json
     from op2motion.motion.pipeline import plan_motion
 
     motion = _motion_from_args(args, spec)
     trajectory = plan_motion(motion, spec, args.planner, args.seed)
-    if args.out:
-        outputs = OutputSet({"out": args.out})
-        outputs.put("out", motion_to_json(motion, spec, args.out))
-        outputs.commit()
     result: dict[str, Any] = {"name": motion.name, "profile": motion.profile, "ticks": len(trajectory.goals) - 1,
                               "duration_s": round(trajectory.duration_s, 3), "segments": list(trajectory.segment_names),
                               "notes": list(trajectory.notes), "motion_file": args.out}
     warn(args, result, list(trajectory.notes))
-    lines = [f"{motion.name}: {len(motion.steps)} poses, {trajectory.duration_s:.3f} s ({motion.profile})"
-             + (f", wrote {args.out}" if args.out else "")]
-    return finish(args, spec, trajectory, motion.name, result, lines)
+    lines = [f"{motion.name}: {len(motion.steps)} poses, {trajectory.duration_s:.3f} s ({motion.profile})"]
+    return finish(args, spec, trajectory, motion.name, result, lines,
+                  motion_file=(args.out, motion_to_json(motion, spec, args.out)) if args.out else None)
 
 
 def cmd_export(args: argparse.Namespace, spec: Spec) -> int:

@@ -48,7 +48,6 @@ def cmd_line(args: argparse.Namespace, spec: Spec) -> int:
     from pathlib import Path
 
     from op2motion.figures.paths import render_line
-    from op2motion.fileio import OutputSet
     from op2motion.formats.motionfile import motion_to_json
     from op2motion.formats.posefile import read_pose
     from op2motion.motion.cartesian import LineRequest, line_move
@@ -60,10 +59,6 @@ def cmd_line(args: argparse.Namespace, spec: Spec) -> int:
     name = args.name or (Path(args.out).stem if args.out else "line")
     motion = move.motion(name)
     trajectory = move.trajectory(motion.p_gain)
-    if args.out:
-        outputs = OutputSet({"out": args.out})
-        outputs.put("out", motion_to_json(motion, spec, args.out))
-        outputs.commit()
     summary = move.summary(spec)
     result: dict[str, Any] = {"name": name, "pose": pose.name, "support": str(pose.support), **summary,
                               "duration_s": round(trajectory.duration_s, 3), "ticks": len(trajectory.goals) - 1,
@@ -71,7 +66,7 @@ def cmd_line(args: argparse.Namespace, spec: Spec) -> int:
     lines = [f"{name}: the {args.hand} hand from {pose.name}, {summary['length_m'] * 1000:.1f} mm in "
              f"{trajectory.duration_s:.3f} s{' and back' if args.back else ''}: off the line <= "
              f"{summary['line_deviation_max_m'] * 1000:.2f} mm, CoM margin >= {summary['com_margin_min_m'] * 1000:.1f} "
-             f"mm, fastest joint {summary['joint_speed_joint']} at {summary['joint_speed_max_rad_s']:.2f} rad/s"
-             + (f", wrote {args.out}" if args.out else "")]
+             f"mm, fastest joint {summary['joint_speed_joint']} at {summary['joint_speed_max_rad_s']:.2f} rad/s"]
     title = f"{name}: {args.hand} hand line from {pose.name}"
-    return finish(args, spec, trajectory, title, result, lines, lambda verdict: render_line(move, title, verdict))
+    return finish(args, spec, trajectory, title, result, lines, lambda verdict: render_line(move, title, verdict),
+                  (args.out, motion_to_json(motion, spec, args.out)) if args.out else None)

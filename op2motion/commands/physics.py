@@ -13,6 +13,7 @@ from op2motion.commands.common import (
     number,
     output_path,
     physics_args,
+    png_path,
     progress,
 )
 from op2motion.model.servo import MAX_STIFFNESS_SCALE
@@ -40,7 +41,7 @@ def register(sub: Any) -> None:
                    help="scale the servos' stiffness (default 1: the MX-28 at P = 32)")
     p.add_argument("--voltage", type=float, choices=(11.1, 12.0, 14.8), default=None,
                    help="servo supply voltage [V], one of the MX-28's ratings (default: the spec's, 12 V)")
-    p.add_argument("--gui-png", type=output_path, metavar="PNG", help="snapshot of the final state (TinyRenderer)")
+    p.add_argument("--gui-png", type=png_path, metavar="PNG", help="snapshot of the final state (TinyRenderer)")
     p.add_argument("--robust", action="store_true",
                    help="hold the pose on every member of the robustness family (torso CoM and mass from the spec's "
                         "uncertainty, servo stiffness x0.6-1.6, friction 0.5-1.0, 16 ms IMU latency) and print the "
@@ -91,7 +92,8 @@ def cmd_validate(args: argparse.Namespace, spec: Spec) -> int:
         result = {**report.first.as_dict(), **head,
                   "static_torque_nm": {n: float(x) for n, x in zip(spec.joint_names, static.torques)},
                   "static_worst_joint": static.worst_joint, "static_worst_ratio": round(static.worst_ratio, 4)}
-    if args.gui_png and report.run.snapshot_png is not None:
+    problem = report.problem()
+    if args.gui_png and report.run.snapshot_png is not None and not problem:     # a failed check writes nothing
         outputs.put("gui_png", report.run.snapshot_png)
         result["png"] = str(outputs.commit()["gui_png"])
     lines = [f"{pose.name} ({pose.support} support): {e.run.summary()}" + _pushes_line(e.pushes)
@@ -100,7 +102,6 @@ def cmd_validate(args: argparse.Namespace, spec: Spec) -> int:
     if len(report.engines) > 1:
         lines.append("  the engines agree" if report.agree else "  THE ENGINES DISAGREE")
     emit(args, result, "\n".join(lines))
-    problem = report.problem()
     if problem:
         raise CheckFailed(f"{pose.name}: {problem}")
     return 0

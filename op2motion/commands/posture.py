@@ -16,6 +16,7 @@ from op2motion.commands.common import (
     emit,
     number,
     output_path,
+    png_path,
     pose_name,
     progress_enabled,
     vec3,
@@ -80,7 +81,7 @@ def register(sub: Any) -> None:
     p.add_argument("--no-refine", action="store_true", help="skip the local refinement (hand within 5 mm)")
     p.add_argument("--name", type=pose_name, help="pose name (default from hand, support, target and br)")
     p.add_argument("--out", type=output_path, metavar="FILE", help="pose file (default poses/NAME.json)")
-    p.add_argument("--plot", type=output_path, metavar="PNG", help="pose figure (default beside the pose file)")
+    p.add_argument("--plot", type=png_path, metavar="PNG", help="pose figure (default beside the pose file)")
 
 
 def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:

@@ -7,7 +7,17 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from op2motion.commands.common import add_command, emit, engines_of, number, output_path, physics_args, progress, whole
+from op2motion.commands.common import (
+    add_command,
+    emit,
+    engines_of,
+    number,
+    output_path,
+    physics_args,
+    png_path,
+    progress,
+    whole,
+)
 from op2motion.errors import CheckFailed, InputError
 from op2motion.robot.spec import Spec
 
@@ -32,9 +42,10 @@ def register(sub: Any) -> None:
     physics_args(p, False, "with --validate: also push the torso N newtons for 0.1 s halfway, from each side")
     p.add_argument("--trials", type=whole(0, 100), default=0, metavar="N",
                    help="with --validate: N more runs from randomly perturbed starts (seeded)")
-    p.add_argument("--perturb-deg", type=number(0.0, 5.0, "deg"), default=0.5, metavar="DEG",
-                   help="standard deviation of the trials' start offsets per joint (default 0.5°)")
-    p.add_argument("--seed", type=whole(0, 2 ** 31 - 1), default=0, help="seed of the trials' offsets")
+    p.add_argument("--perturb-deg", type=number(0.0, 5.0, "deg"), default=None, metavar="DEG",
+                   help="standard deviation of the trials' start offsets per joint (default 0.5°, with --trials)")
+    p.add_argument("--seed", type=whole(0, 2 ** 31 - 1), default=None,
+                   help="with --trials: seed of the trials' offsets (default 0)")
     p.add_argument("--robust", action="store_true",
                    help="with --validate: walk every member of the robustness family (torso CoM and mass from the "
                         "spec's uncertainty, servo stiffness x0.6-1.6, friction 0.5-1.0, 16 ms IMU latency) and "
@@ -44,7 +55,7 @@ def register(sub: Any) -> None:
     p.add_argument("--retime", action="store_true",
                    help="lengthen the step when a joint would pass 90%% of the servo's no-load speed "
                         "(default: refuse the plan and name the joint)")
-    p.add_argument("--plot", type=output_path, metavar="PNG", help="footsteps, ZMP and CoM from above and in time")
+    p.add_argument("--plot", type=png_path, metavar="PNG", help="footsteps, ZMP and CoM from above and in time")
     p.add_argument("--out", type=output_path, nargs="+", metavar="FILE",
                    help="write the goals every 8 ms: .csv (CSV) and/or .motion (Webots)")
 
@@ -91,7 +102,10 @@ def _walk_physics(args: argparse.Namespace, gait: Any, spec: Spec, result: dict[
     from op2motion.physics import Trials, check
 
     controller = _controller(args, gait, spec)
-    trials = Trials(args.trials, args.perturb_deg, args.seed) if args.trials else None
+    trials = None
+    if args.trials:
+        trials = Trials(args.trials, Trials.perturb_deg if args.perturb_deg is None else args.perturb_deg,
+                        args.seed or 0)
     with progress(args, "physics", "s") as on_progress:
         report = check(controller, spec, engines_of(args), side_pushes(args.push) if args.push else None, trials,
                        on_progress=on_progress)
@@ -149,6 +163,13 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
         raise InputError("expected --validate with --push, --trials, --robust or --open-loop", "validate")
     if args.robust and args.trials:
         raise InputError("expected --robust or --trials, not both", "trials")
+    if not args.trials and (args.seed is not None or args.perturb_deg is not None):
+        raise InputError("expected --trials N with --seed or --perturb-deg (they set the perturbed starts)",
+                         "seed" if args.seed is not None else "perturb_deg")
+    if args.target is not None and args.steps is not None:
+        raise InputError("expected --steps or --target, not both (a target sets the number of steps)", "steps")
+    if args.preset is not None and not args.preset.strip():
+        raise InputError("expected a gait preset file or a shipped name, got an empty string", "preset")
     outputs = OutputSet(_outputs(args))
     params = read_preset(preset_path(args.preset)).with_steps(args.steps)
     target = None if args.target is None else (args.target[0], args.target[1], math.radians(args.target[2]))
@@ -167,8 +188,9 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
         lines += [_walk_line(e, s) for e, s in result["physics"]["engines"].items()]
     if robust is not None:
         lines.append(robust[1])
+    failed = (robust is not None and not robust[0].passed) or (report is not None and report.fell)
     _walk_files(args, outputs, gait, spec, report)
-    written = outputs.commit()
+    written = {} if failed else outputs.commit()        # a walk that failed its check writes nothing
     result["files"] = {k: str(v) for k, v in written.items()}
     lines += [f"  wrote {p}" for p in written.values()]
     emit(args, result, "\n".join(lines))

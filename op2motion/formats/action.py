@@ -18,6 +18,7 @@ from op2motion.errors import InputError, ref
 from op2motion.fileio import read_bytes
 from op2motion.formats.actionlayout import (
     MAX_BYTE,
+    MAX_STEPS,
     NUM_PAGES,
     PAGE_SIZE,
     RawPage,
@@ -107,7 +108,11 @@ class ActionFile:
     def raw(self, index: int) -> RawPage:
         """Page ``index`` as bytes say it (parsed once)."""
         if index not in self._raw:
-            self._raw[index] = parse_page(self.data, index)
+            raw = parse_page(self.data, index)
+            if raw.valid and raw.stepnum > MAX_STEPS:      # the framework would read past the page's 7 steps
+                raise InputError(f"page {index} ({raw.name!r}) says it has {raw.stepnum} steps; expected at most "
+                                 f"{MAX_STEPS}", self.where)
+            self._raw[index] = raw
         return self._raw[index]
 
     def is_empty(self, index: int) -> bool:

@@ -21,8 +21,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
-from op2motion.errors import InputError, PoseFileError
-from op2motion.fileio import write_atomic
+from op2motion.errors import InputError, Op2MotionError, PoseFileError
+from op2motion.fileio import read_bytes, write_atomic
 from op2motion.formats.posefile import read_json_file, read_pose
 from op2motion.robot.framework import DEFAULT_P_GAIN
 from op2motion.robot.joints import servo_dict, servo_from_mapping
@@ -126,8 +126,8 @@ def read_motion(path: str | Path, spec: Spec) -> Motion:
 def is_motion_file(path: str | Path) -> bool:
     """Whether ``path`` holds a motion document (its schema names a motion, of any version), not a pose."""
     try:
-        return str(json.loads(Path(path).read_text(encoding="utf-8")).get("schema")).startswith("op2motion.motion/")
-    except (OSError, ValueError, AttributeError):
+        return str(json.loads(read_bytes(path, "pose or motion file")).get("schema")).startswith("op2motion.motion/")
+    except (Op2MotionError, ValueError, AttributeError):
         return False
 
 
@@ -162,6 +162,13 @@ def read_support(step: MotionStep, where: str | Path, spec: Spec) -> str:
 def relative_source(pose_path: str | Path, motion_path: str | Path) -> str:
     """A pose file's path as a motion file at ``motion_path`` refers to it."""
     return Path(os.path.relpath(Path(pose_path).resolve(), Path(motion_path).resolve().parent)).as_posix()
+
+
+def rebased(motion: Motion, old: str | Path, new: str | Path) -> Motion:
+    """``motion`` read from ``old`` with its pose references rewritten for a motion file at ``new``."""
+    steps = tuple(MotionStep(s.pose, None if s.source is None else relative_source(Path(old).parent / s.source, new),
+                             s.duration_s, s.pause_s) for s in motion.steps)
+    return Motion(motion.name, steps, motion.profile, motion.p_gain)
 
 
 def write_motion(motion: Motion, path: str | Path, spec: Spec) -> Path:

@@ -54,6 +54,10 @@ def parse_pose(doc: Any, spec: Spec, where: str = "<pose>") -> Pose:
     schema = doc.get("schema")
     if schema != SCHEMA:
         raise PoseFileError(f"schema: expected {SCHEMA!r}, got {schema!r}", where)
+    unknown = set(doc) - POSE_KEYS
+    if unknown:
+        raise PoseFileError(f"unknown field(s) {', '.join(sorted(unknown))} (expected some of "
+                            f"{', '.join(sorted(POSE_KEYS))})", where)
     try:
         servo = servo_from_mapping(doc.get("servo_deg"), spec)  # type: ignore[arg-type]
         pose = Pose(doc.get("name"), doc.get("support"), servo, _mapping(doc, "metrics"),  # type: ignore[arg-type]
@@ -67,11 +71,33 @@ def parse_pose(doc: Any, spec: Spec, where: str = "<pose>") -> Pose:
     return pose
 
 
+POSE_KEYS = {"schema", "name", "support", "servo_deg", "book_deg", "metrics", "provenance"}
+
+
+class DuplicateKey(ValueError):
+    """A JSON object names one key twice (JSON decoders keep the last silently)."""
+
+    def __init__(self, key: str):
+        super().__init__(key)
+        self.key = key
+
+
+def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in out:
+            raise DuplicateKey(key)
+        out[key] = value
+    return out
+
+
 def read_json_file(path: str | Path, what: str) -> Any:
     """The decoded JSON of a pose or motion file; unreadable files and bad JSON are :class:`PoseFileError`."""
     text = read_text(path, what, PoseFileError)
     try:
-        return json.loads(text)
+        return json.loads(text, object_pairs_hook=_unique_keys)
+    except DuplicateKey as exc:
+        raise PoseFileError(f"expected each key once in an object, got {exc.key!r} twice", str(path)) from None
     except json.JSONDecodeError as exc:
         raise PoseFileError(f"not valid JSON: {exc.msg} at line {exc.lineno}", str(path)) from None
     except RecursionError:

@@ -25,6 +25,9 @@ from op2motion.robot.spec import Spec
 FOOT_GAP_M = 0.005          # soles closer than this from above count as colliding
 PATH_SAMPLES = 9            # poses checked along each swing (start and landing included)
 
+TARGET_REACH_M = 1.0        # a walk target lies within this many metres of the start, each way
+MAX_TARGET_STEPS = 200      # and within as many steps as --steps allows
+
 
 @dataclass(frozen=True)
 class Footstep:
@@ -109,9 +112,16 @@ def _target_moves(params: GaitParams, target: tuple[float, float, float]) -> lis
     x, y, yaw = (float(v) for v in target)
     if not all(math.isfinite(v) for v in (x, y, yaw)):
         raise InputError(f"expected a finite target (x, y, yaw), got {target}", "target")
+    if max(abs(x), abs(y)) > TARGET_REACH_M or abs(yaw) > math.pi + 1e-9:
+        raise InputError(f"expected x and y within ±{TARGET_REACH_M:g} m and a heading within ±180°, got "
+                         f"({x:g} m, {y:g} m, {math.degrees(yaw):g}°)", "target")
     limits = (max(abs(params.step_length_m), 1e-3), max(abs(params.step_side_m), 1e-3),
               max(abs(params.turn_rad), math.radians(1.0)))
     n = max(1, *(math.ceil(abs(v) / lim - 1e-9) for v, lim in zip((x, y, yaw), limits)))
+    if n > MAX_TARGET_STEPS:
+        raise InputError(f"expected a target within {MAX_TARGET_STEPS} steps of the {params.name!r} preset "
+                         f"({abs(params.step_length_m) * 1000:g} mm, {abs(params.step_side_m) * 1000:g} mm and "
+                         f"{math.degrees(abs(params.turn_rad)):g}° a step), got one {n} steps away", "target")
     # the body path is a straight line in the start frame with the heading turning evenly
     moves, pose = [], np.zeros(3)
     for k in range(1, n + 1):

@@ -23,6 +23,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from op2motion.errors import InputError
 from op2motion.gait.footsteps import FootPlan, Footstep, plan_footsteps, sole_rectangle
 from op2motion.gait.params import GaitParams
 from op2motion.gait.preview import preview_gains, track_reference
@@ -143,7 +144,11 @@ class _Body:
         out = arms.copy()
         for side, leg in self.legs.items():
             sole = np.einsum("kji,kj->ki", rot, self.timeline.feet[side][:, :3] - pos)
-            out[:, list(leg.index)] = leg_ik(leg, sole, np.transpose(rot, (0, 2, 1)) @ self.sole_rot[side])
+            try:
+                out[:, list(leg.index)] = leg_ik(leg, sole, np.transpose(rot, (0, 2, 1)) @ self.sole_rot[side])
+            except InputError as e:                # a preset whose values are in range but not together
+                raise InputError(f"expected a gait the legs can reach; the {side} leg cannot: {e.message} (lower "
+                                 f"the hips more, shorten the steps or lift the swing foot less)", "preset") from None
         return out
 
     def configs(self, goals: np.ndarray, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:

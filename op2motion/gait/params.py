@@ -156,13 +156,11 @@ def params_from_mapping(doc: Any, where: str = "<preset>") -> GaitParams:
 
 def read_preset(path: str | Path) -> GaitParams:
     """The gait of a preset file ``walking/NAME.toml`` (its name defaults to the file's stem)."""
+    from op2motion.fileio import read_text
+
     path = Path(path)
     try:
-        doc = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(f"expected a gait preset file, got {str(path)!r} (no such file)", "preset") from None
-    except (OSError, UnicodeDecodeError) as e:
-        raise InputError(f"expected a readable gait preset, got {str(path)!r} ({e})", "preset") from None
+        doc = tomllib.loads(read_text(path, "gait preset file"))
     except tomllib.TOMLDecodeError as e:
         raise InputError(f"expected TOML in {str(path)!r}, got an error: {e}", "preset") from None
     doc.setdefault("name", path.stem)

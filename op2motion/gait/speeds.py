@@ -19,6 +19,7 @@ import numpy as np
 from op2motion.errors import InputError
 from op2motion.gait.generator import Gait, plan_gait
 from op2motion.gait.params import RANGES, GaitParams
+from op2motion.robot.joints import LIMIT_SLACK_RAD, joint_range
 from op2motion.robot.spec import Spec
 
 SPEED_SHARE = 0.9          # a planned joint may move at most this share of the no-load speed
@@ -60,25 +61,42 @@ def too_fast_message(check: SpeedCheck, step_s: float) -> str:
     """Why a plan is refused, and the step that would do."""
     return (f"expected every joint within {SPEED_SHARE:.0%} of the MX-28's no-load speed ({check.limit_rad_s:.2f} "
             f"rad/s at {check.voltage_v:g} V), got {check.joint} at {check.peak_rad_s:.2f} rad/s; a step of about "
-            f"{step_s * check.ratio * RETIME_MARGIN:.2f} s would do (or re-time the plan)")
+            f"{step_s * check.ratio * RETIME_MARGIN:.2f} s (the preset's step_s) would do, or re-time the plan)")
 
 
 def plan_within_speed(params: GaitParams, spec: Spec, target: tuple[float, float, float] | None = None,
                       retime: bool = False, on_progress: Callable[[float, float], Any] | None = None) -> Gait:
     """:func:`~.generator.plan_gait` with the speed limit: the plan, re-timed if ``retime`` (the gait's
-    ``params.step_s`` says the step it got). Raises :class:`InputError` on ``step_s`` when a joint is too fast
+    ``params.step_s`` says the step it got). Raises :class:`InputError` on the preset when a joint is too fast
     (without ``retime``, or when even the longest step allowed is)."""
     gait = plan_gait(params, spec, target, on_progress)
     for _ in range(RETIME_TRIES):
         check = speed_check(gait, spec)
         if check.ok:
-            return gait
+            return within_range(gait, spec)
         longest = RANGES["step_s"][1]
         if not retime or params.step_s >= longest:
-            raise InputError(too_fast_message(check, params.step_s), "step_s")
+            raise InputError(too_fast_message(check, params.step_s), "preset")
         params = replace(params, step_s=min(longest, round(params.step_s * check.ratio * RETIME_MARGIN, 3)))
         gait = plan_gait(params, spec, target, on_progress)
     check = speed_check(gait, spec)
     if not check.ok:
-        raise InputError(too_fast_message(check, params.step_s), "step_s")
+        raise InputError(too_fast_message(check, params.step_s), "preset")
+    return within_range(gait, spec)
+
+
+def within_range(gait: Gait, spec: Spec) -> Gait:
+    """``gait``, if every goal lies inside its joint's mechanical range; else :class:`InputError` on the preset
+    naming the joint (values each in range can still ask for the impossible together, e.g. a P gain of 1 whose
+    sag compensation would turn a knee past its stop)."""
+    goals = gait.goals
+    lower, upper = (np.array([joint_range(j, "mechanical")[k] for j in spec.joints]) for k in (0, 1))
+    beyond = np.maximum(lower - goals.min(axis=0), goals.max(axis=0) - upper)
+    worst = int(np.argmax(beyond))
+    if beyond[worst] > LIMIT_SLACK_RAD:
+        joint = spec.joints[worst]
+        got = goals[:, worst].max() if goals[:, worst].max() > upper[worst] else goals[:, worst].min()
+        span = f"{np.degrees(lower[worst]):.0f}..{np.degrees(upper[worst]):.0f}°"
+        raise InputError(f"expected goals inside every joint's mechanical range, got {joint.name} at "
+                         f"{np.degrees(got):.0f}° (range {span}; check the preset's p_gain and hip_lower_m)", "preset")
     return gait

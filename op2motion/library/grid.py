@@ -14,7 +14,7 @@ from typing import Sequence
 
 import numpy as np
 
-from op2motion.errors import InputError
+from op2motion.errors import InputError, ref
 from op2motion.posture.cost import PostureProblem
 from op2motion.robot.balance import COM_MODEL_FULL
 
@@ -52,14 +52,18 @@ def axis(start: float, stop: float, count: float, name: str) -> list[float]:
     return [float(v) for v in np.linspace(start, stop, int(count))]
 
 
+def _axes() -> str:
+    return ", ".join(ref(p) for p in ("hands", "supports", "br", "x", "y", "z"))
+
+
 def grid_jobs(hands: Sequence[str], supports: Sequence[str], brs: Sequence[float], xs: Sequence[float],
               ys: Sequence[float], zs: Sequence[float], com_model: str = COM_MODEL_FULL) -> list[Job]:
     """All combinations, each checked; raises :class:`InputError` for too many targets or colliding names."""
     total = len(hands) * len(supports) * len(brs) * len(xs) * len(ys) * len(zs)
     if total > MAX_TARGETS:
-        raise InputError(f"the grid has {total} targets, more than the cap of {MAX_TARGETS}", "grid")
+        raise InputError(f"expected at most {MAX_TARGETS} targets, got a grid of {total} ({_axes()})")
     if total == 0:
-        raise InputError("the grid is empty", "grid")
+        raise InputError(f"expected at least one target, got an empty grid ({_axes()})")
     jobs = [Job(h, s, float(b), (float(x), float(y), float(z)), com_model)
             for h, s, b, x, y, z in itertools.product(dict.fromkeys(hands), dict.fromkeys(supports), brs, xs, ys, zs)]
     names: dict[str, Job] = {}
@@ -69,5 +73,5 @@ def grid_jobs(hands: Sequence[str], supports: Sequence[str], brs: Sequence[float
         if other is not job:
             raise InputError(f"targets {list(other.target)} (br {other.br}) and {list(job.target)} (br {job.br}) "
                              f"get the same pose name {job.name!r}: space targets at least 1 mm and boundary "
-                             "ratios at least 0.01 apart", "grid")
+                             f"ratios at least 0.01 apart ({_axes()})")
     return jobs

@@ -302,11 +302,29 @@ def start_ticks(servo: np.ndarray, spec: Spec) -> list[int]:
     return [by_id[i] for i in IDS]
 
 
+def check_chain(action: ActionFile, page: int) -> None:
+    """Refuse (bad input on ``page``) a page whose ``next`` links lead back to a page already in the chain: the
+    framework would play it until stopped. Found from the links alone, before any playing."""
+    seen: list[int] = []
+    index = page
+    while 1 <= index < NUM_PAGES and index not in seen:
+        raw = action.raw(index)
+        if not raw.valid or raw.repeat == 0 or raw.stepnum == 0:
+            return
+        seen.append(index)
+        index = raw.next
+    if index in seen:
+        loop = " -> ".join(map(str, seen[seen.index(index):] + [index]))
+        raise InputError(f"page {page} never ends: its next links loop ({loop}); the robot would play it until "
+                         f"stopped", "page")
+
+
 def play(action: ActionFile | bytes, page: int, start_ticks: Sequence[int], stop_at: int | None = None,
          brake_at: int | None = None) -> Playback:
     """Play ``page`` of an action file from ``start_ticks`` (IDs 1-20) to its end; ``stop_at`` / ``brake_at`` call
     ``Stop()`` / ``Brake()`` just before that call."""
     player = ActionPlayer(action, start_ticks)
+    check_chain(player.action, page)
     player.start_page(page)
     goals, gains = [list(player.value)], [list(player.gain)]
     call = 0
