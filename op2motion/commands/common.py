@@ -75,18 +75,61 @@ def cable_warnings(poses: Sequence[Any], spec: Spec) -> list[str]:
             for pose in poses for v in limit_violations(pose.servo, spec, "cable-safe")]
 
 
+PLAIN_EVERY_S = 10.0      # where stderr is not a terminal (a log, CI), progress is a plain line this often at most
+
+
 def progress_enabled(args: argparse.Namespace) -> bool:
-    """Progress bars go to stderr when it is a terminal and the output is not JSON."""
+    """Progress bars go to stderr when it is a terminal and the output is not JSON (elsewhere: plain lines, see
+    :func:`ticker`)."""
     return sys.stderr.isatty() and not getattr(args, "json", False)
+
+
+class PlainTicker:
+    """Progress for a log: one line ``op2motion: DESC: N/TOTAL UNIT (S s)`` on stderr at most every
+    :data:`PLAIN_EVERY_S` seconds (a run shorter than that prints nothing); the tqdm calls the commands use."""
+
+    def __init__(self, desc: str, unit: str, total: float | None = None):
+        import time
+
+        self.desc, self.unit, self.total, self.n = desc, unit, total, 0.0
+        self._clock = time.monotonic
+        self._start = self._last = self._clock()
+        self._postfix = ""
+
+    def update(self, k: float = 1.0) -> None:
+        """``k`` more done; a line if the last was long enough ago."""
+        self.n += k
+        now = self._clock()
+        if now - self._last >= PLAIN_EVERY_S:
+            self._last = now
+            total = f"/{self.total:g}" if self.total else ""
+            print(f"op2motion: {self.desc}: {self.n:g}{total} {self.unit} ({now - self._start:.0f} s){self._postfix}",
+                  file=sys.stderr, flush=True)
+
+    def set_postfix(self, **values: Any) -> None:
+        """Shown after the count (e.g. the best cost)."""
+        self._postfix = "; " + ", ".join(f"{k} {v}" for k, v in values.items())
+
+    def __enter__(self) -> "PlainTicker":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+
+def ticker(args: argparse.Namespace, desc: str, unit: str, total: float | None = None, leave: bool = False) -> Any:
+    """A tqdm bar on a terminal, else a :class:`PlainTicker` (JSON output keeps stdout clean either way)."""
+    if progress_enabled(args):
+        from tqdm import tqdm
+
+        return tqdm(total=total, desc=desc, unit=unit, leave=leave)
+    return PlainTicker(desc, unit, total)
 
 
 @contextlib.contextmanager
 def progress(args: argparse.Namespace, desc: str, unit: str) -> Iterator[Callable[[float, float], None]]:
-    """A progress bar on stderr (see :func:`progress_enabled`) fed with (done, total), e.g. the simulated seconds of
-    a physics check."""
-    from tqdm import tqdm
-
-    with tqdm(total=None, desc=desc, unit=unit, leave=False, disable=not progress_enabled(args)) as bar:
+    """Progress on stderr (:func:`ticker`) fed with (done, total), e.g. the simulated seconds of a physics check."""
+    with ticker(args, desc, unit) as bar:
         def update(done: float, total: float) -> None:
             if bar.total != total:
                 bar.total = total

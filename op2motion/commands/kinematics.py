@@ -75,9 +75,10 @@ def cmd_fk(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion fk``."""
     from op2motion.kinematics.report import evaluate
 
-    angles, _, _ = angles_from(args, spec)
+    angles, _, pose = angles_from(args, spec)
     sp = vec3(args.sp, "sp") or (0.0, 0.0, 0.0)
-    report = evaluate(angles, spec, args.model, args.br, sp, math.radians(args.gamma))
+    double = pose is not None and Support.of(pose.support).is_double
+    report = evaluate(angles, spec, args.model, args.br, sp, math.radians(args.gamma), double)
     emit(args, report.as_dict(spec), report.human())
     return 0
 

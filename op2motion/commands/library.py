@@ -13,7 +13,7 @@ from op2motion.commands.common import (
     emit,
     number,
     output_path,
-    progress_enabled,
+    ticker,
     whole,
 )
 from op2motion.commands.posture import com_model_arg, solver_args
@@ -65,8 +65,6 @@ def register(sub: Any) -> None:
 
 def cmd_library_build(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion library build``."""
-    from tqdm import tqdm
-
     from op2motion.library.build import BuildSettings, Executor, build_library, check_workers
     from op2motion.library.grid import axis, grid_jobs
     from op2motion.posture.pso import PSOSettings
@@ -81,7 +79,7 @@ def cmd_library_build(args: argparse.Namespace, spec: Spec) -> int:
     jobs = grid_jobs(args.hands, args.supports, args.br, x, y, z, args.com_model)
     settings = BuildSettings(PSOSettings(args.particles, args.iters, seed=args.seed).validated(), args.restarts,
                              Validate(args.seconds, args.engine) if args.validate else None, args.robust)
-    with tqdm(total=len(jobs), desc="library", unit="pose", disable=not progress_enabled(args)) as bar:
+    with ticker(args, "library", "pose", len(jobs), leave=True) as bar:
         summary = build_library(jobs, spec, args.out, settings, args.workers, args.spec,
                                 on_done=lambda row: bar.update(), executor=executor)
     text = (f"{summary.targets} targets: {summary.solved} reached, {summary.failed} not, {summary.skipped} already "

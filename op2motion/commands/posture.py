@@ -18,7 +18,7 @@ from op2motion.commands.common import (
     output_path,
     png_path,
     pose_name,
-    progress_enabled,
+    ticker,
     vec3,
     warn,
     whole,
@@ -104,16 +104,13 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
 def _optimize(args: argparse.Namespace, spec: Spec, problem: PostureProblem, settings: PSOSettings, name: str,
               outputs: OutputSet, renderers: Renderers) -> int:
     """The work of :func:`cmd_optimize`, its figures drawn by ``renderers``."""
-    from tqdm import tqdm
-
     from op2motion.errors import CheckFailed
     from op2motion.figures.pose import outcome_cost_curve, outcome_pose_figure
     from op2motion.formats.posefile import pose_to_json
     from op2motion.workflow import Validate, solve
 
     target = problem.target
-    with tqdm(total=settings.iterations * (1 + args.restarts), desc="PSO", unit="it", leave=False,
-              disable=not progress_enabled(args)) as bar:
+    with ticker(args, "PSO", "it", settings.iterations * (1 + args.restarts)) as bar:
         outcome = solve(problem, spec, settings, restarts=args.restarts, refine=not args.no_refine,
                         validate=Validate(args.seconds, args.engine) if args.validate else None,
                         on_iteration=lambda best: (bar.update(), bar.set_postfix(cost=f"{best:.4f}")))

@@ -17,10 +17,8 @@ from op2motion.figures.draw import PoseFigure, TitleBlock, render_cost_curve, re
 from op2motion.kinematics import forward
 from op2motion.kinematics.report import PoseReport, evaluate
 from op2motion.physics import RunReport
-from op2motion.robot.balance import polygon_margin
 from op2motion.robot.joints import BookAngles
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import SIDES, Support
 from op2motion.workflow import Outcome
 
 PB_PSI_NOTE = "projection model drawn with psi = 0 (it has no transverse rotation)"
@@ -38,19 +36,13 @@ def verdict_of(validation: RunReport | None, metrics: Mapping[str, Any] | None =
     return "not checked in physics", None
 
 
-def double_support_margin_m(report: PoseReport) -> float:
-    """Margin [m] of the full-inertia CoM to the convex hull of both soles (double support)."""
-    hull = Support.DOUBLE.polygon({s: report.points.foot_corners(s)[0] for s in SIDES})
-    return float(polygon_margin(report.com_full[:2], hull)[0])
-
-
 def _numbers(report: PoseReport, double: bool = False) -> list[str]:
     mm = lambda v: f"{v * 1000:+6.1f} mm"  # noqa: E731
     com, full = report.com, report.com_full
     if double:
         return [f"CoM lumped (book)  ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m",
                 f"CoM full inertia   ({full[0]:+.3f}, {full[1]:+.3f}, {full[2]:.3f}) m   margin "
-                f"{mm(double_support_margin_m(report))}   (to the hull of both soles)"]
+                f"{mm(report.double_support_margin_m)}   (to the hull of both soles)"]
     return [f"CoM lumped (book)  ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m   margin "
             f"{mm(report.stability_margin_m)}",
             f"CoM full inertia   ({full[0]:+.3f}, {full[1]:+.3f}, {full[2]:.3f}) m   margin "
@@ -91,7 +83,7 @@ def pose_figure(name: str, angles: BookAngles, spec: Spec, drawing: Drawing = Dr
                                None if ghost is None else forward(ghost, spec, model), note, double))
     verdict, ok = verdict_of(validation, metrics)
     support = "double" if double else angles.support
-    margins = ({"margin_full_double_m": double_support_margin_m(reports[0])} if double else
+    margins = ({"margin_full_double_m": reports[0].double_support_margin_m} if double else
                {"margin_lumped_m": reports[0].stability_margin_m, "margin_full_m": reports[0].stability_margin_full_m})
     block = TitleBlock(f"{name}: {spec.name}, {support} support", [*drawing.lines, *_numbers(reports[0], double)],
                        verdict, ok, margins)

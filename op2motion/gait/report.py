@@ -17,6 +17,9 @@ from op2motion.physics import CheckReport, EngineReport, Pushes, RunReport
 from op2motion.physics.report import OPPOSITE
 from op2motion.robot.spec import Spec
 
+STILL_M = 1e-3       # a plan that ends this close to where it started walks in place: its steady speed is 0 (the
+#                      sway alone would show one over a short window)
+
 
 def gait_summary(gait: Gait) -> dict[str, Any]:
     """The plan's figures: steps, durations, distance and speed, ZMP margin, CoM height, footsteps, parameters."""
@@ -28,8 +31,8 @@ def gait_summary(gait: Gait) -> dict[str, Any]:
     return {
         "preset": gait.params.name, "steps": len(gait.plan.steps), "duration_s": round(gait.duration_s, 3),
         "walking_s": round(gait.walking_s, 3), "distance_m": round(distance, 4),
-        "planned_speed_mps": round(float(np.hypot(*(steady[1] - steady[0]))) /
-                                   max(speed_window[1] - speed_window[0], 1e-9), 4),
+        "planned_speed_mps": 0.0 if distance < STILL_M else round(
+            float(np.hypot(*(steady[1] - steady[0]))) / max(speed_window[1] - speed_window[0], 1e-9), 4),
         "end_pose": {"x_m": round(float(end[0]), 4), "y_m": round(float(end[1]), 4),
                      "yaw_deg": round(math.degrees(float(end[2])), 2)},
         "zmp_margin_min_m": round(float(gait.zmp_margin[worst]), 4),

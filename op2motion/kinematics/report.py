@@ -9,7 +9,7 @@ import numpy as np
 
 from op2motion.errors import InputError, LimitViolation
 from op2motion.kinematics import BodyPoints, forward
-from op2motion.robot.balance import COM_MODEL_FULL, check_br, stability_margin
+from op2motion.robot.balance import COM_MODEL_FULL, check_br, polygon_margin, stability_margin
 from op2motion.robot.joints import (
     BookAngles,
     book_to_servo,
@@ -18,6 +18,7 @@ from op2motion.robot.joints import (
     servo_to_ticks,
 )
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
 
 
 def _vec(v: np.ndarray) -> list[float]:
@@ -41,6 +42,13 @@ class PoseReport:
     book: BookAngles
     ticks: dict[str, int] | None
     limit_violations: list[LimitViolation]
+    double: bool = False
+
+    @property
+    def double_support_margin_m(self) -> float:
+        """Margin [m] of the full-inertia CoM to the convex hull of both soles (a pose standing on both feet)."""
+        hull = Support.DOUBLE.polygon({s: self.points.foot_corners(s)[0] for s in ("left", "right")})
+        return float(polygon_margin(self.com_full[:2], hull)[0])
 
     @property
     def swing_foot_min_z(self) -> float:
@@ -49,8 +57,10 @@ class PoseReport:
 
     def as_dict(self, spec: Spec) -> dict[str, Any]:
         """JSON-ready dict (the ``fk --json`` keys)."""
+        double = {"frame": f"{self.support} sole", "double_support_margin_m": self.double_support_margin_m}
         return {
-            "model": self.model, "support": self.support, "points": self.points.as_dict(0), "com": _vec(self.com),
+            "model": self.model, "support": "double" if self.double else self.support,
+            **(double if self.double else {}), "points": self.points.as_dict(0), "com": _vec(self.com),
             "com_model": "book", "com_full": _vec(self.com_full),
             "stability_margin_full_m": self.stability_margin_full_m,
             "left_hand": _vec(self.points.point("left_hand")[0]),
@@ -64,24 +74,29 @@ class PoseReport:
     def human(self) -> str:
         """A short multi-line text summary."""
         fmt = lambda v: "(" + ", ".join(f"{x:+.4f}" for x in v) + ")"  # noqa: E731
+        margin = (f"stability margin {self.double_support_margin_m * 1000:+.1f} mm full inertia, to the hull of both "
+                  f"soles (positive = inside)" if self.double else
+                  f"stability margin {self.stability_margin_m * 1000:+.1f} mm lumped, "
+                  f"{self.stability_margin_full_m * 1000:+.1f} mm full inertia (br {self.br}; positive = inside)")
         lines = [
-            f"model {self.model.upper()}, {self.support} support",
+            f"model {self.model.upper()}, " + (f"double support (frame: the {self.support} sole)" if self.double
+                                               else f"{self.support} support"),
             f"centre of mass   {fmt(self.com)} m  [lumped, the book's masses]",
             f"                 {fmt(self.com_full)} m  [full inertia, the spec's link inertials]",
-            f"stability margin {self.stability_margin_m * 1000:+.1f} mm lumped, "
-            f"{self.stability_margin_full_m * 1000:+.1f} "
-            f"mm full inertia (br {self.br}; positive = inside)",
+            margin,
             f"left hand        {fmt(self.points.point('left_hand')[0])} m",
             f"right hand       {fmt(self.points.point('right_hand')[0])} m",
-            f"swing foot lowest corner z {self.swing_foot_min_z * 1000:+.2f} mm",
         ]
+        if not self.double:
+            lines.append(f"swing foot lowest corner z {self.swing_foot_min_z * 1000:+.2f} mm")
         lines += [f"warning: {v.describe()}" for v in self.limit_violations]
         return "\n".join(lines)
 
 
 def evaluate(angles: BookAngles, spec: Spec, model: str = "dh", br: float = 1.0,
-             sp: Sequence[float] = (0.0, 0.0, 0.0), gamma: float = 0.0) -> PoseReport:
-    """Forward kinematics and balance of the first pose of ``angles``."""
+             sp: Sequence[float] = (0.0, 0.0, 0.0), gamma: float = 0.0, double: bool = False) -> PoseReport:
+    """Forward kinematics and balance of the first pose of ``angles`` (``double``: standing on both feet, measured
+    in the support sole's frame, its margin to the hull of both soles)."""
     one = angles.row(0)
     points = forward(one, spec, model, sp, gamma)
     com = points.com[:, 0].copy()
@@ -95,4 +110,5 @@ def evaluate(angles: BookAngles, spec: Spec, model: str = "dh", br: float = 1.0,
     except InputError:  # an angle beyond ±180° has no tick; limit_violations names it
         ticks = None
     violations = limit_violations(servo, spec, "mechanical") + limit_violations(servo, spec, "cable-safe")
-    return PoseReport(model, one.support, points, com, br, margin, full, margin_full, servo, one, ticks, violations)
+    return PoseReport(model, one.support, points, com, br, margin, full, margin_full, servo, one, ticks, violations,
+                      double)

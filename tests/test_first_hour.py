@@ -1,0 +1,36 @@
+"""A first hour without surprises: what a new user meets (round two): a double-support pose measured on both feet,
+progress in a log, a walk in place that does not claim a speed."""
+
+from __future__ import annotations
+
+import json
+
+from helpers import pose_path, run_cli
+
+from op2motion.commands import common
+
+
+def test_fk_of_a_double_support_pose_measures_it_on_both_feet(capsys):
+    code, out, _ = run_cli(capsys, "fk", "--pose", pose_path("walkready"), "--json")
+    doc = json.loads(out)
+    assert code == 0 and doc["support"] == "double" and doc["double_support_margin_m"] > 0.03
+    code, text, _ = run_cli(capsys, "fk", "--pose", pose_path("walkready"))
+    assert "double support" in text and "hull of both soles" in text and "swing foot" not in text
+
+
+def test_progress_in_a_log_is_a_plain_line_now_and_then(capsys, monkeypatch):
+    clock = iter([1.0, common.PLAIN_EVERY_S + 1.0, common.PLAIN_EVERY_S + 2.0])
+    ticker = common.PlainTicker("physics", "s", 5.0)
+    monkeypatch.setattr(ticker, "_clock", lambda: next(clock))
+    ticker._start = ticker._last = 0.0
+    ticker.update(1.0)                                       # 1 s after the start: quiet
+    ticker.update(1.0)                                       # past PLAIN_EVERY_S: one line
+    ticker.update(1.0)                                       # 1 s after that line: quiet
+    err = capsys.readouterr().err
+    assert err == f"op2motion: physics: 2/5 s ({common.PLAIN_EVERY_S + 1:.0f} s)\n"
+
+
+def test_a_walk_in_place_has_no_steady_speed(capsys):
+    code, out, _ = run_cli(capsys, "walk", "--target", "0", "0", "0", "--json")
+    doc = json.loads(out)
+    assert code == 0 and doc["distance_m"] == 0.0 and doc["planned_speed_mps"] == 0.0
