@@ -178,7 +178,7 @@ def render_poses(figures: Sequence[PoseFigure], spec: Spec, block: TitleBlock) -
             setter(centre[k] - half, centre[k] + half)
         ax3.set_box_aspect((1, 1, 1))
         ax3.view_init(elev=18, azim=-135)
-        ticks = np.round(np.linspace(-half, half, 3) + 0.0, 2)
+        ticks = np.array([-0.6, 0.0, 0.6]) * half     # away from the box's corners, where two axes' labels meet
         ax3.set_xticks(np.round(centre[0] + ticks, 2))
         ax3.set_yticks(np.round(centre[1] + ticks, 2))
         ax3.set_zticks(np.round(centre[2] + ticks, 2))
@@ -207,9 +207,10 @@ def render_poses(figures: Sequence[PoseFigure], spec: Spec, block: TitleBlock) -
 
 def render_cost_curve(attempts: Sequence[Sequence[float] | np.ndarray],
                       hand_errors: Sequence[Sequence[float] | np.ndarray], threshold_m: float, title: str,
-                      chosen: int) -> bytes:
+                      chosen: int, final: tuple[float, float, str] | None = None) -> bytes:
     """The PSO's best cost after each iteration for every attempt (book fig. 2.43), log scale, with the hand
-    error of the best particle and the reach threshold; ``chosen`` marks the attempt that was kept."""
+    error of the best particle and the reach threshold; ``chosen`` marks the attempt that was kept; ``final``
+    (cost, hand error [m], method) is the result after the refinement, drawn one step after the last iteration."""
     plt = _pyplot()
     fig, (ax, ax2) = plt.subplots(1, 2, figsize=(13, 4.6))
     for k, (history, errors) in enumerate(zip(attempts, hand_errors)):
@@ -219,6 +220,11 @@ def render_cost_curve(attempts: Sequence[Sequence[float] | np.ndarray],
         ax.semilogy(it, np.maximum(np.asarray(history, dtype=float), 1e-9), label=label, **style)
         ax2.semilogy(np.arange(1, len(errors) + 1), np.maximum(np.asarray(errors, dtype=float) * 1000, 1e-6),
                      label=label, **style)
+    if final is not None and attempts:
+        after = len(attempts[chosen]) + 1
+        label = f"after refinement ({final[2]})"
+        ax.semilogy([after], [max(final[0], 1e-9)], marker="*", ms=12, color="k", ls="none", label=label)
+        ax2.semilogy([after], [max(final[1] * 1000, 1e-6)], marker="*", ms=12, color="k", ls="none", label=label)
     ax.axhline(100, color="grey", ls=":", lw=1)
     ax.text(1, 100, " a penalty (100) is active above this line", va="bottom", fontsize=8, color="grey")
     ax.set_xlabel("iteration")
@@ -238,12 +244,14 @@ def render_cost_curve(attempts: Sequence[Sequence[float] | np.ndarray],
     return _png(fig)
 
 
-def margin_panel_png(fig: Any, ax: Any, t: np.ndarray, margin_m: np.ndarray, colour: str) -> bytes:
-    """Draw the ZMP margin [m] against time [s] (in mm) on ``ax`` as the last panel, and the figure's PNG."""
+def margin_panel_png(fig: Any, ax: Any, t: np.ndarray, margin_m: np.ndarray, colour: str,
+                     right: float | None = None) -> bytes:
+    """Draw the ZMP margin [m] against time [s] (in mm) on ``ax`` as the last panel, and the figure's PNG
+    (``right``: the share of the width the panels keep, leaving the rest for a legend beside them)."""
     ax.plot(t, margin_m * 1000, color=colour, lw=1.0)
     ax.axhline(0.0, color="k", lw=0.6)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("ZMP margin [mm]")
     ax.grid(alpha=0.3)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.0, right or 1.0, 1.0))
     return _png(fig)

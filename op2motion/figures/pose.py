@@ -65,6 +65,9 @@ class Drawing:
     double: bool = False
 
 
+MODEL_LABELS = {"dh": "D-H model", "pb": "projection model"}
+
+
 def pose_figure(name: str, angles: BookAngles, spec: Spec, drawing: Drawing = Drawing(),
                 validation: RunReport | None = None, metrics: Mapping[str, Any] | None = None
                 ) -> tuple[bytes, dict[str, Any], list[PoseReport]]:
@@ -78,15 +81,18 @@ def pose_figure(name: str, angles: BookAngles, spec: Spec, drawing: Drawing = Dr
             note, shown = PB_PSI_NOTE, replace(angles, psi=np.zeros_like(angles.psi))
         report = evaluate(shown, spec, model, br)
         reports.append(report)
-        label = {"dh": "D-H model", "pb": "projection model"}[model]
+        label = MODEL_LABELS[model]
         rows.append(PoseFigure(report.points, label, report.com, report.com_full, br, target,
                                None if ghost is None else forward(ghost, spec, model), note, double))
     verdict, ok = verdict_of(validation, metrics)
     support = "double" if double else angles.support
     margins = ({"margin_full_double_m": reports[0].double_support_margin_m} if double else
                {"margin_lumped_m": reports[0].stability_margin_m, "margin_full_m": reports[0].stability_margin_full_m})
-    block = TitleBlock(f"{name}: {spec.name}, {support} support", [*drawing.lines, *_numbers(reports[0], double)],
-                       verdict, ok, margins)
+    others = [f"{MODEL_LABELS[r.model]}: CoM lumped ({r.com[0]:+.3f}, {r.com[1]:+.3f}, {r.com[2]:.3f}) m"
+              + ("" if double else f"   margin {r.stability_margin_m * 1000:+6.1f} mm") for r in reports[1:]]
+    first = [f"{MODEL_LABELS[reports[0].model]}:"] if len(reports) > 1 else []
+    block = TitleBlock(f"{name}: {spec.name}, {support} support",
+                       [*drawing.lines, *first, *_numbers(reports[0], double), *others], verdict, ok, margins)
     png, drawn = render_poses(rows, spec, block)
     return png, drawn, reports
 
@@ -108,4 +114,5 @@ def outcome_cost_curve(outcome: Outcome, name: str) -> bytes:
     r = outcome.result
     attempts = r.attempt_pso or (r.pso,)
     return render_cost_curve([a.history for a in attempts], [a.hand_error_history for a in attempts], r.tolerance_m,
-                             f"PSO cost, {name} ({len(attempts)} attempt(s))", r.chosen_attempt)
+                             f"PSO cost, {name} ({len(attempts)} attempt(s))", r.chosen_attempt,
+                             (float(r.terms.total[0]), r.hand_error_m, r.method))
