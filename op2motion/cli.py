@@ -38,8 +38,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         args = build_parser().parse_args(argv)
         parser = args.parser
-        from op2motion.commands.common import check_paths
+        from op2motion.commands.common import check_inert, check_paths
 
+        check_inert(parser, args)
         check_paths(parser, args)
         spec = load_spec(args.spec)
         return int(args.func(args, spec))

@@ -72,6 +72,11 @@ CASES = [
     (["walk", "--plot", "w.jpg"], ".png"),
     (["walk", "--out", "w.csv", "w.csv"], "another output"),
     (["walk", "--preset", f"{IN}/unreachable.toml"], "--preset"),
+    (["motion", "play", str(STOCK), "--page", "9", "--push", "10"], "--validate"),
+    (["motion", "plan", INIT, STAND, "--durations", "1", "--engine", "mujoco"], "--validate"),
+    (["motion", "plan", INIT, STAND, "--durations", "1", "--planner", "none", "--seed", "3"], "--seed"),
+    (["optimize", "--seconds", "3"], "--validate"),
+    (["library", "build", "--robust", "--out", "lib"], "--validate"),
     # endless or oversized files
     (["motion", "play", "/dev/zero", "--page", "4"], "MiB"),
     (["validate", "/dev/zero"], "MiB"),

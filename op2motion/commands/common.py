@@ -250,6 +250,22 @@ def _values(value: Any) -> list[str]:
     return [str(v) for v in value] if isinstance(value, (list, tuple)) else [str(value)]
 
 
+#: Flags that only act on a physics check: typed without ``--validate`` they would do nothing.
+VALIDATE_ONLY = ("push", "engine", "seconds", "trials", "robust", "open_loop", "perturb_deg")
+
+
+def check_inert(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Refuse (bad input, naming the flag) a flag given a value that cannot act: a physics option without
+    ``--validate``, a planner seed with ``--planner none``."""
+    if getattr(args, "validate", None) is False:
+        for dest in VALIDATE_ONLY:
+            if hasattr(args, dest) and getattr(args, dest) != parser.get_default(dest):
+                raise InputError(f"expected --validate with {ref(dest)} (it sets the physics check)", dest)
+    if getattr(args, "planner", None) == "none" and getattr(args, "seed", 0) != parser.get_default("seed"):
+        raise InputError(f"expected {ref('planner')} rrt with {ref('seed')} (the seed drives the path planner)",
+                         "seed")
+
+
 def check_paths(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """Refuse (bad input, naming the flag) an output file that is also an input file or another output of the same
     command: writing it would destroy the input or one of the two results."""
