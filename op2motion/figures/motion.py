@@ -24,7 +24,7 @@ def _joint_panel(ax: Any, t: np.ndarray, values: np.ndarray, spec: Spec, label: 
     """One curve per joint, each its own colour (tab20 and a dash for the 20th), labelled by joint name."""
     import matplotlib
 
-    colours = matplotlib.colormaps["tab20"].colors
+    colours = matplotlib.colormaps["tab20"](np.arange(20))
     for j, name in enumerate(spec.joint_names):
         ax.plot(t, values[:, j], color=colours[j % len(colours)], lw=0.9, ls="-" if j < len(colours) else "--",
                 label=name)
