@@ -46,7 +46,7 @@ def test_five_centimetres_each_way_from_walkready_and_back(spec, hand, axis):
     assert np.abs(move.speeds).max() <= 0.5 * spec.servo.no_load_speed_rad_s + 1e-9
 
 
-@pytest.mark.parametrize("axis", ["+X", "+Y", "-Y"])
+@pytest.mark.parametrize("axis", ["+X", "-X", "+Y", "-Y"])
 def test_from_the_straight_legged_standing_pose(spec, axis):
     move = _move(spec, "standing", "right", AXES[axis], back=False)
     assert move.deviation_m.max() <= LINE_TOL_M and move.com_margin_m.min() >= LINE_MARGIN_M

@@ -11,6 +11,8 @@ frame measured on the D-H chain, the Jacobian by forward differences with all th
 * the hand point [m] (weight :data:`W_HAND`);
 * on both feet, the other sole's four corners [m] where they started (:data:`W_FEET`);
 * the full-inertia CoM's x, y [m] where it started (:data:`W_COM`);
+* a knee that started straight held straight (:data:`W_STRAIGHT_KNEE`): there the leg IK turns a sink of a
+  fraction of a millimetre into degrees of knee, a jolt the servos cannot follow;
 * links apart: how far the least clearance between the collision shapes is below :data:`CLEAR_TASK_M`
   (:data:`W_CLEAR`);
 * the torso's x and z axes where they started (:data:`W_TORSO`), and optionally the forearm's direction (the
@@ -41,18 +43,21 @@ W_COM = 0.01
 W_TORSO = 0.005
 W_POINT = 0.01
 W_CLEAR = 1.0
+W_STRAIGHT_KNEE = 1e-2      # per rad² that a knee which started straight bends
+STRAIGHT_KNEE_RAD = 0.09    # a knee within 5° of straight started straight
 CLEAR_TASK_M = 0.008        # links closer than this push apart (the check after wants SELF_CLEARANCE_M)
 W_POSTURE = np.array([1e-3, 1e-3, 1e-1] + [1e-4] * 3 + [1e-6] * 3)  # per m² of torso shift (rising and sinking
 #                            most), rad² of its turn, rad² of the arm
 MAX_REACH_SHARE = 0.985     # a bent leg stretches to at most this share of its length (the knee stays ~20° bent)
 DAMPING = 1e-7
-SOLVE_TOL_M = 2e-5
+SOLVE_TOL_M = 1e-4
 MAX_ITERATIONS = 15
 FD_STEP = 1e-6                # [m] for the torso shift, [rad] for its rotation and the arm
 ROW_STEP = np.array([0.001] * 3 + [0.002] * 3 + [0.023] * 3)  # per 8 ms row at most: torso [m], its turn and
 #                            the arm [rad] (0.25 m/s, 2.5 rad/s, 2.9 rad/s: half the MX-28's no-load speed)
 LIMIT_MARGIN_RAD = 0.035      # joints stay 2° inside their mechanical range
 ARM_JOINTS = ("sho_pitch", "sho_roll", "el")
+MIN_GAIN = 1e-3             # a step that lowers the weighted error by less than this share ends the row's solve
 
 
 def rotation(vectors: np.ndarray) -> np.ndarray:
@@ -95,6 +100,8 @@ class WholeBodyIk:
             share = float(np.linalg.norm(ankle - leg.hip)) / (leg.thigh + leg.calf)
             self.reach[leg.side] = max(share, MAX_REACH_SHARE)
         moved = np.concatenate([self.arm] + [np.array(leg.index) for leg in self.legs])
+        knees = np.array([spec.joint_names.index(f"{leg.side[0]}_knee") for leg in self.legs])
+        self._straight_knees = knees[np.abs(self.start[knees]) < STRAIGHT_KNEE_RAD]
         hard = np.array([joint_range(spec.joints[i], "mechanical") for i in moved])
         self._moved = moved
         self.lower = np.minimum(hard[:, 0] + LIMIT_MARGIN_RAD, self.start[moved])
@@ -137,13 +144,13 @@ class WholeBodyIk:
         return {"hand": hand, "point": forearm / np.linalg.norm(forearm, axis=1, keepdims=True),
                 "feet": data[self._foot_rows].transpose(2, 0, 1).reshape(len(q), -1),
                 "com": points.full()[:2].T, "torso": np.concatenate([axes[0].T, axes[2].T], axis=1),
-                "close": np.maximum(CLEAR_TASK_M - clearance, 0.0)[:, None]}
+                "close": np.maximum(CLEAR_TASK_M - clearance, 0.0)[:, None], "knees": q[:, self._straight_knees]}
 
     def _stack(self, f: dict[str, np.ndarray], hand: np.ndarray, point: np.ndarray | None) -> tuple[np.ndarray,
                                                                                                     np.ndarray]:
         """Task values (N, m) and their targets (m,), each scaled by the square root of its weight."""
         parts = [(f["hand"], hand, W_HAND), (f["com"], self.com0, W_COM), (f["torso"], self.torso0, W_TORSO),
-                 (f["close"], np.zeros(1), W_CLEAR)]
+                 (f["close"], np.zeros(1), W_CLEAR), (f["knees"], self.start[self._straight_knees], W_STRAIGHT_KNEE)]
         if self.double:
             parts.append((f["feet"], self.feet0, W_FEET))
         if point is not None:
@@ -178,9 +185,12 @@ class WholeBodyIk:
                 trial = np.clip(x + np.linalg.solve(normal + damping * np.eye(n), rhs), low, high)
                 trial_cost = self._cost(trial, hand, point)
                 if trial_cost < cost:
+                    gain = (cost - trial_cost) / max(cost, 1e-30)
                     x, cost, damping = trial, trial_cost, max(damping / 3.0, DAMPING)
                     break
                 damping *= 10.0
             else:
+                break
+            if gain < MIN_GAIN:                       # stalled (at a speed bound or a limit): this row is done
                 break
         return x, float(np.linalg.norm(self.features(self.servo(x[None]))["hand"][0] - hand))
