@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -52,6 +53,14 @@ def run_cli(capsys, *argv: str) -> tuple[int, str, str]:
     code = main([str(a) for a in argv])
     out, err = capsys.readouterr()
     return code, out, err
+
+
+PROGRESS_LINE = re.compile(r"^op2motion: [\w ]+: [\d.]+(/[\d.]+)? \S+ \(\d+ s\)(; .*)?$")
+
+
+def without_progress(err: str) -> str:
+    """stderr less the plain progress lines a long run prints in a log (``op2motion: PSO: 40/300 it (10 s)``)."""
+    return "".join(line for line in err.splitlines(keepends=True) if not PROGRESS_LINE.match(line.rstrip("\n")))
 
 
 def page_last_step_ticks(data: bytes, page: int) -> np.ndarray:

@@ -10,7 +10,7 @@ import os
 from pathlib import Path
 
 import pytest
-from helpers import ROOT, STOCK, pose_path, run_cli
+from helpers import ROOT, STOCK, pose_path, run_cli, without_progress
 
 from op2motion.formats import actionlayout as layout
 
@@ -118,6 +118,7 @@ def _run(capsys, tmp_path, monkeypatch, argv):
     monkeypatch.chdir(work)
     before = _snapshot(tmp_path, ROOT / "poses")
     code, out, err = run_cli(capsys, *[a.replace(IN, str(tmp_path / "in")) for a in argv])
+    err = without_progress(err)
     assert _snapshot(tmp_path, ROOT / "poses") == before and not os.listdir(work)   # nothing written or changed
     assert err.count("\n") == 1 and err.startswith("op2motion: error: ") and "Traceback" not in err, err
     assert err.count("op2motion") == 1, err                                           # the program named once

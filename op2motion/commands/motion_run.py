@@ -76,7 +76,7 @@ def finish(args: argparse.Namespace, spec: Spec, trajectory: Trajectory, title: 
     from op2motion.figures.motion import render_motion
     from op2motion.fileio import OutputSet
     from op2motion.formats.tables import goals_csv
-    from op2motion.motion.checks import check_trajectory
+    from op2motion.motion.checks import check_trajectory, in_sole_frame
 
     paths = {k: getattr(args, k) for k in ("plot", "csv") if getattr(args, k)}
     outputs = OutputSet({**paths, **({"out": motion_file[0]} if motion_file else {})})
@@ -84,7 +84,7 @@ def finish(args: argparse.Namespace, spec: Spec, trajectory: Trajectory, title: 
     if unreachable:
         raise CheckFailed(f"{title}: {unreachable}")
     report = _physics(args, trajectory, spec)
-    checks = check_trajectory(trajectory, spec, foot=report.run.flat_foot if report else None)
+    checks = check_trajectory(trajectory, spec)      # one frame, the fixed foot's, with or without physics
     result["checks"] = checks.summary()
     if report is not None:
         result["physics"] = {"engines": {e: r.as_dict() for e, r in report.engines.items()}, "agree": report.agree,
@@ -92,7 +92,10 @@ def finish(args: argparse.Namespace, spec: Spec, trajectory: Trajectory, title: 
     if args.plot:
         verdict = "not checked in physics" if report is None else " | ".join(
             f"{e}: {_verdict(r)}" for e, r in report.engines.items())
-        cop = report.run.motion.cop_track if report is not None and report.run.motion else None
+        cop = None
+        if report is not None and report.run.motion:
+            cop = in_sole_frame(report.run.motion.cop_track, trajectory.goals[0], report.run.flat_foot,
+                                checks.fixed_foot, spec)
         outputs.put("plot", figure(verdict) if figure else render_motion(trajectory, checks, spec, title, cop,
                                                                           verdict))
     if args.csv:

@@ -19,11 +19,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
 from op2motion.errors import CheckFailed
+from op2motion.kinematics import forward
 from op2motion.kinematics.dh import MATRIX_BELOW, forward_dh_frames
 from op2motion.kinematics.shapes import self_clearance, shape_set
 from op2motion.model.dynamics import dynamics_for
@@ -198,3 +199,17 @@ def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | Non
     margin = np.array([polygon_margin(zmp[i], polygons[i])[0] for i in range(k)])
     least, links = clearance(goals, spec)
     return MotionChecks(side, least, tuple(links), com, zmp, margin, tuple(polygons), ratio, torque, tuple(joint))
+
+
+def in_sole_frame(track: Sequence[Sequence[float]], start: np.ndarray, measured: str, wanted: str,
+                  spec: Spec) -> list[tuple[float, float, float]]:
+    """Rows (time [s], x [m], y [m]) measured in the ``measured`` sole's frame, in the ``wanted`` sole's frame
+    instead, the two soles placed as the start pose ``start`` (20,) [rad] has them (D-H chain)."""
+    if measured == wanted:
+        return [tuple(row) for row in track]                  # type: ignore[misc]
+    corners = forward(servo_to_book(np.atleast_2d(start), wanted, spec), spec, "dh").foot_corners(measured)[0]
+    centre = corners[:, :2].mean(axis=0)
+    forward_edge = (corners[0, :2] + corners[1, :2]) / 2 - (corners[2, :2] + corners[3, :2]) / 2
+    yaw = float(np.arctan2(forward_edge[1], forward_edge[0]))
+    turn = np.array([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])
+    return [(float(t), *(turn @ np.array([x, y]) + centre)) for t, x, y in track]
