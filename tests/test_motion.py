@@ -179,3 +179,14 @@ def test_stock_page_played_in_physics(spec):
     verdict = check(played.trajectory.schedule(spec), spec, ("mujoco",)).run
     assert verdict.stable, verdict.reasons
     assert not action.is_empty(15)
+
+
+@pytest.mark.physics
+@pytest.mark.parametrize("name", sorted(p.stem for p in (POSES / "motions").glob("*.json")))
+def test_every_example_motion_stands_in_both_engines(spec, name):
+    from op2motion.motion.pipeline import plan_motion
+    from op2motion.physics import check
+
+    report = check(plan_motion(read_motion(POSES / "motions" / f"{name}.json", spec), spec).schedule(spec), spec,
+                   ("pybullet", "mujoco"))
+    assert report.agree and report.stable, [e.run.reasons for e in report.engines.values()]

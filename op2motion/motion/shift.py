@@ -30,7 +30,8 @@ SHIFT_TOL_M = 1e-4             # the centre of mass lands this close to its targ
 LIFT_S = 1.2                   # the time lifting the swing foot off the floor takes [s]
 LIFT_CLEAR_M = 0.015           # ... to this height of its lowest corner above the floor, after the sag [m]
 TOUCH_CLEAR_M = 0.003          # coming down, the foot first stops this high, then takes the load slowly [m]
-SHIFT_EDGE_M = 0.025           # a weight shift aims at least this far inside the sole's edges [m]
+SHIFT_EDGE_M = 0.035           # a weight shift aims at least this far inside the sole's edges [m]: at 25 mm the
+#                                lean onto book_2_44 (CoM 21 mm out of the ankle) tipped over the outer edge
 LIFT_ABDUCT_RAD = 0.1          # the lifted leg turns this far outward at the hip (6°, about 20 mm at the foot)
 MAX_FOLD_RAD = 1.2             # a lift folds the knee by at most twice this
 MAX_LEAN_RAD = 0.6             # a shift needs less than this (34°); more means the target is out of reach
@@ -106,10 +107,14 @@ def settled_swing_heights(goals: np.ndarray, side: str, spec: Spec) -> np.ndarra
 
 
 def _inside(xy: np.ndarray, side: str, spec: Spec) -> np.ndarray:
-    """``xy`` [m] in the ``side`` sole's frame, moved to at least :data:`SHIFT_EDGE_M` inside its edges."""
+    """``xy`` [m] in the ``side`` sole's frame, moved to at least :data:`SHIFT_EDGE_M` inside its edges (to the
+    middle between two edges closer together than twice that)."""
     front, back, left, right = spec.sole_extents(side)
-    return np.array([np.clip(xy[0], -back + SHIFT_EDGE_M, front - SHIFT_EDGE_M),
-                     np.clip(xy[1], -right + SHIFT_EDGE_M, left - SHIFT_EDGE_M)])
+    out = []
+    for v, lo, hi in ((xy[0], -back + SHIFT_EDGE_M, front - SHIFT_EDGE_M), (xy[1], -right + SHIFT_EDGE_M,
+                                                                           left - SHIFT_EDGE_M)):
+        out.append((lo + hi) / 2.0 if lo > hi else float(np.clip(v, lo, hi)))
+    return np.array(out)
 
 
 def _folded(spec: Spec, servo: np.ndarray, side: str, fold: np.ndarray) -> np.ndarray:
