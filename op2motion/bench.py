@@ -102,6 +102,39 @@ def _motion_figures(spec: Spec, action: ActionFile | None, repeat: int) -> dict[
             "check_motion_stands": bool(out["v"].stable)}
 
 
+BENCH_ARM_SWING_DEG = {"r_sho_pitch": (69.0, -178.0), "r_sho_roll": (-63.0, -51.0), "r_el": (-29.0, -24.0)}
+
+
+def _planning_figures(spec: Spec, action: ActionFile | None, repeat: int) -> dict[str, Any]:
+    """``route_plan_ms``: planning around a collision (the right arm swung from in front of the hip to behind the
+    shoulder, from the stock init pose; the straight line puts the elbow through the hip); ``line_move_ms``: the
+    right hand 5 cm forward in 1 s from the stock walk-ready pose (page 9) with the whole-body IK (126 rows).
+    Checks: the least clearance along the planned rows, the hand's largest distance from its line. None without
+    the stock action file."""
+    if action is None:
+        return {"route_plan_ms": None, "line_move_ms": None, "check_route_clearance_m": None,
+                "check_line_deviation_m": None}
+    from op2motion.motion.cartesian import LineRequest, line_move
+    from op2motion.motion.checks import clearance
+    from op2motion.motion.planner import plan
+    from op2motion.motion.waypoint import Waypoint
+    from op2motion.robot.pose import Pose
+
+    init = action.pose(1, spec).servo
+    a, b = init.copy(), init.copy()
+    for joint, (x, y) in BENCH_ARM_SWING_DEG.items():
+        a[spec.joint_names.index(joint)], b[spec.joint_names.index(joint)] = np.radians(x), np.radians(y)
+    ends = [Waypoint("front", a, 0.0, 0.0, Support.DOUBLE), Waypoint("back", b, 2.0, 0.0, Support.DOUBLE)]
+    out: dict[str, Any] = {}
+    route_ms = _best_ms(lambda: out.update(t=plan(ends, spec, seed=0)), min(repeat, 3))
+    ready = Pose("walkready", Support.DOUBLE, action.pose(9, spec).servo)
+    line_ms = _best_ms(lambda: out.update(m=line_move(ready, LineRequest("right", 1.0, delta_m=(0.05, 0.0, 0.0)),
+                                                        spec)), min(repeat, 3))
+    return {"route_plan_ms": round(route_ms, 1), "line_move_ms": round(line_ms, 1),
+            "check_route_clearance_m": round(float(clearance(out["t"].goals, spec)[0].min()), 5),
+            "check_line_deviation_m": round(float(out["m"].deviation_m.max()), 6)}
+
+
 def _walk_figures(spec: Spec, repeat: int) -> dict[str, Any]:
     """``walk_plan_ms``: planning the shipped ``forward`` gait (20 steps: footsteps, preview control, multibody
     correction passes, IK); ``walk_validate_ms``: playing it into the servo model in PyBullet."""
@@ -171,6 +204,7 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
                                                       spec).hand_error[0]),
         **_studio_figures(spec, repeat),
         **_motion_figures(spec, action, repeat),
+        **_planning_figures(spec, action, repeat),
         **_walk_figures(spec, repeat),
         **(wall_figures(wall_runs, wall_library) if wall_runs else {}),
     }

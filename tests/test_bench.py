@@ -6,6 +6,8 @@ from helpers import STOCK
 
 from op2motion.bench import run_bench
 from op2motion.formats.action import ActionFile
+from op2motion.motion.cartesian import LINE_TOL_M
+from op2motion.posture.cost import SELF_CLEARANCE_M
 
 DH_VS_PINOCCHIO_M = 1e-9      # the D-H joint centres equal pinocchio's on the generated URDF
 PSO_REACH_M = 0.01            # the default problem's swarm lands the hand within a centimetre
@@ -35,6 +37,7 @@ def test_bench_reports_every_figure_and_its_work_is_right(spec):
     assert result["check_motion_ticks"] == 464 and result["check_motion_stands"] is True
     assert result["check_walk_fell"] is False and result["check_walk_speed_mps"] > WALK_SPEED_MPS
     assert result["check_studio_readout"] is True
+    assert result["check_route_clearance_m"] >= SELF_CLEARANCE_M and result["check_line_deviation_m"] <= LINE_TOL_M
     assert result["book_matlab_dh_40k_ms"] == 3350.0 and result["book_matlab_pb_40k_ms"] == 780.0
 
 
