@@ -56,7 +56,8 @@ class FootLoad:
 @dataclass(frozen=True)
 class WorstTorque:
     """The largest servo torque [N·m] of a stretch of a run, at ``joint`` and ``time_s`` [s], against
-    ``available_nm`` [N·m] (for a motion: what the servo had at that moment; for a walk: its largest torque);
+    ``available_nm`` [N·m] (what the servo could deliver at that moment, its speed and the torque's direction; a
+    walk reports the sample nearest the limit, a motion its largest torque);
     ``limited_share``: the share of samples with some servo at its limit (walks)."""
 
     joint: str

@@ -149,7 +149,7 @@ class _Runner:
             report = run_report(track, start, plan, self.spec, judged,
                                 RunSetupFacts(engine_name, self.servo, engine.time_step))
             if plan.walk is not None:
-                report = replace(report, walk=walk_measures(track, start, plan, self.spec, self.servo.torque_max))
+                report = replace(report, walk=walk_measures(track, start, plan, self.spec))
             if snapshot:
                 report = replace(report, snapshot_png=snapshot_png(engine, self.spec, self.servo))
             return replace(report, track=track) if keep_track else report

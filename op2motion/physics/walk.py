@@ -62,19 +62,22 @@ def cop_inside_fraction(track: Track, plan: Plan, first: int) -> float:
     return inside / max(counted, 1)
 
 
-def worst_walk_torque(track: Track, plan: Plan, spec: Spec, torque_max: float, clock: WalkClock) -> WorstTorque:
-    """The largest servo torque while walking against ``torque_max`` [N·m], and the share of samples at the limit."""
+def worst_walk_torque(track: Track, plan: Plan, spec: Spec, clock: WalkClock) -> WorstTorque:
+    """The servo torque nearest its limit while walking, against what that servo could deliver at that moment (its
+    speed and the torque's direction: a braking servo has more than its stall torque, so a torque over 2.41 N·m is
+    not an overload), and the share of samples with some servo at its limit."""
     times = track.times
     walking = (times >= clock.start_s) & (times <= plan.end_s)
-    torque = np.abs(track.torque)[walking]
-    k, j = np.unravel_index(int(np.argmax(torque)), torque.shape)
-    limited = (torque >= LIMITED_FRACTION * track.available[walking]).any(axis=1)
-    return WorstTorque(spec.joint_names[j], round(float(torque[k, j]), 4), round(torque_max, 4),
+    torque, available = np.abs(track.torque)[walking], track.available[walking]
+    share = torque / np.maximum(available, 1e-9)
+    k, j = np.unravel_index(int(np.argmax(share)), share.shape)
+    limited = (torque >= LIMITED_FRACTION * available).any(axis=1)
+    return WorstTorque(spec.joint_names[j], round(float(torque[k, j]), 4), round(float(available[k, j]), 4),
                        round(float(times[walking][k] - clock.start_s), 3), round(float(limited.mean()), 4))
 
 
-def walk_measures(track: Track, start: StartFacts, plan: Plan, spec: Spec, torque_max: float) -> WalkMeasures:
-    """The measurements of a walk (see the module docstring); ``torque_max`` [N·m] is the servo's largest."""
+def walk_measures(track: Track, start: StartFacts, plan: Plan, spec: Spec) -> WalkMeasures:
+    """The measurements of a walk (see the module docstring)."""
     clock = plan.walk
     if clock is None:
         raise InputError(f"expected a walk's plan (with a walking clock), got a '{plan.kind}' plan", "plan")
@@ -95,4 +98,4 @@ def walk_measures(track: Track, start: StartFacts, plan: Plan, spec: Spec, torqu
         heading_error_deg=math.degrees(float(yaw[-1] - yaw[first]) - float(planned_yaw[-1] - planned_yaw[0])),
         turn_rate_deg_s=math.degrees(float(yaw[b] - yaw[a])) / steady_s,
         cop_inside_fraction=cop_inside_fraction(track, plan, first),
-        worst_torque=worst_walk_torque(track, plan, spec, torque_max, clock))
+        worst_torque=worst_walk_torque(track, plan, spec, clock))
