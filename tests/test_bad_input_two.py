@@ -51,6 +51,10 @@ def _fixtures(root: Path) -> None:
         "unreachable.toml": b'name = "unreachable"\nsteps = 4\nstep_length_m = 0.12\nstep_s = 0.5\n'
                             b'hip_lower_m = 0.0\nstep_height_m = 0.05\n',
         "stance.json": text.encode(),
+        "pgain1.toml": b'name = "pgain1"\nsteps = 4\np_gain = 1\n',
+        "leaning.json": json.dumps({**{k: v for k, v in stand.items() if k != "book_deg"}, "servo_deg": {
+            **stand["servo_deg"], "l_ank_pitch": stand["servo_deg"]["l_ank_pitch"] - 35.0,
+            "r_ank_pitch": stand["servo_deg"]["r_ank_pitch"] + 35.0}}).encode(),
         "inline.json": json.dumps({"schema": "op2motion.motion/1", "name": "inline", "steps": [
             {"servo_deg": stand["servo_deg"]}, {"servo_deg": stand["servo_deg"], "duration_s": 1.0}]}).encode(),
     }
@@ -72,6 +76,8 @@ CASES = [
     (["walk", "--plot", "w.jpg"], ".png"),
     (["walk", "--out", "w.csv", "w.csv"], "another output"),
     (["walk", "--preset", f"{IN}/unreachable.toml"], "--preset"),
+    (["walk", "--preset", f"{IN}/pgain1.toml", "--out", "w.motion"], "--preset"),
+    (["walk", "--preset", f"{IN}/pgain1.toml", "--retime", "--out", "w.motion"], "mechanical range"),
     (["motion", "play", str(STOCK), "--page", "9", "--push", "10"], "--validate"),
     (["motion", "plan", INIT, STAND, "--durations", "1", "--engine", "mujoco"], "--validate"),
     (["motion", "plan", INIT, STAND, "--durations", "1", "--planner", "none", "--seed", "3"], "--seed"),
@@ -103,6 +109,8 @@ FAILED_CHECKS = [
                  "mechanical range", id="page of goals beyond the joints' range"),
     pytest.param(["motion", "play", str(STOCK), "--page", "9", "--validate", "--push", "100", "--plot", "p.png"],
                  "pushed", marks=pytest.mark.physics, id="page pushed over"),
+    pytest.param(["validate", f"{IN}/leaning.json", "--seconds", "3", "--gui-png", "g.png"], "leaning",
+                 marks=pytest.mark.physics, id="a falling pose's snapshot"),
 ]
 
 
@@ -135,3 +143,13 @@ def test_bad_input_is_exit_2_naming_the_flag_or_file(capsys, tmp_path, monkeypat
 def test_a_failed_check_is_exit_1_with_nothing_written(capsys, tmp_path, monkeypatch, argv, needle):
     code, _, err = _run(capsys, tmp_path, monkeypatch, argv)
     assert code == 1 and needle in err, err
+
+
+def test_a_saved_motion_planned_into_another_folder_keeps_its_poses(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "elsewhere" / "deeper" / "o.json"
+    code, _, err = run_cli(capsys, "motion", "plan", str(ROOT / "poses" / "motions" / "stand_sit_stand.json"),
+                           "--out", out)
+    assert code == 0, err
+    code, _, err = run_cli(capsys, "motion", "plan", out)              # its pose references resolve from there
+    assert code == 0, err

@@ -155,8 +155,9 @@ def motion_to_json(motion: Motion, spec: Spec, where: str | Path) -> str:
 
 
 def read_support(step: MotionStep, where: str | Path, spec: Spec) -> str:
-    """The support written in the pose file a step refers to."""
-    return read_pose(Path(where).parent / str(step.source), spec).support
+    """The support written in the pose file a step refers to (the motion file's folder need not exist yet: the
+    reference is resolved by name)."""
+    return read_pose(os.path.normpath(Path(os.path.abspath(where)).parent / str(step.source)), spec).support
 
 
 def relative_source(pose_path: str | Path, motion_path: str | Path) -> str:
