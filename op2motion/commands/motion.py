@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING, Any, Sequence, TypeVar
+from typing import Any, Sequence, TypeVar
 
 from op2motion.commands.common import add_command, emit, number, output_path, warn, whole
 from op2motion.commands.motion_run import finish, motion_physics_args
@@ -12,9 +12,6 @@ from op2motion.formats.actionlayout import NUM_PAGES
 from op2motion.formats.motionfile import PLANNERS, PROFILES
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support
-
-if TYPE_CHECKING:
-    pass
 
 PAGE = whole(1, NUM_PAGES - 1)
 T = TypeVar("T")
