@@ -75,6 +75,7 @@ CASES = [
     (["walk", "--preset", ""], "--preset"),
     (["walk", "--plot", "w.jpg"], ".png"),
     (["walk", "--out", "w.csv", "w.csv"], "another output"),
+    (["walk", "--out", "w.csv", "w.txt"], "--out"),
     (["walk", "--preset", f"{IN}/unreachable.toml"], "--preset"),
     (["walk", "--preset", f"{IN}/pgain1.toml", "--out", "w.motion"], "--preset"),
     (["walk", "--preset", f"{IN}/pgain1.toml", "--retime", "--out", "w.motion"], "mechanical range"),
@@ -109,7 +110,9 @@ FAILED_CHECKS = [
                  "mechanical range", id="page of goals beyond the joints' range"),
     pytest.param(["motion", "play", str(STOCK), "--page", "9", "--validate", "--push", "100", "--plot", "p.png"],
                  "pushed", marks=pytest.mark.physics, id="page pushed over"),
-    pytest.param(["validate", f"{IN}/leaning.json", "--seconds", "3", "--gui-png", "g.png"], "leaning",
+    pytest.param(["walk", "--steps", "4", "--validate", "--push", "100", "--plot", "w.png", "--out", "w.csv"],
+                 "pushed", marks=pytest.mark.physics, id="a walk pushed over"),
+    pytest.param(["validate", f"{IN}/leaning.json", "--seconds", "3", "--gui-png", "g.png"], "does not stand",
                  marks=pytest.mark.physics, id="a falling pose's snapshot"),
 ]
 
@@ -153,3 +156,9 @@ def test_a_saved_motion_planned_into_another_folder_keeps_its_poses(capsys, tmp_
     assert code == 0, err
     code, _, err = run_cli(capsys, "motion", "plan", out)              # its pose references resolve from there
     assert code == 0, err
+
+
+def test_a_page_repeated_255_times_is_named_once_with_its_count():
+    from op2motion.commands.motion import _chain
+
+    assert _chain([4] * 255) == "4 x255" and _chain([4, 4, 5, 9, 9]) == "4 x2 -> 5 -> 9 x2"

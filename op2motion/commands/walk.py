@@ -188,7 +188,8 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
         lines += [_walk_line(e, s) for e, s in result["physics"]["engines"].items()]
     if robust is not None:
         lines.append(robust[1])
-    failed = (robust is not None and not robust[0].passed) or (report is not None and report.fell)
+    failed = (robust is not None and not robust[0].passed) or (report is not None and (
+        report.fell or not report.pushes_survived))
     _walk_files(args, outputs, gait, spec, report)
     written = {} if failed else outputs.commit()        # a walk that failed its check writes nothing
     result["files"] = {k: str(v) for k, v in written.items()}
@@ -200,4 +201,7 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
     if report is not None and report.fell:
         raise CheckFailed(f"walk '{params.name}' fell in physics: " + "; ".join(
             f"{e}: {', '.join(r.run.reasons)}" for e, r in report.engines.items() if r.run.fell))
+    if report is not None and not report.pushes_survived:
+        raise CheckFailed(f"walk '{params.name}' " + (report.problem("does not get through", fall_only=True)
+                                                      or "fell when pushed"))
     return 0
