@@ -86,6 +86,7 @@ def test_cli_writes_a_motion_that_replays_on_the_line(tmp_path, spec, capsys):
 @pytest.mark.parametrize("argv, flag", [
     (["--to", "0.1", "0", "0.2", "--by", "0", "0", "0.01"], "--by"),
     (["--by", "0", "0", "0.05", "--orientation", "sideways"], "--orientation"),
+    (["--by", "0", "0", "0.05", "--orientation", "nan", "0", "0"], "--orientation"),
     (["--by", "0", "0", "2"], "--by"),
     (["--by", "0.05", "0", "0", "--duration", "0.2"], "--duration"),
 ])

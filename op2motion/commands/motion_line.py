@@ -33,14 +33,24 @@ def register_line(inner: Any) -> None:
 
 
 def _orientation(words: list[str]) -> str | tuple[float, float, float]:
+    """``--orientation``: ``free``, ``keep`` or a direction of three finite numbers."""
     if len(words) == 1 and words[0] in ("free", "keep"):
         return words[0]
-    if len(words) == 3:
-        try:
-            return (float(words[0]), float(words[1]), float(words[2]))
-        except ValueError:
-            pass
-    raise InputError(f"expected free, keep or three numbers DX DY DZ, got {' '.join(words)}", "orientation")
+    numbers = [n for n in map(_finite, words) if n is not None]
+    if len(words) != 3 or len(numbers) != 3:
+        raise InputError(f"expected free, keep or three numbers DX DY DZ, got {' '.join(words)}", "orientation")
+    return (numbers[0], numbers[1], numbers[2])
+
+
+def _finite(word: str) -> float | None:
+    """``word`` as a finite number, None if it is not one."""
+    import math
+
+    try:
+        value = float(word)
+    except ValueError:
+        return None
+    return value if math.isfinite(value) else None
 
 
 def cmd_line(args: argparse.Namespace, spec: Spec) -> int:
