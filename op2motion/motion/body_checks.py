@@ -77,13 +77,19 @@ class Limits:
                 & (m.swing >= self.swing) & (m.tilt <= self.tilt))
 
 
+def body_cost(spec: Spec, stance: str) -> CostModel:
+    """The posture cost standing on ``stance`` (full sole, full-inertia CoM), used for what it measures beside the
+    hand: clearance between links, the settled CoM's margin, the swing foot's lift, the sag tilt."""
+    return CostModel(PostureProblem(stance, "left", _ANY_HAND_TARGET, 1.0), spec)
+
+
 class BodyChecks:
     """The measures of poses standing on ``side`` (``left``/``right``) or on both feet (None), prepared once."""
 
     def __init__(self, spec: Spec, side: str | None):
         self.spec, self.side = spec, side
         self.frame = side or "left"
-        self.cost = CostModel(PostureProblem(self.frame, "left", _ANY_HAND_TARGET, 1.0), spec)
+        self.cost = body_cost(spec, self.frame)
         lower, upper = zip(*(joint_range(j, "mechanical") for j in spec.joints))
         self.lower, self.upper = np.array(lower), np.array(upper)
 

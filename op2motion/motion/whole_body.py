@@ -32,7 +32,8 @@ import numpy as np
 from op2motion.kinematics import forward
 from op2motion.kinematics.leg_ik import Leg, leg_fk, leg_ik, leg_of, within_reach
 from op2motion.kinematics.points import row_of
-from op2motion.posture.cost import CostModel, PostureProblem, torso_axes
+from op2motion.motion.body_checks import body_cost
+from op2motion.posture.cost import torso_axes
 from op2motion.robot.joints import joint_range, servo_to_book
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support, other_side
@@ -106,7 +107,7 @@ class WholeBodyIk:
         self._moved = moved
         self.lower = np.minimum(hard[:, 0] + LIMIT_MARGIN_RAD, self.start[moved])
         self.upper = np.maximum(hard[:, 1] - LIMIT_MARGIN_RAD, self.start[moved])
-        self._clearance = CostModel(PostureProblem(self.frame, hand, (0.0, 0.0, 0.2), 1.0), spec)
+        self._clearance = body_cost(spec, self.frame)
         self._hand_row = row_of(f"{hand}_hand")
         self._elbow_row = row_of(f"{hand[0]}_el")
         first = row_of(f"{other_side(self.frame)}_foot_0")
