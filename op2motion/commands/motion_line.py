@@ -76,7 +76,9 @@ def cmd_line(args: argparse.Namespace, spec: Spec) -> int:
     lines = [f"{name}: the {args.hand} hand from {pose.name}, {summary['length_m'] * 1000:.1f} mm in "
              f"{trajectory.duration_s:.3f} s{' and back' if args.back else ''}: off the line <= "
              f"{summary['line_deviation_max_m'] * 1000:.2f} mm, CoM margin >= {summary['com_margin_min_m'] * 1000:.1f} "
-             f"mm, fastest joint {summary['joint_speed_joint']} at {summary['joint_speed_max_rad_s']:.2f} rad/s"]
+             f"mm, fastest joint {summary['joint_speed_joint']} at {summary['joint_speed_max_rad_s']:.2f} rad/s; "
+             f"solved {summary['solved']}" + (f" (the arm changes branch first, {summary['reconfigure_s']:.2f} s)"
+                                              if summary["reconfigure_s"] else "")]
     title = f"{name}: {args.hand} hand line from {pose.name}"
     return finish(args, spec, trajectory, title, result, lines, lambda verdict: render_line(move, title, verdict),
                   (args.out, motion_to_json(motion, spec, args.out)) if args.out else None)

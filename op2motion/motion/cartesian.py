@@ -3,7 +3,8 @@ on a humanoid).
 
 :func:`line_move` puts the hand's target on the line from where it starts to where it should end, with a
 minimum-jerk progress (10 s³ - 15 s⁴ + 6 s⁵ of the time share s), every 8 ms row; the whole-body IK
-(:mod:`.whole_body`) takes each row from the last (feet fixed, CoM held softly, torso upright, joints in range).
+(:mod:`.whole_body`: feet fixed, CoM held softly, torso upright, joints in range) finds the rows in one of the ways
+of :mod:`.line_solve` (forward from the start, crouching, or from the end back), the first that passes the checks.
 The least clearance reported is exact (:func:`.checks.clearance`). A pointing direction of the forearm may be held
 (``keep``) or turned to a new one by quaternion slerp. The result is refused
 (:class:`~op2motion.errors.CheckFailed`) where the hand leaves the line by more than :data:`LINE_TOL_M`, links come
@@ -24,6 +25,7 @@ from op2motion.errors import CheckFailed, InputError
 from op2motion.formats.motionfile import Motion, MotionStep
 from op2motion.motion.body_checks import BodyChecks
 from op2motion.motion.checks import clearance
+from op2motion.motion.line_solve import END_SEEDS_RAD, END_TOL_M, EndSearch, Rows, ways
 from op2motion.motion.planner import SPEED_FRACTION
 from op2motion.motion.trajectory import Trajectory
 from op2motion.motion.waypoint import MAX_SEGMENT_S
@@ -39,6 +41,7 @@ LINE_MARGIN_M = 0.005       # the CoM stays this far inside the support (settled
 MIN_LINE_S = 0.1            # the shortest move [s]
 MAX_LINE_M = 0.3            # the longest line [m]: about the OP2's arm span
 ROW_STRIDE = 3              # a motion-file step every 3 rows (24 ms, the robot's shortest step)
+GIVE_UP_M = 2 * LINE_TOL_M  # a way whose hand is this far off its row's target has failed there
 SPEED_LAG_SHARE = 0.99      # a hand off the line while an arm joint ran this close to its limit: too fast
 ORIENTATIONS = ("free", "keep")
 
@@ -91,6 +94,8 @@ class LineMove:
     clearance_m: np.ndarray
     speeds: np.ndarray
     pointing_error_rad: np.ndarray | None
+    how: str = "forward"
+    reconfigure_s: float = 0.0
 
     @property
     def times(self) -> np.ndarray:
@@ -107,7 +112,8 @@ class LineMove:
                "com_margin_min_m": round(float(self.com_margin_m.min()), 5),
                "min_clearance_m": round(float(self.clearance_m.min()), 5),
                "joint_speed_max_rad_s": round(float(abs(self.speeds[worst])), 4),
-               "joint_speed_joint": spec.joint_names[int(worst[1])]}
+               "joint_speed_joint": spec.joint_names[int(worst[1])], "solved": self.how,
+               "reconfigure_s": round(self.reconfigure_s, 3)}
         if self.pointing_error_rad is not None:
             out["pointing_error_max_deg"] = round(math.degrees(float(self.pointing_error_rad.max())), 3)
         return out
@@ -160,10 +166,9 @@ def _distance_to_segment(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np
 
 def _targets(request: LineRequest, start: np.ndarray, end: np.ndarray, pointing: np.ndarray
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    """The progress (K,), the hand's targets (K, 3) [m] and the forearm's directions (K, 3) (None: free) per row."""
+    """One way: the progress (K,), the hand's targets (K, 3) [m] and the forearm's directions (K, 3) (None: free)
+    per row."""
     s = _progress(int(math.ceil(request.duration_s / CONTROL_PERIOD_S - 1e-9)) + 1)
-    if request.back:
-        s = np.concatenate([s, s[-2::-1]])
     o = request.orientation
     points = None if o == "free" else _slerp_directions(pointing, pointing if o == "keep"
                                                           else np.asarray(o, dtype=float), s)
@@ -208,8 +213,38 @@ def _refuse_unbalanced(margin: np.ndarray, close: np.ndarray) -> None:
                           f"(expected at least {clear_floor * 1000:.1f} mm): move the hand another way")
 
 
+def _checked(pose: Pose, request: LineRequest, spec: Spec, ik: WholeBodyIk, rows: Rows, start: np.ndarray,
+             end: np.ndarray) -> LineMove:
+    """The move of ``rows`` after every check (raises :class:`CheckFailed` or :class:`InputError`)."""
+    goals = rows.goals
+    reached = ik.features(goals)
+    speeds = np.gradient(goals, CONTROL_PERIOD_S, axis=0)
+    share = (rows.targets - start) @ (end - start) / max(float(np.sum((end - start) ** 2)), 1e-18)
+    _refuse_off_line(request, np.linalg.norm(reached["hand"] - rows.targets, axis=1), share, speeds, ik.arm, spec)
+    measured = BodyChecks(spec, None if Support.of(pose.support).is_double else str(pose.support)).measure(goals)
+    _refuse_unbalanced(measured.margin, measured.clearance)
+    pointing = None
+    if rows.points is not None:
+        pointing = np.arccos(np.clip(np.einsum("ij,ij->i", reached["point"], rows.points), -1.0, 1.0))
+    return LineMove(pose, request.hand, start, end, goals, reached["hand"],
+                    _distance_to_segment(reached["hand"], start, end), measured.margin, clearance(goals, spec)[0],
+                    speeds, pointing, rows.how, rows.reconfigure_s)
+
+
+def _most_useful(request: LineRequest, end: np.ndarray, failures: list[Exception], search: EndSearch) -> Exception:
+    """Of the ways' failures, the one to report: the end out of reach where no arm configuration holds the hand
+    there, else a duration too short, else the first way's failure."""
+    if search.found == 0:
+        return CheckFailed(f"the {request.hand} hand cannot reach the line's end ({', '.join(f'{v:+.3f}' for v in end)}"
+                           f" m): from {len(END_SEEDS_RAD)} starting arm configurations the nearest comes "
+                           f"{search.closest_m * 1000:.1f} mm short (expected at most {END_TOL_M * 1000:.1f} mm)")
+    durations = [e for e in failures if isinstance(e, InputError)]
+    return durations[0] if durations else failures[0]
+
+
 def line_move(pose: Pose, request: LineRequest, spec: Spec) -> LineMove:
-    """The hand of ``request`` moved along a straight line from ``pose`` (see the module docstring)."""
+    """The hand of ``request`` moved along a straight line from ``pose`` (see the module docstring): the ways of
+    :mod:`.line_solve` in turn, the first that passes every check."""
     request = request.validated()
     ik = WholeBodyIk(spec, str(pose.support), request.hand, pose.servo)
     first = ik.features(pose.servo[None])
@@ -218,20 +253,13 @@ def line_move(pose: Pose, request: LineRequest, spec: Spec) -> LineMove:
     if np.linalg.norm(end - start) > MAX_LINE_M:
         raise InputError(f"expected a line of at most {MAX_LINE_M:g} m, got {np.linalg.norm(end - start):.3f} m",
                          "to" if request.target_m is not None else "by")
-    share, targets, points = _targets(request, start, end, first["point"][0])
-    x, rows = ik.x0.copy(), [pose.servo.copy()]
-    for i in range(1, len(targets)):
-        x, _ = ik.solve(x, targets[i], None if points is None else points[i])
-        rows.append(ik.servo(x[None])[0])
-    goals = np.array(rows)
-    reached = ik.features(goals)
-    speeds = np.gradient(goals, CONTROL_PERIOD_S, axis=0)
-    _refuse_off_line(request, np.linalg.norm(reached["hand"] - targets, axis=1), share, speeds, ik.arm, spec)
-    measured = BodyChecks(spec, None if Support.of(pose.support).is_double else str(pose.support)).measure(goals)
-    _refuse_unbalanced(measured.margin, measured.clearance)
-    pointing = None
-    if points is not None:
-        pointing = np.arccos(np.clip(np.einsum("ij,ij->i", reached["point"], points), -1.0, 1.0))
-    return LineMove(pose, request.hand, start, end, goals, reached["hand"],
-                    _distance_to_segment(reached["hand"], start, end), measured.margin, clearance(goals, spec)[0],
-                    speeds, pointing)
+    _, targets, points = _targets(request, start, end, first["point"][0])
+    crouching = WholeBodyIk(spec, str(pose.support), request.hand, pose.servo, crouch=True)
+    failures: list[Exception] = []
+    search = EndSearch()
+    for rows in ways(ik, crouching, targets, points, request.back, GIVE_UP_M, search):
+        try:
+            return _checked(pose, request, spec, ik, rows, start, end)
+        except (CheckFailed, InputError) as e:
+            failures.append(e)
+    raise _most_useful(request, end, failures, search)

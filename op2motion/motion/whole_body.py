@@ -12,7 +12,8 @@ frame measured on the D-H chain, the Jacobian by forward differences with all th
 * on both feet, the other sole's four corners [m] where they started (:data:`W_FEET`);
 * the full-inertia CoM's x, y [m] where it started (:data:`W_COM`);
 * a knee that started straight held straight (:data:`W_STRAIGHT_KNEE`): there the leg IK turns a sink of a
-  fraction of a millimetre into degrees of knee, a jolt the servos cannot follow;
+  fraction of a millimetre into degrees of knee, a jolt the servos cannot follow (with ``crouch`` not: the body may
+  sink, at a small cost :data:`W_CROUCH_Z`, its derivative taken downwards, where a straight leg can go);
 * links apart: how far the least clearance between the collision shapes is below :data:`CLEAR_TASK_M`
   (:data:`W_CLEAR`);
 * the torso's x and z axes where they started (:data:`W_TORSO`), and optionally the forearm's direction (the
@@ -20,9 +21,10 @@ frame measured on the D-H chain, the Jacobian by forward differences with all th
   (:data:`W_POINT`);
 * regulation: the unknowns pulled towards the start (:data:`W_POSTURE`: the torso moves only where the arm alone
   cannot do it, by about a millimetre of hand error per centimetre), damping from :data:`DAMPING`;  one
-  call moves the unknowns no more than :data:`ROW_STEP` (what one 8 ms row may: the hand lags rather than the body
-  jumping) and keeps every joint :data:`LIMIT_MARGIN_RAD` inside its mechanical range (widened to include the
-  start).
+  call moves the unknowns no more than :data:`ROW_STEP` and each leg joint no more than :data:`JOINT_ROW_STEP`
+  (what one 8 ms row may: the hand lags rather than the body jumping) and keeps every joint
+  :data:`LIMIT_MARGIN_RAD` inside its mechanical range (widened to include the start). :meth:`WholeBodyIk.settle`
+  solves for a point however many rows it takes (an end configuration).
 """
 
 from __future__ import annotations
@@ -44,6 +46,7 @@ W_COM = 0.01
 W_TORSO = 0.005
 W_POINT = 0.01
 W_CLEAR = 1.0
+JOINT_ROW_STEP = 0.023      # [rad] a leg joint turns at most this much in one row (half the no-load speed)
 W_STRAIGHT_KNEE = 1e-2      # per rad² that a knee which started straight bends
 STRAIGHT_KNEE_RAD = 0.09    # a knee within 5° of straight started straight
 CLEAR_TASK_M = 0.008        # links closer than this push apart (the check after wants SELF_CLEARANCE_M)
@@ -58,6 +61,9 @@ ROW_STEP = np.array([0.001] * 3 + [0.002] * 3 + [0.023] * 3)  # per 8 ms row at 
 #                            the arm [rad] (0.25 m/s, 2.5 rad/s, 2.9 rad/s: half the MX-28's no-load speed)
 LIMIT_MARGIN_RAD = 0.035      # joints stay 2° inside their mechanical range
 ARM_JOINTS = ("sho_pitch", "sho_roll", "el")
+W_CROUCH_Z = 1e-3           # per m² of torso sinking when the body may crouch
+SETTLE_CALLS = 40           # solves at most to settle on a point,
+SETTLE_ROWS = 5.0           # each moving as far as this many rows may
 MIN_GAIN = 1e-3             # a step that lowers the weighted error by less than this share ends the row's solve
 
 
@@ -77,8 +83,8 @@ class WholeBodyIk:
     """The IK of one hand on a robot standing on ``support`` (``left``, ``right`` or ``double``: then the left sole
     is the frame), prepared at the pose ``start`` (20,) [rad]."""
 
-    def __init__(self, spec: Spec, support: str, hand: str, start: np.ndarray):
-        self.spec, self.hand = spec, hand
+    def __init__(self, spec: Spec, support: str, hand: str, start: np.ndarray, crouch: bool = False):
+        self.spec, self.hand, self.crouch = spec, hand, crouch
         sup = Support.of(support)
         self.frame = "left" if sup.is_double else str(sup)
         self.double = sup.is_double
@@ -102,9 +108,15 @@ class WholeBodyIk:
             self.reach[leg.side] = max(share, MAX_REACH_SHARE)
         moved = np.concatenate([self.arm] + [np.array(leg.index) for leg in self.legs])
         knees = np.array([spec.joint_names.index(f"{leg.side[0]}_knee") for leg in self.legs])
-        self._straight_knees = knees[np.abs(self.start[knees]) < STRAIGHT_KNEE_RAD]
+        self._straight_knees = knees[np.abs(self.start[knees]) < STRAIGHT_KNEE_RAD] if not crouch else knees[:0]
+        self._w_posture = W_POSTURE.copy()
+        self._fd_step = np.full(9, FD_STEP)
+        if crouch:                                   # sinking is free, and measured downwards (a straight leg
+            self._w_posture[2] = W_CROUCH_Z          # cannot rise: its upward difference is zero)
+            self._fd_step[2] = -FD_STEP
         hard = np.array([joint_range(spec.joints[i], "mechanical") for i in moved])
         self._moved = moved
+        self._leg_joints = np.concatenate([np.array(leg.index) for leg in self.legs])
         self.lower = np.minimum(hard[:, 0] + LIMIT_MARGIN_RAD, self.start[moved])
         self.upper = np.maximum(hard[:, 1] - LIMIT_MARGIN_RAD, self.start[moved])
         self._clearance = body_cost(spec, self.frame)
@@ -162,28 +174,41 @@ class WholeBodyIk:
 
     def _cost(self, x: np.ndarray, hand: np.ndarray, point: np.ndarray | None) -> float:
         values, target = self._stack(self.features(self.servo(x[None])), hand, point)
-        return float(np.sum((target - values[0]) ** 2) + np.sum(W_POSTURE * (x - self.x0) ** 2))
+        return float(np.sum((target - values[0]) ** 2) + np.sum(self._w_posture * (x - self.x0) ** 2))
 
-    def solve(self, x: np.ndarray, hand: np.ndarray, point: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+    def _bounded(self, x: np.ndarray, trial: np.ndarray, legs: np.ndarray, rows: float) -> np.ndarray:
+        """``trial`` pulled back towards ``x`` until no leg joint turns more than ``rows`` times
+        :data:`JOINT_ROW_STEP` from ``legs`` (near a straight knee a fraction of a millimetre of sinking is degrees
+        of knee)."""
+        shares = np.linspace(1.0, 0.0, 33)[:, None]
+        batch = np.repeat(trial[None], len(shares), axis=0)
+        batch[:, :6] = x[:6] + shares * (trial[:6] - x[:6])      # the legs follow the torso alone
+        turn = np.abs(self.servo(batch)[:, self._leg_joints] - legs).max(axis=1)
+        return batch[int(np.flatnonzero(turn <= rows * JOINT_ROW_STEP)[0])]
+
+    def solve(self, x: np.ndarray, hand: np.ndarray, point: np.ndarray | None = None,
+              rows: float = 1.0) -> tuple[np.ndarray, float]:
         """Unknowns (9,) from ``x`` that put the hand at ``hand`` (3,) [m] (and the forearm along ``point`` (3,), if
-        given) with the other tasks held, and the hand's remaining error [m]. A step that does not lower the
-        weighted error is retried with more damping."""
+        given) with the other tasks held, moving as far as ``rows`` rows may, and the hand's remaining error [m]. A
+        step that does not lower the weighted error is retried with more damping."""
         x = np.asarray(x, dtype=float).copy()
-        n, low, high = len(x), x - ROW_STEP, x + ROW_STEP
+        n, low, high = len(x), x - rows * ROW_STEP, x + rows * ROW_STEP
+        legs = self.servo(x[None])[0, self._leg_joints]
         damping, cost = DAMPING, self._cost(x, hand, point)
         for _ in range(MAX_ITERATIONS):
-            batch = np.repeat(x[None], n + 1, axis=0) + np.vstack([np.zeros(n), np.eye(n) * FD_STEP])
+            batch = np.repeat(x[None], n + 1, axis=0) + np.vstack([np.zeros(n), np.diag(self._fd_step)])
             f = self.features(self.servo(batch))
             error = float(np.linalg.norm(f["hand"][0] - hand))
             feet = float(np.abs(f["feet"][0] - self.feet0).max()) if self.double else 0.0
             if error < SOLVE_TOL_M and feet < SOLVE_TOL_M:
                 break
             values, target = self._stack(f, hand, point)
-            jac = (values[1:] - values[0]).T / FD_STEP                 # (m, n)
-            normal = jac.T @ jac + np.diag(W_POSTURE)
-            rhs = jac.T @ (target - values[0]) - W_POSTURE * (x - self.x0)
+            jac = (values[1:] - values[0]).T / self._fd_step            # (m, n)
+            normal = jac.T @ jac + np.diag(self._w_posture)
+            rhs = jac.T @ (target - values[0]) - self._w_posture * (x - self.x0)
             for _ in range(8):
-                trial = np.clip(x + np.linalg.solve(normal + damping * np.eye(n), rhs), low, high)
+                trial = self._bounded(x, np.clip(x + np.linalg.solve(normal + damping * np.eye(n), rhs), low, high),
+                                      legs, rows)
                 trial_cost = self._cost(trial, hand, point)
                 if trial_cost < cost:
                     gain = (cost - trial_cost) / max(cost, 1e-30)
@@ -195,3 +220,14 @@ class WholeBodyIk:
             if gain < MIN_GAIN:                       # stalled (at a speed bound or a limit): this row is done
                 break
         return x, float(np.linalg.norm(self.features(self.servo(x[None]))["hand"][0] - hand))
+
+    def settle(self, x: np.ndarray, hand: np.ndarray, point: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+        """Unknowns (9,) from ``x`` that put the hand at ``hand`` (3,) [m] (the forearm along ``point``, if given),
+        in at most :data:`SETTLE_CALLS` solves of :data:`SETTLE_ROWS` rows each, and the hand's remaining error [m]."""
+        error = np.inf
+        for _ in range(SETTLE_CALLS):
+            previous = x
+            x, error = self.solve(x, hand, point, SETTLE_ROWS)
+            if error < SOLVE_TOL_M or np.abs(x - previous).max() < FD_STEP:
+                break
+        return x, error
