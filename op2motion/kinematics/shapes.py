@@ -26,6 +26,7 @@ from op2motion.kinematics.dh_chain import cached
 from op2motion.kinematics.links import attachments
 from op2motion.robot.spec import Spec, rpy_matrix
 
+RIM_MISS_SHARE = 0.118      # a cylinder's rim lies this share of its radius outside its capsule (sqrt(1.25) - 1)
 BROAD_PHASE_M = 0.03        # default: clearances beyond this are reported as lower bounds, not exactly
 SAMPLES, ROUNDS = 9, 4      # samples along a segment per round; rounds (the bracket shrinks to (1/4)^4 = 4e-3)
 SEGMENT_GRID = np.linspace(0.0, 1.0, SAMPLES)
@@ -60,6 +61,14 @@ class ShapeSet:
     def pair_names(self) -> list[tuple[str, str]]:
         """The link names of each pair."""
         return [(self.links[a], self.links[b]) for a, b in self.pairs]
+
+    def approximation_m(self) -> tuple[np.ndarray, np.ndarray]:
+        """How much more (P,) and how much less (P,) than the exact distance a pair's clearance may be [m]: the rims
+        of its cylinders (:data:`RIM_MISS_SHARE` of each one's radius) and their round caps (half a radius each)."""
+        cylinder = ~self.is_box & (np.abs(self.segment[:, 1, 2] - self.segment[:, 0, 2]) > 0.0)
+        r = np.where(cylinder, self.radius, 0.0)
+        per_pair = r[self.pairs[:, 0]] + r[self.pairs[:, 1]]
+        return RIM_MISS_SHARE * per_pair, 0.5 * per_pair
 
 
 def shape_set(spec: Spec, support: str) -> ShapeSet:
