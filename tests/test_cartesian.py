@@ -13,6 +13,7 @@ from op2motion.errors import CheckFailed
 from op2motion.formats.motionfile import read_motion
 from op2motion.formats.posefile import read_pose
 from op2motion.motion.cartesian import LINE_MARGIN_M, LINE_TOL_M, LineRequest, _slerp_directions, line_move
+from op2motion.motion.checks import check_trajectory
 from op2motion.motion.pipeline import plan_motion
 from op2motion.motion.whole_body import WholeBodyIk
 from op2motion.physics import check
@@ -42,6 +43,7 @@ def _assert_on_the_line_and_back(spec, move, hand: str) -> None:
     feet = ik.features(move.goals)["feet"]
     assert np.abs(feet - feet[0]).max() < FEET_TOL_M                     # both soles stay where they stood
     assert np.abs(move.speeds).max() <= 0.5 * spec.servo.no_load_speed_rad_s + 1e-9
+    assert check_trajectory(move.trajectory(), spec).zmp_margin_m.min() >= LINE_MARGIN_M   # no lurch either
 
 
 @pytest.mark.parametrize("hand, axis", [("right", a) for a in sorted(AXES)] + [("left", a) for a in ("+X", "+Y", "-Z")])
@@ -49,7 +51,7 @@ def test_five_centimetres_each_way_from_walkready_and_back(spec, hand, axis):
     _assert_on_the_line_and_back(spec, _move(spec, "walkready", hand, AXES[axis]), hand)
 
 
-@pytest.mark.parametrize("hand, axis", [("right", a) for a in sorted(AXES)] + [("left", a) for a in ("-Y", "+Z")])
+@pytest.mark.parametrize("hand, axis", [("right", a) for a in sorted(AXES) if a != "+Y"] + [("left", "+Z")])
 def test_five_centimetres_each_way_from_the_straight_legged_standing_pose_and_back(spec, hand, axis):
     move = _move(spec, "standing", hand, AXES[axis])
     _assert_on_the_line_and_back(spec, move, hand)
@@ -59,13 +61,22 @@ def test_five_centimetres_each_way_from_the_straight_legged_standing_pose_and_ba
         assert move.how == "from the end" and move.reconfigure_s > 0.0
 
 
+@pytest.mark.parametrize("hand, axis", [("right", "+Y"), ("left", "-Y")])
+def test_inwards_from_standing_is_refused_where_a_foot_would_tip(spec, hand, axis):
+    # The elbow stands 8 mm from the hip: the torso must lean away so far that, on straight legs with the servos
+    # sagging, the loaded foot's own CoP leaves its sole (in physics the robot fell, while the hull of both soles
+    # still had 17 mm and the ZMP 12 mm).
+    with pytest.raises(CheckFailed, match=r"a foot's own centre of pressure comes -1\d\.\d mm from its edge"):
+        _move(spec, "standing", hand, AXES[axis])
+
+
 def test_a_line_beyond_the_arm_is_refused_saying_where(spec):
     with pytest.raises(CheckFailed, match=r"the right hand cannot reach the line's end \(\+0.221, .* mm short"):
         _move(spec, "standing", "right", (0.2, 0.0, 0.0), back=False)
 
 
 def test_the_forearm_keeps_or_turns_its_direction(spec):
-    keep = _move(spec, "walkready", "left", (0.0, MOVE_M, 0.0), back=False, orientation="keep")
+    keep = _move(spec, "walkready", "left", (MOVE_M, 0.0, 0.0), back=False, orientation="keep")
     assert keep.pointing_error_rad is not None and keep.pointing_error_rad.max() < POINT_TOL_RAD
     a, b = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 1.0])
     turned = _slerp_directions(a, b, np.linspace(0.0, 1.0, 11))
@@ -107,7 +118,8 @@ def test_cli_bad_input_is_one_line_exit_2_nothing_written(tmp_path, capsys, argv
 
 
 @pytest.mark.physics
-@pytest.mark.parametrize("pose, axis", [("walkready", "-Z"), ("standing", "+Z"), ("standing", "-Z")])
+@pytest.mark.parametrize("pose, axis", [("walkready", "-Z"), ("walkready", "+Y"), ("standing", "+Z"),
+                                        ("standing", "-Z")])
 def test_a_line_and_back_stands_in_both_engines(spec, pose, axis):
     move = _move(spec, pose, "right", AXES[axis])
     report = check(move.trajectory().schedule(spec), spec, ("pybullet", "mujoco"))

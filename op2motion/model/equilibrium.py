@@ -26,6 +26,7 @@ oscillator with about a quarter of critical damping), and near a foot's edge tha
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -45,6 +46,24 @@ def sagged_angles(goal: np.ndarray, support: Support | str, spec: Spec, kp: np.n
     """The servo angles (20,) [rad] at which servos of stiffness ``kp`` (20,) [N·m/rad] holding ``goal`` (20,)
     [rad] carry the body at rest on ``support``; ``None`` where no equilibrium exists within the servos'
     ``torque_max`` [N·m] (see the module docstring)."""
+    found = _sagged(goal, support, spec, kp, torque_max)
+    return None if found is None or found[1] <= 0.0 else found[0]
+
+
+def feet_margin(goal: np.ndarray, spec: Spec, kp: np.ndarray, torque_max: float) -> float:
+    """On two feet: the least margin [m] of a sole's own centre of pressure to its edge where the compliant servos
+    hold ``goal`` (20,) [rad] at rest (the statically indeterminate split solved as in the module docstring; a foot
+    tips when its own CoP reaches its edge, whatever the hull of both soles says); negative where a sole would
+    press outside itself, -inf where one would pull or no equilibrium exists. Conservative: where the lighter foot
+    only rolls onto its edge the robot may still stand."""
+    found = _sagged(goal, Support.DOUBLE, spec, kp, torque_max)
+    return -math.inf if found is None else found[1]
+
+
+def _sagged(goal: np.ndarray, support: Support | str, spec: Spec, kp: np.ndarray,
+            torque_max: float) -> tuple[np.ndarray, float] | None:
+    """The sagged angles and, on two feet, the least CoP margin of the soles (+inf on one foot); None where the
+    servos cannot hold the pose."""
     dyn = dynamics_for(spec)
     support = Support.of(support)
     goal = np.asarray(goal, dtype=float)
@@ -88,9 +107,9 @@ def sagged_angles(goal: np.ndarray, support: Support | str, spec: Spec, kp: np.n
     q = x[:n]
     if np.max(np.abs(kp * (goal - q))) > torque_max:
         return None
-    if support.is_double and not _both_press(dyn, q, x[n:]):
-        return None
-    return q
+    if not support.is_double:
+        return q, math.inf
+    return q, min(_feet_margins(dyn, q, x[n:]))
 
 
 def _right_from_left(dyn: Any, q: np.ndarray) -> tuple[Any, np.ndarray]:
@@ -108,9 +127,10 @@ def _right_from_left(dyn: Any, q: np.ndarray) -> tuple[Any, np.ndarray]:
     return data.oMf[left].actInv(data.oMf[right]), rel_jac
 
 
-def _both_press(dyn: Any, q: np.ndarray, right_wrench: np.ndarray) -> bool:
-    """Do both soles press on the floor (positive normal force) with their centres of pressure inside the soles
-    when the right one carries ``right_wrench`` (own frame)? A sole cannot pull, nor press outside itself."""
+def _feet_margins(dyn: Any, q: np.ndarray, right_wrench: np.ndarray) -> list[float]:
+    """Each sole's margin [m] of its own centre of pressure to its edge when the right one carries
+    ``right_wrench`` (own frame); -inf for a sole that would pull (a sole cannot pull, nor press outside
+    itself)."""
     pin, model, data = dyn.pin, dyn.model, dyn.data
     config = dyn.level_configuration(q, "left")
     zero = np.zeros(model.nv)
@@ -119,12 +139,13 @@ def _both_press(dyn: Any, q: np.ndarray, right_wrench: np.ndarray) -> bool:
     pin.framesForwardKinematics(model, data, config)
     jl, jr = (pin.getFrameJacobian(model, data, dyn.sole_ids[s], pin.ReferenceFrame.LOCAL) for s in ("left", "right"))
     left_wrench = np.linalg.solve(jl[:, :6].T, gravity[:6] - jr[:, :6].T @ right_wrench)
+    margins = []
     for side, wrench in (("left", left_wrench), ("right", right_wrench)):
         force, moment = wrench[:3], wrench[3:]
         if force[2] <= 0.0:
-            return False
+            margins.append(-math.inf)
+            continue
         front, back, left, right = dyn.spec.sole_extents(side)
         x, y = -moment[1] / force[2], moment[0] / force[2]
-        if not (-back <= x <= front and -right <= y <= left):
-            return False
-    return True
+        margins.append(min(front - x, x + back, left - y, y + right))
+    return margins

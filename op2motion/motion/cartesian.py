@@ -24,7 +24,7 @@ import numpy as np
 from op2motion.errors import CheckFailed, InputError
 from op2motion.formats.motionfile import Motion, MotionStep
 from op2motion.motion.body_checks import BodyChecks
-from op2motion.motion.checks import clearance
+from op2motion.motion.checks import check_trajectory, clearance
 from op2motion.motion.line_solve import END_SEEDS_RAD, END_TOL_M, EndSearch, Rows, ways
 from op2motion.motion.planner import SPEED_FRACTION
 from op2motion.motion.trajectory import Trajectory
@@ -42,6 +42,7 @@ MIN_LINE_S = 0.1            # the shortest move [s]
 MAX_LINE_M = 0.3            # the longest line [m]: about the OP2's arm span
 ROW_STRIDE = 3              # a motion-file step every 3 rows (24 ms, the robot's shortest step)
 GIVE_UP_M = 2 * LINE_TOL_M  # a way whose hand is this far off its row's target has failed there
+FEET_EVERY = 6             # on two feet the soles' own CoP margins are solved every this many rows (48 ms)
 SPEED_LAG_SHARE = 0.99      # a hand off the line while an arm joint ran this close to its limit: too fast
 ORIENTATIONS = ("free", "keep")
 
@@ -175,9 +176,15 @@ def _targets(request: LineRequest, start: np.ndarray, end: np.ndarray, pointing:
     return s, start + s[:, None] * (end - start), points
 
 
+class TooFast(InputError):
+    """A way kept to the line and the balance but its joints would pass the servos' speed: a longer duration
+    helps."""
+
+
 def _refuse_off_line(request: LineRequest, off: np.ndarray, share: np.ndarray, speeds: np.ndarray,
                      arm: np.ndarray, spec: Spec) -> None:
-    """Bad input where the servos are too slow for the duration; a failed check where the hand leaves the line."""
+    """Bad input where the hand lags with an arm joint at its speed limit; a failed check where the hand leaves the
+    line."""
     worst = int(np.argmax(off))
     limit = SPEED_FRACTION * spec.servo.no_load_speed_rad_s
     lagging = np.abs(speeds[:worst + 1, arm]).max(axis=0)
@@ -190,23 +197,51 @@ def _refuse_off_line(request: LineRequest, off: np.ndarray, share: np.ndarray, s
         raise CheckFailed(f"the {request.hand} hand cannot follow the line: {off[worst] * 1000:.1f} mm off at "
                           f"{worst * CONTROL_PERIOD_S:.2f} s ({share[worst]:.0%} of the way, expected at most "
                           f"{LINE_TOL_M * 1000:.0f} mm): the arm's three joints and the legs cannot hold it there")
+
+
+def _refuse_too_fast(request: LineRequest, speeds: np.ndarray, spec: Spec) -> None:
+    """Bad input (:class:`TooFast`) where a joint's speed (K, 20) [rad/s] passes the servos' limit."""
+    limit = SPEED_FRACTION * spec.servo.no_load_speed_rad_s
     fastest = np.unravel_index(int(np.argmax(np.abs(speeds))), speeds.shape)
     if abs(speeds[fastest]) > limit:
         need = request.duration_s * abs(speeds[fastest]) / limit
-        raise InputError(f"expected at least {need:.2f} s: in {request.duration_s:g} s "
-                         f"{spec.joint_names[int(fastest[1])]} would turn at {abs(speeds[fastest]):.2f} rad/s (over "
-                         f"{limit:.2f} rad/s, {SPEED_FRACTION:.0%} of the MX-28's no-load speed)", "duration")
+        raise TooFast(f"expected at least {need:.2f} s: in {request.duration_s:g} s "
+                      f"{spec.joint_names[int(fastest[1])]} would turn at {abs(speeds[fastest]):.2f} rad/s (over "
+                      f"{limit:.2f} rad/s, {SPEED_FRACTION:.0%} of the MX-28's no-load speed)", "duration")
 
 
-def _refuse_unbalanced(margin: np.ndarray, close: np.ndarray) -> None:
-    """A failed check where the CoM margin (K,) [m] or the clearance (K,) [m] falls below the limits (or below
-    what the first row has)."""
+def _feet_margins(goals: np.ndarray, spec: Spec) -> np.ndarray:
+    """On two feet, the soles' own CoP margins [m] (:func:`~op2motion.model.equilibrium.feet_margin`) at every
+    :data:`FEET_EVERY`-th row and the last (K,), each row taking the margin of the last one measured."""
+    from op2motion.model.equilibrium import feet_margin
+    from op2motion.model.servo import ServoModel
+
+    servo = ServoModel.of(spec)
+    rows = sorted(set(range(0, len(goals), FEET_EVERY)) | {len(goals) - 1})
+    measured = np.array([feet_margin(goals[r], spec, servo.kp, servo.torque_max) for r in rows])
+    return measured[np.searchsorted(rows, np.arange(len(goals)), side="right") - 1]
+
+
+def _refuse_unbalanced(margin: np.ndarray, close: np.ndarray, zmp: np.ndarray, feet: np.ndarray | None) -> None:
+    """A failed check where the CoM margin (K,) [m], the ZMP's margin (K,) [m], on two feet the soles' own CoP
+    margins (K,) [m], or the clearance (K,) [m] falls below the limits (or below what the first row has)."""
     margin_floor = min(LINE_MARGIN_M, float(margin[0]))
     clear_floor = min(SELF_CLEARANCE_M, float(close[0]))
     if margin.min() < margin_floor:
         i = int(np.argmin(margin))
         raise CheckFailed(f"the centre of mass comes {margin[i] * 1000:.1f} mm from the support's edge at "
                           f"{i * CONTROL_PERIOD_S:.2f} s (expected at least {margin_floor * 1000:.1f} mm)")
+    if feet is not None and feet.min() < min(LINE_MARGIN_M, float(feet[0])):
+        i = int(np.argmin(feet))
+        raise CheckFailed(f"a foot's own centre of pressure comes {feet[i] * 1000:.1f} mm from its edge at "
+                          f"{i * CONTROL_PERIOD_S:.2f} s where the servos sag under the load (expected at least "
+                          f"{min(LINE_MARGIN_M, float(feet[0])) * 1000:.1f} mm): that foot would tip")
+    zmp_floor = min(LINE_MARGIN_M, float(zmp[0]))
+    if zmp.min() < zmp_floor:
+        i = int(np.argmin(zmp))
+        raise CheckFailed(f"the ZMP comes {zmp[i] * 1000:.1f} mm from the support's edge at "
+                          f"{i * CONTROL_PERIOD_S:.2f} s (expected at least {zmp_floor * 1000:.1f} mm): the body "
+                          f"accelerates too hard there; a longer --duration may help")
     if close.min() < clear_floor:
         i = int(np.argmin(close))
         raise CheckFailed(f"links come {close[i] * 1000:.1f} mm close at {i * CONTROL_PERIOD_S:.2f} s "
@@ -222,23 +257,26 @@ def _checked(pose: Pose, request: LineRequest, spec: Spec, ik: WholeBodyIk, rows
     share = (rows.targets - start) @ (end - start) / max(float(np.sum((end - start) ** 2)), 1e-18)
     _refuse_off_line(request, np.linalg.norm(reached["hand"] - rows.targets, axis=1), share, speeds, ik.arm, spec)
     measured = BodyChecks(spec, None if Support.of(pose.support).is_double else str(pose.support)).measure(goals)
-    _refuse_unbalanced(measured.margin, measured.clearance)
     pointing = None
     if rows.points is not None:
         pointing = np.arccos(np.clip(np.einsum("ij,ij->i", reached["point"], rows.points), -1.0, 1.0))
-    return LineMove(pose, request.hand, start, end, goals, reached["hand"],
+    move = LineMove(pose, request.hand, start, end, goals, reached["hand"],
                     _distance_to_segment(reached["hand"], start, end), measured.margin, clearance(goals, spec)[0],
                     speeds, pointing, rows.how, rows.reconfigure_s)
+    feet = _feet_margins(goals, spec) if Support.of(pose.support).is_double else None
+    _refuse_unbalanced(measured.margin, move.clearance_m, check_trajectory(move.trajectory(), spec).zmp_margin_m, feet)
+    _refuse_too_fast(request, speeds, spec)
+    return move
 
 
 def _most_useful(request: LineRequest, end: np.ndarray, failures: list[Exception], search: EndSearch) -> Exception:
     """Of the ways' failures, the one to report: the end out of reach where no arm configuration holds the hand
-    there, else a duration too short, else the first way's failure."""
+    there, else a way that only needs a longer duration, else the first way's failure."""
     if search.found == 0:
         return CheckFailed(f"the {request.hand} hand cannot reach the line's end ({', '.join(f'{v:+.3f}' for v in end)}"
                            f" m): from {len(END_SEEDS_RAD)} starting arm configurations the nearest comes "
                            f"{search.closest_m * 1000:.1f} mm short (expected at most {END_TOL_M * 1000:.1f} mm)")
-    durations = [e for e in failures if isinstance(e, InputError)]
+    durations = [e for e in failures if isinstance(e, TooFast)]
     return durations[0] if durations else failures[0]
 
 

@@ -5,10 +5,12 @@
 * ``crouching``: the same, the body free to sink on bending knees (a hand below what straight legs allow);
 * ``from the end``: where the start is a singular arm (a forearm hanging straight down cannot start upwards
   without first folding the elbow the wrong way, into its stop), the arm configurations that hold the hand at the
-  line's end are found from a few seeds (:data:`END_SEEDS_RAD`); from each the line is followed backwards, which
-  arrives at the start point on the arm's other branch. The move then begins with the body changing to that branch
+  line's end are found from a few seeds (:data:`END_SEEDS_RAD`); from each the line is followed backwards (the
+  torso keeping its speed from row to row, :data:`~.whole_body.W_SMOOTH`), which may arrive at the start point on
+  the arm's other branch. The move then begins with the body changing to that branch
   while the hand stays at the start (a reconfiguration, the joints on a minimum-jerk straight line in the IK's
-  unknowns, as fast as :data:`RECONFIGURE_SPEED_RAD_S` allows); it is measured like every other row.
+  unknowns, as fast as :data:`RECONFIGURE_SPEED_RAD_S` and :data:`RECONFIGURE_ACCEL_M_S2` allow); it is measured
+  like every other row.
 
 Each way returns :class:`Rows`; the caller checks them (on the line, balanced, apart, within the servos' speed).
 """
@@ -26,10 +28,11 @@ from op2motion.robot.framework import CONTROL_PERIOD_S
 
 END_SEEDS_RAD = ((0.0, 0.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.0, -1.0), (-1.0, -1.0),
                  (1.0, 1.0))                # (shoulder pitch, elbow) added to the start's arm
-END_TOL_M = 5e-4            # an end configuration holds the hand this close to the line's end
+END_TOL_M = 1e-3            # an end configuration holds the hand this close to the line's end
 SAME_END_RAD = 0.05         # end configurations closer than this (each arm joint) are one
 SAME_START_RAD = 0.01       # a backward solve that arrives this close to the start needs no reconfiguration
 RECONFIGURE_SPEED_RAD_S = 1.4   # the fastest joint while the body changes branch (a quarter of no-load speed)
+RECONFIGURE_ACCEL_M_S2 = 0.5    # ... and the CoM's largest acceleration (its ZMP moves about 12 mm)
 
 
 @dataclass(frozen=True)
@@ -68,19 +71,28 @@ def forward(ik: WholeBodyIk, targets: np.ndarray, points: np.ndarray | None, giv
 
 def _backward(ik: WholeBodyIk, x_end: np.ndarray, targets: np.ndarray, points: np.ndarray | None
               ) -> np.ndarray:
-    """Unknowns (K, 9): each row solved from the one after, from ``x_end`` at the last."""
+    """Unknowns (K, 9): each row solved from the one after, from ``x_end`` at the last, the torso keeping its speed
+    from row to row (this way is the careful one: it is tried last)."""
     x, rows = x_end, [x_end]
+    before = x
     for i in range(len(targets) - 2, -1, -1):
-        x, _ = ik.solve(x, targets[i], None if points is None else points[i])
+        x, before = ik.solve(x, targets[i], None if points is None else points[i], before=before)[0], x
         rows.append(x)
     return np.array(rows[::-1])
 
 
 def _reconfiguration(ik: WholeBodyIk, x_to: np.ndarray) -> np.ndarray:
     """Unknowns (R, 9) from the start's to ``x_to`` on a minimum-jerk straight line, as many rows as the fastest
-    joint needs at :data:`RECONFIGURE_SPEED_RAD_S` (a minimum-jerk move peaks at 15/8 of its mean speed)."""
-    turn = float(np.abs(ik.servo(x_to[None])[0] - ik.start).max())
-    count = max(2, int(math.ceil(15 / 8 * turn / RECONFIGURE_SPEED_RAD_S / CONTROL_PERIOD_S)) + 1)
+    joint needs at :data:`RECONFIGURE_SPEED_RAD_S` (a minimum-jerk move peaks at 15/8 of its mean speed) and the
+    CoM at :data:`RECONFIGURE_ACCEL_M_S2` (its acceleration peaks at 10/sqrt(3) of the distance over the time
+    squared)."""
+    ends = np.array([ik.x0, x_to])
+    turn = float(np.abs(ik.servo(ends[1:])[0] - ik.start).max())
+    com = ik.features(ik.servo(ends))["com"]
+    shift = float(np.linalg.norm(com[1] - com[0]))
+    seconds = max(15 / 8 * turn / RECONFIGURE_SPEED_RAD_S,
+                  math.sqrt(10 / math.sqrt(3) * shift / RECONFIGURE_ACCEL_M_S2))
+    count = max(2, int(math.ceil(seconds / CONTROL_PERIOD_S)) + 1)
     tau = np.linspace(0.0, 1.0, count)
     s = 10 * tau ** 3 - 15 * tau ** 4 + 6 * tau ** 5
     return ik.x0 + s[:, None] * (x_to - ik.x0)

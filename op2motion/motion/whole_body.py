@@ -61,6 +61,7 @@ ROW_STEP = np.array([0.001] * 3 + [0.002] * 3 + [0.023] * 3)  # per 8 ms row at 
 #                            the arm [rad] (0.25 m/s, 2.5 rad/s, 2.9 rad/s: half the MX-28's no-load speed)
 LIMIT_MARGIN_RAD = 0.035      # joints stay 2° inside their mechanical range
 ARM_JOINTS = ("sho_pitch", "sho_roll", "el")
+W_SMOOTH = np.array([1e2] * 3 + [1e0] * 3 + [0.0] * 3)   # per m² (rad²) of the torso's change of speed in a row
 W_CROUCH_Z = 1e-3           # per m² of torso sinking when the body may crouch
 SETTLE_CALLS = 40           # solves at most to settle on a point,
 SETTLE_ROWS = 5.0           # each moving as far as this many rows may
@@ -172,9 +173,10 @@ class WholeBodyIk:
         target = np.concatenate([t * np.sqrt(w) for _, t, w in parts])
         return values, target
 
-    def _cost(self, x: np.ndarray, hand: np.ndarray, point: np.ndarray | None) -> float:
+    def _cost(self, x: np.ndarray, hand: np.ndarray, point: np.ndarray | None,
+              pulls: list[tuple[np.ndarray, np.ndarray]]) -> float:
         values, target = self._stack(self.features(self.servo(x[None])), hand, point)
-        return float(np.sum((target - values[0]) ** 2) + np.sum(self._w_posture * (x - self.x0) ** 2))
+        return float(np.sum((target - values[0]) ** 2) + sum(np.sum(w * (x - ref) ** 2) for w, ref in pulls))
 
     def _bounded(self, x: np.ndarray, trial: np.ndarray, legs: np.ndarray, rows: float) -> np.ndarray:
         """``trial`` pulled back towards ``x`` until no leg joint turns more than ``rows`` times
@@ -186,15 +188,19 @@ class WholeBodyIk:
         turn = np.abs(self.servo(batch)[:, self._leg_joints] - legs).max(axis=1)
         return batch[int(np.flatnonzero(turn <= rows * JOINT_ROW_STEP)[0])]
 
-    def solve(self, x: np.ndarray, hand: np.ndarray, point: np.ndarray | None = None,
-              rows: float = 1.0) -> tuple[np.ndarray, float]:
+    def solve(self, x: np.ndarray, hand: np.ndarray, point: np.ndarray | None = None, rows: float = 1.0,
+              before: np.ndarray | None = None) -> tuple[np.ndarray, float]:
         """Unknowns (9,) from ``x`` that put the hand at ``hand`` (3,) [m] (and the forearm along ``point`` (3,), if
-        given) with the other tasks held, moving as far as ``rows`` rows may, and the hand's remaining error [m]. A
-        step that does not lower the weighted error is retried with more damping."""
+        given) with the other tasks held, moving as far as ``rows`` rows may, and the hand's remaining error [m].
+        Given the row ``before`` ``x``, the torso keeps its speed (:data:`W_SMOOTH`: its acceleration moves the
+        ZMP). A step that does not lower the weighted error is retried with more damping."""
         x = np.asarray(x, dtype=float).copy()
+        pulls = [(self._w_posture, self.x0)]
+        if before is not None:
+            pulls.append((W_SMOOTH, 2.0 * x - before))
         n, low, high = len(x), x - rows * ROW_STEP, x + rows * ROW_STEP
         legs = self.servo(x[None])[0, self._leg_joints]
-        damping, cost = DAMPING, self._cost(x, hand, point)
+        damping, cost = DAMPING, self._cost(x, hand, point, pulls)
         for _ in range(MAX_ITERATIONS):
             batch = np.repeat(x[None], n + 1, axis=0) + np.vstack([np.zeros(n), np.diag(self._fd_step)])
             f = self.features(self.servo(batch))
@@ -204,12 +210,12 @@ class WholeBodyIk:
                 break
             values, target = self._stack(f, hand, point)
             jac = (values[1:] - values[0]).T / self._fd_step            # (m, n)
-            normal = jac.T @ jac + np.diag(self._w_posture)
-            rhs = jac.T @ (target - values[0]) - self._w_posture * (x - self.x0)
+            normal = jac.T @ jac + np.diag(sum(w for w, _ in pulls))
+            rhs = jac.T @ (target - values[0]) - sum(w * (x - ref) for w, ref in pulls)
             for _ in range(8):
                 trial = self._bounded(x, np.clip(x + np.linalg.solve(normal + damping * np.eye(n), rhs), low, high),
                                       legs, rows)
-                trial_cost = self._cost(trial, hand, point)
+                trial_cost = self._cost(trial, hand, point, pulls)
                 if trial_cost < cost:
                     gain = (cost - trial_cost) / max(cost, 1e-30)
                     x, cost, damping = trial, trial_cost, max(damping / 3.0, DAMPING)
