@@ -50,20 +50,20 @@ def sagged_angles(goal: np.ndarray, support: Support | str, spec: Spec, kp: np.n
     return None if found is None or found[1] <= 0.0 else found[0]
 
 
-def feet_margin(goal: np.ndarray, spec: Spec, kp: np.ndarray, torque_max: float) -> float:
-    """On two feet: the least margin [m] of a sole's own centre of pressure to its edge where the compliant servos
-    hold ``goal`` (20,) [rad] at rest (the statically indeterminate split solved as in the module docstring; a foot
-    tips when its own CoP reaches its edge, whatever the hull of both soles says); negative where a sole would
-    press outside itself, -inf where one would pull or no equilibrium exists. Conservative: where the lighter foot
-    only rolls onto its edge the robot may still stand."""
-    found = _sagged(goal, Support.DOUBLE, spec, kp, torque_max)
+def loaded_foot_margin(goal: np.ndarray, spec: Spec, kp: np.ndarray, torque_max: float) -> float:
+    """On two feet: the margin [m] of the loaded sole's own centre of pressure to its edge where the compliant servos
+    hold ``goal`` (20,) [rad] at rest (the statically indeterminate split solved as in the module docstring). In a
+    lean the robot tips where the loaded foot's own CoP reaches its edge, whatever the hull of both soles says;
+    where the split puts the lighter foot's CoP outside it, that foot rolls onto its edge and the loaded one takes
+    the rest of the moment (:func:`_feet_margins`). -inf where no equilibrium exists."""
+    found = _sagged(goal, Support.DOUBLE, spec, kp, torque_max, loaded_only=True)
     return -math.inf if found is None else found[1]
 
 
-def _sagged(goal: np.ndarray, support: Support | str, spec: Spec, kp: np.ndarray,
-            torque_max: float) -> tuple[np.ndarray, float] | None:
-    """The sagged angles and, on two feet, the least CoP margin of the soles (+inf on one foot); None where the
-    servos cannot hold the pose."""
+def _sagged(goal: np.ndarray, support: Support | str, spec: Spec, kp: np.ndarray, torque_max: float,
+            loaded_only: bool = False) -> tuple[np.ndarray, float] | None:
+    """The sagged angles and, on two feet, the least CoP margin of the soles (``loaded_only``: the loaded sole's
+    once the other has rolled onto its edge; +inf on one foot); None where the servos cannot hold the pose."""
     dyn = dynamics_for(spec)
     support = Support.of(support)
     goal = np.asarray(goal, dtype=float)
@@ -109,7 +109,8 @@ def _sagged(goal: np.ndarray, support: Support | str, spec: Spec, kp: np.ndarray
         return None
     if not support.is_double:
         return q, math.inf
-    return q, min(_feet_margins(dyn, q, x[n:]))
+    raw, loaded = _feet_margins(dyn, q, x[n:])
+    return q, (loaded if loaded_only else min(raw))
 
 
 def _right_from_left(dyn: Any, q: np.ndarray) -> tuple[Any, np.ndarray]:
@@ -127,10 +128,12 @@ def _right_from_left(dyn: Any, q: np.ndarray) -> tuple[Any, np.ndarray]:
     return data.oMf[left].actInv(data.oMf[right]), rel_jac
 
 
-def _feet_margins(dyn: Any, q: np.ndarray, right_wrench: np.ndarray) -> list[float]:
+def _feet_margins(dyn: Any, q: np.ndarray, right_wrench: np.ndarray) -> tuple[list[float], float]:
     """Each sole's margin [m] of its own centre of pressure to its edge when the right one carries
-    ``right_wrench`` (own frame); -inf for a sole that would pull (a sole cannot pull, nor press outside
-    itself)."""
+    ``right_wrench`` (own frame), -inf for a sole that would pull (a sole cannot pull, nor press outside itself);
+    and the loaded sole's margin once the lighter one, where its CoP falls outside it, has rolled onto its edge:
+    its CoP clamped into the sole, the loaded sole taking over the moment (the total CoP stays where gravity puts
+    it); -inf where the lighter one would pull (it lifts)."""
     pin, model, data = dyn.pin, dyn.model, dyn.data
     config = dyn.level_configuration(q, "left")
     zero = np.zeros(model.nv)
@@ -139,13 +142,21 @@ def _feet_margins(dyn: Any, q: np.ndarray, right_wrench: np.ndarray) -> list[flo
     pin.framesForwardKinematics(model, data, config)
     jl, jr = (pin.getFrameJacobian(model, data, dyn.sole_ids[s], pin.ReferenceFrame.LOCAL) for s in ("left", "right"))
     left_wrench = np.linalg.solve(jl[:, :6].T, gravity[:6] - jr[:, :6].T @ right_wrench)
-    margins = []
+    feet = []
     for side, wrench in (("left", left_wrench), ("right", right_wrench)):
         force, moment = wrench[:3], wrench[3:]
-        if force[2] <= 0.0:
-            margins.append(-math.inf)
-            continue
+        cop = np.array([-moment[1], moment[0]]) / force[2] if force[2] > 0.0 else np.zeros(2)
         front, back, left, right = dyn.spec.sole_extents(side)
-        x, y = -moment[1] / force[2], moment[0] / force[2]
-        margins.append(min(front - x, x + back, left - y, y + right))
-    return margins
+        margin = min(front - cop[0], cop[0] + back, left - cop[1], cop[1] + right) if force[2] > 0.0 else -math.inf
+        turn = data.oMf[dyn.sole_ids[side]].rotation[:2, :2]
+        feet.append((float(force[2]), cop, margin, (front, back, left, right), turn))
+    heavy, light = sorted(feet, key=lambda f: -f[0])
+    load, cop, _, (front, back, left, right), turn = heavy
+    if light[0] <= 0.0:                                  # the lighter sole would pull: it lifts
+        return [f[2] for f in feet], -math.inf
+    if light[2] < 0.0:                                   # the lighter sole rolls onto its edge
+        l_load, l_cop, _, (l_front, l_back, l_left, l_right), l_turn = light
+        clamped = np.array([np.clip(l_cop[0], -l_back, l_front), np.clip(l_cop[1], -l_right, l_left)])
+        cop = cop + turn.T @ (l_turn @ (l_load * (l_cop - clamped))) / load
+    loaded = min(front - cop[0], cop[0] + back, left - cop[1], cop[1] + right)
+    return [f[2] for f in feet], float(loaded)

@@ -42,6 +42,8 @@ MIN_LINE_S = 0.1            # the shortest move [s]
 MAX_LINE_M = 0.3            # the longest line [m]: about the OP2's arm span
 ROW_STRIDE = 3              # a motion-file step every 3 rows (24 ms, the robot's shortest step)
 GIVE_UP_M = 2 * LINE_TOL_M  # a way whose hand is this far off its row's target has failed there
+FEET_MARGIN_M = 0.01       # on two feet the loaded sole's own CoP stays this far inside it, servos sagged (a
+#                            lean that kept 5.7 mm fell in both engines, rocking on the foot; 21.7 mm stood)
 FEET_EVERY = 6             # on two feet the soles' own CoP margins are solved every this many rows (48 ms)
 SPEED_LAG_SHARE = 0.99      # a hand off the line while an arm joint ran this close to its limit: too fast
 ORIENTATIONS = ("free", "keep")
@@ -211,14 +213,14 @@ def _refuse_too_fast(request: LineRequest, speeds: np.ndarray, spec: Spec) -> No
 
 
 def _feet_margins(goals: np.ndarray, spec: Spec) -> np.ndarray:
-    """On two feet, the soles' own CoP margins [m] (:func:`~op2motion.model.equilibrium.feet_margin`) at every
-    :data:`FEET_EVERY`-th row and the last (K,), each row taking the margin of the last one measured."""
-    from op2motion.model.equilibrium import feet_margin
+    """On two feet, the loaded sole's own CoP margin [m] (:func:`~op2motion.model.equilibrium.loaded_foot_margin`)
+    at every :data:`FEET_EVERY`-th row and the last (K,), each row taking the margin of the last one measured."""
+    from op2motion.model.equilibrium import loaded_foot_margin
     from op2motion.model.servo import ServoModel
 
     servo = ServoModel.of(spec)
     rows = sorted(set(range(0, len(goals), FEET_EVERY)) | {len(goals) - 1})
-    measured = np.array([feet_margin(goals[r], spec, servo.kp, servo.torque_max) for r in rows])
+    measured = np.array([loaded_foot_margin(goals[r], spec, servo.kp, servo.torque_max) for r in rows])
     return measured[np.searchsorted(rows, np.arange(len(goals)), side="right") - 1]
 
 
@@ -231,11 +233,11 @@ def _refuse_unbalanced(margin: np.ndarray, close: np.ndarray, zmp: np.ndarray, f
         i = int(np.argmin(margin))
         raise CheckFailed(f"the centre of mass comes {margin[i] * 1000:.1f} mm from the support's edge at "
                           f"{i * CONTROL_PERIOD_S:.2f} s (expected at least {margin_floor * 1000:.1f} mm)")
-    if feet is not None and feet.min() < min(LINE_MARGIN_M, float(feet[0])):
+    if feet is not None and feet.min() < min(FEET_MARGIN_M, float(feet[0])):
         i = int(np.argmin(feet))
-        raise CheckFailed(f"a foot's own centre of pressure comes {feet[i] * 1000:.1f} mm from its edge at "
+        raise CheckFailed(f"the loaded foot's own centre of pressure comes {feet[i] * 1000:.1f} mm from its edge at "
                           f"{i * CONTROL_PERIOD_S:.2f} s where the servos sag under the load (expected at least "
-                          f"{min(LINE_MARGIN_M, float(feet[0])) * 1000:.1f} mm): that foot would tip")
+                          f"{min(FEET_MARGIN_M, float(feet[0])) * 1000:.1f} mm): the robot would tip over it")
     zmp_floor = min(LINE_MARGIN_M, float(zmp[0]))
     if zmp.min() < zmp_floor:
         i = int(np.argmin(zmp))
