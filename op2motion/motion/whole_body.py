@@ -182,6 +182,8 @@ class WholeBodyIk:
         """``trial`` pulled back towards ``x`` until no leg joint turns more than ``rows`` times
         :data:`JOINT_ROW_STEP` from ``legs`` (near a straight knee a fraction of a millimetre of sinking is degrees
         of knee)."""
+        if np.abs(self.servo(trial[None])[0, self._leg_joints] - legs).max() <= rows * JOINT_ROW_STEP:
+            return trial
         shares = np.linspace(1.0, 0.0, 33)[:, None]
         batch = np.repeat(trial[None], len(shares), axis=0)
         batch[:, :6] = x[:6] + shares * (trial[:6] - x[:6])      # the legs follow the torso alone
