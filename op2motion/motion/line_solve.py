@@ -69,14 +69,17 @@ def forward(ik: WholeBodyIk, targets: np.ndarray, points: np.ndarray | None, giv
     return np.array(rows)
 
 
-def _backward(ik: WholeBodyIk, x_end: np.ndarray, targets: np.ndarray, points: np.ndarray | None
-              ) -> np.ndarray:
+def _backward(ik: WholeBodyIk, x_end: np.ndarray, targets: np.ndarray, points: np.ndarray | None,
+              give_up_m: float) -> np.ndarray | None:
     """Unknowns (K, 9): each row solved from the one after, from ``x_end`` at the last, the torso keeping its speed
-    from row to row (this way is the careful one: it is tried last)."""
+    from row to row (this way is the careful one: it is tried last); None where a row's hand ends more than
+    ``give_up_m`` [m] from its target."""
     x, rows = x_end, [x_end]
     before = x
     for i in range(len(targets) - 2, -1, -1):
-        x, before = ik.solve(x, targets[i], None if points is None else points[i], before=before)[0], x
+        (x, error), before = ik.solve(x, targets[i], None if points is None else points[i], before=before), x
+        if error > give_up_m:
+            return None
         rows.append(x)
     return np.array(rows[::-1])
 
@@ -125,10 +128,13 @@ def _ends(ik: WholeBodyIk, end: np.ndarray, point: np.ndarray | None, search: En
 
 
 def from_the_end(ik: WholeBodyIk, targets: np.ndarray, points: np.ndarray | None, back: bool,
-                 search: EndSearch) -> Iterator[Rows]:
-    """Rows (see the module docstring) for each end configuration, one way ``targets`` (K, 3) [m]."""
+                 search: EndSearch, give_up_m: float) -> Iterator[Rows]:
+    """Rows (see the module docstring) for each end configuration from which the line can be followed back
+    (within ``give_up_m`` [m] at every row), one way ``targets`` (K, 3) [m]."""
     for x_end in _ends(ik, targets[-1], None if points is None else points[-1], search):
-        way = _backward(ik, x_end, targets, points)
+        way = _backward(ik, x_end, targets, points, give_up_m)
+        if way is None:
+            continue
         lead = np.zeros((0, 9))
         if np.abs(way[0] - ik.x0).max() > SAME_START_RAD:
             lead = _reconfiguration(ik, way[0])[:-1]
@@ -150,4 +156,4 @@ def ways(ik: WholeBodyIk, crouching: WholeBodyIk, targets: np.ndarray, points: n
         goals = forward(solver, all_targets, all_points, give_up_m)
         k = len(goals)
         yield Rows(goals, all_targets[:k], None if all_points is None else all_points[:k], how)
-    yield from from_the_end(ik, targets, points, back, search)
+    yield from from_the_end(ik, targets, points, back, search, give_up_m)
