@@ -14,16 +14,20 @@ from op2motion.formats.motionfile import read_motion
 from op2motion.formats.posefile import read_pose
 from op2motion.motion.cartesian import LINE_MARGIN_M, LINE_TOL_M, LineRequest, _slerp_directions, line_move
 from op2motion.motion.checks import check_trajectory
+from op2motion.motion.line_solve import RECONFIGURE_ACCEL_M_S2, RECONFIGURE_SPEED_RAD_S
 from op2motion.motion.pipeline import plan_motion
 from op2motion.motion.whole_body import WholeBodyIk
 from op2motion.physics import check
 from op2motion.posture.cost import SELF_CLEARANCE_M
+from op2motion.robot.framework import CONTROL_PERIOD_S
 
 MOVE_M = 0.05
 FEET_TOL_M = 1e-4            # the other sole's corners stay this close to where they were
 END_TOL_M = LINE_TOL_M      # the hand ends within the line's tolerance of its end (or its start, going back)
 REPLAY_TOL_M = LINE_TOL_M    # the motion file, planned again, keeps the hand as close to the line
 POINT_TOL_RAD = np.radians(1.0)
+PACE_TOL = 0.1               # the branch change's CoM acceleration and joint speed against their limits (the CoM
+#                            is not linear in the unknowns; differences over 8 ms rows)
 AXES = {f"{sign}{axis}": sign_v * np.eye(3)[k] * MOVE_M for k, axis in enumerate("XYZ")
         for sign, sign_v in (("+", 1.0), ("-", -1.0))}
 
@@ -59,6 +63,11 @@ def test_five_centimetres_each_way_from_the_straight_legged_standing_pose_and_ba
         assert move.how == "crouching"
     if axis == "+Z":                  # the forearm hangs straight down: the arm changes branch first
         assert move.how == "from the end" and move.reconfigure_s > 0.0
+        lead = move.goals[:int(round(move.reconfigure_s / CONTROL_PERIOD_S)) + 1]
+        com = WholeBodyIk(spec, "double", hand, lead[0]).features(lead)["com"]
+        accel = np.linalg.norm(np.diff(com, 2, axis=0), axis=1) / CONTROL_PERIOD_S ** 2
+        assert accel.max() <= RECONFIGURE_ACCEL_M_S2 * (1 + PACE_TOL)
+        assert np.abs(np.diff(lead, axis=0)).max() / CONTROL_PERIOD_S <= RECONFIGURE_SPEED_RAD_S * (1 + PACE_TOL)
 
 
 @pytest.mark.parametrize("hand, axis", [("right", "+Y"), ("left", "-Y")])

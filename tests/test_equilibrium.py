@@ -2,15 +2,20 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
+from op2motion.formats.posefile import read_pose
 from op2motion.model.dynamics import dynamics_for
-from op2motion.model.equilibrium import _right_from_left, sagged_angles
+from op2motion.model.equilibrium import _right_from_left, loaded_foot_margin, sagged_angles
 from op2motion.model.servo import ServoModel
 from op2motion.physics import Schedule, Setup, check
 from op2motion.physics.sweeps import sweep_base
 from op2motion.robot.specfile import default_spec
+
+POSES_DIR = Path(__file__).resolve().parents[1] / "poses"
 
 BALANCE_TOL_NM = 1e-5          # torque imbalance left at a solution [N·m]
 MIRROR_TOL_RAD = 1e-4          # left and right sags of a symmetric pose differ by less
@@ -19,6 +24,7 @@ SETTLED_TOL_DEG = 0.5          # physics started at the sagged angles moves them
                                # by degrees)
 HOLD_S = 2.5                   # the shortest check [s]
 SOLE_TOL_M = 1e-6              # the right sole stays where it was put down, seen from the left one
+FOOT_COP_TOL_M = 0.002         # the solved split's per-foot CoP margin against both engines' measured ones
 
 
 @pytest.fixture(scope="module")
@@ -67,3 +73,34 @@ def test_physics_holds_the_sagged_angles(spec, engine):
     assert verdict.stable, verdict.reasons
     moved = np.degrees(np.max(np.abs(verdict.track.q - q), axis=0))
     assert moved.max() < SETTLED_TOL_DEG, dict(zip(spec.joint_names, np.round(moved, 2)))
+
+
+def test_a_lean_that_rolls_the_lighter_foot_loads_the_other_one_towards_its_edge(spec):
+    # walk-ready with the torso shifted sideways by the hip and ankle rolls: at first the load moves onto one foot
+    # (its own CoP margin grows); once the split would press the lighter foot outside itself (no equilibrium with
+    # both soles flat), that foot rolls onto its edge and the loaded one takes over the moment: its margin falls
+    servo = ServoModel.of(spec)
+    goal = read_pose(POSES_DIR / "walkready.json", spec).servo
+
+    def lean(roll_deg: float) -> np.ndarray:
+        out = goal.copy()
+        for joint, sign in (("l_hip_roll", 1), ("r_hip_roll", 1), ("l_ank_roll", -1), ("r_ank_roll", -1)):
+            out[spec.joint_names.index(joint)] += sign * np.radians(roll_deg)
+        return out
+
+    margins = {deg: loaded_foot_margin(lean(deg), spec, servo.kp, servo.torque_max) for deg in (0.0, 4.0, 8.0, 12.0)}
+    assert margins[4.0] > margins[0.0] > 0.015
+    assert sagged_angles(lean(4.0), "double", spec, servo.kp, servo.torque_max) is not None
+    assert sagged_angles(lean(12.0), "double", spec, servo.kp, servo.torque_max) is None
+    assert margins[4.0] > margins[8.0] > margins[12.0] > 0.0
+
+
+@pytest.mark.physics
+def test_per_foot_margin_of_a_standing_pose_agrees_with_both_engines(spec):
+    servo = ServoModel.of(spec)
+    goal = read_pose(POSES_DIR / "standing.json", spec).servo
+    ours = loaded_foot_margin(goal, spec, servo.kp, servo.torque_max)
+    report = check(Schedule.hold(goal, "double", spec, HOLD_S), spec, ("pybullet", "mujoco"))
+    for name, engine in report.engines.items():
+        measured = min(f.cop_margin_m for f in engine.run.feet.values())
+        assert abs(measured - ours) < FOOT_COP_TOL_M, (name, measured, ours)
