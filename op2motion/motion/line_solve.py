@@ -119,7 +119,8 @@ def _ends(ik: WholeBodyIk, end: np.ndarray, point: np.ndarray | None, search: En
         seed[6] += d_pitch
         seed[8] += d_elbow
         seed[6:] = np.clip(seed[6:], ik.lower[:3], ik.upper[:3])
-        x, error = ik.settle(seed, end, point)
+        x, error = ik.settle(seed, end, point, lambda x: any(np.abs(x[6:] - f[6:]).max() <= SAME_END_RAD
+                                                             for f in found))
         search.closest_m = min(search.closest_m, error)
         if error < END_TOL_M and all(np.abs(x[6:] - f[6:]).max() > SAME_END_RAD for f in found):
             found.append(x)

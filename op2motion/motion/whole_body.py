@@ -29,6 +29,8 @@ frame measured on the D-H chain, the Jacobian by forward differences with all th
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from op2motion.kinematics import forward
@@ -229,13 +231,15 @@ class WholeBodyIk:
                 break
         return x, float(np.linalg.norm(self.features(self.servo(x[None]))["hand"][0] - hand))
 
-    def settle(self, x: np.ndarray, hand: np.ndarray, point: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+    def settle(self, x: np.ndarray, hand: np.ndarray, point: np.ndarray | None = None,
+               known: Callable[[np.ndarray], bool] | None = None) -> tuple[np.ndarray, float]:
         """Unknowns (9,) from ``x`` that put the hand at ``hand`` (3,) [m] (the forearm along ``point``, if given),
-        in at most :data:`SETTLE_CALLS` solves of :data:`SETTLE_ROWS` rows each, and the hand's remaining error [m]."""
+        in at most :data:`SETTLE_CALLS` solves of :data:`SETTLE_ROWS` rows each (sooner where ``known`` says the
+        unknowns have come to a solution already found), and the hand's remaining error [m]."""
         error = np.inf
         for _ in range(SETTLE_CALLS):
             previous = x
             x, error = self.solve(x, hand, point, SETTLE_ROWS)
-            if error < SOLVE_TOL_M or np.abs(x - previous).max() < FD_STEP:
+            if error < SOLVE_TOL_M or np.abs(x - previous).max() < FD_STEP or (known is not None and known(x)):
                 break
         return x, error
