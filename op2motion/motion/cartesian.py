@@ -16,6 +16,7 @@ the joint. Frames: the stance sole's (world = support foot: X forward, Y left, Z
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -212,15 +213,22 @@ def _refuse_too_fast(request: LineRequest, speeds: np.ndarray, spec: Spec) -> No
                       f"{limit:.2f} rad/s, {SPEED_FRACTION:.0%} of the MX-28's no-load speed)", "duration")
 
 
-def _feet_margins(goals: np.ndarray, spec: Spec) -> np.ndarray:
-    """On two feet, the loaded sole's own CoP margin [m] (:func:`~op2motion.model.equilibrium.loaded_foot_margin`)
-    at every :data:`FEET_EVERY`-th row and the last (K,), each row taking the margin of the last one measured."""
+def _feet_margin_of(spec: Spec) -> Callable[[np.ndarray], float]:
+    """The loaded sole's own CoP margin [m] of goals (20,) [rad] on two feet, the default servos sagging
+    (:func:`~op2motion.model.equilibrium.loaded_foot_margin`)."""
     from op2motion.model.equilibrium import loaded_foot_margin
     from op2motion.model.servo import ServoModel
 
     servo = ServoModel.of(spec)
+    return lambda goal: loaded_foot_margin(goal, spec, servo.kp, servo.torque_max)
+
+
+def _feet_margins(goals: np.ndarray, spec: Spec) -> np.ndarray:
+    """On two feet, the loaded sole's own CoP margin [m] at every :data:`FEET_EVERY`-th row and the last (K,), each
+    row taking the margin of the last one measured."""
+    margin = _feet_margin_of(spec)
     rows = sorted(set(range(0, len(goals), FEET_EVERY)) | {len(goals) - 1})
-    measured = np.array([loaded_foot_margin(goals[r], spec, servo.kp, servo.torque_max) for r in rows])
+    measured = np.array([margin(goals[r]) for r in rows])
     return measured[np.searchsorted(rows, np.arange(len(goals)), side="right") - 1]
 
 
@@ -297,7 +305,14 @@ def line_move(pose: Pose, request: LineRequest, spec: Spec) -> LineMove:
     crouching = WholeBodyIk(spec, str(pose.support), request.hand, pose.servo, crouch=True)
     failures: list[Exception] = []
     search = EndSearch()
-    for rows in ways(ik, crouching, targets, points, request.back, GIVE_UP_M, search):
+    tips = None
+    if Support.of(pose.support).is_double:               # a forward way stops where a foot would tip
+        margin = _feet_margin_of(spec)
+        floor = min(FEET_MARGIN_M, margin(pose.servo))
+
+        def tips(goal: np.ndarray) -> bool:
+            return margin(goal) < floor
+    for rows in ways(ik, crouching, targets, points, request.back, GIVE_UP_M, search, tips):
         try:
             return _checked(pose, request, spec, ik, rows, start, end)
         except (CheckFailed, InputError) as e:

@@ -18,7 +18,7 @@ Each way returns :class:`Rows`; the caller checks them (on the line, balanced, a
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,6 +32,7 @@ END_TOL_M = 1e-3            # an end configuration holds the hand this close to 
 SAME_END_RAD = 0.05         # end configurations closer than this (each arm joint) are one
 SAME_START_RAD = 0.01       # a backward solve that arrives this close to the start needs no reconfiguration
 RECONFIGURE_SPEED_RAD_S = 1.4   # the fastest joint while the body changes branch (a quarter of no-load speed)
+WATCH_EVERY = 6             # a forward way asks every this many rows (48 ms) whether the robot would tip
 RECONFIGURE_ACCEL_M_S2 = 0.5    # ... and the CoM's largest acceleration (its ZMP moves about 12 mm)
 
 
@@ -57,14 +58,16 @@ def _there_and_back(rows: np.ndarray, back: bool) -> np.ndarray:
     return np.concatenate([rows, rows[-2::-1]]) if back else rows
 
 
-def forward(ik: WholeBodyIk, targets: np.ndarray, points: np.ndarray | None, give_up_m: float) -> np.ndarray:
+def forward(ik: WholeBodyIk, targets: np.ndarray, points: np.ndarray | None, give_up_m: float,
+            tips: Callable[[np.ndarray], bool] | None = None) -> np.ndarray:
     """Goals (k <= K, 20) [rad]: each row solved from the one before, from the start pose, up to the first row
-    whose hand is more than ``give_up_m`` [m] from its target (that way has failed)."""
+    whose hand is more than ``give_up_m`` [m] from its target or, looked at every :data:`WATCH_EVERY` rows, whose
+    goals (20,) ``tips`` says the robot would tip over (that way has failed)."""
     x, rows = ik.x0.copy(), [ik.start.copy()]
     for i in range(1, len(targets)):
         x, error = ik.solve(x, targets[i], None if points is None else points[i])
         rows.append(ik.servo(x[None])[0])
-        if error > give_up_m:
+        if error > give_up_m or (tips is not None and i % WATCH_EVERY == 0 and tips(rows[-1])):
             break
     return np.array(rows)
 
@@ -148,13 +151,14 @@ def from_the_end(ik: WholeBodyIk, targets: np.ndarray, points: np.ndarray | None
 
 
 def ways(ik: WholeBodyIk, crouching: WholeBodyIk, targets: np.ndarray, points: np.ndarray | None,
-         back: bool, give_up_m: float, search: EndSearch) -> Iterator[Rows]:
+         back: bool, give_up_m: float, search: EndSearch,
+         tips: Callable[[np.ndarray], bool] | None = None) -> Iterator[Rows]:
     """The ways in the order to try them, lazily (the later ones cost more); ``targets`` and ``points`` one way; a
-    forward way stops at the first row more than ``give_up_m`` [m] off (its rows end there); ``search`` counts the
-    end configurations tried."""
+    forward way stops at the first row more than ``give_up_m`` [m] off or where ``tips`` (see :func:`forward`)
+    (its rows end there); ``search`` counts the end configurations tried."""
     all_targets, all_points = _there_and_back(targets, back), None if points is None else _there_and_back(points, back)
     for solver, how in ((ik, "forward"), (crouching, "crouching")):
-        goals = forward(solver, all_targets, all_points, give_up_m)
+        goals = forward(solver, all_targets, all_points, give_up_m, tips)
         k = len(goals)
         yield Rows(goals, all_targets[:k], None if all_points is None else all_points[:k], how)
     yield from from_the_end(ik, targets, points, back, search, give_up_m)
