@@ -8,9 +8,11 @@ of :mod:`.line_solve` (forward from the start, crouching, or from the end back),
 The least clearance reported is exact (:func:`.checks.clearance`). A pointing direction of the forearm may be held
 (``keep``) or turned to a new one by quaternion slerp. The result is refused
 (:class:`~op2motion.errors.CheckFailed`) where the hand leaves the line by more than :data:`LINE_TOL_M`, links come
-closer than :data:`~op2motion.posture.cost.SELF_CLEARANCE_M` or the CoM nearer than :data:`LINE_MARGIN_M` to the
-support's edge (each lowered to what the start pose has); a duration too short for the servos is bad input naming
-the joint. Frames: the stance sole's (world = support foot: X forward, Y left, Z up; on both feet the left sole's).
+closer than :data:`~op2motion.posture.cost.SELF_CLEARANCE_M`, the CoM or the multibody ZMP nearer than
+:data:`LINE_MARGIN_M` to the support's edge, or on two feet the loaded sole's own centre of pressure, the servos
+sagging, nearer than :data:`FEET_MARGIN_M` to its edge (each lowered to what the start pose has); a duration too
+short for the servos is bad input naming the joint. Frames: the stance sole's (world = support foot: X forward,
+Y left, Z up; on both feet the left sole's).
 """
 
 from __future__ import annotations
@@ -233,8 +235,8 @@ def _feet_margins(goals: np.ndarray, spec: Spec) -> np.ndarray:
 
 
 def _refuse_unbalanced(margin: np.ndarray, close: np.ndarray, zmp: np.ndarray, feet: np.ndarray | None) -> None:
-    """A failed check where the CoM margin (K,) [m], the ZMP's margin (K,) [m], on two feet the soles' own CoP
-    margins (K,) [m], or the clearance (K,) [m] falls below the limits (or below what the first row has)."""
+    """A failed check where the CoM margin (K,) [m], the ZMP's margin (K,) [m], on two feet the loaded sole's own
+    CoP margin (K,) [m], or the clearance (K,) [m] falls below the limits (or below what the first row has)."""
     margin_floor = min(LINE_MARGIN_M, float(margin[0]))
     clear_floor = min(SELF_CLEARANCE_M, float(close[0]))
     if margin.min() < margin_floor:
