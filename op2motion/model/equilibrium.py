@@ -47,7 +47,7 @@ def sagged_angles(goal: np.ndarray, support: Support | str, spec: Spec, kp: np.n
     [rad] carry the body at rest on ``support``; ``None`` where no equilibrium exists within the servos'
     ``torque_max`` [N·m] (see the module docstring)."""
     found = _sagged(goal, support, spec, kp, torque_max)
-    return None if found is None or found[1] <= 0.0 else found[0]
+    return None if found is None or found[1] < 0.0 else found[0]
 
 
 def loaded_foot_margin(goal: np.ndarray, spec: Spec, kp: np.ndarray, torque_max: float) -> float:
