@@ -87,7 +87,7 @@ class WholeBodyIk:
     is the frame), prepared at the pose ``start`` (20,) [rad]."""
 
     def __init__(self, spec: Spec, support: str, hand: str, start: np.ndarray, crouch: bool = False):
-        self.spec, self.hand, self.crouch = spec, hand, crouch
+        self.spec, self.hand = spec, hand
         sup = Support.of(support)
         self.frame = "left" if sup.is_double else str(sup)
         self.double = sup.is_double
