@@ -1,4 +1,5 @@
-"""Lean sweeps: a pose leaned in 0.5° steps at the support ankle(s) until it falls, in both engines.
+"""Lean sweeps: a pose leaned at the support ankle(s) until it falls, in both engines: 2° steps from upright,
+then 0.5° steps across the switch.
 
 The verdict must be monotonic (once a pose falls, every further lean falls too), the two engines must agree on every
 pose whose margin is beyond ±5 mm, and the verdict must switch where the pose runs out of support: where the settled
@@ -21,10 +22,11 @@ import pytest
 
 from op2motion.physics.sweeps import sweep_verdict
 
-STEP_DEG = 0.5
+STEP_DEG = 0.5                 # the fine step, around each engine's switch
+COARSE_DEG = 2.0               # the step from the upright start until a pose falls
 SECONDS = 3.0
 FALLS_PAST_SWITCH = 3          # steps leaned on after the first fall, to see that nothing stands again
-MAX_STEPS = 70
+MAX_DEG = 35.0
 AGREE_BEYOND_M = 0.005         # the engines agree wherever the margin is beyond this
 SWITCH_TOL_M = 0.005           # the switch lies this close to the edge
 pytestmark = pytest.mark.physics
@@ -35,31 +37,51 @@ SWEEPS = [  # support, kind, direction, what runs out (the CoM's polygon or a lo
 ]
 
 
+def _sweep(pool, support: str, kind: str, direction: int) -> tuple[list[float], dict[str, list]]:
+    """One sweep in both engines: leaned in :data:`COARSE_DEG` steps from upright until a pose falls in either
+    engine, then in :data:`STEP_DEG` steps across the last coarse interval before each engine's first fall and
+    :data:`FALLS_PAST_SWITCH` steps past it; every lean runs in both engines."""
+    verdicts: dict[float, dict[str, tuple]] = {}
+
+    def run(degrees: list[float]) -> None:
+        todo = sorted({round(d, 6) for d in degrees} - set(verdicts))
+        tasks = [(support, kind, direction * d, e, SECONDS) for d in todo for e in ("mujoco", "pybullet")]
+        for (_, _, deg, engine, _), v in zip(tasks, pool.map(sweep_verdict, tasks)):
+            verdicts.setdefault(abs(deg), {})[engine] = v
+
+    coarse = 0.0
+    while coarse <= MAX_DEG:
+        run([coarse, coarse + COARSE_DEG])
+        if not all(v[0] for d in verdicts.values() for v in d.values()):
+            break
+        coarse += 2 * COARSE_DEG
+    for engine in ("mujoco", "pybullet"):
+        first = min((d for d, v in verdicts.items() if not v[engine][0]), default=None)
+        if first is not None:
+            steps = int(round(COARSE_DEG / STEP_DEG))
+            run([first + STEP_DEG * k for k in range(-steps, FALLS_PAST_SWITCH + 1)])
+    angles = sorted(verdicts)
+    return [direction * a for a in angles], {e: [verdicts[a][e] for a in angles] for e in ("mujoco", "pybullet")}
+
+
 @pytest.fixture(scope="module")
 def sweeps():
-    """Every sweep run in MuJoCo step by step, then every pose of it in PyBullet (two processes)."""
-    results = {}
+    """Every sweep, every lean in both engines (two processes)."""
     ctx = multiprocessing.get_context("spawn")
     with ctx.Pool(2) as pool:
-        for support, kind, direction, _ in SWEEPS:
-            angles, mujoco, falls = [], [], 0
-            while falls < 1 + FALLS_PAST_SWITCH and len(angles) < MAX_STEPS:
-                deg = direction * STEP_DEG * len(angles)
-                verdict = sweep_verdict((support, kind, deg, "mujoco", SECONDS))
-                angles.append(deg)
-                mujoco.append(verdict)
-                falls += (not verdict[0]) or falls > 0
-            pybullet = pool.map(sweep_verdict, [(support, kind, a, "pybullet", SECONDS) for a in angles])
-            results[(support, kind, direction)] = (angles, {"mujoco": mujoco, "pybullet": pybullet})
-    return results
+        return {(support, kind, direction): _sweep(pool, support, kind, direction)
+                for support, kind, direction, _ in SWEEPS}
 
 
-def _switch_margin(verdicts: list, index: int = 1) -> float:
+def _switch_margin(angles: list[float], verdicts: list, index: int = 1) -> float:
+    """The margin halfway between the last standing lean and the next :data:`STEP_DEG` (the margin lost per step
+    taken from the last standing lean and the one before it)."""
     stable = [v[0] for v in verdicts]
     last = stable.index(False) - 1
     assert last >= 1, "the sweep must start standing"
-    step = verdicts[last - 1][index] - verdicts[last][index]
-    return verdicts[last][index] - 0.5 * step
+    assert abs(angles[last + 1] - angles[last]) <= STEP_DEG + 1e-9, "the switch must be bracketed by a fine step"
+    per_step = (verdicts[last - 1][index] - verdicts[last][index]) * STEP_DEG / abs(angles[last] - angles[last - 1])
+    return verdicts[last][index] - 0.5 * per_step
 
 
 @pytest.mark.parametrize("support, kind, direction, criterion", SWEEPS,
@@ -71,7 +93,7 @@ def test_lean_sweep(sweeps, support, kind, direction, criterion):
         stable = [v[0] for v in verdicts]
         first_fall = stable.index(False)
         assert not any(stable[first_fall:]), f"{engine}: stands again after falling at {angles[first_fall]}°"
-        switch = _switch_margin(verdicts, 1 if criterion == "com" else 3)
+        switch = _switch_margin(angles, verdicts, 1 if criterion == "com" else 3)
         assert abs(switch) <= SWITCH_TOL_M, (engine, criterion, switch)
     for deg, mj, pb in zip(angles, by_engine["mujoco"], by_engine["pybullet"]):
         if min(abs(mj[1]), abs(pb[1])) > AGREE_BEYOND_M:
