@@ -114,7 +114,20 @@ class WalkController:
         self.delay_rows = int(round(feedback.latency_s / CONTROL_PERIOD_S))
         self.calibration = StiffnessCalibration.of(gait, self.leg_index)
         self.odometry = FootOdometry.of(gait, self.legs, self.delay_rows + LANDING_ROWS)
+        self.planned_legs = self._planned_legs()
         self.state = _State()
+
+    def _planned_legs(self) -> dict[str, np.ndarray]:
+        """Each leg's servo angles (K, 6) [rad] that put its sole where the plan does, every gait row (the
+        reference :meth:`_leg_change` turns from; worked out once, in one batch)."""
+        pos, rot = self.gait.torso_pos, self.gait.torso_rot
+        out = {}
+        for side, leg in self.legs.items():
+            feet = self.gait.timeline.feet[side]
+            sole = np.einsum("kji,kj->ki", rot, feet[:, :3] - pos)                    # rot.T @ (sole - pos)
+            sole_rot = np.swapaxes(rot, 1, 2) @ rot_z(feet[:, 3])
+            out[side] = leg_ik(leg, *within_reach(leg, sole, sole_rot, REACH_SHARE))
+        return out
 
     @classmethod
     def from_preset(cls, preset: str | None = None, steps: int | None = None, spec: Spec | None = None,
@@ -260,8 +273,7 @@ class WalkController:
                 sole, sole_rot = sole + np.array([*last[1], 0.0]), rot_z(last[2]) @ sole_rot
             if contact not in ("double", side) and self.feedback.placement:
                 sole = sole + self.swing_phase[k] * self.odometry.shift(self.feedback.placement, self.plan_velocity[k])
-            planned = leg_ik(leg, *within_reach(leg, rot.T @ (planned_sole - pos), rot.T @ planned_rot,
-                                                REACH_SHARE))[0]
+            planned = self.planned_legs[side][k]
             moved = leg_ik(leg, *within_reach(leg, moved_rot.T @ (sole - moved_pos), moved_rot.T @ sole_rot,
                                               REACH_SHARE))[0]
             out[list(leg.index)] = moved - planned

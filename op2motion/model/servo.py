@@ -81,7 +81,8 @@ class ServoModel:
     def active_torque(self, goal: np.ndarray, q: np.ndarray, kp: np.ndarray | None = None) -> np.ndarray:
         """The torque the PWM drives [N·m] (before damping and friction): clip(Kp (goal - q), ±torque_max), with
         this model's Kp or the given one (a motion's P gains)."""
-        return np.clip((self.kp if kp is None else kp) * (goal - q), -self.torque_max, self.torque_max)
+        torque = (self.kp if kp is None else kp) * (goal - q)
+        return np.minimum(np.maximum(torque, -self.torque_max), self.torque_max)    # np.clip, at a third the cost
 
     def motor_torque(self, goal: np.ndarray, q: np.ndarray, dq: np.ndarray, kp: np.ndarray | None = None
                      ) -> np.ndarray:

@@ -16,6 +16,7 @@
 
 from __future__ import annotations
 
+import functools
 import inspect
 from dataclasses import dataclass, replace
 from typing import Callable
@@ -167,7 +168,7 @@ def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoMod
             recorder.sample(engine, (k + 1) * dt, row, servos.goals, servos.kp)
             state = recorder.lists["states"][-1]
             last = stop.sample((k + 1) * dt, float(state.com[2]), float(planned.states[row].com[2]),
-                               margin_to(state, plan.supports[row], state.com[:2])) or last
+                               functools.partial(margin_to, state, plan.supports[row], state.com[:2])) or last
         if last:
             break
     return recorder.track(), StartFacts(body.state(base_pos, base_rot, q0), planned, ramp, stop.ended)

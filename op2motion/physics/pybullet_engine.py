@@ -112,6 +112,7 @@ class PyBulletEngine:
         c.setJointMotorControlArray(self.robot, self.joints, pb.VELOCITY_CONTROL, forces=[0.0] * len(self.joints))
         info = c.getDynamicsInfo(self.robot, -1)
         self._inertial = (info[3], info[4])      # base CoM frame in the base link frame
+        self._link_in_com = c.invertTransform(*self._inertial)
         self.torso = self.link_index[spec.root_link]
         self._dq = np.zeros(len(self.joints))
         self._zero = [0.0] * len(self.joints)
@@ -142,9 +143,8 @@ class PyBulletEngine:
     def state(self) -> tuple[np.ndarray, np.ndarray]:
         """Joint angles and velocities (20,) [rad, rad/s]."""
         states = self.client.getJointStates(self.robot, self.joints)
-        q = np.fromiter((s[0] for s in states), float, len(states))
-        self._dq = np.fromiter((s[1] for s in states), float, len(states))
-        return q, self._dq
+        self._dq = np.array([s[1] for s in states])
+        return np.array([s[0] for s in states]), self._dq
 
     def step(self, torque: np.ndarray, push: np.ndarray | None = None) -> None:
         """One time step with the servos' active ``torque`` (20,) [N·m] and an optional ``push`` (3,) [N] at the
@@ -162,19 +162,19 @@ class PyBulletEngine:
     def base(self) -> tuple[np.ndarray, np.ndarray]:
         """Torso link frame (= the URDF root's): position [m] and rotation (3, 3)."""
         c = self.client
-        com_pos, com_orn = c.getBasePositionAndOrientation(self.robot)
-        inv = c.invertTransform(*self._inertial)
-        pos, orn = c.multiplyTransforms(com_pos, com_orn, inv[0], inv[1])
+        pos, orn = c.multiplyTransforms(*c.getBasePositionAndOrientation(self.robot), *self._link_in_com)
         return np.asarray(pos), np.asarray(c.getMatrixFromQuaternion(orn)).reshape(3, 3)
 
     def base_velocity(self) -> tuple[np.ndarray, np.ndarray]:
         """Velocity of the torso link frame's origin: linear [m/s] and angular [rad/s], world frame (PyBullet
         reports the base's centre of mass: v_origin = v_com + w x (p_origin - p_com))."""
         c = self.client
-        linear, angular = (np.asarray(v, dtype=float) for v in c.getBaseVelocity(self.robot))
-        com = np.asarray(c.getBasePositionAndOrientation(self.robot)[0])
-        origin, _ = self.base()
-        return linear + np.cross(angular, origin - com), angular
+        (vx, vy, vz), (wx, wy, wz) = c.getBaseVelocity(self.robot)
+        com, orn = c.getBasePositionAndOrientation(self.robot)
+        origin = c.multiplyTransforms(com, orn, *self._link_in_com)[0]
+        rx, ry, rz = (o - p for o, p in zip(origin, com))
+        return (np.array([vx + wy * rz - wz * ry, vy + wz * rx - wx * rz, vz + wx * ry - wy * rx]),
+                np.array([wx, wy, wz]))
 
     def contacts(self) -> list[Contact]:
         """Contacts of the robot with the floor (``other`` None) and with itself."""

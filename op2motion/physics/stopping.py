@@ -21,6 +21,7 @@ Tests run the lean sweeps, stock pages and library poses both ways and compare t
 from __future__ import annotations
 
 import math
+from typing import Callable
 
 import numpy as np
 
@@ -43,7 +44,8 @@ class EarlyStop:
     def __init__(self, plan: Plan, ramped: bool, push_end_s: float = 0.0, enabled: bool = True):
         events = max(RAMP_S if ramped else 0.0, plan.end_s, push_end_s)
         self.duration_s = plan.duration_s
-        self.margins: list[tuple[float, float]] = []          # (t [s], the CoM's margin to the support [m])
+        # (t [s], the CoM's margin to the support [m], or how to work it out: most are never needed)
+        self.margins: list[tuple[float, float | Callable[[], float]]] = []
         self.earliest_s = max(events + STEADY_S, events + SETTLE_HOLD_S, RAMP_S)
         self.events_s, self.enabled = events, enabled
         self.still_from: float | None = None
@@ -65,16 +67,24 @@ class EarlyStop:
 
     def _clear(self, t: float) -> bool:
         """The CoM is clear of the edge by :data:`EDGE_BAND_M` plus its creep until the plan ends."""
-        window = [(s, m) for s, m in self.margins if s >= t - SETTLE_HOLD_S - 1e-9]
+        window = [i for i, (s, _) in enumerate(self.margins) if s >= t - SETTLE_HOLD_S - 1e-9]
         if len(window) < 2:
             return False
-        (t0, m0), (t1, m1) = window[0], window[-1]
+        (t0, m0), (t1, m1) = self._margin(window[0]), self._margin(window[-1])
         creep = max(m0 - m1, 0.0) / max(t1 - t0, 1e-9)                   # [m/s] towards the edge
         return m1 > EDGE_BAND_M + creep * max(self.duration_s - t1, 0.0)
 
-    def sample(self, t: float, com_z_m: float, planned_z_m: float, margin_m: float) -> bool:
-        """Record the CoM's margin [m] to the support at ``t`` [s]; True when the run may end because it fell (the
-        CoM height [m] against its planned height [m])."""
+    def _margin(self, i: int) -> tuple[float, float]:
+        """Sample ``i``'s time [s] and margin [m], worked out once."""
+        t, margin = self.margins[i]
+        if callable(margin):
+            margin = margin()
+            self.margins[i] = (t, margin)
+        return t, margin
+
+    def sample(self, t: float, com_z_m: float, planned_z_m: float, margin_m: float | Callable[[], float]) -> bool:
+        """Record the CoM's margin [m] to the support at ``t`` [s] (or a function that works it out when needed);
+        True when the run may end because it fell (the CoM height [m] against its planned height [m])."""
         self.margins.append((t, margin_m))
         if self.enabled and com_z_m < (1.0 - COM_DROP_FRACTION) * planned_z_m:
             self.ended = FELL
