@@ -126,30 +126,30 @@ def leg_ik(leg: Leg, sole: np.ndarray, rot: np.ndarray) -> np.ndarray:
     (N, 3, 3), both in the torso frame. Raises :class:`InputError` naming the first row beyond the leg's reach."""
     sole = np.asarray(sole, dtype=float).reshape(-1, 3)
     rot = np.asarray(rot, dtype=float).reshape(-1, 3, 3)
-    ankle = sole + rot @ np.array([0.0, 0.0, leg.ankle_to_sole])
+    ankle = sole + rot[:, :, 2] * leg.ankle_to_sole
     r = np.einsum("nji,nj->ni", rot, leg.hip - ankle)           # the hip seen from the ankle, foot frame
-    c = np.linalg.norm(r, axis=1)
+    c = np.sqrt((r * r).sum(axis=1))
     a, b = leg.thigh, leg.calf
-    cos_knee = (c ** 2 - a ** 2 - b ** 2) / (2.0 * a * b)
-    bad = np.flatnonzero((c > a + b + REACH_TOL_M) | (c < abs(a - b) + 1e-6))
-    if bad.size:
-        i = int(bad[0])
+    if np.any((c > a + b + REACH_TOL_M) | (c < abs(a - b) + 1e-6)):
+        i = int(np.flatnonzero((c > a + b + REACH_TOL_M) | (c < abs(a - b) + 1e-6))[0])
         raise InputError(f"expected the {leg.side} ankle within {a + b:.4f} m of the hip, got {c[i]:.4f} m at row "
                          f"{i}", "leg")
-    below = np.flatnonzero(r[:, 2] <= 0.0)
-    if below.size:
-        raise InputError(f"expected the {leg.side} hip above the ankle in the foot frame, got {r[below[0], 2]:.4f} m "
-                         f"at row {int(below[0])}", "leg")
-    knee = np.arccos(np.clip(cos_knee, -1.0, 1.0))
+    if np.any(r[:, 2] <= 0.0):
+        below = int(np.flatnonzero(r[:, 2] <= 0.0)[0])
+        raise InputError(f"expected the {leg.side} hip above the ankle in the foot frame, got {r[below, 2]:.4f} m "
+                         f"at row {below}", "leg")
+    knee = np.arccos(np.minimum(np.maximum((c ** 2 - a ** 2 - b ** 2) / (2.0 * a * b), -1.0), 1.0))
     ank_roll = np.arctan2(r[:, 1], r[:, 2])
     # v: the hip from the ankle in the shin frame before the ankle pitch; its direction less r's gives the pitch
     vx, vz = -a * np.sin(knee), a * np.cos(knee) + b
     ank = np.arctan2(vx, vz) - np.arctan2(r[:, 0], np.hypot(r[:, 1], r[:, 2]))
     m = rot @ rot_x(-ank_roll) @ rot_y(-(knee + ank))
-    yaw = np.arctan2(-m[:, 0, 1], m[:, 1, 1])
-    roll = np.arctan2(m[:, 2, 1], np.hypot(m[:, 2, 0], m[:, 2, 2]))
-    pitch = np.arctan2(-m[:, 2, 0], m[:, 2, 2])
-    return np.column_stack([yaw, roll, pitch, knee, ank, ank_roll]) * leg.sign
+    out = np.empty((len(sole), 6))
+    out[:, 0] = np.arctan2(-m[:, 0, 1], m[:, 1, 1])                                    # yaw
+    out[:, 1] = np.arctan2(m[:, 2, 1], np.hypot(m[:, 2, 0], m[:, 2, 2]))               # roll
+    out[:, 2] = np.arctan2(-m[:, 2, 0], m[:, 2, 2])                                    # pitch
+    out[:, 3], out[:, 4], out[:, 5] = knee, ank, ank_roll
+    return out * leg.sign
 
 
 def legs_ik(spec: Spec, soles: dict[str, tuple[np.ndarray, np.ndarray]], base: np.ndarray) -> np.ndarray:
