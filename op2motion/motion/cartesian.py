@@ -217,18 +217,25 @@ def _refuse_too_fast(request: LineRequest, speeds: np.ndarray, spec: Spec) -> No
 
 def _feet_margin_of(spec: Spec) -> Callable[[np.ndarray], float]:
     """The loaded sole's own CoP margin [m] of goals (20,) [rad] on two feet, the default servos sagging
-    (:func:`~op2motion.model.equilibrium.loaded_foot_margin`)."""
+    (:func:`~op2motion.model.equilibrium.loaded_foot_margin`); each pose solved once (a forward way watches the rows
+    the final check measures again)."""
     from op2motion.model.equilibrium import loaded_foot_margin
     from op2motion.model.servo import ServoModel
 
     servo = ServoModel.of(spec)
-    return lambda goal: loaded_foot_margin(goal, spec, servo.kp, servo.torque_max)
+    known: dict[bytes, float] = {}
+
+    def margin(goal: np.ndarray) -> float:
+        key = np.asarray(goal, dtype=float).tobytes()
+        if key not in known:
+            known[key] = loaded_foot_margin(goal, spec, servo.kp, servo.torque_max)
+        return known[key]
+    return margin
 
 
-def _feet_margins(goals: np.ndarray, spec: Spec) -> np.ndarray:
-    """On two feet, the loaded sole's own CoP margin [m] at every :data:`FEET_EVERY`-th row and the last (K,), each
-    row taking the margin of the last one measured."""
-    margin = _feet_margin_of(spec)
+def _feet_margins(goals: np.ndarray, margin: Callable[[np.ndarray], float]) -> np.ndarray:
+    """On two feet, the loaded sole's own CoP margin [m] (``margin`` of a pose) at every :data:`FEET_EVERY`-th row
+    and the last (K,), each row taking the margin of the last one measured."""
     rows = sorted(set(range(0, len(goals), FEET_EVERY)) | {len(goals) - 1})
     measured = np.array([margin(goals[r]) for r in rows])
     return measured[np.searchsorted(rows, np.arange(len(goals)), side="right") - 1]
@@ -261,8 +268,9 @@ def _refuse_unbalanced(margin: np.ndarray, close: np.ndarray, zmp: np.ndarray, f
 
 
 def _checked(pose: Pose, request: LineRequest, spec: Spec, ik: WholeBodyIk, rows: Rows, start: np.ndarray,
-             end: np.ndarray) -> LineMove:
-    """The move of ``rows`` after every check (raises :class:`CheckFailed` or :class:`InputError`)."""
+             end: np.ndarray, feet_margin: Callable[[np.ndarray], float]) -> LineMove:
+    """The move of ``rows`` after every check (raises :class:`CheckFailed` or :class:`InputError`); on two feet
+    ``feet_margin`` gives a pose's loaded-sole CoP margin [m]."""
     goals = rows.goals
     reached = ik.features(goals)
     speeds = np.gradient(goals, CONTROL_PERIOD_S, axis=0)
@@ -275,7 +283,7 @@ def _checked(pose: Pose, request: LineRequest, spec: Spec, ik: WholeBodyIk, rows
     move = LineMove(pose, request.hand, start, end, goals, reached["hand"],
                     _distance_to_segment(reached["hand"], start, end), measured.margin, clearance(goals, spec)[0],
                     speeds, pointing, rows.how, rows.reconfigure_s)
-    feet = _feet_margins(goals, spec) if Support.of(pose.support).is_double else None
+    feet = _feet_margins(goals, feet_margin) if Support.of(pose.support).is_double else None
     _refuse_unbalanced(measured.margin, move.clearance_m, check_trajectory(move.trajectory(), spec).zmp_margin_m, feet)
     _refuse_too_fast(request, speeds, spec)
     return move
@@ -308,15 +316,15 @@ def line_move(pose: Pose, request: LineRequest, spec: Spec) -> LineMove:
     failures: list[Exception] = []
     search = EndSearch()
     tips = None
+    margin = _feet_margin_of(spec)
     if Support.of(pose.support).is_double:               # a forward way stops where a foot would tip
-        margin = _feet_margin_of(spec)
         floor = min(FEET_MARGIN_M, margin(pose.servo))
 
         def tips(goal: np.ndarray) -> bool:
             return margin(goal) < floor
     for rows in ways(ik, crouching, targets, points, request.back, GIVE_UP_M, search, tips):
         try:
-            return _checked(pose, request, spec, ik, rows, start, end)
+            return _checked(pose, request, spec, ik, rows, start, end, margin)
         except (CheckFailed, InputError) as e:
             failures.append(e)
     raise _most_useful(request, end, failures, search)
