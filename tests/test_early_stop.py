@@ -32,8 +32,12 @@ STOCK_PAGES = [15, 16]            # sit down, stand up (from the init pose)
 
 
 def _both(schedule: Schedule, spec, engine: str, setup: RunSetup = RunSetup()):
+    """The run with early stopping and the one played full length (the same run where the first played the whole
+    plan: near its edge a pose does, and the engines are deterministic)."""
     runner = _Runner(schedule, spec, Setup(), 2, None)
     early = runner.run(engine, setup)
+    if early.ended == FULL:
+        return early, early
     full = runner.run(engine, RunSetup(push=setup.push, full_length=True))
     return early, full
 

@@ -114,7 +114,9 @@ class WalkController:
         self.delay_rows = int(round(feedback.latency_s / CONTROL_PERIOD_S))
         self.calibration = StiffnessCalibration.of(gait, self.leg_index)
         self.odometry = FootOdometry.of(gait, self.legs, self.delay_rows + LANDING_ROWS)
+        self.sole_rots = {side: rot_z(gait.timeline.feet[side][:, 3]) for side in SIDES}   # (K, 3, 3) each
         self.planned_legs = self._planned_legs()
+        self.support_points = self._support_points()
         self.state = _State()
 
     def _planned_legs(self) -> dict[str, np.ndarray]:
@@ -125,7 +127,7 @@ class WalkController:
         for side, leg in self.legs.items():
             feet = self.gait.timeline.feet[side]
             sole = np.einsum("kji,kj->ki", rot, feet[:, :3] - pos)                    # rot.T @ (sole - pos)
-            sole_rot = np.swapaxes(rot, 1, 2) @ rot_z(feet[:, 3])
+            sole_rot = np.swapaxes(rot, 1, 2) @ self.sole_rots[side]
             out[side] = leg_ik(leg, *within_reach(leg, sole, sole_rot, REACH_SHARE))
         return out
 
@@ -246,10 +248,12 @@ class WalkController:
             out[list(leg.index)] = natural * leg.sign
         return out
 
-    def _support_point(self, k: int) -> np.ndarray:
+    def _support_points(self) -> np.ndarray:
+        """The point (K, 3) [m] the body turns about at each gait row: the planned contact sole's centre, midway
+        between the soles on two feet."""
         feet = self.gait.timeline.feet
-        sides = Support.of(self.gait.timeline.contact[k]).feet
-        return np.mean([feet[side][k, :3] for side in sides], axis=0)
+        return np.array([np.mean([feet[side][k, :3] for side in Support.of(contact).feet], axis=0)
+                         for k, contact in enumerate(self.gait.timeline.contact)])
 
     def _leg_change(self, k: int, pitch: float, roll: float, heading: float = 0.0) -> np.ndarray:
         """The servo change (20,) [rad] that turns the whole body by (pitch, roll) [rad] about the support point,
@@ -257,13 +261,12 @@ class WalkController:
         sole's centre (in full at landing) and moved against the feet's placement error (leg odometry); after the
         closing step, the landed sole where it landed."""
         pos, rot = self.gait.torso_pos[k], self.gait.torso_rot[k]
-        pivot, turn = self._support_point(k), rot_y(pitch) @ rot_x(roll)
+        pivot, turn = self.support_points[k], rot_y(pitch) @ rot_x(roll)
         moved_pos, moved_rot = pivot + turn @ (pos - pivot), turn @ rot
         contact = self.gait.timeline.contact[k]
         out = np.zeros(len(self.spec.joints))
         for side, leg in self.legs.items():
-            planned_sole, planned_rot = self.gait.timeline.feet[side][k, :3], rot_z(self.gait.timeline.feet[side][k, 3])
-            sole, sole_rot = planned_sole, planned_rot
+            sole, sole_rot = self.gait.timeline.feet[side][k, :3], self.sole_rots[side][k]
             if contact not in ("double", side) and heading:
                 steer = rot_z(heading * self.swing_phase[k])
                 stance = self.gait.timeline.feet[contact][k, :3]
