@@ -3,6 +3,7 @@ balanced: on the line within 2 mm, the feet where they were, the CoM inside the 
 
 from __future__ import annotations
 
+import functools
 import json
 
 import numpy as np
@@ -19,6 +20,7 @@ from op2motion.motion.pipeline import plan_motion
 from op2motion.motion.whole_body import WholeBodyIk
 from op2motion.physics import check
 from op2motion.posture.cost import SELF_CLEARANCE_M
+from op2motion.robot.specfile import default_spec
 from op2motion.robot.framework import CONTROL_PERIOD_S
 
 MOVE_M = 0.05
@@ -33,8 +35,18 @@ AXES = {f"{sign}{axis}": sign_v * np.eye(3)[k] * MOVE_M for k, axis in enumerate
 
 
 def _move(spec, pose: str, hand: str, delta, back: bool = True, duration_s: float = 1.0, orientation="free"):
+    if back and duration_s == 1.0 and orientation == "free" and spec is default_spec():
+        return _move_and_back(pose, hand, tuple(float(v) for v in delta))
     return line_move(read_pose(POSES / f"{pose}.json", spec),
                      LineRequest(hand, duration_s, delta_m=tuple(delta), orientation=orientation, back=back), spec)
+
+
+@functools.lru_cache(maxsize=None)
+def _move_and_back(pose: str, hand: str, delta: tuple[float, float, float]):
+    """The 1-s line there and back with the shipped spec, solved once per test process (the physics tests play
+    lines the geometric tests have solved)."""
+    return line_move(read_pose(POSES / f"{pose}.json", default_spec()),
+                     LineRequest(hand, 1.0, delta_m=delta, orientation="free", back=True), default_spec())
 
 
 def _assert_on_the_line_and_back(spec, move, hand: str) -> None:
