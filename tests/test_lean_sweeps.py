@@ -39,8 +39,8 @@ SWEEPS = [  # support, kind, direction, what runs out (the CoM's polygon or a lo
 
 def _sweep(pool, support: str, kind: str, direction: int) -> tuple[list[float], dict[str, list]]:
     """One sweep in both engines: leaned in :data:`COARSE_DEG` steps from upright until a pose falls in either
-    engine, then in :data:`STEP_DEG` steps across the last coarse interval before each engine's first fall and
-    :data:`FALLS_PAST_SWITCH` steps past it; every lean runs in both engines."""
+    engine, then in :data:`STEP_DEG` steps from each engine's first fall back to the lean before it, and on until
+    at least :data:`FALLS_PAST_SWITCH` leans lie past it; every lean runs in both engines."""
     verdicts: dict[float, dict[str, tuple]] = {}
 
     def run(degrees: list[float]) -> None:
@@ -55,11 +55,23 @@ def _sweep(pool, support: str, kind: str, direction: int) -> tuple[list[float], 
         if not all(v[0] for d in verdicts.values() for v in d.values()):
             break
         coarse += 2 * COARSE_DEG
-    for engine in ("mujoco", "pybullet"):
-        first = min((d for d, v in verdicts.items() if not v[engine][0]), default=None)
-        if first is not None:
-            steps = int(round(COARSE_DEG / STEP_DEG))
-            run([first + STEP_DEG * k for k in range(-steps, FALLS_PAST_SWITCH + 1)])
+    for fill in (True, False):        # first the fine steps back from each first fall, then the leans past it
+        while True:
+            todo: set[float] = set()
+            for engine in ("mujoco", "pybullet"):
+                falls = sorted(d for d, v in verdicts.items() if not v[engine][0])
+                if not falls:                   # not fallen yet in this engine: lean on
+                    todo |= {max(verdicts) + STEP_DEG * k for k in range(1, FALLS_PAST_SWITCH + 1)}
+                elif fill:
+                    below = max((d for d in verdicts if d < falls[0]), default=falls[0])
+                    todo |= {falls[0] - STEP_DEG * k for k in range(1, int(round((falls[0] - below) / STEP_DEG)))}
+                else:
+                    past = sum(d > falls[0] for d in verdicts)
+                    todo |= {max(verdicts) + STEP_DEG * k for k in range(1, FALLS_PAST_SWITCH - past + 1)}
+            todo = {round(d, 6) for d in todo if d <= MAX_DEG} - set(verdicts)
+            if not todo:
+                break
+            run(sorted(todo))
     angles = sorted(verdicts)
     return [direction * a for a in angles], {e: [verdicts[a][e] for a in angles] for e in ("mujoco", "pybullet")}
 
