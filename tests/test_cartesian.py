@@ -20,8 +20,8 @@ from op2motion.motion.pipeline import plan_motion
 from op2motion.motion.whole_body import WholeBodyIk
 from op2motion.physics import check
 from op2motion.posture.cost import SELF_CLEARANCE_M
-from op2motion.robot.specfile import default_spec
 from op2motion.robot.framework import CONTROL_PERIOD_S
+from op2motion.robot.specfile import default_spec
 
 MOVE_M = 0.05
 FEET_TOL_M = 1e-4            # the other sole's corners stay this close to where they were
