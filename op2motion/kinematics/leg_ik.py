@@ -130,12 +130,14 @@ def leg_ik(leg: Leg, sole: np.ndarray, rot: np.ndarray) -> np.ndarray:
     r = np.einsum("nji,nj->ni", rot, leg.hip - ankle)           # the hip seen from the ankle, foot frame
     c = np.sqrt((r * r).sum(axis=1))
     a, b = leg.thigh, leg.calf
-    if np.any((c > a + b + REACH_TOL_M) | (c < abs(a - b) + 1e-6)):
-        i = int(np.flatnonzero((c > a + b + REACH_TOL_M) | (c < abs(a - b) + 1e-6))[0])
+    out_of_reach = (c > a + b + REACH_TOL_M) | (c < abs(a - b) + 1e-6)
+    if np.any(out_of_reach):
+        i = int(np.flatnonzero(out_of_reach)[0])
         raise InputError(f"expected the {leg.side} ankle within {a + b:.4f} m of the hip, got {c[i]:.4f} m at row "
                          f"{i}", "leg")
-    if np.any(r[:, 2] <= 0.0):
-        below = int(np.flatnonzero(r[:, 2] <= 0.0)[0])
+    hip_below = r[:, 2] <= 0.0
+    if np.any(hip_below):
+        below = int(np.flatnonzero(hip_below)[0])
         raise InputError(f"expected the {leg.side} hip above the ankle in the foot frame, got {r[below, 2]:.4f} m "
                          f"at row {below}", "leg")
     knee = np.arccos(np.minimum(np.maximum((c ** 2 - a ** 2 - b ** 2) / (2.0 * a * b), -1.0), 1.0))
