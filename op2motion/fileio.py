@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import os
 import secrets
+import stat
 from pathlib import Path
 from typing import Mapping, Type
 
@@ -20,22 +21,52 @@ from op2motion.errors import InputError, Op2MotionError, OutputError
 MAX_INPUT_BYTES = 16 * 2 ** 20    # every file op2motion reads is far smaller (an action file: 128 KiB)
 
 
+def _file_kind(mode: int) -> str:
+    """What a non-regular file is, in words (for messages)."""
+    for test, kind in ((stat.S_ISDIR, "directory"), (stat.S_ISFIFO, "named pipe"), (stat.S_ISSOCK, "socket"),
+                       (stat.S_ISCHR, "character device"), (stat.S_ISBLK, "block device")):
+        if test(mode):
+            return kind
+    return "special file"
+
+
 def read_bytes(path: str | Path, what: str, error: Type[Op2MotionError] = InputError) -> bytes:
-    """The bytes of ``path``; errors (``error`` class) say what file was expected and why it cannot be read. At most
-    :data:`MAX_INPUT_BYTES` are read: a larger file (or an endless one such as ``/dev/zero``) is refused."""
+    """The bytes of ``path``; errors (``error`` class) say what file was expected and why it cannot be read.
+
+    The file is opened without blocking and must be a regular file: a named pipe, a device (``/dev/zero``,
+    ``/dev/ttyUSB0``), a socket or a directory is refused before anything is read, so no input can make a command
+    wait for a writer that never comes. At most :data:`MAX_INPUT_BYTES` are read: a larger file is refused."""
     p = Path(path)
     try:
-        with p.open("rb") as f:
-            data = f.read(MAX_INPUT_BYTES + 1)
+        fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0))
     except FileNotFoundError:
         raise error(f"no such {what}", str(p)) from None
     except IsADirectoryError:
         raise error(f"expected a {what}, got a directory", str(p)) from None
     except OSError as exc:
         raise error(f"cannot read {what}: {exc.strerror or exc}", str(p)) from None
-    if len(data) > MAX_INPUT_BYTES:
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            kind = _file_kind(info.st_mode)
+            raise error(f"expected a {what} (a regular file), got a {kind}", str(p))
+        if info.st_size > MAX_INPUT_BYTES:
+            raise error(f"expected at most {MAX_INPUT_BYTES // 2 ** 20} MiB ({what}), got {info.st_size} bytes",
+                        str(p))
+        chunks, size = [], 0
+        while size <= MAX_INPUT_BYTES:       # a file may grow while it is read (or claim size 0, as /proc files do)
+            chunk = os.read(fd, min(2 ** 20, MAX_INPUT_BYTES + 1 - size))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+    except OSError as exc:
+        raise error(f"cannot read {what}: {exc.strerror or exc}", str(p)) from None
+    finally:
+        os.close(fd)
+    if size > MAX_INPUT_BYTES:
         raise error(f"expected at most {MAX_INPUT_BYTES // 2 ** 20} MiB ({what}), got more", str(p))
-    return data
+    return b"".join(chunks)
 
 
 def read_text(path: str | Path, what: str, error: Type[Op2MotionError] = InputError) -> str:

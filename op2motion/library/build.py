@@ -125,6 +125,10 @@ def build_library(jobs: Sequence[Job], spec: Spec, out_dir: str | Path, settings
         raise InputError(f"expected a folder, got a file: {out}", "out")
     workers = check_workers(workers)
     settings.pso.validated()
+    if executor is not None and executor.kind == "ray":    # a missing Ray or a bad address: refused before writing
+        from op2motion.library.cluster import check_ray
+
+        check_ray(executor.address)
     out.mkdir(parents=True, exist_ok=True)
     rows = load_index(out, spec)
     todo = [j for j in jobs if j.name not in rows]

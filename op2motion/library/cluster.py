@@ -9,29 +9,61 @@ optional extra; asking for it without it installed is an input error that names 
 
 from __future__ import annotations
 
+import contextlib
+import io
+import os
+import signal
 import socket
-from typing import Any, Sequence
+import sys
+import tempfile
+import threading
+from typing import Any, Iterator, Sequence
 
 from op2motion.errors import InputError
 from op2motion.library.grid import Job
 from op2motion.library.jobs import THREAD_VARIABLES, BuildSettings, Recorder, solve_job
 from op2motion.robot.spec import Spec
 
-CONNECT_TIMEOUT_S = 5.0     # a cluster's head that does not answer a TCP connection in this long is not there
+CONNECT_TIMEOUT_S = 3.0     # a cluster's head that does not accept a TCP connection in this long is not there [s]
+ANSWER_TIMEOUT_S = 3.0      # ... nor one that does not answer the HTTP/2 greeting of Ray's GCS (gRPC) in this long [s]
+WAIT_S = 0.25               # the driver waits for results this long at a time, so signals are handled [s]
+INIT_TIMEOUT_S = 9.0        # ray.init on an address that passed both: the rest of the 15 s a refusal may take [s]
+HTTP2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n"
+HTTP2_SETTINGS = b"\x00\x00\x00\x04\x00\x00\x00\x00\x00"      # an empty SETTINGS frame (type 4, stream 0)
 
 
-def _reachable(address: str) -> None:
-    """Raise :class:`InputError` unless ``address`` (``host:port``, or ``auto``/``ray://...``) accepts a connection
-    (Ray itself retries an absent head for minutes)."""
+def check_address(address: str) -> None:
+    """Raise :class:`InputError` unless ``address`` (``host:port``, or ``auto``/``ray://...``) is a running Ray head,
+    within :data:`CONNECT_TIMEOUT_S` + :data:`ANSWER_TIMEOUT_S`. Ray's own connection retries an absent or foreign
+    head for minutes; here a head must accept a TCP connection and answer the HTTP/2 greeting with its SETTINGS
+    frame, as the gRPC server of Ray's GCS does (a web server, a database or a silent port does not)."""
     if address == "auto" or "://" in address:
         return
     host, _, port = address.rpartition(":")
-    if not host or not port.isdigit():
+    if not host or not port.isdigit() or not 0 < int(port) < 65536:
         raise InputError(f"expected HOST:PORT (e.g. 10.0.0.5:6379) or auto, got {address!r}", "address")
+    host = host.strip("[]")
     try:
-        socket.create_connection((host, int(port)), timeout=CONNECT_TIMEOUT_S).close()
+        conn = socket.create_connection((host, int(port)), timeout=CONNECT_TIMEOUT_S)
+    except socket.gaierror as exc:
+        raise InputError(f"expected a host name or address, got {host!r} ({exc.strerror})", "address") from None
     except OSError as exc:
         raise InputError(f"expected a running Ray cluster at {address}: {exc.strerror or exc}", "address") from None
+    with conn:
+        try:
+            conn.settimeout(ANSWER_TIMEOUT_S)
+            conn.sendall(HTTP2_PREFACE + HTTP2_SETTINGS)
+            head = b""
+            while len(head) < 9:
+                chunk = conn.recv(9 - len(head))
+                if not chunk:
+                    break
+                head += chunk
+        except OSError:
+            head = b""
+    if len(head) < 9 or head[3] != 4 or head[5:9] != b"\x00\x00\x00\x00":
+        raise InputError(f"expected a Ray cluster's head (its GCS port, e.g. 6379) at {address}, but it does not "
+                         f"answer as Ray does", "address")
 
 
 def _ray() -> Any:
@@ -43,29 +75,95 @@ def _ray() -> Any:
     return ray
 
 
+def check_ray(address: str | None) -> None:
+    """Before anything is written: Ray installed, and ``address`` (if any) a running Ray head
+    (:func:`check_address`)."""
+    ray = _ray()
+    if address is not None and not ray.is_initialized():
+        check_address(address)
+
+
+@contextlib.contextmanager
+def _quiet_stderr() -> Iterator[None]:
+    """Ray's messages while it starts and stops (its notices through ``sys.stderr``, and its C++ core's log lines,
+    which go straight to file descriptor 2) into a log file under the temp folder, not the user's terminal."""
+    log = tempfile.NamedTemporaryFile(prefix="op2motion-ray-", suffix=".log", delete=False)
+    saved, previous = os.dup(2), sys.stderr
+    try:
+        with contextlib.suppress(Exception):
+            sys.stderr.flush()
+        os.dup2(log.fileno(), 2)
+        sys.stderr = io.TextIOWrapper(log, encoding="utf-8", errors="replace", write_through=True)
+        yield
+    finally:
+        with contextlib.suppress(Exception):
+            sys.stderr.flush()
+        sys.stderr = previous
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
+def _init(ray: Any, address: str | None, workers: int) -> None:
+    """``ray.init`` in the main thread (Ray ties the processes it starts to the thread that starts them), bounded by
+    :data:`INIT_TIMEOUT_S` where a timer can interrupt it (a head that greets as gRPC but is not Ray would keep it
+    retrying), and our Ctrl-C/SIGTERM handling put back (Ray's C++ core installs its own SIGTERM handler, which
+    prints a stack dump and exits 15)."""
+    import logging
+
+    env = {"env_vars": {name: "1" for name in THREAD_VARIABLES}}     # one maths thread per task
+    main = threading.current_thread() is threading.main_thread()
+    handlers = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGALRM)} if main else {}
+
+    def too_long(signum: int, frame: Any) -> None:
+        raise TimeoutError(f"no answer in {INIT_TIMEOUT_S:g} s")
+
+    try:
+        if main and address is not None:
+            signal.signal(signal.SIGALRM, too_long)
+            signal.setitimer(signal.ITIMER_REAL, INIT_TIMEOUT_S)
+        ray.init(address=address, num_cpus=None if address else workers, include_dashboard=False,
+                 log_to_driver=False, configure_logging=False, logging_level=logging.ERROR, runtime_env=env)
+    except (ConnectionError, RuntimeError, ValueError, TimeoutError) as exc:
+        raise InputError(f"expected a running Ray cluster at {address!r}: {exc}", "address") from None
+    finally:
+        if main:
+            signal.setitimer(signal.ITIMER_REAL, 0.0)
+            for sig, handler in handlers.items():
+                if handler is not None:
+                    signal.signal(sig, handler)
+
+
 def run_on_ray(todo: Sequence[Job], spec: Spec, spec_text: str, settings: BuildSettings, workers: int,
                record: Recorder, address: str | None) -> None:
     """Solve ``todo`` as Ray tasks (``address``: a running cluster, e.g. ``127.0.0.1:6379`` or ``auto``; None starts
-    Ray on this machine with ``workers`` CPUs) and record each result as it comes."""
+    Ray on this machine with ``workers`` CPUs) and record each result as it comes. Ray's output goes to a log file,
+    not the terminal; a Ray started here is ended however the build ends (:mod:`.reaper`)."""
+    from op2motion.library.reaper import release, watch
+
     ray = _ray()
     started = not ray.is_initialized()
     if started and address is not None:
-        _reachable(address)
-    if started:
-        env = {"env_vars": {name: "1" for name in THREAD_VARIABLES}}     # one maths thread per task
-        try:
-            ray.init(address=address, num_cpus=None if address else workers, include_dashboard=False,
-                     log_to_driver=False, configure_logging=False, runtime_env=env)
-        except (ConnectionError, RuntimeError, ValueError) as exc:
-            raise InputError(f"expected a running Ray cluster at {address!r}: {exc}", "address") from None
-    task = ray.remote(num_cpus=1)(solve_job)
-    pending = [task.remote((job, None, spec.sha256, settings, spec_text)) for job in todo]
+        check_address(address)
+    watchdog = watch() if started and address is None else None
     try:
-        while pending:
-            done, pending = ray.wait(pending, num_returns=1)
-            record(*ray.get(done[0]))
-    finally:
-        for ref in pending:               # interrupted: nothing more is solved
-            ray.cancel(ref, force=True)
         if started:
-            ray.shutdown()
+            with _quiet_stderr():
+                _init(ray, address, workers)
+        try:
+            task = ray.remote(num_cpus=1)(solve_job)
+            pending = [task.remote((job, None, spec.sha256, settings, spec_text)) for job in todo]
+            try:
+                while pending:     # short waits: Ctrl-C and SIGTERM are handled between them
+                    done, pending = ray.wait(pending, num_returns=1, timeout=WAIT_S)
+                    for ref in done:
+                        record(*ray.get(ref))
+            finally:
+                for ref in pending:               # interrupted: nothing more is solved
+                    with contextlib.suppress(Exception):
+                        ray.cancel(ref, force=True)
+        finally:
+            if started:
+                with _quiet_stderr():
+                    ray.shutdown()
+    finally:
+        release(watchdog)
