@@ -76,6 +76,9 @@ def entry() -> None:
     code = main()
     for sig in (signal.SIGINT, signal.SIGTERM):     # the result is decided: a late signal changes nothing
         signal.signal(sig, signal.SIG_IGN)
+    from op2motion.fileio import remove_temps
+
+    remove_temps(final=True)                        # a write cut short in another thread leaves no temp file
     import atexit
 
     atexit._run_exitfuncs()

@@ -13,6 +13,7 @@ import contextlib
 import os
 import secrets
 import stat
+import threading
 from pathlib import Path
 from typing import Mapping, Type
 
@@ -100,15 +101,47 @@ def check_output_path(path: str | Path, param: str = "output") -> Path:
     return target
 
 
+_temps: set[Path] = set()          # temp files being written now (removed by remove_temps on an interrupt)
+_temps_lock = threading.Lock()
+_closing = False
+
+
 def _temp_beside(target: Path) -> tuple[int, Path]:
-    """Create a new temp file beside ``target`` (mode 0666 less the umask) and return (fd, path)."""
+    """Create a new temp file beside ``target`` (mode 0666 less the umask) and return (fd, path); it is recorded
+    until :func:`_done_with` so that :func:`remove_temps` can clean up after an interrupt."""
     for _ in range(100):
         tmp = target.with_name(f".{target.name}.{secrets.token_hex(6)}.tmp")
-        try:
-            return os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666), tmp
-        except FileExistsError:
-            continue
+        with _temps_lock:
+            if _closing:
+                raise OutputError("not written: the program is ending", str(target))
+            try:
+                fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
+            except FileExistsError:
+                continue
+            _temps.add(tmp)
+            return fd, tmp
     raise OutputError("cannot create a temporary file", str(target))  # pragma: no cover
+
+
+def _done_with(tmp: Path) -> None:
+    with _temps_lock:
+        _temps.discard(tmp)
+
+
+def remove_temps(final: bool = False) -> int:
+    """Remove every temp file still being written (a run interrupted by Ctrl-C or SIGTERM, or a thread cut short
+    as the program ends); with ``final`` (the program ends now) also refuse new ones. Returns how many were
+    removed. The targets keep their old content."""
+    global _closing
+    removed = 0
+    with _temps_lock:
+        _closing = _closing or final
+        for tmp in list(_temps):
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+                removed += 1
+        _temps.clear()
+    return removed
 
 
 def write_atomic(path: str | Path, data: bytes | str) -> Path:
@@ -136,6 +169,8 @@ def write_atomic(path: str | Path, data: bytes | str) -> Path:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
+    finally:
+        _done_with(tmp)
     return target
 
 
@@ -170,6 +205,7 @@ class OutputSet:
         targets = {key: self.paths[key] for key in self.staged}
         folders = sorted({p.parent.resolve() for p in targets.values()}, key=str)
         temps: list[tuple[Path, Path]] = []
+        made: list[Path] = []
         locks: list[int] = []
         try:
             for folder in folders:
@@ -179,6 +215,7 @@ class OutputSet:
                 fcntl.flock(fd, fcntl.LOCK_EX)
             for key, target in targets.items():
                 fd, tmp = _temp_beside(target)
+                made.append(tmp)
                 temps.append((tmp, target))
                 with os.fdopen(fd, "wb") as handle:
                     handle.write(self.staged[key])
@@ -195,6 +232,8 @@ class OutputSet:
             for tmp, _ in temps:
                 with contextlib.suppress(OSError):
                     os.unlink(tmp)
+            for tmp in made:
+                _done_with(tmp)
             for fd in locks:
                 os.close(fd)  # closing releases the lock
         return targets

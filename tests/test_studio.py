@@ -17,6 +17,7 @@ import pytest
 
 from op2motion.errors import InputError
 from op2motion.formats.posefile import read_pose
+from op2motion.studio.folder import Workspace
 from op2motion.studio.session import CLEARANCE_WARN_M, Session
 
 ROOT = os.path.join(os.path.dirname(__file__), "..")
@@ -149,12 +150,12 @@ def test_the_page_moves_a_joint_and_checks_in_physics(spec, tmp_path):
         pytest.skip("Debian's chromium is not installed (the CI script installs it)")
     from op2motion.studio.server import Studio
 
-    studio = Studio(spec, Session(spec, read_pose(WALKREADY, spec)))
+    studio = Studio(spec, Session(spec, read_pose(WALKREADY, spec)), workspace=Workspace(tmp_path))
     try:
         with playwright.sync_playwright() as p:
             browser = p.chromium.launch(executable_path=CHROMIUM, args=BROWSER_ARGS, headless=True)
             page = browser.new_page(viewport={"width": 1280, "height": 800})
-            page.goto(f"http://127.0.0.1:{studio.port}")
+            page.goto(studio.url)
             page.wait_for_selector("canvas", timeout=WAIT_S * 1000)
             before = _stable_view(page)
             label = page.locator("label").filter(has_text=re.compile(r"^l_sho_pitch$")).first   # the slider's
@@ -184,17 +185,39 @@ def test_the_page_moves_a_joint_and_checks_in_physics(spec, tmp_path):
         studio.stop()
 
 
-def test_ctrl_c_ends_the_server_within_3_s(tmp_path):
+def _stuck_client(url: str) -> socket.socket:
+    """A client that opens the page's WebSocket and then stops reading (a tiny receive buffer, never read)."""
+    import base64
+    from urllib.parse import urlsplit
+
+    parts = urlsplit(url)
+    s = socket.socket()
+    s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1024)
+    s.connect((parts.hostname, parts.port))
+    s.sendall((f"GET {parts.path.rstrip('/')} HTTP/1.1\r\nHost: {parts.netloc}\r\nUpgrade: websocket\r\n"
+               f"Connection: Upgrade\r\nSec-WebSocket-Version: 13\r\nSec-WebSocket-Key: "
+               f"{base64.b64encode(os.urandom(16)).decode()}\r\nSec-WebSocket-Protocol: viser-v1.1.1\r\n"
+               f"Origin: http://{parts.netloc}\r\n\r\n").encode())
+    return s
+
+
+def test_ctrl_c_ends_the_server_within_3_s_even_with_a_stuck_client(tmp_path):
     import signal
 
     proc = subprocess.Popen([sys.executable, "-m", "op2motion", "studio", WALKREADY, "--port", "0"], cwd=tmp_path,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    stuck = None
     try:
         line = proc.stdout.readline()
-        assert "http://127.0.0.1:" in line and ":0 " not in line, line
+        assert "http://127.0.0.1:" in line and ":0/" not in line, line
+        stuck = _stuck_client(line.split()[2])
+        time.sleep(1.0)                                  # the server fills what the client will never read
         proc.send_signal(signal.SIGINT)
         t0 = time.monotonic()
-        assert proc.wait(timeout=10) == 0 and time.monotonic() - t0 < 3.0
-        assert "Traceback" not in proc.stderr.read()
+        assert proc.wait(timeout=10) == 130 and time.monotonic() - t0 < 3.0
+        err = proc.stderr.read()
+        assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("op2motion: interrupted"), err
     finally:
         proc.kill()
+        if stuck is not None:
+            stuck.close()

@@ -3,13 +3,20 @@
 from __future__ import annotations
 
 import argparse
+import errno
 import socket
+import sys
+import threading
 import time
+from pathlib import Path
 from typing import Any
 
 from op2motion.commands.common import add_command, whole
-from op2motion.errors import InputError
+from op2motion.errors import InputError, Interrupted
 from op2motion.robot.spec import Spec
+
+RESOLVE_TIMEOUT_S = 5.0      # a host name that does not resolve in this long is refused [s]
+STOP_WAIT_S = 1.5            # the server gets this long to close its connections on Ctrl-C [s]
 
 
 def register(sub: Any) -> None:
@@ -17,23 +24,71 @@ def register(sub: Any) -> None:
     p = add_command(sub, "studio", cmd_studio, "edit a pose in the browser: joints, balance, physics check, save",
                     "Serve the pose studio on a local web page (viser; install with pip install '.[studio]'): "
                     "the robot from the generated URDF, a slider and jog buttons per joint, the support, both "
-                    "centres of mass and their margins, the closest links, check in physics, save. Ctrl-C ends it.")
+                    "centres of mass and their margins, the closest links, check in physics, save. The printed "
+                    "address carries a secret; the page saves and opens files only inside one folder. Ctrl-C ends it.")
     p.add_argument("pose", nargs="?", metavar="POSE|ACTION_FILE",
                    help="pose file to start from, or a ROBOTIS action file (.bin) to play and edit pages of (starting "
                         "from its page 1's last step); default: the standing pose")
     p.add_argument("--port", type=whole(0, 65535), default=8080, help="port (0: a free one, printed; default 8080)")
-    p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1, this machine only)")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address to listen on (default 127.0.0.1, this machine only; another address lets other "
+                        "machines that have the printed address edit and save files in the folder)")
+    p.add_argument("--workdir", metavar="DIR",
+                   help="the one folder the page may open and save files in (default: the folder of POSE, or the "
+                        "current folder)")
 
 
-def _port_free(host: str, port: int) -> None:
-    """viser quietly takes the next port when one is in use: refuse instead, naming the port."""
-    if port == 0:
-        return
-    with socket.socket() as s:
+def _resolve(host: str, port: int) -> tuple[int, Any]:
+    """The address family and socket address ``host`` resolves to, within :data:`RESOLVE_TIMEOUT_S`."""
+    if not host.strip() or host != host.strip():
+        raise InputError(f"expected an address to listen on (127.0.0.1, or 0.0.0.0 for every interface), got "
+                         f"{host!r}", "host")
+    found: list[Any] = []
+
+    def lookup() -> None:
         try:
-            s.bind((host, port))
+            found.append(socket.getaddrinfo(host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)[0])
+        except (OSError, UnicodeError) as exc:
+            found.append(exc)
+
+    worker = threading.Thread(target=lookup, daemon=True)
+    worker.start()
+    worker.join(RESOLVE_TIMEOUT_S)
+    if not found:
+        raise InputError(f"expected a host name that resolves, got {host!r} (no answer in {RESOLVE_TIMEOUT_S:g} s)",
+                         "host")
+    if isinstance(found[0], BaseException):
+        raise InputError(f"expected an address of this machine or a name that resolves, got {host!r}", "host")
+    family, _, _, _, address = found[0]
+    return family, address
+
+
+def check_listen(host: str, port: int) -> None:
+    """Refuse, naming the right flag, a host that does not resolve or is not this machine's, and a port in use or
+    not allowed (viser would quietly take the next port, or wait forever on an address it cannot bind)."""
+    family, address = _resolve(host, port)
+    with socket.socket(family, socket.SOCK_STREAM) as s:
+        try:
+            s.bind(address)
         except OSError as exc:
-            raise InputError(f"expected a free port, but {host}:{port} is in use ({exc.strerror})", "port") from None
+            if exc.errno == errno.EADDRINUSE:
+                raise InputError(f"expected a free port, but {host}:{port} is in use", "port") from None
+            if exc.errno == errno.EACCES:
+                raise InputError(f"expected a port this user may open (1024 and up), got {port}", "port") from None
+            raise InputError(f"expected an address of this machine, got {host!r} ({exc.strerror})", "host") from None
+
+
+def _folder(args: argparse.Namespace) -> Path:
+    """The studio's folder: ``--workdir``, else the folder of the file given, else the current folder; a file given
+    must lie inside it."""
+    from op2motion.studio.folder import Workspace
+
+    given = Path(args.pose).resolve() if args.pose else None
+    root = Path(args.workdir) if args.workdir else (given.parent if given is not None else Path("."))
+    workspace = Workspace(root)
+    if given is not None and not given.is_relative_to(workspace.root):
+        raise InputError(f"expected {args.pose} inside the studio's folder {workspace.root}", "workdir")
+    return workspace.root
 
 
 def cmd_studio(args: argparse.Namespace, spec: Spec) -> int:
@@ -42,6 +97,8 @@ def cmd_studio(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.robot.joints import BookAngles, book_to_servo
     from op2motion.robot.pose import Pose
     from op2motion.robot.support import Support
+    from op2motion.studio.folder import Workspace
+    from op2motion.studio.guard import is_loopback
     from op2motion.studio.session import Session
 
     action = args.pose is not None and args.pose.lower().endswith(".bin")
@@ -52,7 +109,8 @@ def cmd_studio(args: argparse.Namespace, spec: Spec) -> int:
     else:
         pose = (read_pose(args.pose, spec) if args.pose else
                 Pose("standing", Support.DOUBLE, book_to_servo(BookAngles.standing("left"), spec)[0]))
-    _port_free(args.host, args.port)
+    workspace = Workspace(_folder(args))
+    check_listen(args.host, args.port)
     try:
         from op2motion.studio.server import Studio
     except ImportError as exc:
@@ -60,13 +118,26 @@ def cmd_studio(args: argparse.Namespace, spec: Spec) -> int:
     session = Session(spec, pose)
     if action:
         session.open_action(args.pose)
-    studio = Studio(spec, session, args.host, args.port, action_path=args.pose if action else "")
+    studio = Studio(spec, session, args.host, args.port, action_path=args.pose if action else "",
+                    workspace=workspace, pose_path="" if action or not args.pose else args.pose)
     try:                                  # Ctrl-C from the moment the address is printed ends it cleanly
-        print(f"op2motion studio: http://{args.host}:{studio.port} (Ctrl-C ends it)", flush=True)
+        if not is_loopback(args.host):
+            print(f"op2motion studio: warning: listening on {args.host}, not only this machine: whoever has the "
+                  f"address below can edit poses and save files in {workspace.root}", file=sys.stderr, flush=True)
+        print(f"op2motion studio: {studio.url} (files in {workspace.root}; Ctrl-C ends it)", flush=True)
         while True:
             time.sleep(0.2)
     except KeyboardInterrupt:
-        print("op2motion studio: stopped", flush=True)
+        raise Interrupted("studio stopped") from None
     finally:
-        studio.stop()
-    return 0
+        _stop(studio)
+
+
+def _stop(studio: Any) -> None:
+    """End the server, waiting at most :data:`STOP_WAIT_S` (a client that stopped reading cannot hold the exit)."""
+    from op2motion.fileio import remove_temps
+
+    closer = threading.Thread(target=studio.stop, daemon=True)
+    closer.start()
+    closer.join(STOP_WAIT_S)
+    remove_temps()

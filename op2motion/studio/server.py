@@ -8,6 +8,11 @@ slider over its mechanical range and jog buttons; a typed entry (joint, degrees)
 choice; "check in physics" runs the check on a worker thread (the page stays live) and draws the settled pose as a
 grey ghost; "save pose" writes the pose file atomically. Every edit the page makes is recorded in
 :attr:`Studio.events` (what the Python side saw), and refused edits show their message in the page.
+
+Security (README *Pose studio*): the page and its WebSocket only behind the per-run secret and from the studio's
+own origin (:mod:`.guard`); files only inside one folder, overwriting only files the studio opened or created,
+after confirmation (:mod:`.folder`); one editing tab, all-or-nothing edits, one check and one optimisation at a
+time (:mod:`.edits`, :mod:`.work`).
 """
 
 from __future__ import annotations
@@ -15,7 +20,6 @@ from __future__ import annotations
 import contextlib
 import io
 import tempfile
-import threading
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +29,9 @@ from op2motion.errors import Op2MotionError
 from op2motion.model.urdf import build_urdf
 from op2motion.robot.spec import Spec
 from op2motion.studio.actions import ActionPanel
+from op2motion.studio.edits import Edits
+from op2motion.studio.folder import Workspace
+from op2motion.studio.guard import Gate, guarded_viser, new_secret
 from op2motion.studio.place import root_in_sole, wxyz
 from op2motion.studio.session import Readout, Session
 from op2motion.studio.work import LongWork
@@ -33,20 +40,37 @@ JOG_STEPS = ("-5°", "-1°", "+1°", "+5°")
 PURPLE, GREEN = (0.55, 0.25, 0.75), (0.1, 0.6, 0.1)
 
 
-class Studio(LongWork, ActionPanel):
-    """A running studio page on ``host:port`` (port 0: a free one, read back in :attr:`port`)."""
+class Studio(Edits, LongWork, ActionPanel):
+    """A running studio page on ``host:port`` (port 0: a free one, read back in :attr:`port`); open :attr:`url`.
 
-    def __init__(self, spec: Spec, session: Session, host: str = "127.0.0.1", port: int = 0, action_path: str = ""):
-        import viser
+    Args:
+        spec: The robot.
+        session: The pose under edit.
+        host: Address to listen on (127.0.0.1: this machine only).
+        port: Port (0: a free one).
+        action_path: An action file opened with the studio (inside ``workspace``), or "".
+        workspace: The folder the page may read and write (default: the current folder).
+        pose_path: The pose file the session came from (inside ``workspace``), the save box's default.
+        secret: The address's secret (default: a fresh one).
+    """
+
+    def __init__(self, spec: Spec, session: Session, host: str = "127.0.0.1", port: int = 0, action_path: str = "",
+                 workspace: Workspace | None = None, pose_path: str = "", secret: str | None = None):
         import yourdfpy
         from viser.extras import ViserUrdf
 
-        self.spec, self.session, self._opened_path = spec, session, action_path
-        self.events: list[tuple[str, str]] = []
-        self._lock, self._quiet = threading.Lock(), False
+        self.spec, self.session = spec, session
+        self.workspace = workspace if workspace is not None else Workspace(".")
+        self._opened_path = self.workspace.relative(self.workspace.claim(action_path)) if action_path else ""
+        self._pose_path = self.workspace.relative(self.workspace.claim(pose_path)) if pose_path else ""
+        self._quiet = False
+        self.gate = Gate(host, secret or new_secret())
         with contextlib.redirect_stdout(io.StringIO()):        # viser's banner: the CLI prints its own line
-            self.server = viser.ViserServer(host=host, port=port, verbose=False)
+            self.server = guarded_viser(host, port, self.gate)
         self.port = int(self.server.get_port())
+        shown = host if ":" not in host else f"[{host}]"
+        self.url = f"http://{'127.0.0.1' if host in ('0.0.0.0', '::') else shown}:{self.port}/{self.gate.secret}/"
+        self._init_edits()
         self.server.scene.configure_environment_map(hdri=None)
         with tempfile.TemporaryDirectory(prefix="op2motion-studio-") as tmp:
             path = Path(tmp) / "op2.urdf"
@@ -73,25 +97,34 @@ class Studio(LongWork, ActionPanel):
         self._message = gui.add_markdown("")
         self._support = gui.add_dropdown("support", ("left", "right", "double"),
                                          initial_value=self.session.support.value)
-        self._support.on_update(lambda _: self._edit("support", lambda: self.session.set_support(self._support.value)))
-        check = gui.add_button("check in physics")
-        check.on_click(lambda _: self._start_check())
+        self._support.on_update(lambda e: None if e.client_id is None else self._edit(
+            "support", lambda: self.session.set_support(self._support.value), e))
+        self._pen_button = gui.add_button("edit in this tab")
+        self._pen_button.on_click(self._take_pen)
+        self._check_button = gui.add_button("check in physics")
+        self._check_button.on_click(self._start_check)
         self._verdict = gui.add_markdown("physics: not checked")
         self._target_goal: dict[str, tuple[float, float, float]] = {}
         with gui.add_folder("optimise"):
-            self._hand = gui.add_dropdown("hand", ("left", "right"))
-            gui.add_button("optimise to the hand target").on_click(lambda _: self._start_optimise())
-            self._pins = gui.add_text("pinned joints", "", hint="comma-separated joint names kept as they are")
-            gui.add_button("balance (keep the hand and the pins)").on_click(lambda _: self._start_balance())
+            self._hand = self._guard_input(gui.add_dropdown("hand", ("left", "right")))
+            self._optimise_button = gui.add_button("optimise to the hand target")
+            self._optimise_button.on_click(self._start_optimise)
+            self._pins = self._guard_input(gui.add_text("pinned joints", "",
+                                                        hint="comma-separated joint names kept as they are"))
+            gui.add_button("balance (keep the hand and the pins)").on_click(self._start_balance)
             self._progress = gui.add_progress_bar(0.0, visible=False)
         with gui.add_folder("type a value"):
-            self._joint = gui.add_dropdown("joint", tuple(self.spec.joint_names))
-            self._value = gui.add_text("degrees", "")
-            gui.add_button("set").on_click(lambda _: self._edit(
-                "set", lambda: self.session.set_joint(self._joint.value, self._value.value)))
+            self._joint = self._guard_input(gui.add_dropdown("joint", tuple(self.spec.joint_names)))
+            self._value = self._guard_input(gui.add_text("degrees", ""))
+            gui.add_button("set").on_click(lambda e: self._edit(
+                "set", lambda: self.session.set_joint(self._joint.value, self._value.value), e))
         with gui.add_folder("save"):
-            self._path = gui.add_text("pose file", f"poses/{self.session.name}.json")
-            gui.add_button("save pose").on_click(lambda _: self._save())
+            self._path = self._guard_input(gui.add_text(
+                "pose file", self._pose_path or f"{self.session.name}.json",
+                hint=f"a .json file name inside {self.workspace.root}"))
+            self._overwrite_pose = self._guard_input(gui.add_checkbox("overwrite", False))
+            self._save_button = gui.add_button("save pose")
+            self._save_button.on_click(self._save)
         self._build_action_gui()
         with gui.add_folder("joint table", expand_by_default=False):
             self._table = gui.add_markdown("")
@@ -114,10 +147,10 @@ class Studio(LongWork, ActionPanel):
             self._targets[hand] = control
 
     def _target_handler(self, hand: str, control: Any) -> Any:
-        def dragged(_: Any) -> None:
+        def dragged(event: Any) -> None:
             self._dragging = True
             try:
-                self._edit("target", lambda: self._reach(hand, tuple(control.position)))
+                self._edit("target", lambda: self._reach(hand, tuple(control.position)), event)
             finally:
                 self._dragging = False
         return dragged
@@ -130,28 +163,15 @@ class Studio(LongWork, ActionPanel):
         return readout
 
     def _slider_handler(self, name: str, slider: Any) -> Any:
-        def moved(_: Any) -> None:
-            if not self._quiet:                   # not when the page follows the pose
-                self._edit("slider", lambda: self.session.set_joint(name, slider.value))
+        def moved(event: Any) -> None:
+            if event.client_id is not None:       # from a tab (not the page following the pose)
+                self._edit("slider", lambda: self.session.set_joint(name, slider.value), event)
         return moved
 
     def _jog_handler(self, name: str) -> Any:
         def jogged(event: Any) -> None:
-            self._edit("jog", lambda: self.session.jog(name, float(str(event.target.value).rstrip("°"))))
+            self._edit("jog", lambda: self.session.jog(name, _jog_degrees(event.target.value)), event)
         return jogged
-
-    def _edit(self, kind: str, action: Any) -> None:
-        """Apply one edit; a refused one leaves the pose and shows why."""
-        with self._lock:
-            try:
-                readout = action()
-            except Op2MotionError as exc:
-                self.events.append((kind, f"refused: {exc}"))
-                self._message.content = f"**refused**: {exc}"
-                return
-            self._message.content = ""
-            self._show(readout)
-            self.events.append((kind, "applied"))          # after the page shows it
 
     def _show(self, readout: Readout) -> None:
         """Draw the pose and its readout."""
@@ -171,10 +191,12 @@ class Studio(LongWork, ActionPanel):
             self.server.scene.add_icosphere(f"/com/{name}", radius=0.008, color=rgb, position=com)
             self.server.scene.add_icosphere(f"/com/{name}_ground", radius=0.004, color=rgb,
                                             position=(com[0], com[1], 0.0))
-        self._quiet = True                    # the sliders follow the pose without editing it again
+        self._quiet = True                    # the sliders follow the pose (events from Python edit nothing)
         try:
+            if self._support.value != s.support.value:
+                self._support.value = s.support.value
             for state in readout.joints:
-                if abs(self._sliders[state.name].value - state.degrees) > 1e-6:
+                if not abs(self._sliders[state.name].value - state.degrees) <= 1e-6:     # NaN too
                     self._sliders[state.name].value = state.degrees
         finally:
             self._quiet = False
@@ -188,16 +210,37 @@ class Studio(LongWork, ActionPanel):
                                  f"{'self-collision' if readout.colliding else 'no self-collision'}</span>"
                                  + ("\n\n" + "\n\n".join(marks) if marks else ""))
 
-    def _save(self) -> None:
-        try:
-            path = self.session.save(self._path.value)
-        except (Op2MotionError, OSError) as exc:
-            self._message.content = f"**not saved**: {exc}"
-            self.events.append(("save", f"refused: {exc}"))
-            return
-        self._message.content = f"saved {path}"
-        self.events.append(("save", str(path)))
+    def _save(self, event: Any = None) -> None:
+        """Write the pose inside the studio's folder (see :mod:`.folder`)."""
+        from op2motion.robot.pose import check_pose_name
+
+        with self._lock:
+            why = self._pen(event)
+            if why is not None:
+                self._refused("save", why, event)
+                return
+            try:
+                path = self.workspace.for_writing(self._path.value, ".json", "pose file",
+                                                  bool(self._overwrite_pose.value))
+                with contextlib.suppress(Op2MotionError):       # the pose takes the file's name when it can
+                    self.session.name = check_pose_name(path.stem)
+                self.session.save(path)
+            except (Op2MotionError, OSError) as exc:
+                self._refused("save", str(exc), event)
+                return
+            self.workspace.claim(path)
+            self._settle_input(self._overwrite_pose, False)
+            shown = self.workspace.relative(path)
+            self._message.content = f"saved {shown}"
+            self.events.append(("save", shown))
 
     def stop(self) -> None:
         """End the server."""
         self.server.stop()
+
+
+def _jog_degrees(label: object) -> float:
+    """A jog button's label ("-5°" ... "+5°") as degrees; anything else is refused."""
+    if label not in JOG_STEPS:
+        raise ValueError(f"expected one of {', '.join(JOG_STEPS)}, got {label!r}")
+    return float(str(label).rstrip("°"))

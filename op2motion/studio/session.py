@@ -205,6 +205,8 @@ class Session:
         played = self.played
         if played is None:
             raise InputError("expected a played page: play one first", "page")
+        if isinstance(t_s, bool) or not isinstance(t_s, (int, float)) or not math.isfinite(t_s):
+            raise InputError(f"expected a time [s], got {t_s!r}", "time [s]")
         row = int(min(max(round(float(t_s) / played.dt), 0), len(played.goals) - 1))
         self.servo, self.support = np.array(played.goals[row], dtype=float), Support.of(played.supports[row])
         return self.readout()
