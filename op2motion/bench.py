@@ -85,6 +85,23 @@ def _studio_figures(spec: Spec, repeat: int) -> dict[str, Any]:
 
 
 BENCH_PAGE = 4            # the stock "hi" page: 464 ticks from the init pose, three pages chained
+READY_PAGE = 9            # the stock walk-ready page (the planning figures' start)
+
+
+def check_bench_action(action: ActionFile, spec: Spec) -> ActionFile:
+    """Refuse at once, before any figure is measured, an action file without the pages the bench plays: the start
+    (page 1), :data:`BENCH_PAGE` (played through its chain) and :data:`READY_PAGE`."""
+    from op2motion.errors import InputError, Op2MotionError
+    from op2motion.motion.pipeline import START_PAGE, play_page
+
+    try:
+        for page in (START_PAGE, READY_PAGE):
+            action.pose(page, spec)
+        play_page(action, BENCH_PAGE, spec)
+    except Op2MotionError as exc:
+        raise InputError(f"expected an action file with playable pages {START_PAGE}, {BENCH_PAGE} and {READY_PAGE} "
+                         f"(the stock file's init, hi and walk-ready): {exc}", "action") from None
+    return action
 
 
 def _motion_figures(spec: Spec, action: ActionFile | None, repeat: int) -> dict[str, Any]:
@@ -131,7 +148,7 @@ def _planning_figures(spec: Spec, action: ActionFile | None, repeat: int) -> dic
     ends = [Waypoint("front", a, 0.0, 0.0, Support.DOUBLE), Waypoint("back", b, 2.0, 0.0, Support.DOUBLE)]
     out: dict[str, Any] = {}
     route_ms = _best_ms(lambda: out.update(t=plan(ends, spec, seed=0)), min(repeat, 3))
-    ready = Pose("walkready", Support.DOUBLE, action.pose(9, spec).servo)
+    ready = Pose("walkready", Support.DOUBLE, action.pose(READY_PAGE, spec).servo)
     line_ms = _best_ms(lambda: out.update(m=line_move(ready, LineRequest("right", 1.0, delta_m=(0.05, 0.0, 0.0)),
                                                         spec)), min(repeat, 3))
     return {"route_plan_ms": round(route_ms, 1), "line_move_ms": round(line_ms, 1),

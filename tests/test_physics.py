@@ -234,11 +234,10 @@ def test_trap_a_link_without_inertial_weighs_one_kilogram(spec):
 
 
 @pytest.mark.physics
-def test_trap_loadurdf_needs_a_file_and_the_temp_file_is_removed(spec):
-    before = set(os.listdir(tempfile.gettempdir()))
+def test_trap_loadurdf_needs_a_file_and_the_temp_file_is_removed(spec, tmp_path, monkeypatch):
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))      # a private temp folder: other tests make URDFs too
     PyBulletEngine(spec, ServoModel.of(spec), 0.001).close()
-    leftovers = {f for f in set(os.listdir(tempfile.gettempdir())) - before if f.endswith(".urdf")}
-    assert leftovers == set()
+    assert [f for f in os.listdir(tmp_path) if f.endswith(".urdf")] == []
 
 
 @pytest.mark.physics

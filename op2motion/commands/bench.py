@@ -30,11 +30,11 @@ def register(sub: Any) -> None:
 
 def cmd_bench(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion bench``."""
-    from op2motion.bench import run_bench
+    from op2motion.bench import check_bench_action, run_bench
     from op2motion.formats.action import ActionFile
 
-    r = run_bench(spec, args.poses, args.repeat, action=ActionFile.read(args.action) if args.action else None,
-                  wall_runs=args.wall_runs)
+    action = check_bench_action(ActionFile.read(args.action), spec) if args.action else None
+    r = run_bench(spec, args.poses, args.repeat, action=action, wall_runs=args.wall_runs)
     lines = [f"{r['poses']} poses, best of {r['repeat']}, scaled to {BENCH_POSES} full-body evaluations:",
              f"  projection model  {r['fk_pb_40k_ms']:8.2f} ms   (book MATLAB: {book.MATLAB_40K_MS['pb']:.0f} ms)",
              f"  D-H model         {r['fk_dh_40k_ms']:8.2f} ms   (book MATLAB: {book.MATLAB_40K_MS['dh']:.0f} ms)",

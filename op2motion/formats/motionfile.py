@@ -24,7 +24,7 @@ from typing import Any, Sequence
 from op2motion.errors import InputError, Op2MotionError, PoseFileError
 from op2motion.fileio import read_bytes, write_atomic
 from op2motion.formats.posefile import read_json_file, read_pose
-from op2motion.robot.framework import DEFAULT_P_GAIN
+from op2motion.robot.framework import DEFAULT_P_GAIN, MAX_MOTION_POSES, MAX_MOTION_S, MAX_SEGMENT_S, MIN_SEGMENT_S
 from op2motion.robot.joints import servo_dict, servo_from_mapping
 from op2motion.robot.pose import Pose
 from op2motion.robot.spec import Spec
@@ -59,9 +59,23 @@ class Motion:
     p_gain: int = DEFAULT_P_GAIN
 
 
-def _number(value: Any, what: str, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
-        raise PoseFileError(f"{what}: expected a number of seconds >= 0, got {value!r}", where)
+MAX_NAME_CHARS = 100
+
+
+def check_motion_name(name: object, param: str = "name") -> str:
+    """A motion's name: one line of at most :data:`MAX_NAME_CHARS` characters, no control characters (a file
+    op2motion writes must read back)."""
+    if not isinstance(name, str) or not name.strip() or len(name) > MAX_NAME_CHARS or any(
+            ord(c) < 32 or ord(c) == 127 for c in name):
+        raise InputError(f"expected a one-line name of 1 to {MAX_NAME_CHARS} characters without control "
+                         f"characters, got {name!r}", param)
+    return name
+
+
+def _number(value: Any, what: str, where: str, low: float = 0.0) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
+            or not low - 1e-9 <= value <= MAX_SEGMENT_S:
+        raise PoseFileError(f"{what}: expected {low:g} to {MAX_SEGMENT_S:g} s, got {value!r}", where)
     return float(value)
 
 
@@ -92,7 +106,7 @@ def _step(doc: Any, k: int, base: Path, spec: Spec, where: str) -> MotionStep:
         raise PoseFileError("duration_s: the first step is where the motion starts (no duration)", at)
     if k > 0 and "duration_s" not in doc:
         raise PoseFileError("duration_s: expected the time to reach this pose [s]", at)
-    duration = _number(doc["duration_s"], "duration_s", at) if k else 0.0
+    duration = _number(doc["duration_s"], "duration_s", at, MIN_SEGMENT_S) if k else 0.0
     return MotionStep(pose, source, duration, _number(doc.get("pause_s", 0.0), "pause_s", at))
 
 
@@ -106,16 +120,23 @@ def parse_motion(doc: Any, spec: Spec, base: Path, where: str = "<motion>") -> M
     if unknown:
         raise PoseFileError(f"unknown field(s) {', '.join(sorted(unknown))}", where)
     name, profile, gain = doc.get("name"), doc.get("profile", "quintic"), doc.get("p_gain", 32)
-    if not isinstance(name, str) or not name or "\n" in name:
-        raise PoseFileError(f"name: expected a one-line name, got {name!r}", where)
+    try:
+        name = check_motion_name(name)
+    except InputError as exc:
+        raise PoseFileError(f"name: {exc.message}", where) from None
     if profile not in PROFILES:
         raise PoseFileError(f"profile: expected one of {', '.join(PROFILES)}, got {profile!r}", where)
     if isinstance(gain, bool) or not isinstance(gain, int) or not 1 <= gain <= 254:
         raise PoseFileError(f"p_gain: expected an integer 1..254, got {gain!r}", where)
     steps = doc.get("steps")
-    if not isinstance(steps, list) or len(steps) < 2:
-        raise PoseFileError("steps: expected a list of at least two steps", where)
-    return Motion(name, tuple(_step(s, k, base, spec, where) for k, s in enumerate(steps)), profile, gain)
+    if not isinstance(steps, list) or not 2 <= len(steps) <= MAX_MOTION_POSES:
+        raise PoseFileError(f"steps: expected a list of 2 to {MAX_MOTION_POSES} steps", where)
+    motion = Motion(name, tuple(_step(s, k, base, spec, where) for k, s in enumerate(steps)), profile, gain)
+    total = sum(s.duration_s + s.pause_s for s in motion.steps)
+    if total > MAX_MOTION_S:
+        raise PoseFileError(f"steps: expected at most {MAX_MOTION_S:g} s in all (duration_s and pause_s), got "
+                            f"{total:g} s", where)
+    return motion
 
 
 def read_motion(path: str | Path, spec: Spec) -> Motion:
@@ -183,6 +204,7 @@ def motion_of(poses: Sequence[Pose], sources: Sequence[str | None], durations: S
               pauses: Sequence[float], name: str, profile: str = "quintic",
               p_gain: int = DEFAULT_P_GAIN) -> Motion:
     """A motion from poses with their sources, the durations of the steps after the first and the pauses."""
+    check_motion_name(name)
     if len(durations) != len(poses) - 1 or len(pauses) != len(poses):
         raise InputError(f"expected {len(poses) - 1} durations and {len(poses)} pauses for {len(poses)} poses, got "
                          f"{len(durations)} and {len(pauses)}", "durations")

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -77,10 +77,19 @@ class LineRequest:
         if not (math.isfinite(self.duration_s) and MIN_LINE_S <= self.duration_s <= MAX_SEGMENT_S):
             raise InputError(f"expected {MIN_LINE_S:g} to {MAX_SEGMENT_S:g} s, got {self.duration_s}", "duration")
         o = self.orientation
-        if isinstance(o, str) and o not in ORIENTATIONS or not isinstance(o, str) and (
-                len(o) != 3 or not all(math.isfinite(c) for c in o) or np.linalg.norm(o) < 1e-6):
-            raise InputError(f"expected free, keep or a direction DX DY DZ, got {o!r}", "orientation")
-        return self
+        if isinstance(o, str):
+            if o not in ORIENTATIONS:
+                raise InputError(f"expected free, keep or a direction DX DY DZ, got {o!r}", "orientation")
+            return self
+        if len(o) != 3 or not all(isinstance(c, (int, float)) and math.isfinite(c) for c in o):
+            raise InputError(f"expected free, keep or a direction of 3 finite numbers DX DY DZ, got {o!r}",
+                             "orientation")
+        scale = max(abs(float(c)) for c in o)            # scaled first: (1e154, 1e154, 0) has no finite norm
+        if scale == 0.0:
+            raise InputError(f"expected a direction (not all zero), got {o!r}", "orientation")
+        unit = np.array(o, dtype=float) / scale
+        unit /= np.linalg.norm(unit)
+        return replace(self, orientation=(float(unit[0]), float(unit[1]), float(unit[2])))
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ The same seed plans the same path (:class:`numpy.random.Generator` from ``seed``
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, replace
 from typing import Sequence
 
@@ -44,6 +45,7 @@ LINE_STEP_RAD = 0.01                # the straight line is checked every 0.6° o
 ARMS_AND_HEAD = ("r_sho_pitch", "l_sho_pitch", "r_sho_roll", "l_sho_roll", "r_el", "l_el", "head_pan", "head_tilt")
 MIN_PROGRESS_WEIGHT = 0.05          # the progress coordinate's weight when the held joints hardly move [rad]
 MOVING_RAD = 1e-3                   # a joint whose ends differ by more than this moves in the segment
+MAX_ROUTE_S = 60.0                  # a motion's segments are planned around for at most this long in all [s]
 NARROW_SHARE = 0.4                  # the share of the budget tried with only the moving joints free
 
 
@@ -157,6 +159,13 @@ def route_segment(a: Waypoint, b: Waypoint, spec: Spec, seed: int, settings: Rrt
             max_samples=settings.max_samples - int(settings.max_samples * NARROW_SHARE))
         path = _plan(seg, limits, rng, rest, settings)
     if path is None:
+        tight = [(w, c) for w, c in zip((a, b), ends_measured.clearance) if c < Limits().clearance]
+        if tight:                                 # no seed helps: the pose itself is where the search must end
+            w, c = min(tight, key=lambda wc: wc[1])
+            pair = " / ".join(clearance(w.servo[None], spec, seg.side or "left")[1][0])
+            raise CheckFailed(f"no path from {a.name} to {b.name}: {w.name} itself has links {c * 1000:.1f} mm apart "
+                              f"({pair}), closer than the {Limits().clearance * 1000:.0f} mm a planned path keeps "
+                              f"between links: move them apart in {w.name}")
         raise CheckFailed(f"no path from {a.name} to {b.name} within {settings.budget_s:g} s and "
                           f"{settings.max_samples} samples ({why}): keeping {limits.clearance * 1000:.0f} mm between "
                           f"links, the CoM {limits.margin * 1000:.0f} mm inside the support; add a pose in between")
@@ -177,7 +186,11 @@ def route(waypoints: Sequence[Waypoint], spec: Spec, planner: str = "rrt", seed:
     vias: list[int] = []
     if planner == "none":
         return Routed(list(waypoints), notes, segments, vias)
+    started = time.monotonic()
     for i, (a, b) in enumerate(zip(waypoints, waypoints[1:])):
+        if time.monotonic() - started > MAX_ROUTE_S:
+            raise CheckFailed(f"planning around collisions took over {MAX_ROUTE_S:g} s in all (at segment {i + 1} of "
+                              f"{len(waypoints) - 1}): add poses that keep the links apart, or split the motion")
         pieces, why = route_segment(a, b, spec, seed * 1000 + i, settings)
         if why is not None:
             first = len(out) - 1

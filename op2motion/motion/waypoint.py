@@ -9,11 +9,10 @@ from typing import Sequence
 import numpy as np
 
 from op2motion.errors import InputError
-from op2motion.robot.framework import CONTROL_PERIOD_S
+from op2motion.robot.framework import MAX_MOTION_POSES, MAX_MOTION_S, MAX_SEGMENT_S, MIN_SEGMENT_S
 from op2motion.robot.support import Support
 
-MIN_SEGMENT_S = 3 * CONTROL_PERIOD_S   # the shortest step the robot moves (24 ms)
-MAX_SEGMENT_S = 60.0
+__all__ = ["MAX_SEGMENT_S", "MIN_SEGMENT_S", "Waypoint", "check_waypoints"]
 
 
 @dataclass(frozen=True)
@@ -34,12 +33,17 @@ class Waypoint:
 
 
 def check_waypoints(waypoints: Sequence[Waypoint]) -> None:
-    """At least two poses; durations of 24 ms to a minute after the first; pauses of 0 to a minute."""
-    if len(waypoints) < 2:
-        raise InputError(f"expected at least two poses, got {len(waypoints)}", "poses")
+    """Two to :data:`~op2motion.robot.framework.MAX_MOTION_POSES` poses; durations of 24 ms to a minute after the
+    first; pauses of 0 to a minute; at most :data:`~op2motion.robot.framework.MAX_MOTION_S` in all."""
+    if not 2 <= len(waypoints) <= MAX_MOTION_POSES:
+        raise InputError(f"expected 2 to {MAX_MOTION_POSES} poses, got {len(waypoints)}", "poses")
     for k, w in enumerate(waypoints):
         if k and not (math.isfinite(w.duration_s) and MIN_SEGMENT_S - 1e-9 <= w.duration_s <= MAX_SEGMENT_S):
             raise InputError(f"expected {MIN_SEGMENT_S:.3f} to {MAX_SEGMENT_S:g} s to reach {w.name!r}, got "
                              f"{w.duration_s}", "durations")
         if not (math.isfinite(w.pause_s) and 0.0 <= w.pause_s <= MAX_SEGMENT_S):
             raise InputError(f"expected a pause of 0 to {MAX_SEGMENT_S:g} s at {w.name!r}, got {w.pause_s}", "pauses")
+    total = sum(w.duration_s + w.pause_s for w in waypoints)
+    if total > MAX_MOTION_S:
+        raise InputError(f"expected a motion of at most {MAX_MOTION_S:g} s in all (durations and pauses), got "
+                         f"{total:g} s", "durations")

@@ -25,6 +25,7 @@ TILT_LIMIT_DEG = 10.0
 LOADING_TILT_LIMIT_DEG = 20.0   # while gravity ramps in, a turn this large from the start is a fall
 SATURATION_FRACTION = 0.95
 SATURATION_SHARE = 0.5
+FALL_LEAD_S = 0.2               # a fall's saturation is judged from this long before it began [s]
 LIMIT_AT_RAD = 0.0175           # 1°: a joint this close to its stop lies on it
 LIMIT_AWAY_RAD = 0.035          # 2°: ...and is held there away from its goal
 LIMIT_HOLD_S = 0.2
@@ -102,17 +103,32 @@ def self_collision_failure(times: np.ndarray, pairs: Sequence[frozenset[tuple[st
     return Failure("self_collision", float(times[k]), "; ".join(" against ".join(p) for p in sorted(pairs[k])))
 
 
+def fall_window(times: np.ndarray, fell_s: float, down_s: float | None) -> np.ndarray:
+    """The samples from :data:`FALL_LEAD_S` before a fall began (``fell_s`` [s], its first tilt or drop) until the
+    body was down (``down_s`` [s], its ``com_drop``; at most :data:`STEADY_S` after the start of the fall) (bool
+    (n,)): what the servos did as the robot went down names the cause; what they do lying on the floor afterwards
+    does not, and a check that stops early at the drop has exactly these samples."""
+    end = fell_s + STEADY_S if down_s is None else down_s
+    return (times >= fell_s - FALL_LEAD_S - 1e-9) & (times <= end + 1e-9)
+
+
 def saturation_failure(times: np.ndarray, torque: np.ndarray, available: np.ndarray,
-                       joint_names: Sequence[str]) -> Failure | None:
-    """``torque_saturation``: over the steady window a servo's torque |(n, 20)| [N·m] was at least
-    :data:`SATURATION_FRACTION` of what was available in at least :data:`SATURATION_SHARE` of the samples."""
-    steady = steady_window(times)
+                       joint_names: Sequence[str], window: np.ndarray | None = None) -> Failure | None:
+    """``torque_saturation``: over ``window`` (default the steady window; for a run that fell, the way down,
+    :func:`fall_window`) a servo's torque |(n, 20)| [N·m] was at least :data:`SATURATION_FRACTION` of what
+    was available in at least :data:`SATURATION_SHARE` of the samples."""
+    steady = steady_window(times) if window is None else window
+    if not steady.any():
+        return None
     torque = np.abs(torque)
     saturated = (torque / np.maximum(available, 1e-9) >= SATURATION_FRACTION)[steady].mean(axis=0)
     if saturated.max() < SATURATION_SHARE:
         return None
     j = int(np.argmax(saturated))
-    return Failure("torque_saturation", float(times[np.flatnonzero(steady)[0]]),
+    at = np.flatnonzero(steady)[0]
+    if window is not None:         # on the way down: from when that servo first reached its limit
+        at = np.flatnonzero(steady & (torque[:, j] / np.maximum(available[:, j], 1e-9) >= SATURATION_FRACTION))[0]
+    return Failure("torque_saturation", float(times[at]),
                    f"{joint_names[j]} needs {torque[steady][:, j].mean():.2f} N·m of "
                    f"{available[steady][:, j].mean():.2f} N·m available")
 
@@ -206,9 +222,12 @@ def judge(track: Track, start: StartFacts, plan: Plan, spec: Spec, tilt_limit_de
     limits = np.array([[j.mechanical[0] for j in spec.joints], [j.mechanical[1] for j in spec.joints]])
     start_xy = {side: start.state.soles[side][0][:2] for side in ("left", "right")}
     slid, slipped = slip(t, {s: xy[:, :2] for s, xy in track.soles.items()}, supporting_soles(track, plan), start_xy)
-    found = [tilt_failure(t, tilt, from_start, loaded, tilt_limit_deg), com_drop_failure(t, track.com[:, 2], planned_z),
-             *floor_failures(t, track.ground, lifted, foot_links), self_collision_failure(t, track.self_pairs),
-             saturation_failure(t, track.torque, track.available, spec.joint_names),
+    fell = [f for f in (tilt_failure(t, tilt, from_start, loaded, tilt_limit_deg),
+                        com_drop_failure(t, track.com[:, 2], planned_z)) if f is not None]
+    down = next((f.time_s for f in fell if f.reason == "com_drop"), None)
+    window = fall_window(t, min(f.time_s for f in fell), down) if fell else None   # a fall: judged on the way down
+    found = [*fell, *floor_failures(t, track.ground, lifted, foot_links), self_collision_failure(t, track.self_pairs),
+             saturation_failure(t, track.torque, track.available, spec.joint_names, window),
              joint_limit_failure(t, track.q, track.goals, limits, spec.joint_names), slipped]
     ordered = sorted((f for f in found if f is not None), key=lambda f: f.time_s)
     return Judgement(tuple(ordered), from_start, tilt, loaded, slid)

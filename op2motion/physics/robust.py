@@ -21,7 +21,7 @@ from typing import Any, Callable, Iterable
 
 from op2motion.physics.controller import Controller
 from op2motion.physics.report import EngineReport
-from op2motion.physics.runner import Pushes, Setup, check
+from op2motion.physics.runner import Pushes, Setup, check, check_work, runs_per_engine
 from op2motion.physics.sensors import Sensors
 from op2motion.robot.spec import Spec, Uncertainty
 from op2motion.robot.variant import spec_variant
@@ -155,6 +155,9 @@ def robust_check(make_controller: Callable[[], Controller], spec: Spec, engines:
     each run judged by ``judge``; ``on_progress(done, total)`` counts runs."""
     chosen = tuple(family(spec) if members is None else members)
     names = tuple(engines)
+    per = runs_per_engine(pushes, None)
+    check_work(len(chosen) * len(names) * per, make_controller().plan.duration_s,
+               f"{len(chosen)} bodies x {len(names)} engine(s) x {per}")
     runs = []
     total = len(chosen) * len(names)
     for i, member in enumerate(chosen):

@@ -35,6 +35,7 @@ MAX_FRICTION = 2.0
 PUSH_DURATION_S = 0.1
 MAX_TRIALS = 100
 MAX_PERTURB_DEG = 5.0
+MAX_SIMULATED_S = 7200.0   # one request simulates at most this long in all [s] (about an hour of computing)
 Progress = Callable[[float, float], object]      # (simulated seconds done, in all) of the whole check
 
 
@@ -169,6 +170,22 @@ class _Runner:
         return tuple(out)
 
 
+def runs_per_engine(pushes: Pushes | None, trials: Trials | None) -> int:
+    """The runs one engine makes in a check: the main run, one per push direction, one per trial."""
+    pushing = pushes is not None and pushes.force_n > 0.0
+    return 1 + (len(pushes.directions) if pushes is not None and pushing else 0) + (trials.runs if trials else 0)
+
+
+def check_work(runs: int, seconds_each: float, counted: str | None = None) -> None:
+    """Refuse more than :data:`MAX_SIMULATED_S` of simulated time in one request (runs x seconds), before any work:
+    engines, bodies, pushes, trials and steps multiply. ``counted`` says how the runs came about."""
+    total = runs * seconds_each
+    if total > MAX_SIMULATED_S:
+        raise InputError(f"expected at most {MAX_SIMULATED_S:g} s of simulated time in all, got {counted or runs} "
+                         f"run(s) of {seconds_each:.1f} s = {total:.0f} s: ask for fewer steps or seconds, trials, "
+                         f"pushes, bodies or engines")
+
+
 def check(controller: Controller, spec: Spec, engines: Sequence[str] = ("pybullet",), pushes: Pushes | None = None,
           trials: Trials | None = None, setup: Setup = Setup(), on_progress: Progress | None = None) -> CheckReport:
     """Run ``controller`` (a :class:`.controller.Controller`, e.g. a :class:`.controller.Schedule`) in each of
@@ -179,7 +196,8 @@ def check(controller: Controller, spec: Spec, engines: Sequence[str] = ("pybulle
         raise InputError(f"expected a controller (plan, start, step, done), got {type(controller).__name__}",
                          "controller")
     pushing = pushes is not None and pushes.force_n > 0.0
-    per_engine = 1 + (len(pushes.directions) if pushes is not None and pushing else 0) + (trials.runs if trials else 0)
+    per_engine = runs_per_engine(pushes, trials)
+    check_work(per_engine * len(engines), controller.plan.duration_s)
     runner = _Runner(controller, spec, setup, per_engine * len(engines), on_progress)
     reports = {}
     for k, name in enumerate(engines):

@@ -14,6 +14,10 @@ from __future__ import annotations
 from op2motion.errors import InputError
 
 CONTROL_PERIOD_S = 0.008       # one call of the framework's motion timer: goals every 8 ms
+MIN_SEGMENT_S = 3 * CONTROL_PERIOD_S   # the shortest step the robot moves (24 ms)
+MAX_SEGMENT_S = 60.0           # op2motion's cap on one step's duration or pause [s]
+MAX_MOTION_S = 300.0           # ... on a whole motion's durations and pauses [s] (40 min took 88 s and 856 MB)
+MAX_MOTION_POSES = 2500        # ... and on its poses (a 60-s hand line is written as 2500 steps of 24 ms)
 DEFAULT_COMPLIANCE = 0x55      # the compliance byte of a reset action page and of the framework's default
 MAX_BYTE = 0xFF
 

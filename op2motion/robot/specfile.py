@@ -11,6 +11,7 @@ asymmetry where the kinematic models assume symmetry.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import hashlib
 import math
@@ -101,6 +102,16 @@ def _webots_range(r: TableReader, name: str) -> tuple[float, float]:
         raise SpecError(f"({name}): expected lower < upper, got [{lower}, {upper}]",
                         f"{r.path}: {r.where}.webots_range_rad")
     return float(lower), float(upper)
+
+
+def _within_ticks(joint: Joint, servo: Servo) -> Joint:
+    """The joint's ranges within what the servo can be told: ticks ``min_tick``..``max_tick`` (-180° to +179.91° on
+    the MX-28). +180° would be tick 4096, which does not exist: one rule for every reader (pose files, ``fk``,
+    ``convert``, ``export``, the studio), so a range written as ±180° ends at the last tick."""
+    lo, hi = (servo.min_tick - servo.center_tick) * servo.rad_per_tick, (servo.max_tick - servo.center_tick) * \
+        servo.rad_per_tick
+    clip = lambda r: (max(r[0], lo), min(r[1], hi))  # noqa: E731
+    return dataclasses.replace(joint, mechanical=clip(joint.mechanical), safe=clip(joint.safe))
 
 
 def _joint(r: TableReader) -> Joint:
@@ -339,7 +350,7 @@ def parse_spec(text: str, path: str = "<spec>") -> Spec:
     for required in ("left_hand", "right_hand", "head_top"):
         if required not in points:
             raise SpecError(f"missing key 'points.{required}'", path)
-    joints = [_joint(r) for r in top.array("joint")]
+    joints = [_within_ticks(_joint(r), servo) for r in top.array("joint")]
     _check_joints(path, root, joints)
     joints.sort(key=lambda j: j.id)
     sources = _sources(top)
