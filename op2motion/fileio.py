@@ -39,6 +39,9 @@ def read_bytes(path: str | Path, what: str, error: Type[Op2MotionError] = InputE
     wait for a writer that never comes. At most :data:`MAX_INPUT_BYTES` are read: a larger file is refused."""
     p = Path(path)
     try:
+        mode = os.stat(p).st_mode                  # a socket cannot even be opened: tell what it is first
+        if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
+            raise error(f"expected a {what} (a regular file), got a {_file_kind(mode)}", str(p))
         fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0))
     except FileNotFoundError:
         raise error(f"no such {what}", str(p)) from None

@@ -131,7 +131,7 @@ def _motion_from_args(args: argparse.Namespace, spec: Spec) -> Any:
     pauses = _broadcast(args.pauses, len(poses), 0.0, "--pauses")
     where = args.out or "motion.json"
     sources = [relative_source(p, where) for p in args.poses]
-    name = args.name or (Path(args.out).stem if args.out else "motion")
+    name = args.name if args.name is not None else (Path(args.out).stem if args.out else "motion")
     return motion_of(poses, sources, durations, pauses, name, args.profile or "quintic")
 
 

@@ -103,41 +103,73 @@ def _quiet_stderr() -> Iterator[None]:
         os.close(saved)
 
 
-def _init(ray: Any, address: str | None, workers: int) -> None:
+class _Stop:
+    """Ctrl-C and SIGTERM while Ray runs: noted, and acted on between Ray's calls (:meth:`check`). An exception
+    raised from a signal handler inside Ray's own code crashed the driver (a segmentation fault seen with Ray
+    2.60); Ray's ``init`` also installs its own SIGTERM handler, which exits with status 15."""
+
+    def __init__(self) -> None:
+        self.requested = False
+        self.main = threading.current_thread() is threading.main_thread()
+        self.saved = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)} if self.main else {}
+
+    def note(self, signum: int, frame: Any) -> None:
+        self.requested = True
+
+    def arm(self) -> None:
+        """(Again) note the signals instead of raising (after ``ray.init`` replaced the SIGTERM handler)."""
+        for sig in self.saved:
+            signal.signal(sig, self.note)
+
+    def check(self) -> None:
+        """Raise :class:`KeyboardInterrupt` here, in our code, if a stop was asked for."""
+        if self.requested:
+            raise KeyboardInterrupt
+
+    def restore(self) -> None:
+        for sig, handler in self.saved.items():
+            if handler is not None:
+                signal.signal(sig, handler)
+
+
+def _init(ray: Any, address: str | None, workers: int, stop: _Stop) -> None:
     """``ray.init`` in the main thread (Ray ties the processes it starts to the thread that starts them), bounded by
     :data:`INIT_TIMEOUT_S` where a timer can interrupt it (a head that greets as gRPC but is not Ray would keep it
-    retrying), and our Ctrl-C/SIGTERM handling put back (Ray's C++ core installs its own SIGTERM handler, which
-    prints a stack dump and exits 15)."""
+    retrying); a SIGTERM meanwhile (Ray's handler: ``sys.exit(15)``) becomes a stop like any other."""
     import logging
 
     env = {"env_vars": {name: "1" for name in THREAD_VARIABLES}}     # one maths thread per task
-    main = threading.current_thread() is threading.main_thread()
-    handlers = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGALRM)} if main else {}
+    alarm = signal.getsignal(signal.SIGALRM) if stop.main else None
 
     def too_long(signum: int, frame: Any) -> None:
         raise TimeoutError(f"no answer in {INIT_TIMEOUT_S:g} s")
 
     try:
-        if main and address is not None:
+        if stop.main and address is not None:
             signal.signal(signal.SIGALRM, too_long)
             signal.setitimer(signal.ITIMER_REAL, INIT_TIMEOUT_S)
         ray.init(address=address, num_cpus=None if address else workers, include_dashboard=False,
                  log_to_driver=False, configure_logging=False, logging_level=logging.ERROR, runtime_env=env)
+    except SystemExit as exc:
+        if exc.code != signal.SIGTERM:
+            raise
+        stop.requested = True
     except (ConnectionError, RuntimeError, ValueError, TimeoutError) as exc:
         raise InputError(f"expected a running Ray cluster at {address!r}: {exc}", "address") from None
     finally:
-        if main:
+        if stop.main:
             signal.setitimer(signal.ITIMER_REAL, 0.0)
-            for sig, handler in handlers.items():
-                if handler is not None:
-                    signal.signal(sig, handler)
+            if alarm is not None:
+                signal.signal(signal.SIGALRM, alarm)
+            stop.arm()
 
 
 def run_on_ray(todo: Sequence[Job], spec: Spec, spec_text: str, settings: BuildSettings, workers: int,
                record: Recorder, address: str | None) -> None:
     """Solve ``todo`` as Ray tasks (``address``: a running cluster, e.g. ``127.0.0.1:6379`` or ``auto``; None starts
     Ray on this machine with ``workers`` CPUs) and record each result as it comes. Ray's output goes to a log file,
-    not the terminal; a Ray started here is ended however the build ends (:mod:`.reaper`)."""
+    not the terminal; Ctrl-C and SIGTERM end the build between Ray's calls (:class:`_Stop`); a Ray started here is
+    ended however the build ends (:mod:`.reaper`)."""
     from op2motion.library.reaper import release, watch
 
     ray = _ray()
@@ -145,15 +177,19 @@ def run_on_ray(todo: Sequence[Job], spec: Spec, spec_text: str, settings: BuildS
     if started and address is not None:
         check_address(address)
     watchdog = watch() if started and address is None else None
+    stop = _Stop()
+    stop.arm()
     try:
         if started:
             with _quiet_stderr():
-                _init(ray, address, workers)
+                _init(ray, address, workers, stop)
         try:
+            stop.check()
             task = ray.remote(num_cpus=1)(solve_job)
             pending = [task.remote((job, None, spec.sha256, settings, spec_text)) for job in todo]
             try:
-                while pending:     # short waits: Ctrl-C and SIGTERM are handled between them
+                while pending:     # short waits: a stop is acted on between them
+                    stop.check()
                     done, pending = ray.wait(pending, num_returns=1, timeout=WAIT_S)
                     for ref in done:
                         record(*ray.get(ref))
@@ -166,4 +202,5 @@ def run_on_ray(todo: Sequence[Job], spec: Spec, spec_text: str, settings: BuildS
                 with _quiet_stderr():
                     ray.shutdown()
     finally:
+        stop.restore()
         release(watchdog)

@@ -1,0 +1,98 @@
+"""A failed or interrupted command writes nothing and leaves nothing running: SIGTERM ends every command as Ctrl-C
+does (one line, exit 130, temp files gone), for the process pool and for Ray; a build with Ray started here leaves
+no Ray process after ``kill -9``; a name that would make an unreadable file is refused before writing."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from helpers import pose_path, run_cli
+
+STAND, INIT = pose_path("standing"), pose_path("init")
+END_S = 10.0                  # a terminated command ends within this [s]
+GRID = ["--hands", "left", "--supports", "left", "--x", "0.06", "0.14", "20", "--y", "-0.05", "0.05", "10", "--z",
+        "0.07", "0.07", "1"]  # 200 targets: minutes of work
+
+
+def _start(cwd, *argv, env=None) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "op2motion", *argv], cwd=cwd, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env)
+
+
+def _terminated(proc: subprocess.Popen, after_s: float, sig: int = signal.SIGTERM) -> tuple[int, str, float]:
+    time.sleep(after_s)
+    assert proc.poll() is None, proc.stderr.read()
+    proc.send_signal(sig)
+    t0 = time.monotonic()
+    code = proc.wait(timeout=60)
+    return code, proc.stderr.read(), time.monotonic() - t0
+
+
+def _last_line(err: str) -> str:
+    assert "Traceback" not in err and "SIGTERM" not in err, err
+    return err.strip().splitlines()[-1]
+
+
+def test_sigterm_to_a_validated_walk_writes_nothing(tmp_path):
+    proc = _start(tmp_path, "walk", "--steps", "20", "--validate", "--engine", "both", "--plot", "w.png", "--out",
+                  "w.csv")
+    code, err, took = _terminated(proc, 4.0)
+    assert code == 130 and took < END_S and _last_line(err).startswith("op2motion: interrupted"), err
+    assert list(tmp_path.iterdir()) == []                 # no outputs, no temp files
+
+
+@pytest.mark.slow
+def test_sigterm_to_a_process_pool_build_leaves_a_complete_index(tmp_path):
+    proc = _start(tmp_path, "library", "build", *GRID, "--out", "lib", "--workers", "2")
+    code, err, took = _terminated(proc, 8.0)
+    assert code == 130 and took < END_S and "resume" in _last_line(err)
+    assert (tmp_path / "lib" / "index.json").exists()
+    assert not [p for p in (tmp_path / "lib").iterdir() if p.name.endswith(".tmp")]
+
+
+def _ray_processes(mark: str) -> list[int]:
+    """Processes whose environment carries the build's Ray mark (op2motion.library.reaper)."""
+    found = []
+    for pid in os.listdir("/proc"):
+        if pid.isdigit():
+            try:
+                with open(f"/proc/{pid}/environ", "rb") as f:
+                    if mark.encode() in f.read().split(b"\0"):
+                        found.append(int(pid))
+            except OSError:
+                pass
+    return found
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["SIGTERM", "kill -9"])
+def test_a_ray_build_ends_cleanly_and_leaves_no_ray_process(tmp_path, sig):
+    pytest.importorskip("ray")
+    env = {**os.environ, "RAY_USAGE_STATS_ENABLED": "0"}
+    proc = _start(tmp_path, "library", "build", *GRID, "--out", "lib", "--executor", "ray", "--workers", "2", env=env)
+    mark = f"OP2MOTION_RAY_OWNER={proc.pid}"
+    deadline = time.monotonic() + 60
+    while not [p for p in _ray_processes(mark) if p != proc.pid] and time.monotonic() < deadline:
+        time.sleep(0.5)
+    assert [p for p in _ray_processes(mark) if p != proc.pid], "Ray started"
+    code, err, _ = _terminated(proc, 3.0, sig)
+    if sig == signal.SIGTERM:
+        assert code == 130 and "resume" in _last_line(err), err
+    deadline = time.monotonic() + 15
+    while _ray_processes(mark) and time.monotonic() < deadline:
+        time.sleep(0.5)
+    assert _ray_processes(mark) == []
+
+
+def test_a_motion_name_that_would_not_read_back_is_refused_before_writing(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    for name in ("two\nlines", "tab\there", "x" * 101, ""):
+        code, _, err = run_cli(capsys, "motion", "plan", INIT, STAND, "--durations", "1", "--name", name, "--out",
+                               "m.json")
+        assert code == 2 and "--name" in err and len(err.strip().splitlines()) == 1, err
+    assert list(tmp_path.iterdir()) == []
