@@ -130,7 +130,7 @@ def test_servo_mapping_rejects_bad_input(spec):
         servo_from_mapping(missing, spec)
     with pytest.raises(InputError, match="finite"):
         servo_from_mapping({**good, "l_knee": float("nan")}, spec)
-    with pytest.raises(InputError, match="outside the servo range"):
+    with pytest.raises(InputError, match="ticks 0 to 4095"):
         servo_to_ticks(np.full(20, math.radians(181.0)), spec)
     with pytest.raises(InputError, match="expected 11 angles, got 10"):
         BookAngles.from_deg([0] * 10, [0] * 6)

@@ -11,9 +11,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
+from op2motion.errors import CheckFailed
 from op2motion.formats.action import ActionFile, Page
 from op2motion.formats.motionfile import Motion
-from op2motion.motion.checks import require_clear
+from op2motion.motion.checks import OVERLAP_TOL_M, clearance, require_clear
 from op2motion.motion.planner import action_pages, plan
 from op2motion.motion.player import Playback, play, start_ticks
 from op2motion.motion.trajectory import Trajectory, from_playback
@@ -52,9 +55,23 @@ def plan_motion(motion: Motion, spec: Spec, planner: str = "rrt", seed: int = 0)
     """A motion's goals every 8 ms with its profile and P gain, weight shifts inserted, segments whose straight
     line collides planned around (``planner`` "rrt", seeded by ``seed``: :mod:`.route`); refused (naming segment,
     time and links) where links would still pass through each other (``planner`` "none")."""
-    trajectory = plan(waypoints_of(motion), spec, motion.profile, motion.p_gain, planner=planner, seed=seed)
+    waypoints = waypoints_of(motion)
+    require_poses_clear(waypoints, spec)
+    trajectory = plan(waypoints, spec, motion.profile, motion.p_gain, planner=planner, seed=seed)
     require_clear(trajectory, spec)
     return trajectory
+
+
+def require_poses_clear(waypoints: list[Waypoint], spec: Spec) -> None:
+    """Refuse a motion through a pose whose own links pass through each other (deeper than
+    :data:`~.checks.OVERLAP_TOL_M`): no seed, no planner and no pose in between can help; the pose must change."""
+    least, links = clearance(np.array([w.servo for w in waypoints]), spec)
+    bad = np.flatnonzero(least < -OVERLAP_TOL_M)
+    if bad.size:
+        k = int(bad[0])
+        raise CheckFailed(f"pose {waypoints[k].name} itself has {links[k][0]} and {links[k][1]} "
+                          f"{-least[k] * 1000:.0f} mm through each other: no path can reach it; move them apart in "
+                          f"the pose")
 
 
 def motion_to_action(motion: Motion, spec: Spec, base: ActionFile, first: int | None = None,

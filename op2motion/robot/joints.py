@@ -161,8 +161,12 @@ def servo_to_ticks(servo: np.ndarray, spec: Spec) -> np.ndarray:
     ticks = np.rint(np.asarray(servo, dtype=float) / s.rad_per_tick).astype(np.int64) + s.center_tick
     bad = (ticks < s.min_tick) | (ticks > s.max_tick)
     if np.any(bad):
-        i = int(np.argwhere(bad.reshape(-1))[0][0]) % len(spec.joints)
-        raise InputError("angle outside the servo range ±180°", spec.joints[i].name)
+        flat = int(np.argwhere(bad.reshape(-1))[0][0])
+        i = flat % len(spec.joints)
+        lo, hi = ((t - s.center_tick) * math.degrees(s.rad_per_tick) for t in (s.min_tick, s.max_tick))
+        got = math.degrees(float(np.asarray(servo, dtype=float).reshape(-1)[flat]))
+        raise InputError(f"expected {lo:+.1f}° to {hi:+.1f}° (ticks {s.min_tick} to {s.max_tick}: +180° would be "
+                         f"tick {s.max_tick + 1}), got {got:+.3f}°", spec.joints[i].name)
     return ticks
 
 

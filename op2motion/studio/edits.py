@@ -108,8 +108,8 @@ class Edits:
             if why is None and self.busy["optimise"]:
                 why = "the optimiser is working on this pose: edits wait until it ends"
             if why is not None:
+                self._show(self.session.readout())          # undo what the page moved, then say why
                 self._refused(kind, why, event)
-                self._show(self.session.readout())          # undo what the page moved
                 return
             before = Snapshot.of(self.session)
             try:
@@ -117,8 +117,8 @@ class Edits:
             except Exception as exc:  # noqa: BLE001 (bad input, or a value no browser sends: nothing changes)
                 before.restore(self.session)
                 why = str(exc) if isinstance(exc, Op2MotionError) else f"not a value this control takes ({exc})"
-                self._refused(kind, why, event)
                 self._show(self.session.readout())
+                self._refused(kind, why, event)
                 return
             self._message.content = ""
             self._show(readout)
