@@ -99,8 +99,12 @@ def check_output_path(path: str | Path, param: str = "output") -> Path:
         raise OutputError(f"cannot write {text}: {existing} is not a directory", param)
     if not os.access(existing, os.W_OK | os.X_OK):
         raise OutputError(f"cannot write {text}: {existing} is not writable", param)
-    if target.exists() and not os.access(target, os.W_OK):
-        raise OutputError(f"cannot write {text}: the file is read-only", param)
+    if target.exists():
+        mode = target.stat().st_mode
+        if not stat.S_ISREG(mode):          # written by rename: a device such as /dev/null would be replaced
+            raise OutputError(f"expected a regular file to write, got a {_file_kind(mode)}: {text}", param)
+        if not os.access(target, os.W_OK):
+            raise OutputError(f"cannot write {text}: the file is read-only", param)
     return target
 
 

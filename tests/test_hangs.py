@@ -138,3 +138,21 @@ def test_a_studio_port_in_use_is_the_port(tmp_path):
         busy.listen()
         done, _ = _op2motion(tmp_path, "studio", STAND, "--port", busy.getsockname()[1])
     assert done.returncode == 2 and _one_line(done.stderr).startswith("op2motion: error: --port:")
+
+
+@pytest.mark.parametrize("argv, suffix", [(["urdf", "-o", "{f}"], ".urdf"), (["plot", STAND, "-o", "{f}"], ".png"),
+                                          (["export", "--format", "webots", STAND, "-o", "{f}"], ".motion")])
+def test_special_files_are_refused_as_outputs(tmp_path, argv, suffix):
+    """Outputs are written by renaming a temp file over them: a device (/dev/null), a FIFO or a socket would be
+    replaced, so each is refused."""
+    fifo, sock_path = tmp_path / f"fifo{suffix}", tmp_path / f"sock{suffix}"
+    os.mkfifo(fifo)
+    with socket.socket(socket.AF_UNIX) as sock:
+        sock.bind(str(sock_path))
+        for kind, path in (("named pipe", fifo), ("socket", sock_path), ("character device", "/dev/null")):
+            if kind == "character device" and suffix == ".png":
+                continue                                    # (a PNG output must end in .png)
+            done, _ = _op2motion(tmp_path, *[a.replace("{f}", str(path)) for a in argv], timeout=FIFO_BOUND_S)
+            line = _one_line(done.stderr)
+            assert done.returncode == 2 and kind in line, (kind, line)
+    assert os.path.exists("/dev/null") and not os.path.isfile("/dev/null") and fifo.is_fifo()

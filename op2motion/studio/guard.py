@@ -8,8 +8,8 @@ segment, ``http://HOST:PORT/SECRET/``, and :class:`Gate` lets a request through 
 * its path starts with the secret (the page) or is exactly the secret (the WebSocket the page opens);
 * its ``Host`` header names this machine when the studio listens on a loopback address (a page that rebinds its
   own host name to 127.0.0.1 is refused), and the port the studio listens on;
-* for the WebSocket: its ``Origin`` header is present and is the studio's own page (the same scheme, host and port
-  as the ``Host`` the browser connected to).
+* for the WebSocket: its ``Origin`` header is present and is the studio's own page (``http``, the port it listens
+  on, and the host the browser connected to, or on loopback any of this machine's names for itself).
 
 Anything else gets ``403`` with a sentence that tells nothing about the studio. viser 1.1 has no hook for this, so
 :func:`guarded_viser` wraps the ``process_request`` of the one ``websockets`` server that viser starts while it is
@@ -89,7 +89,9 @@ class Gate:
                 origin_port = parts.port or {"http": 80, "https": 443}.get(parts.scheme)
             except ValueError:
                 return "bad Origin"
-            if parts.scheme != "http" or (parts.hostname or "").lower() != host or origin_port != port:
+            origin_host = (parts.hostname or "").lower()
+            same = origin_host == host or is_loopback(self.host) and origin_host in LOOPBACK_NAMES
+            if parts.scheme != "http" or not same or origin_port != port:
                 return "foreign Origin"
         return None
 
