@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import time
 from pathlib import Path
 
 import numpy as np
@@ -89,3 +90,13 @@ def pybullet_pair_distances(client, robot, spec, servo_rows: np.ndarray, pairs, 
         points = client.getClosestPoints(robot, robot, 2 * reach_m, link_index[a], link_index[b])
         out.append((k, a, b, min((c[8] for c in points), default=2 * reach_m)))
     return out
+
+
+def wait_for(condition, what: str, timeout_s: float = 60.0, poll_s: float = 0.02) -> None:
+    """Poll ``condition()`` until it is true; fail naming ``what`` after ``timeout_s`` [s]."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if condition():
+            return
+        time.sleep(poll_s)
+    raise AssertionError(f"timed out waiting for {what}")

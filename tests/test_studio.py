@@ -14,6 +14,7 @@ import time
 
 import numpy as np
 import pytest
+from helpers import wait_for
 
 from op2motion.errors import InputError
 from op2motion.formats.posefile import read_pose
@@ -134,15 +135,6 @@ def _pixels(png: bytes) -> np.ndarray:
     return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"), dtype=int)
 
 
-def _wait(condition, what: str) -> None:
-    deadline = time.monotonic() + WAIT_S
-    while time.monotonic() < deadline:
-        if condition():
-            return
-        time.sleep(0.1)
-    raise AssertionError(f"timed out waiting for {what}")
-
-
 @pytest.mark.physics
 def test_the_page_moves_a_joint_and_checks_in_physics(spec, tmp_path):
     playwright = pytest.importorskip("playwright.sync_api")
@@ -163,14 +155,14 @@ def test_the_page_moves_a_joint_and_checks_in_physics(spec, tmp_path):
             box.fill("-20")                                           # the left arm from 41° to -20°
             box.press("Enter")
             joint = spec.joint_names.index("l_sho_pitch")
-            _wait(lambda: abs(studio.session.servo[joint] - np.radians(-20)) < 1e-9 and "| l_sho_pitch | -20.0 |"
+            wait_for(lambda: abs(studio.session.servo[joint] - np.radians(-20)) < 1e-9 and "| l_sho_pitch | -20.0 |"
                   in studio._table.content, "the slider edit on the Python side and in the joint table")
             assert ("slider", "applied") in studio.events
             page.get_by_text("optimise to the hand target", exact=True).click()    # on two feet: refused
-            _wait(lambda: ("optimise", "refused: double support") in studio.events, "the optimiser's refusal")
+            wait_for(lambda: ("optimise", "refused: double support") in studio.events, "the optimiser's refusal")
             page.get_by_text("choose left or right support").first.wait_for(timeout=WAIT_S * 1000)
             page.get_by_text("check in physics", exact=True).click()
-            _wait(lambda: any(k == "check" and v in ("STANDS", "FALLS", "FAILS") for k, v in studio.events),
+            wait_for(lambda: any(k == "check" and v in ("STANDS", "FALLS", "FAILS") for k, v in studio.events),
                   "the physics check")
             page.get_by_text("STANDS").first.wait_for(timeout=WAIT_S * 1000)
             after = _stable_view(page)

@@ -8,13 +8,13 @@ from __future__ import annotations
 
 import math
 import os
-import time
 import urllib.error
 import urllib.request
 
 import msgspec
 import numpy as np
 import pytest
+from helpers import wait_for
 
 from op2motion.formats.posefile import read_pose
 from op2motion.studio.folder import Workspace
@@ -24,16 +24,6 @@ pytest.importorskip("viser")
 ROOT = os.path.join(os.path.dirname(__file__), "..")
 WALKREADY = os.path.join(ROOT, "poses", "walkready.json")
 STOCK = os.path.join(ROOT, "tests", "data", "motion_4096.bin")
-WAIT_S = 20.0
-
-
-def _wait(condition, what: str) -> None:
-    deadline = time.monotonic() + WAIT_S
-    while time.monotonic() < deadline:
-        if condition():
-            return
-        time.sleep(0.02)
-    raise AssertionError(f"timed out waiting for {what}")
 
 
 @pytest.fixture
@@ -79,7 +69,7 @@ class Client:
         self.send({"type": "ViewerCameraMessage", "wxyz": (1.0, 0.0, 0.0, 0.0), "position": (0.5, 0.5, 0.5),
                    "fov": 1.0, "near": 0.01, "far": 100.0, "image_height": 800, "image_width": 900,
                    "look_at": (0.0, 0.0, 0.2), "up_direction": (0.0, 0.0, 1.0)})    # viser's "connected"
-        _wait(lambda: len(studio.server.get_clients()) > clients, "the client registered")
+        wait_for(lambda: len(studio.server.get_clients()) > clients, "the client registered")
 
     def send(self, message: dict) -> None:
         self.ws.send(msgspec.msgpack.encode(message))
@@ -145,9 +135,9 @@ def test_saving_outside_the_folder_or_over_files_it_did_not_open_is_refused(stud
                    "..\\victim.json", "~/x.json", ".hidden.json", "x.txt", "a" * 300 + ".json", "sub/../../victim.json"]
         for i, path in enumerate(hostile):
             client.set(studio._path, path)
-            _wait(lambda: studio._path.value == path, "the save box")
+            wait_for(lambda: studio._path.value == path, "the save box")
             client.click(studio._save_button)
-            _wait(lambda: len(_refusals(studio, "save")) == i + 1, f"the refusal of {path}")
+            wait_for(lambda: len(_refusals(studio, "save")) == i + 1, f"the refusal of {path}")
         _outside_untouched(tmp_path)
         assert (tmp_path / "work" / "other.json").read_text(encoding="utf-8") == "not the studio's"
         assert not (tmp_path / "work" / "new").exists()
@@ -156,15 +146,15 @@ def test_saving_outside_the_folder_or_over_files_it_did_not_open_is_refused(stud
         before = (tmp_path / "work" / "walkready.json").read_bytes()
         client.set(studio._path, "walkready.json")                  # the file it opened: only when confirmed
         client.click(studio._save_button)
-        _wait(lambda: any("tick 'overwrite'" in r for r in _refusals(studio, "save")), "the confirmation")
+        wait_for(lambda: any("tick 'overwrite'" in r for r in _refusals(studio, "save")), "the confirmation")
         assert (tmp_path / "work" / "walkready.json").read_bytes() == before
         client.set(studio._overwrite_pose, True)
-        _wait(lambda: studio._overwrite_pose.value is True, "the checkbox")
+        wait_for(lambda: studio._overwrite_pose.value is True, "the checkbox")
         client.click(studio._save_button)
-        _wait(lambda: ("save", "walkready.json") in studio.events, "the save")
+        wait_for(lambda: ("save", "walkready.json") in studio.events, "the save")
         client.set(studio._path, "mine.json")                       # a new file: written, then its own
         client.click(studio._save_button)
-        _wait(lambda: ("save", "mine.json") in studio.events, "the new file")
+        wait_for(lambda: ("save", "mine.json") in studio.events, "the new file")
         assert read_pose(tmp_path / "work" / "mine.json", studio.spec).name == "mine"
         assert not [p for p in (tmp_path / "work").iterdir() if p.name.endswith(".tmp")]
         _outside_untouched(tmp_path)
@@ -177,15 +167,15 @@ def test_opening_outside_the_folder_tells_nothing_about_it(studio, tmp_path):
     try:
         for i, path in enumerate(("../victim.bin", "../nothing-here.bin", str(tmp_path / "victim.bin"))):
             client.set(studio._action_path, path)
-            _wait(lambda: studio._action_path.value == path, "the file box")
+            wait_for(lambda: studio._action_path.value == path, "the file box")
             client.click(studio._open_button)
-            _wait(lambda: len(_refusals(studio, "open")) == i + 1, f"the refusal of {path}")
+            wait_for(lambda: len(_refusals(studio, "open")) == i + 1, f"the refusal of {path}")
         said = [r.split(", got")[0] for r in _refusals(studio, "open")]
         assert len(set(said)) == 1 and "651" not in " ".join(_refusals(studio, "open"))
         (tmp_path / "work" / "stock.bin").write_bytes(open(STOCK, "rb").read())
         client.set(studio._action_path, "stock.bin")
         client.click(studio._open_button)
-        _wait(lambda: ("open", "applied") in studio.events, "opening a file inside")
+        wait_for(lambda: ("open", "applied") in studio.events, "opening a file inside")
         _outside_untouched(tmp_path)
     finally:
         client.close()
@@ -205,7 +195,7 @@ def test_values_no_browser_sends_change_nothing(studio):
             client.set(handle, value)
             if button is not None:
                 client.click(button)
-            _wait(lambda: len(_refusals(studio, kind)) > refused, f"{kind} refused for {value!r}")
+            wait_for(lambda: len(_refusals(studio, kind)) > refused, f"{kind} refused for {value!r}")
             assert np.array_equal(studio.session.servo, before) and studio.session.support.value == "double"
         assert studio._support.value == "double" and studio._sliders["l_knee"].value == pytest.approx(
             np.degrees(before[studio.spec.joint_names.index("l_knee")]), abs=1e-3)    # the page is put back too
@@ -219,16 +209,16 @@ def test_a_second_tab_cannot_edit_while_the_first_does(studio):
         knee = studio.spec.joint_names.index("l_knee")
         client_value = float(np.degrees(studio.session.servo[knee])) + 5.0
         first.set(studio._sliders["l_knee"], client_value)
-        _wait(lambda: ("slider", "applied") in studio.events, "the first tab's edit")
+        wait_for(lambda: ("slider", "applied") in studio.events, "the first tab's edit")
         held = studio.session.servo.copy()
         second.set(studio._sliders["l_knee"], client_value + 10.0)
         second.set(studio._path, "../victim.json")
-        _wait(lambda: len(_refusals(studio, "slider")) == 1 and _refusals(studio, "input"), "the second tab refused")
+        wait_for(lambda: len(_refusals(studio, "slider")) == 1 and _refusals(studio, "input"), "the second tab refused")
         assert np.array_equal(studio.session.servo, held) and studio._path.value == "walkready.json"
         second.click(studio._pen_button)                             # take over, then it may edit
-        _wait(lambda: any(k == "pen" for k, _ in studio.events), "the pen")
+        wait_for(lambda: any(k == "pen" for k, _ in studio.events), "the pen")
         second.set(studio._sliders["l_knee"], client_value + 10.0)
-        _wait(lambda: studio.events.count(("slider", "applied")) == 2, "the second tab's edit")
+        wait_for(lambda: studio.events.count(("slider", "applied")) == 2, "the second tab's edit")
     finally:
         first.close()
         second.close()
@@ -241,7 +231,7 @@ def test_clicks_do_not_pile_up_work_and_the_share_tunnel_is_off(studio):
         for _ in range(20):
             client.click(studio._check_button)
         client.send({"type": "ShareUrlRequest"})
-        _wait(lambda: any(k == "check" and v in ("STANDS", "FALLS", "FAILS") for k, v in studio.events), "the check")
+        wait_for(lambda: any(k == "check" and v in ("STANDS", "FALLS", "FAILS") for k, v in studio.events), "the check")
         assert studio.events.count(("check", "started")) == 1
         assert len(_refusals(studio, "check")) >= 1 and studio.server._share_tunnel is None
     finally:
@@ -258,13 +248,13 @@ def test_edits_while_the_optimiser_works_are_refused_and_its_pose_adopted_whole(
     client = Client(served)
     try:
         client.click(served._optimise_button)
-        _wait(lambda: served.busy["optimise"], "the optimiser started")
+        wait_for(lambda: served.busy["optimise"], "the optimiser started")
         knee = served.spec.joint_names.index("r_knee")
         client.set(served._sliders["r_knee"], float(np.degrees(served.session.servo[knee])) + 10.0)
         client.click(served._optimise_button)                       # a second optimisation: refused too
-        _wait(lambda: _refusals(served, "slider") and _refusals(served, "optimise"), "the refusals")
+        wait_for(lambda: _refusals(served, "slider") and _refusals(served, "optimise"), "the refusals")
         assert "optimiser" in _refusals(served, "slider")[0]
-        _wait(lambda: not served.busy["optimise"], "the optimiser's end")
+        wait_for(lambda: not served.busy["optimise"], "the optimiser's end")
         outcome = [v for k, v in served.events if k == "optimise" and not v.startswith("refused")]
         assert outcome[-1] in ("reached", "not reached")
         assert served.events.count(("slider", "applied")) == 0
