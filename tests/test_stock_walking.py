@@ -77,7 +77,7 @@ def test_the_config_file_round_trips_with_every_key():
     text = stock_config_text(tuned, "tuned by op2motion")
     assert all(f"\n{key} = " in text for key in KEYS) and text.startswith("; tuned by op2motion\n[Walking Config]")
     assert parse_stock_config(text) == tuned
-    assert parse_stock_config("[Walking Config]\nperiod_time = 500\n") == StockConfig().with_values(period_time_ms=500.0)
+    assert parse_stock_config("[Walking Config]\nperiod_time = 500\n") == StockConfig(period_time_ms=500.0)
 
 
 @pytest.mark.parametrize("text, words", [
