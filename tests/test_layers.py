@@ -15,7 +15,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "op2motion"
 #: Layers, lowest first. A module may import modules of lower layers and of its own package; never higher ones.
 LAYERS = [
     {"errors", "version"},
-    {"book", "fileio", "bench_wall"},
+    {"book", "fileio", "bench_wall", "workers"},
     {"robot"},
     {"kinematics", "formats"},
     {"model"},
@@ -23,7 +23,7 @@ LAYERS = [
     {"motion"},
     {"gait"},
     {"workflow"},
-    {"studio"},
+    {"studio", "tune"},
     {"figures", "library", "bench"},
     {"commands"},
     {"cli"},

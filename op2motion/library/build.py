@@ -12,7 +12,6 @@ it dies (Linux ``PR_SET_PDEATHSIG``, and a watchdog thread that polls the parent
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import multiprocessing
 import os
 import signal
@@ -25,15 +24,14 @@ from typing import Any, Callable, Iterator, Sequence
 from op2motion.errors import InputError, Interrupted
 from op2motion.library.grid import Job
 from op2motion.library.index import INDEX_JSON, IndexRow, load_index, reconcile, write_index
-from op2motion.library.jobs import BuildSettings, Recorder, one_thread_each, solve_job
+from op2motion.library.jobs import BuildSettings, Recorder, solve_job
 from op2motion.robot.spec import Spec
 from op2motion.robot.specfile import spec_text
+from op2motion.workers import one_thread_each, worker_init
 
 __all__ = ["BuildSettings", "BuildSummary", "Executor", "build_library", "check_workers"]
 
 MAX_WORKERS = 64
-WATCHDOG_PERIOD_S = 0.5
-_PR_SET_PDEATHSIG = 1   # linux/prctl.h
 
 
 @dataclass(frozen=True)
@@ -75,23 +73,6 @@ def check_workers(workers: int) -> int:
     if isinstance(workers, bool) or not isinstance(workers, int) or not 0 <= workers <= MAX_WORKERS:
         raise InputError(f"expected 0 (one per core) to {MAX_WORKERS}, got {workers!r}", "workers")
     return workers or max(1, os.cpu_count() or 1)
-
-
-def _watch_parent(parent: int) -> None:
-    while True:
-        if os.getppid() != parent:
-            os._exit(1)
-        time.sleep(WATCHDOG_PERIOD_S)
-
-
-def _worker_init(parent: int) -> None:
-    """In each worker: ignore Ctrl-C (the parent decides) and die with the parent."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    with contextlib.suppress(OSError, AttributeError):
-        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
-    if os.getppid() != parent:   # the parent died before the death signal was armed
-        os._exit(1)
-    threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
 
 
 @contextlib.contextmanager
@@ -167,7 +148,7 @@ def _run(todo: Sequence[Job], spec: Spec, spec_path: str | None, settings: Build
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None  # workers inherit Ctrl-C ignored
     try:
         with one_thread_each():
-            pool = ctx.Pool(workers, initializer=_worker_init, initargs=(os.getpid(),))
+            pool = ctx.Pool(workers, initializer=worker_init, initargs=(os.getpid(),))
     finally:
         if main:
             signal.signal(signal.SIGINT, previous)

@@ -7,13 +7,11 @@ index). Shared by the process pool (:mod:`.build`) and Ray (:mod:`.cluster`).
 
 from __future__ import annotations
 
-import contextlib
 import functools
-import os
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import Any, Callable
 
 from op2motion.errors import Op2MotionError
 from op2motion.fileio import write_atomic
@@ -36,25 +34,6 @@ class BuildSettings:
     restarts: int = DEFAULT_RESTARTS
     validate: Validate | None = None
     robust: bool = False
-
-
-THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
-
-
-@contextlib.contextmanager
-def one_thread_each() -> Iterator[None]:
-    """Workers started in here run their maths libraries on one thread each: the workers fill the cores already,
-    and BLAS threads spinning against other processes made a target take eight times as long."""
-    saved = {name: os.environ.get(name) for name in THREAD_VARIABLES}
-    os.environ.update({name: "1" for name in THREAD_VARIABLES})
-    try:
-        yield
-    finally:
-        for name, value in saved.items():
-            if value is None:
-                os.environ.pop(name, None)
-            else:
-                os.environ[name] = value
 
 
 def _row(job: Job, reached: bool, message: str, **extra: Any) -> IndexRow:
