@@ -165,12 +165,13 @@ def _init(ray: Any, address: str | None, workers: int, stop: _Stop) -> None:
             stop.arm()
 
 
-def run_on_ray(todo: Sequence[Job], spec: Spec, spec_text: str, settings: BuildSettings, workers: int,
-               record: Recorder, address: str | None) -> None:
-    """Solve ``todo`` as Ray tasks (``address``: a running cluster, e.g. ``127.0.0.1:6379`` or ``auto``; None starts
-    Ray on this machine with ``workers`` CPUs) and record each result as it comes. Ray's output goes to a log file,
-    not the terminal; Ctrl-C and SIGTERM end the build between Ray's calls (:class:`_Stop`); a Ray started here is
-    ended however the build ends (:mod:`.reaper`)."""
+@contextlib.contextmanager
+def ray_session(address: str | None, workers: int) -> Iterator[tuple[Any, _Stop]]:
+    """Ray, ready for tasks: ``address`` a running cluster (``127.0.0.1:6379`` or ``auto``; checked first,
+    :func:`check_address`), or None to start Ray on this machine with ``workers`` CPUs. Yields Ray and the
+    :class:`_Stop` that notes Ctrl-C and SIGTERM (call its ``check`` between Ray's calls). Ray's output goes to a
+    log file, not the terminal; a Ray started here is shut down, and ended however the program ends
+    (:mod:`.reaper`). Shared by library builds and gait tuning."""
     from op2motion.library.reaper import release, watch
 
     ray = _ray()
@@ -186,18 +187,7 @@ def run_on_ray(todo: Sequence[Job], spec: Spec, spec_text: str, settings: BuildS
                 _init(ray, address, workers, stop)
         try:
             stop.check()
-            task = ray.remote(num_cpus=1)(solve_job)
-            pending = [task.remote((job, None, spec.sha256, settings, spec_text)) for job in todo]
-            try:
-                while pending:     # short waits: a stop is acted on between them
-                    stop.check()
-                    done, pending = ray.wait(pending, num_returns=1, timeout=WAIT_S)
-                    for ref in done:
-                        record(*ray.get(ref))
-            finally:
-                for ref in pending:               # interrupted: nothing more is solved
-                    with contextlib.suppress(Exception):
-                        ray.cancel(ref, force=True)
+            yield ray, stop
         finally:
             if started:
                 with _quiet_stderr():
@@ -205,3 +195,22 @@ def run_on_ray(todo: Sequence[Job], spec: Spec, spec_text: str, settings: BuildS
     finally:
         stop.restore()
         release(watchdog)
+
+
+def run_on_ray(todo: Sequence[Job], spec: Spec, spec_text: str, settings: BuildSettings, workers: int,
+               record: Recorder, address: str | None) -> None:
+    """Solve ``todo`` as Ray tasks in a :func:`ray_session` and record each result as it comes; Ctrl-C and
+    SIGTERM end the build between Ray's calls."""
+    with ray_session(address, workers) as (ray, stop):
+        task = ray.remote(num_cpus=1)(solve_job)
+        pending = [task.remote((job, None, spec.sha256, settings, spec_text)) for job in todo]
+        try:
+            while pending:     # short waits: a stop is acted on between them
+                stop.check()
+                done, pending = ray.wait(pending, num_returns=1, timeout=WAIT_S)
+                for ref in done:
+                    record(*ray.get(ref))
+        finally:
+            for ref in pending:               # interrupted: nothing more is solved
+                with contextlib.suppress(Exception):
+                    ray.cancel(ref, force=True)

@@ -1,0 +1,87 @@
+"""Tuning studies (op2motion.tune): real Optuna studies in a real SQLite file on a known landscape: the search finds
+the fast and safe corner, a study stopped by Ctrl-C resumes without losing a finished trial, trials that stop at
+their first failure are told as pruned, and bad parameter ranges are refused naming the parameter."""
+
+from __future__ import annotations
+
+import pytest
+
+from op2motion.errors import InputError, Interrupted
+from op2motion.tune.space import Param, SearchSpace
+from op2motion.tune.study import Outcome, choose, open_study, pareto, rows, run_study
+
+SPACE = SearchSpace((Param("step_s", 0.2, 0.5, "s"), Param("step_length_m", 0.02, 0.08, "m")))
+SEED = 3
+
+
+def landscape(point: dict[str, float]) -> Outcome:
+    """A known answer: speed = length / time; margin falls with speed; beyond 0.3 m/s the walk 'falls' at once."""
+    speed = point["step_length_m"] / point["step_s"]
+    if speed > 0.3:
+        return Outcome(speed, -1.0, False, 1, 8, "fell", 0.0)
+    return Outcome(speed, 1.0 - speed / 0.3, True, 8, 8, None, 0.0)
+
+
+class InThread:
+    """Trials run here, one at a time, optionally interrupted after ``stop_after`` of them."""
+
+    workers = 1
+
+    def __init__(self, stop_after: int | None = None):
+        self.stop_after, self._pending, self.count = stop_after, [], 0
+
+    def submit(self, number, fn, *args):
+        self._pending.append((number, fn(*args)))
+
+    def finished(self):
+        self.count += len(self._pending)
+        if self.stop_after is not None and self.count > self.stop_after:
+            raise KeyboardInterrupt
+        out, self._pending = self._pending, []
+        return out
+
+    @property
+    def running(self):
+        return len(self._pending)
+
+
+def test_a_study_finds_the_fast_safe_corner_and_prunes_falls(tmp_path):
+    study = open_study(tmp_path / "s.db", "toy", SPACE, SEED)
+    assert run_study(study, SPACE, landscape, (), 40, InThread()) == 40
+    table = rows(study)
+    assert len(table) == 40 and any(r.state == "PRUNED" for r in table)
+    assert all(r.outcome.passed for r in pareto(table))
+    best = choose(table, min_margin=0.2)
+    assert best is not None and 0.2 <= best.outcome.speed <= 0.3 * 0.8 + 1e-9
+
+
+def test_a_stopped_study_resumes_without_losing_trials(tmp_path):
+    study = open_study(tmp_path / "s.db", "toy", SPACE, SEED)
+    with pytest.raises(Interrupted, match="resume"):
+        run_study(study, SPACE, landscape, (), 20, InThread(stop_after=7))
+    kept = [r.number for r in rows(study)]
+    assert len(kept) == 7
+    again = open_study(tmp_path / "s.db", "toy", SPACE, SEED)                   # a new process would do the same
+    assert run_study(again, SPACE, landscape, (), 20, InThread()) == 13
+    assert len(rows(again)) == 20 and set(kept) <= {r.number for r in rows(again)}
+
+
+def test_a_study_of_other_parameters_is_refused(tmp_path):
+    study = open_study(tmp_path / "s.db", "toy", SPACE, SEED)
+    run_study(study, SPACE, landscape, (), 2, InThread())
+    other = SearchSpace((Param("step_s", 0.2, 0.5, "s"),))
+    with pytest.raises(InputError, match="another --study"):
+        open_study(tmp_path / "s.db", "toy", other, SEED)
+    (tmp_path / "junk.db").write_text("not sqlite", encoding="utf-8")
+    with pytest.raises(InputError, match="study"):
+        open_study(tmp_path / "junk.db", "toy", SPACE, SEED)
+
+
+@pytest.mark.parametrize("override, words", [
+    (["nope", "1", "2"], "among"), (["step_s", "0.4", "0.3"], "low < high"), (["step_s", "0.1", "0.3"], "within"),
+    (["step_s", "nan", "0.3"], "low < high"), (["step_s", "a", "0.3"], "two numbers"), (["step_s", "0.3"], "NAME"),
+])
+def test_bad_ranges_are_refused_naming_the_parameter(override, words):
+    with pytest.raises(InputError, match=words):
+        SPACE.narrowed([override])
+    assert SPACE.narrowed([["step_s", "0.25", "0.3"]]).params[0].low == 0.25
