@@ -1,0 +1,214 @@
+"""The robot's serial port, opened safely, with bounded timeouts everywhere.
+
+:func:`open_port` refuses, as bad input naming ``--port`` (exit 2), a path that does not exist, that is not a
+character device, whose device is not a terminal (checked against ``/proc/devices`` *before* opening: opening some
+character devices, a watchdog for one, has effects), and a port another program holds: an advisory lock
+(``flock``) that every op2motion process takes, a scan of the other processes' open files (the stock framework
+takes no lock), and then ``TIOCEXCL`` so that nobody else opens it while we drive the robot. The port runs at
+1 Mbps, raw, with the FTDI's low-latency mode where the driver has it (a pseudo-terminal has none).
+
+:class:`Port` reads and writes with deadlines (``select``): nothing here blocks forever. A port that fails mid-run
+(the USB cable pulled) raises :class:`PortFailed` (a check that ran and failed: exit 1).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import os
+import select
+import stat
+import time
+from pathlib import Path
+from typing import Any
+
+from op2motion.errors import CheckFailed, InputError
+
+BAUD = 1_000_000                   # the OP2's bus: Dynamixel baud number 1
+WRITE_TIMEOUT_S = 0.05             # a write that cannot go out in this long means the port is stuck
+READ_CHUNK = 4096
+TTY_DRIVERS = ("tty", "pts", "ttyS", "ttyUSB", "ttyACM", "ttyAMA", "usb/tty", "/dev/tty")
+PARAM = "port"
+
+
+class PortFailed(CheckFailed):
+    """The port stopped working mid-run (unplugged, I/O error, stuck)."""
+
+
+def _tty_majors() -> set[int] | None:
+    """Character-device majors whose driver is a terminal, from ``/proc/devices`` (None where there is none)."""
+    try:
+        text = Path("/proc/devices").read_text()
+    except OSError:
+        return None
+    majors: set[int] = set()
+    block = False
+    for line in text.splitlines():
+        if line.startswith("Block"):
+            block = True
+        parts = line.split(None, 1)
+        if block or len(parts) != 2 or not parts[0].isdigit():
+            continue
+        if any(parts[1] == d or parts[1].startswith(d) for d in TTY_DRIVERS):
+            majors.add(int(parts[0]))
+    return majors
+
+
+def _check_device(path: str) -> os.stat_result:
+    """The device's stat; bad input if it is missing, unreadable, not a character device or not a terminal."""
+    if not path or not path.strip():
+        raise InputError("expected the robot's serial port (e.g. /dev/ttyUSB0), got an empty string", PARAM)
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise InputError(f"no such serial port: {path} (is the robot's USB cable plugged in and the robot on?)",
+                         PARAM) from None
+    except PermissionError:
+        raise InputError(f"permission denied: {path} (add yourself to the 'dialout' group)", PARAM) from None
+    except OSError as exc:
+        raise InputError(f"cannot use {path}: {exc.strerror or exc}", PARAM) from None
+    if not stat.S_ISCHR(st.st_mode):
+        kind = "directory" if stat.S_ISDIR(st.st_mode) else "regular file" if stat.S_ISREG(st.st_mode) else \
+            "block device" if stat.S_ISBLK(st.st_mode) else "socket or pipe"
+        raise InputError(f"expected a serial device, got a {kind}: {path}", PARAM)
+    majors = _tty_majors()
+    if majors is not None and os.major(st.st_rdev) not in majors:
+        raise InputError(f"expected a serial device, got another kind of character device: {path}", PARAM)
+    return st
+
+
+def holders(device: os.stat_result, skip: int | None = None) -> list[tuple[int, str]]:
+    """Other processes with the character device ``device`` open: (pid, command name), as far as ``/proc`` shows
+    (processes of other users may be hidden)."""
+    found = []
+    skip = os.getpid() if skip is None else skip
+    for entry in Path("/proc").iterdir() if Path("/proc").is_dir() else ():
+        if not entry.name.isdigit() or int(entry.name) == skip:
+            continue
+        try:
+            fds = list((entry / "fd").iterdir())
+        except OSError:
+            continue
+        for fd in fds:
+            try:
+                st = os.stat(fd)
+            except OSError:
+                continue
+            if stat.S_ISCHR(st.st_mode) and st.st_rdev == device.st_rdev:
+                try:
+                    name = (entry / "comm").read_text().strip()
+                except OSError:
+                    name = "?"
+                found.append((int(entry.name), name))
+                break
+    return found
+
+
+class Port:
+    """An open serial port: raw, exclusive, every call bounded by a deadline."""
+
+    def __init__(self, path: str, serial: Any):
+        self.path, self.serial = path, serial
+        self.fd: int = serial.fileno()
+
+    def write(self, data: bytes) -> None:
+        """Send ``data`` within :data:`WRITE_TIMEOUT_S`."""
+        deadline = time.monotonic() + WRITE_TIMEOUT_S
+        view = memoryview(data)
+        while view:
+            try:
+                sent = os.write(self.fd, view)
+                view = view[sent:]
+            except BlockingIOError:
+                pass
+            except OSError as exc:
+                raise PortFailed(f"writing to {self.path} failed: {exc.strerror or exc}", PARAM) from None
+            if view:
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise PortFailed(f"{self.path} did not take {len(data)} bytes within "
+                                     f"{WRITE_TIMEOUT_S * 1000:.0f} ms", PARAM)
+                select.select([], [self.fd], [], left)
+
+    def read(self, deadline: float) -> bytes:
+        """What arrives before ``deadline`` (time.monotonic) — at least one chunk if any came, else ``b""``."""
+        left = deadline - time.monotonic()
+        try:
+            ready, _, _ = select.select([self.fd], [], [], max(left, 0.0))
+            if not ready:
+                return b""
+            return os.read(self.fd, READ_CHUNK)
+        except BlockingIOError:
+            return b""
+        except InterruptedError:
+            return b""
+        except OSError as exc:
+            raise PortFailed(f"reading from {self.path} failed: {exc.strerror or exc}", PARAM) from None
+
+    def flush_input(self) -> None:
+        """Throw away whatever waits to be read (late replies of an earlier request)."""
+        import termios
+
+        with contextlib.suppress(OSError):
+            termios.tcflush(self.fd, termios.TCIFLUSH)
+        for _ in range(64):
+            try:
+                if not os.read(self.fd, READ_CHUNK):
+                    break
+            except (BlockingIOError, InterruptedError):
+                break
+            except OSError:
+                break
+
+    def close(self) -> None:
+        """Release the port (and its lock)."""
+        with contextlib.suppress(Exception):
+            self.serial.close()
+
+    def __enter__(self) -> "Port":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def open_port(path: str, baud: int = BAUD) -> Port:
+    """Open the robot's serial port (see the module docstring); every refusal is an :class:`InputError` naming the
+    ``port`` parameter."""
+    import fcntl
+    import termios
+
+    import serial
+
+    device = _check_device(path)
+    ser = serial.Serial()
+    ser.port, ser.baudrate, ser.timeout, ser.write_timeout = path, baud, 0, WRITE_TIMEOUT_S
+    try:
+        ser.open()
+    except (serial.SerialException, OSError, ValueError) as exc:
+        raise InputError(f"cannot open {path}: {exc}", PARAM) from None
+    try:
+        if not os.isatty(ser.fileno()):
+            raise InputError(f"expected a serial device, got a character device that is not a terminal: {path}",
+                             PARAM)
+        try:
+            fcntl.flock(ser.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN):
+                raise InputError(f"busy: another op2motion holds {path}", PARAM) from None
+            raise InputError(f"cannot lock {path}: {exc.strerror or exc}", PARAM) from None
+        others = holders(device)
+        if others:
+            pid, name = others[0]
+            raise InputError(f"busy: process {pid} ({name}) holds {path}; stop it first (the stock framework "
+                             f"must not hold the port at the same time)", PARAM)
+        with contextlib.suppress(OSError):
+            fcntl.ioctl(ser.fileno(), termios.TIOCEXCL)
+        with contextlib.suppress(Exception):
+            ser.set_low_latency_mode(True)           # FTDI: 1 ms latency timer instead of 16 ms
+    except BaseException:
+        ser.close()
+        raise
+    port = Port(path, ser)
+    port.flush_input()
+    return port
