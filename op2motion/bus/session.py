@@ -8,6 +8,8 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from op2motion.bus.client import Bus
 from op2motion.bus.port import Port, open_port
 from op2motion.bus.robot import OP2, BoardState, ServoState
@@ -24,6 +26,11 @@ class RobotStatus:
     servos: tuple[ServoState, ...]
     problems: tuple[Fault, ...]
     powered_now: bool
+
+    @property
+    def servo_angles(self) -> np.ndarray:
+        """The present positions (20,) [rad] in the spec's joint order (a silent servo: 0)."""
+        return np.array([s.position_rad for s in self.servos])
 
     @property
     def ok(self) -> bool:
@@ -89,13 +96,20 @@ class Session:
         servos = tuple(self.robot.servos())
         return RobotStatus(board, servos, tuple(preflight_problems(board, servos, self.spec)), self.powered_now)
 
-    def ready_for_motion(self, p_gains: dict[int, int] | None = None) -> RobotStatus:
-        """Refuse a robot unfit for a motion (:func:`~.safety.preflight`), then switch every torque on with the
-        goals where the joints are."""
-        status = self.status()
+    def preflight(self, status: RobotStatus) -> None:
+        """Refuse (exit 1) a robot unfit for a motion (:func:`~.safety.preflight`)."""
         preflight(status.board, status.servos, self.spec)
+
+    def take_control(self, status: RobotStatus, p_gains: dict[int, int] | None = None) -> None:
+        """Every torque on with the goals where the joints are (as ``status`` read them)."""
         failed = self.robot.take_control({s.id: s.position_rad for s in status.servos}, p_gains)
         if failed:
             names = ", ".join(f"{self.robot.joint_of[d]} (ID {d})" for d in failed)
             raise CheckFailed(f"the torque could not be switched on: {names} did not confirm")
+
+    def ready_for_motion(self, p_gains: dict[int, int] | None = None) -> RobotStatus:
+        """:meth:`status`, :meth:`preflight` and :meth:`take_control` in one."""
+        status = self.status()
+        self.preflight(status)
+        self.take_control(status, p_gains)
         return status
