@@ -20,8 +20,19 @@ from op2motion.version import __version__
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand (each command module registers its own)."""
-    from op2motion.commands import (bench, common, files, kinematics, library, motion, physics, posture, robot, studio,
-                                    walk)
+    from op2motion.commands import (
+        bench,
+        common,
+        files,
+        kinematics,
+        library,
+        motion,
+        physics,
+        posture,
+        robot,
+        studio,
+        walk,
+    )
 
     parser = common.Parser(prog="op2motion", description="Whole-body motion for the ROBOTIS OP2, checked in physics.")
     parser.add_argument("--version", action="version", version=f"op2motion {__version__}")

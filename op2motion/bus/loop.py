@@ -32,7 +32,7 @@ import numpy as np
 
 from op2motion.bus import safety
 from op2motion.bus.imu import decode
-from op2motion.bus.robot import OP2
+from op2motion.bus.robot import OP2, angle_of
 from op2motion.bus.tables import (
     BOARD_SPAN,
     CM730_ID,
@@ -42,9 +42,9 @@ from op2motion.bus.tables import (
     TORQUE_LIMIT_FULL,
 )
 from op2motion.errors import InputError
-from op2motion.physics.controller import Controller
+from op2motion.physics import Controller
 from op2motion.robot.framework import CONTROL_PERIOD_S
-from op2motion.robot.joints import servo_to_ticks, ticks_to_servo
+from op2motion.robot.joints import servo_to_ticks
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support
 
@@ -104,7 +104,8 @@ class LoopReport:
                 "retried_ticks": self.retried_ticks, "max_blind_ticks": self.max_blind_ticks,
                 "clipped": dict(self.clipped), "ended": self.ended,
                 "fault": None if self.fault is None else self.fault.as_dict(),
-                "yaw_deg": round(math.degrees(self.yaw_rad), 2), "tilt_max_deg": round(math.degrees(self.tilt_max_rad), 1),
+                "yaw_deg": round(math.degrees(self.yaw_rad), 2),
+                "tilt_max_deg": round(math.degrees(self.tilt_max_rad), 1),
                 "bus": dict(self.bus)}
 
     def describe(self) -> str:
@@ -157,6 +158,9 @@ class _Run:
         self.gyro, self.accel = np.zeros(3), np.zeros(3)
         self.goals = np.zeros(len(self.names))
         self.report = LoopReport()
+        self.answered: set[int] = set()
+        self.got: dict[int, Any] = {}
+        self.rotating = self.ids[0]
 
     def read(self, k: int, started: float) -> set[int]:
         """One bulk read (and one retry for the silent devices); the devices that answered."""
@@ -181,7 +185,7 @@ class _Run:
             packet = got.get(d)
             if packet is not None:
                 ticks = packet.params[0] | (packet.params[1] << 8)
-                self.positions[i] = float(ticks_to_servo(ticks, self.spec))
+                self.positions[i] = angle_of(ticks, self.spec)
         self.got = got
         self.rotating = rotating
         return set(got)
@@ -226,11 +230,78 @@ class _Run:
         ticks = servo_to_ticks(self.goals, self.spec)
         address, length = SYNC_SPAN
         self.robot.bus.sync_write(address, length, {
-            d: bytes((0, 0, int(gains[i]), 0, int(ticks[i]) & 0xFF, int(ticks[i]) >> 8)) for i, d in enumerate(self.ids)})
+            d: bytes((0, 0, int(gains[i]), 0, int(ticks[i]) & 0xFF, int(ticks[i]) >> 8))
+            for i, d in enumerate(self.ids)})
 
 
 def _percentile(values: list[float], q: float) -> float:
     return float(np.percentile(values, q)) * 1000.0 if values else 0.0
+
+
+class _Stops:
+    """How a run ends: the row a stop froze the goals at, when the loop ends after holding them, a fall's settling."""
+
+    def __init__(self) -> None:
+        self.frozen_at: int | None = None
+        self.end_at: float | None = None
+        self.fall_until: float | None = None
+
+    def fault(self, fault: safety.Fault, robot: OP2, plan: Any, row: int, k: int, now: float) -> None:
+        """React to the run's first fault (:mod:`.safety`'s policy)."""
+        if fault.kind == "fell":
+            robot.torque_limit(safety.FALL_TORQUE_LIMIT)
+            self.frozen_at, self.fall_until = row, now + safety.FALL_SETTLE_S
+        elif fault.kind == "not answering" and fault.id == CM730_ID:
+            self.frozen_at = row
+        else:
+            self.frozen_at = stop_row(plan, row) if k else 0
+
+    def request(self, plan: Any, row: int, k: int) -> None:
+        """A stop request (Ctrl-C): a walk on its next double support, anything else at once."""
+        if self.frozen_at is None:
+            self.frozen_at = stop_row(plan, row) if k else 0
+
+    def frozen(self, row: int, now: float) -> bool:
+        """Whether the goals are frozen at ``row`` (the hold's end is timed from the first frozen tick)."""
+        if self.frozen_at is None or row < self.frozen_at:
+            return False
+        if self.end_at is None:
+            self.end_at = now + STOP_HOLD_S
+        return True
+
+    def over(self, now: float, t: float, duration: float) -> bool:
+        """Whether the loop ends after this tick."""
+        if self.frozen_at is None:
+            return t >= duration
+        return self.end_at is not None and now >= self.end_at and self.fall_until is None
+
+
+def _step(run: _Run, stops: _Stops, k: int, now: float, stop: threading.Event | None) -> tuple[float, int]:
+    """One tick after its read: the watch, the controller (or the frozen goals), the sync write; (t, row)."""
+    controller, report, plan = run.controller, run.report, run.controller.plan
+    fault = run.check(run.answered)
+    t = controller_time(k, plan.tick_phase_s)
+    row = plan.row(t)
+    report.yaw_rad += float(run.gyro[2]) * CONTROL_PERIOD_S if k else 0.0
+    if fault is not None and report.fault is None:
+        report.fault, report.ended = fault, "fault"
+        stops.fault(fault, run.robot, plan, row, k, now)
+    if stop is not None and stop.is_set() and stops.frozen_at is None:
+        report.ended = "stopped"
+        stops.request(plan, row, k)
+    positions = dict(zip(run.names, run.positions.tolist()))
+    goals: Any = {}
+    if k == 0:
+        goals = controller.start(positions)
+        run.goals = run.positions.copy()
+    elif not stops.frozen(row, now):
+        goals = controller.step(t, run.gyro.copy(), run.accel.copy(), positions)
+    if stops.fall_until is not None and now >= stops.fall_until:     # the fall is over: relax where it lies
+        run.goals = run.positions.copy()
+        run.robot.torque_limit(TORQUE_LIMIT_FULL)
+        stops.fall_until, stops.end_at = None, now
+    run.send(run.apply(goals, row))
+    return t, row
 
 
 def run_controller(controller: Controller, port: str | OP2, spec: Spec | None = None, *,
@@ -242,25 +313,16 @@ def run_controller(controller: Controller, port: str | OP2, spec: Spec | None = 
     docstring). ``on_tick`` gets every :class:`Tick`. The servos keep holding the last goals afterwards."""
     if isinstance(port, str):
         from op2motion.bus.session import Session
+        from op2motion.robot.specfile import default_spec
 
-        if spec is None:
-            from op2motion.robot.specfile import default_spec
-
-            spec = default_spec()
-        with Session(port, spec) as session:
+        with Session(port, spec or default_spec()) as session:
             session.ready_for_motion()
             return run_controller(controller, session.robot, duration_s=duration_s, stop=stop, on_tick=on_tick,
                                   watch=watch)
-    robot = port
-    run = _Run(controller, robot, watch)
+    run, stops = _Run(controller, port, watch), _Stops()
     report = run.report
-    plan = controller.plan
-    duration = plan.duration_s if duration_s is None else duration_s
-    phase = plan.tick_phase_s
+    duration = controller.plan.duration_s if duration_s is None else duration_s
     periods: list[float] = []
-    frozen_at: int | None = None        # the row a stop froze the goals at
-    end_at: float | None = None         # monotonic time the loop ends (after a stop's hold)
-    fall_until: float | None = None
     start = time.monotonic()
     clock, last, k = start, None, 0
     while True:
@@ -274,48 +336,17 @@ def run_controller(controller: Controller, port: str | OP2, spec: Spec | None = 
             periods.append(now - last)
             report.late_ticks += (now - last) > LATE_S
         last = now
-        answered = run.read(k, now)
-        fault = run.check(answered)
-        t = controller_time(k, phase)
-        row = plan.row(t)
-        report.yaw_rad += float(run.gyro[2]) * CONTROL_PERIOD_S if k else 0.0
-        if fault is not None and report.fault is None:
-            report.fault, report.ended = fault, "fault"
-            if fault.kind == "fell":
-                robot.torque_limit(safety.FALL_TORQUE_LIMIT)
-                frozen_at, fall_until = row, now + safety.FALL_SETTLE_S
-            elif fault.kind == "not answering" and fault.id == CM730_ID:
-                frozen_at = row
-            else:
-                frozen_at = stop_row(plan, row) if k else 0
-        if stop is not None and stop.is_set() and frozen_at is None:
-            report.ended = "stopped"
-            frozen_at = stop_row(plan, row) if k else 0
-        frozen = frozen_at is not None and row >= frozen_at
-        if k == 0:
-            goals = controller.start(dict(zip(run.names, run.positions.tolist())))
-            run.goals = run.positions.copy()
-        elif not frozen:
-            goals = controller.step(t, run.gyro.copy(), run.accel.copy(), dict(zip(run.names, run.positions.tolist())))
-        else:
-            goals = {}
-            if end_at is None:
-                end_at = now + STOP_HOLD_S
-        if fall_until is not None and now >= fall_until:      # the fall is over: relax where it lies
-            run.goals = run.positions.copy()
-            robot.torque_limit(TORQUE_LIMIT_FULL)
-            fall_until, end_at = None, now
-        gains = run.apply(goals, row)
-        run.send(gains)
+        run.answered = run.read(k, now)
+        t, row = _step(run, stops, k, now, stop)
         if on_tick is not None:
             on_tick(Tick(k, t, row, run.positions.copy(), run.gyro.copy(), run.accel.copy(), run.goals.copy()))
         k += 1
         clock += CONTROL_PERIOD_S
-        if (end_at is not None and now >= end_at and fall_until is None) or (frozen_at is None and t >= duration):
+        if stops.over(now, t, duration):
             break
     report.ticks, report.seconds = k, time.monotonic() - start
     report.period_p50_ms, report.period_p99_ms = _percentile(periods, 50), _percentile(periods, 99)
     report.period_max_ms = max(periods) * 1000.0 if periods else 0.0
     report.goals, report.positions = run.goals.copy(), run.positions.copy()
-    report.bus = robot.bus.stats.as_dict()
+    report.bus = run.robot.bus.stats.as_dict()
     return report

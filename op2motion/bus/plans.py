@@ -54,7 +54,7 @@ def then(first: Trajectory, second: Trajectory) -> Trajectory:
 def page_start(action: Any, page: int, spec: Spec, current: np.ndarray) -> Pose:
     """The first step of action page ``page`` as a double-support pose (joints it leaves out stay where they are
     now, ``current`` (20,) [rad])."""
-    from op2motion.robot.joints import ticks_to_servo
+    from op2motion.bus.robot import angle_of
 
     chosen = action.page(page, spec)
     servo = np.asarray(current, dtype=float).copy()
@@ -62,7 +62,7 @@ def page_start(action: Any, page: int, spec: Spec, current: np.ndarray) -> Pose:
         for i, joint in enumerate(spec.joints):
             tick = chosen.steps[0].ticks.get(joint.id)
             if tick is not None:
-                servo[i] = float(ticks_to_servo(tick, spec))
+                servo[i] = angle_of(tick, spec)
     return Pose(f"page{page}_start", Support.DOUBLE, servo)
 
 
@@ -85,6 +85,6 @@ def physics_problem(trajectory: Trajectory, spec: Spec, on_progress: Any = None)
 def robot_schedule(trajectory: Trajectory, spec: Spec) -> Schedule:
     """The trajectory as the loop runs it: row 0 at once, a row every 8 ms, the last held :data:`HOLD_AFTER_S`."""
     end = (len(trajectory.goals) - 1) * trajectory.dt
-    plan = Plan("motion", trajectory.goals, trajectory.p_gains, trajectory.supports, trajectory.dt, 0.0,
-                end + HOLD_AFTER_S)
+    plan = Plan("motion", trajectory.goals, trajectory.p_gains, tuple(Support.of(s) for s in trajectory.supports),
+                trajectory.dt, 0.0, end + HOLD_AFTER_S)
     return Schedule(plan, spec.joint_names)

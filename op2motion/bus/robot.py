@@ -17,7 +17,6 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from op2motion.bus import protocol as p
 from op2motion.bus.client import Bus
 from op2motion.bus.imu import attitude, decode_span, imu_of
 from op2motion.bus.tables import (
@@ -110,6 +109,11 @@ class NoBoard(InputError):
     """Nothing answers at ID 200: not an OP2's port, or the robot is off."""
 
 
+def angle_of(tick: int, spec: Spec) -> float:
+    """A position register's servo angle [rad]."""
+    return float(ticks_to_servo(np.asarray(tick), spec))
+
+
 def _u16(data: bytes, address: int, start: int = 0) -> int:
     return data[address - start] | (data[address - start + 1] << 8)
 
@@ -166,16 +170,19 @@ class OP2:
             return ServoState(device, joint, False)
         d = reply.params
         self.return_level[device] = d[MX28["status_return_level"].address]
-        t = MX28
+        def byte(name: str) -> int:
+            return d[MX28[name].address]
+
+        def word(name: str) -> int:
+            return _u16(d, MX28[name].address)
+
         return ServoState(
-            device, joint, True, _u16(d, t["model_number"].address), d[t["firmware_version"].address],
-            d[t["status_return_level"].address], d[t["temperature_limit"].address], d[t["alarm_shutdown"].address],
-            d[t["torque_enable"].address] == 1, d[t["p_gain"].address],
-            float(ticks_to_servo(_u16(d, t["goal_position"].address), self.spec)), _u16(d, t["moving_speed"].address),
-            _u16(d, t["torque_limit"].address), float(ticks_to_servo(_u16(d, t["present_position"].address), self.spec)),
-            signed(_u16(d, t["present_speed"].address)) * SPEED_RAD_S_PER_UNIT,
-            signed(_u16(d, t["present_load"].address)) / TORQUE_LIMIT_FULL,
-            d[t["present_voltage"].address] * VOLTS_PER_UNIT, d[t["present_temperature"].address], reply.errors)
+            device, joint, True, word("model_number"), byte("firmware_version"), byte("status_return_level"),
+            byte("temperature_limit"), byte("alarm_shutdown"), byte("torque_enable") == 1, byte("p_gain"),
+            angle_of(word("goal_position"), self.spec), word("moving_speed"), word("torque_limit"),
+            angle_of(word("present_position"), self.spec),
+            signed(word("present_speed")) * SPEED_RAD_S_PER_UNIT, signed(word("present_load")) / TORQUE_LIMIT_FULL,
+            byte("present_voltage") * VOLTS_PER_UNIT, byte("present_temperature"), reply.errors)
 
     def servos(self) -> list[ServoState]:
         """Every servo of the spec, in ID order."""
@@ -208,7 +215,7 @@ class OP2:
         for device in devices or self.ids:
             reply = self.bus.read(device, MX28["present_position"].address, 2)
             if reply is not None:
-                out[device] = float(ticks_to_servo(_u16(reply.params, 0), self.spec))
+                out[device] = angle_of(_u16(reply.params, 0), self.spec)
         return out
 
     def take_control(self, positions: dict[int, float], p_gains: dict[int, int] | None = None) -> list[int]:
@@ -231,7 +238,3 @@ class OP2:
         """Every servo's torque limit (0..1023) in one SYNC_WRITE."""
         self.sync("torque_limit", {d: int(min(max(value, 0), TORQUE_LIMIT_FULL)) for d in devices or self.ids})
 
-
-def status_error_names(error: int) -> tuple[str, ...]:
-    """A status packet's error bits by name (re-exported for the commands)."""
-    return p.error_names(error)

@@ -145,7 +145,8 @@ class Watch:
         """A servo's error bits (every tick) and temperature (when read): a fault if it must stop the motion."""
         stop = [e for e in errors if e in STOP_ERRORS]
         if stop:
-            detail = f"{temperature_c} °C" if temperature_c is not None and "overheating" in stop else "status error bit"
+            hot = temperature_c is not None and "overheating" in stop
+            detail = f"{temperature_c} °C" if hot else "status error bit"
             return Fault(", ".join(stop), self._joint(device), device, detail)
         if temperature_c is not None and temperature_c >= HOT_STOP_C:
             return Fault("overheating", self._joint(device), device, f"{temperature_c} °C, at or above "

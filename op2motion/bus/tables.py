@@ -153,7 +153,8 @@ BOARD_SPAN = (CM730["dynamixel_power"].address, 30)
 #: The framework's per-tick sync write: 6 bytes a servo from the D gain: D, I, P, (reserved), goal low, goal high.
 SYNC_SPAN = (MX28["d_gain"].address, 6)
 #: A servo's status block read once per rotation: present position to present temperature (36..43).
-SERVO_STATE_SPAN = (MX28["present_position"].address, MX28["present_temperature"].end - MX28["present_position"].address)
+SERVO_STATE_SPAN = (MX28["present_position"].address,
+                    MX28["present_temperature"].end - MX28["present_position"].address)
 
 
 def signed(value: int) -> int:

@@ -19,8 +19,16 @@ from typing import Any, Callable
 import numpy as np
 
 from op2motion.bus.loop import LoopReport, Tick, run_controller
-from op2motion.bus.plans import CHECK_ENGINE, LYING_TILT_RAD, move, page_start, page_trajectory, physics_problem, \
-    robot_schedule, then
+from op2motion.bus.plans import (
+    CHECK_ENGINE,
+    LYING_TILT_RAD,
+    move,
+    page_start,
+    page_trajectory,
+    physics_problem,
+    robot_schedule,
+    then,
+)
 from op2motion.bus.safety import clip_goals, mechanical_bounds
 from op2motion.bus.session import RobotStatus, Session
 from op2motion.errors import CheckFailed, InputError
@@ -30,6 +38,21 @@ from op2motion.robot.support import Support
 
 ACTION_FILE_BYTES = 256 * 512      # an action file: 256 pages of 512 bytes
 OnTick = Callable[[Tick], None]
+
+
+@dataclass(frozen=True)
+class Options:
+    """How a motion runs: ``force`` (play what op2motion's checks refuse), the ``stop`` event (set on Ctrl-C), a
+    callback per loop tick (progress) and one for the physics check's progress (done, total)."""
+
+    force: bool = False
+    stop: threading.Event | None = None
+    on_tick: OnTick | None = None
+    on_progress: Any = None
+
+    def stopped(self) -> bool:
+        """Whether a stop was asked for."""
+        return self.stop is not None and self.stop.is_set()
 
 
 @dataclass
@@ -165,9 +188,7 @@ def _checked(trajectory: Any, spec: Spec, state: RobotStatus, force: bool, what:
     return f"checked in physics ({CHECK_ENGINE}, the servo model, from the robot's present pose)"
 
 
-def play(port: str, spec: Spec, path: str, page: int | None = None, force: bool = False,
-         stop: threading.Event | None = None, on_tick: OnTick | None = None, on_progress: Any = None
-         ) -> MotionResult:
+def play(port: str, spec: Spec, path: str, page: int | None = None, options: Options = Options()) -> MotionResult:
     """A pose, a motion file or an action page on the robot: a planned move from where it is to the first pose,
     then the motion or the page tick for tick (see the module docstring)."""
     from op2motion.motion.pipeline import plan_motion
@@ -187,24 +208,24 @@ def play(port: str, spec: Spec, path: str, page: int | None = None, force: bool 
             trajectory = then(move(current, first, spec), motion)
             what = f"motion {loaded.name}"
         else:
+            assert page is not None
             start = page_start(loaded, page, spec, current)
             trajectory = then(move(current, start, spec), page_trajectory(loaded, page, spec, start))
             what = f"page {page} ({loaded.page(page, spec).name})"
         result = MotionResult(what, trajectory.duration_s, target=target, notes=list(trajectory.notes))
-        result.checked = _checked(trajectory, spec, state, force, what, on_progress)
-        if stop is not None and stop.is_set():
+        result.checked = _checked(trajectory, spec, state, options.force, what, options.on_progress)
+        if options.stopped():
             result.runs.append(("motion", LoopReport(ended="stopped")))
             return result
         session.take_control(state)
-        report = run_controller(robot_schedule(trajectory, spec), session.robot, stop=stop, on_tick=on_tick)
+        report = run_controller(robot_schedule(trajectory, spec), session.robot, stop=options.stop,
+                                on_tick=options.on_tick)
         result.runs.append(("motion", report))
         return result
 
 
 def walk(port: str, spec: Spec, preset: str | None = None, steps: int | None = None,
-         target: tuple[float, float, float] | None = None, force: bool = False,
-         stop: threading.Event | None = None, on_tick: OnTick | None = None, on_progress: Any = None
-         ) -> MotionResult:
+         target: tuple[float, float, float] | None = None, options: Options = Options()) -> MotionResult:
     """A walk on the robot: the preset's gait planned within the servos' speed (``steps`` steps, or to ``target``
     (x [m], y [m], heading [rad])), a planned move to its first pose, then :class:`~op2motion.gait.controller.
     WalkController` in the loop with the robot's IMU and joints until it stands at the end."""
@@ -225,16 +246,18 @@ def walk(port: str, spec: Spec, preset: str | None = None, steps: int | None = N
         approach = move(state.servo_angles, first, spec)
         result = MotionResult(f"walk '{params.name}' ({gait.params.steps} steps)",
                               approach.duration_s + controller.plan.duration_s, notes=list(approach.notes))
-        result.checked = _checked(approach, spec, state, force, "the move to the walk's first pose", on_progress)
-        if stop is not None and stop.is_set():
+        result.checked = _checked(approach, spec, state, options.force, "the move to the walk's first pose",
+                                  options.on_progress)
+        if options.stopped():
             result.runs.append(("approach", LoopReport(ended="stopped")))
             return result
         session.take_control(state)
-        report = run_controller(robot_schedule(approach, spec), session.robot, stop=stop, on_tick=on_tick)
+        report = run_controller(robot_schedule(approach, spec), session.robot, stop=options.stop,
+                                on_tick=options.on_tick)
         result.runs.append(("approach", report))
         if report.ended != "done":
             return result
-        report = run_controller(controller, session.robot, stop=stop, on_tick=on_tick)
+        report = run_controller(controller, session.robot, stop=options.stop, on_tick=options.on_tick)
         result.runs.append(("walk", report))
         result.travel = leg_travel(controller)
         result.travel["gyro_heading_deg"] = math.degrees(report.yaw_rad)

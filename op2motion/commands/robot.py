@@ -164,6 +164,7 @@ def pose_name_of(stem: str) -> str:
 
 def _motion(args: argparse.Namespace, spec: Spec, run: Any) -> int:
     """Run a motion task with Ctrl-C handling and progress; print; the exit code."""
+    from op2motion.bus.tasks import Options
     from op2motion.commands.common import progress
 
     with stop_on_signals() as stop, ticker(args, "robot", "s") as bar:
@@ -171,7 +172,7 @@ def _motion(args: argparse.Namespace, spec: Spec, run: Any) -> int:
             bar.update(0.008)
 
         with progress(args, "check", "s") as on_progress:
-            result = run(stop, on_tick, on_progress)
+            result = run(Options(args.force, stop, on_tick, on_progress))
     emit(args, result.as_dict(), "\n".join(result.lines()))
     if result.fault is not None:
         raise CheckFailed(f"{result.what} stopped: {result.fault.describe()}")
@@ -184,8 +185,7 @@ def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot play``."""
     from op2motion.bus.tasks import play
 
-    return _motion(args, spec, lambda stop, on_tick, on_progress: play(
-        args.port, spec, args.file, args.page, args.force, stop, on_tick, on_progress))
+    return _motion(args, spec, lambda options: play(args.port, spec, args.file, args.page, options))
 
 
 def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
@@ -199,8 +199,7 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
         if not all(math.isfinite(v) for v in args.target):
             raise InputError(f"expected finite numbers, got {args.target}", "target")
         target = (args.target[0], args.target[1], math.radians(args.target[2]))
-    return _motion(args, spec, lambda stop, on_tick, on_progress: walk(
-        args.port, spec, args.preset, args.steps, target, args.force, stop, on_tick, on_progress))
+    return _motion(args, spec, lambda options: walk(args.port, spec, args.preset, args.steps, target, options))
 
 
 def cmd_emulate(args: argparse.Namespace, spec: Spec) -> int:
@@ -229,8 +228,9 @@ def cmd_emulate(args: argparse.Namespace, spec: Spec) -> int:
     result = {"link": args.link, "pty": emulator.pty_name, "engine": args.engine, "start": args.start,
               "faults": faults.describe(), "stats": dict(emulator.stats), "slipped_s": round(emulator.slipped_s, 3),
               "simulated_s": round(emulator.truth()["t_s"], 3), "truth": emulator.truth()}
-    emit(args, result, f"emulated OP2 stopped after {result['simulated_s']:.1f} s simulated ({emulator.slipped_s:.2f} s "
-                       f"behind the wall clock), {emulator.stats['packets']} packets, link removed")
+    emit(args, result, f"emulated OP2 stopped after {result['simulated_s']:.1f} s simulated "
+                       f"({emulator.slipped_s:.2f} s behind the wall clock), {emulator.stats['packets']} packets, "
+                       f"link removed")
     if interrupted:
         raise Interrupted("the emulated OP2 stopped; its link is removed")
     return 0

@@ -26,10 +26,10 @@ from op2motion.fileio import read_text
 from op2motion.robot.spec import (
     BOOK_VARS,
     COLLISION_SIZES,
+    GRAVITY_M_S2,
     SCHEMA,
     BookMap,
     Collision,
-    GRAVITY_M_S2,
     Foot,
     Geometry,
     ImuChannel,

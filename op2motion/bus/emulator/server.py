@@ -71,8 +71,7 @@ class Emulator:
         self._truth: dict[str, float] = self.body.truth()
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
-        if start in ("standing", "lying_front", "lying_back"):
-            self._powered_holding()
+        self._powered_holding()
 
     # --- setup ---------------------------------------------------------------------------------------------------
     def _powered_holding(self) -> None:
