@@ -3,8 +3,10 @@ time and retried a bounded number of times.
 
 Before each request the input is flushed (a late reply of an earlier request must not be taken for this one's);
 a reply counts only when it comes from the device asked and carries the length asked for; an echo of our own
-packet is skipped. The wait for a reply is the time its bytes take on the wire (1.5 x, 10 bits a byte at 1 Mbps)
-plus a latency allowance (the USB adapter, the device's return delay). A device that does not answer, answers
+packet is skipped. The wait for the first byte is the request's time on the wire plus a latency allowance (the USB
+adapter, the device's return delay); once replies come, a pause of :data:`GAP_S` ends the wait (devices answer back
+to back, so the rest were lost), and the whole wait never exceeds the replies' time on the wire (1.5 x, 10 bits a
+byte at 1 Mbps) on top of that. A device that does not answer, answers
 garbage or reports a checksum or instruction error (our packet arrived damaged) is asked again, at most
 ``retries`` more times; then the transaction returns None and the caller decides.
 
@@ -25,6 +27,7 @@ BYTE_S = 10.0 / BAUD               # one byte on the wire: start, 8 data, stop b
 WIRE_MARGIN = 1.5                  # replies may take this much longer than their bytes
 COMMAND_LATENCY_S = 0.012          # one-off commands: allowance for a device (and a USB adapter) to answer
 RETRIES = 3                        # a one-off command is tried 1 + RETRIES times
+GAP_S = 0.0015                     # replies that stop this long are over (a USB adapter's low-latency timer: 1 ms)
 
 
 @dataclass
@@ -59,19 +62,25 @@ class Bus:
         self.port.write(packet)
 
     def _collect(self, sent: bytes, expect: Mapping[int, int], latency_s: float) -> dict[int, p.Packet]:
-        """Replies to ``sent`` from the devices in ``expect`` ({id: parameter count}), until all came or the wait
-        (wire time + ``latency_s``) is over."""
-        wire = (len(sent) + sum(n + p.MIN_PACKET_BYTES for n in expect.values())) * BYTE_S * WIRE_MARGIN
-        deadline = time.monotonic() + wire + latency_s
+        """Replies to ``sent`` from the devices in ``expect`` ({id: parameter count}), until all came, or nothing
+        came within ``latency_s`` (plus the request's wire time), or the replies stopped for :data:`GAP_S` (devices
+        answer back to back: a gap means the rest were lost), or the whole wait (all bytes' wire time + the
+        latency) is over."""
+        now = time.monotonic()
+        first = now + len(sent) * BYTE_S * WIRE_MARGIN + latency_s
+        end = first + sum(n + p.MIN_PACKET_BYTES for n in expect.values()) * BYTE_S * WIRE_MARGIN
         got: dict[int, p.Packet] = {}
         echo_skipped = False
         bad_before = self.parser.bad_checksums
+        last: float | None = None
         while len(got) < len(expect):
+            deadline = first if last is None else min(end, last + GAP_S)
             data = self.port.read(deadline)
             if not data:
                 if time.monotonic() >= deadline:
                     break
                 continue
+            last = time.monotonic()
             for packet in self.parser.feed(data):
                 if not echo_skipped and packet.encode() == sent:
                     echo_skipped = True

@@ -13,7 +13,7 @@ servo angle decreasing); :func:`signed` and :func:`magnitude` convert.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 MX28_MODEL_NUMBER = 29
 CM730_MODEL_NUMBER = 0x7300        # what the CM-730 reports at address 0 (Bold Hearts' CM730 snapshot, 0x7300)
@@ -54,12 +54,16 @@ class ControlTable:
     model_number: int
     size: int
     registers: tuple[Register, ...]
+    by_name: dict[str, Register] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "by_name", {r.name: r for r in self.registers})
 
     def __getitem__(self, name: str) -> Register:
-        for r in self.registers:
-            if r.name == name:
-                return r
-        raise KeyError(f"{self.device} has no register {name!r}")
+        try:
+            return self.by_name[name]
+        except KeyError:
+            raise KeyError(f"{self.device} has no register {name!r}") from None
 
     def at(self, address: int) -> Register | None:
         """The register that starts at ``address`` (None if none does)."""

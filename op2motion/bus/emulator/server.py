@@ -241,8 +241,10 @@ class Emulator:
             self._handle(packet)
         self.stats["bad_packets"] += self.parser.bad_checksums - bad
 
-    def _reply(self, device: Any, error: int, params: bytes = b"", level: int = 2) -> None:
-        """A status packet, if the device's status return level allows it; lost or corrupted at the fault rates."""
+    def _reply(self, device: Any, error: int, params: bytes = b"", level: int = 2, out: bytearray | None = None
+               ) -> None:
+        """A status packet, if the device's status return level allows it; lost or corrupted at the fault rates.
+        Written at once, or added to ``out`` (a bulk read's replies go out back to back, in one write)."""
         if device.return_level < level:
             return
         packet = bytearray(p.status(device.id, error, params))
@@ -254,9 +256,15 @@ class Emulator:
             packet[i] ^= 1 << self.rng.randrange(8)
             self.stats["corrupted"] += 1
         self.stats["replies"] += 1
+        if out is not None:
+            out += packet
+        else:
+            self._send(bytes(packet))
+
+    def _send(self, data: bytes) -> None:
         assert self.master is not None
         with contextlib.suppress(BlockingIOError, OSError):
-            os.write(self.master, bytes(packet))
+            os.write(self.master, data)
 
     def _write(self, device: Any, address: int, data: bytes) -> int:
         was_powered = self._powered()
@@ -326,10 +334,13 @@ class Emulator:
         if len(params) < 4 or (len(params) - 1) % 3:
             self.stats["bad_packets"] += 1
             return
+        out = bytearray()
         for k in range(1, len(params), 3):
             length, target, address = params[k], params[k + 1], params[k + 2]
             device = self._present(target)
             if device is None:
-                return                             # the devices listed after it wait for its reply in vain
+                break                              # the devices listed after it wait for its reply in vain
             error, data = device.read(address, length)
-            self._reply(device, error, data or b"", level=0)
+            self._reply(device, error, data or b"", level=0, out=out)
+        if out:
+            self._send(bytes(out))
