@@ -61,14 +61,17 @@ class Bus:
         self.stats.requests += 1
         self.port.write(packet)
 
-    def _collect(self, sent: bytes, expect: Mapping[int, int], latency_s: float) -> dict[int, p.Packet]:
+    def _collect(self, sent: bytes, expect: Mapping[int, int], latency_s: float, cap: float | None = None
+                 ) -> dict[int, p.Packet]:
         """Replies to ``sent`` from the devices in ``expect`` ({id: parameter count}), until all came, or nothing
         came within ``latency_s`` (plus the request's wire time), or the replies stopped for :data:`GAP_S` (devices
         answer back to back: a gap means the rest were lost), or the whole wait (all bytes' wire time + the
-        latency) is over."""
+        latency) is over, or the monotonic time ``cap``."""
         now = time.monotonic()
         first = now + len(sent) * BYTE_S * WIRE_MARGIN + latency_s
         end = first + sum(n + p.MIN_PACKET_BYTES for n in expect.values()) * BYTE_S * WIRE_MARGIN
+        if cap is not None:
+            first, end = min(first, cap), min(end, cap)
         got: dict[int, p.Packet] = {}
         echo_skipped = False
         bad_before = self.parser.bad_checksums
@@ -133,11 +136,13 @@ class Bus:
         if data:
             self._send(p.sync_write(address, length, data))
 
-    def bulk_read(self, spans: Iterable[tuple[int, int, int]], latency_s: float) -> dict[int, p.Packet]:
-        """One BULK_READ of ``spans`` (id, address, length); the status packets that came within the wait, by id."""
+    def bulk_read(self, spans: Iterable[tuple[int, int, int]], latency_s: float, until: float | None = None
+                  ) -> dict[int, p.Packet]:
+        """One BULK_READ of ``spans`` (id, address, length); the status packets that came within the wait (at the
+        latest at the monotonic time ``until``), by id."""
         spans = list(spans)
         if not spans:
             return {}
         packet = p.bulk_read(spans)
         self._send(packet)
-        return self._collect(packet, {device: length for device, _, length in spans}, latency_s)
+        return self._collect(packet, {device: length for device, _, length in spans}, latency_s, until)

@@ -49,7 +49,9 @@ from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support
 
 READ_LATENCY_S = 0.003             # the bulk read's allowance beyond its wire time (USB adapter, devices' delay)
-RETRY_WITHIN_S = 0.004             # devices that missed are asked again if the tick is younger than this
+READ_BUDGET_S = 0.005              # a tick's reads end this long after it starts (the controller and the write
+                                   # need the rest of the 8 ms)
+RETRY_LEFT_S = 0.0015              # devices that missed are asked again if this much of the budget is left
 LATE_S = 0.020                     # a period longer than this is a late tick
 STOP_HOLD_S = 0.3                  # after a stop, the held goals are sent this long before the loop ends
 MAX_P_GAIN = 254
@@ -171,10 +173,11 @@ class _Run:
         spans = [(CM730_ID, board_address, board_length)] + [
             (d, state_address, state_length) if d == rotating else (d, position, 2) for d in self.ids]
         bus = self.robot.bus
-        got = bus.bulk_read(spans, READ_LATENCY_S)
-        if len(got) < len(spans) and time.monotonic() - started < RETRY_WITHIN_S:
+        until = started + READ_BUDGET_S
+        got = bus.bulk_read(spans, READ_LATENCY_S, until)
+        if len(got) < len(spans) and until - time.monotonic() > RETRY_LEFT_S:
             self.report.retried_ticks += 1
-            got.update(bus.bulk_read([s for s in spans if s[0] not in got], READ_LATENCY_S))
+            got.update(bus.bulk_read([s for s in spans if s[0] not in got], READ_LATENCY_S, until))
         self.report.missed_reads += len(spans) - len(got)
         board = got.get(CM730_ID)
         if board is not None:

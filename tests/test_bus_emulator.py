@@ -1,0 +1,97 @@
+"""The emulated OP2 itself: byte compatibility with ROBOTIS's own dynamixel-sdk, the power switch, the bulk read's
+order and silence, no reply to broadcast; and a 20-step walk through the bus in both engines behind it, against the
+same walk in ``walk --validate``."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+
+import pytest
+from bus_support import emulated, run
+
+from op2motion.bus import protocol as p
+from op2motion.bus.client import Bus
+from op2motion.bus.emulator.faults import Faults
+from op2motion.bus.port import open_port
+from op2motion.bus.robot import POWER_ON_WAIT_S
+
+SPEED_TOL = 0.10               # the walk through the bus: speed within 10 % of walk --validate's
+HEADING_TOL_DEG = 5.0          # ... heading within 5°
+STEPS = 20
+
+pytestmark = pytest.mark.physics
+
+
+def test_dynamixel_sdk_talks_to_it(spec, tmp_path):
+    sdk = pytest.importorskip("dynamixel_sdk")
+    with emulated(spec, tmp_path) as (emulator, link):
+        port = sdk.PortHandler(link)
+        assert port.openPort() and port.setBaudRate(1_000_000)
+        try:
+            handler = sdk.PacketHandler(1.0)
+            model, result, error = handler.ping(port, 200)
+            assert (model, result, error) == (0x7300, sdk.COMM_SUCCESS, 0)
+            model, result, _ = handler.ping(port, 13)
+            assert (model, result) == (29, sdk.COMM_SUCCESS)
+            position, result, _ = handler.read2ByteTxRx(port, 13, 36)
+            assert result == sdk.COMM_SUCCESS and abs(position - emulator.servos[12].u16("present_position")) <= 2
+            result, error = handler.write1ByteTxRx(port, 13, 25, 1)
+            assert (result, error) == (sdk.COMM_SUCCESS, 0) and emulator.servos[12].get("led") == 1
+            _, result, _ = handler.ping(port, 42)
+            assert result == sdk.COMM_RX_TIMEOUT
+        finally:
+            port.closePort()
+
+
+def test_power_switch_bulk_read_and_broadcast(spec, tmp_path):
+    with emulated(spec, tmp_path, faults=Faults(missing={5})) as (emulator, link):
+        with open_port(link) as port:
+            bus = Bus(port, retries=0, latency_s=0.02)
+            spans = [(200, 24, 30), (3, 36, 2), (4, 36, 2), (5, 36, 2), (6, 36, 2)]
+            got = bus.bulk_read(spans, 0.02)
+            assert sorted(got) == [3, 4, 200] and len(got[200].params) == 30   # 6 waits for 5's reply in vain
+            assert bus.write(200, 24, b"\x00") is not None                     # servos' power off
+            assert bus.ping(13) is None and bus.ping(200) is not None
+            assert bus.write(200, 24, b"\x01") is not None
+            time.sleep(POWER_ON_WAIT_S)
+            reply = bus.read(13, 24, 1)
+            assert reply is not None and reply.params == b"\x00"                 # powered up with its torque off
+            bus.write(p.BROADCAST_ID, 25, b"\x01")
+            assert bus._collect(p.write(p.BROADCAST_ID, 25, b"\x01"), {13: 0}, 0.05) == {}   # no reply to broadcast
+            assert all(s.get("led") == 1 for s in emulator.servos if s.id != 5)
+
+
+def validated(spec, engine: str) -> tuple[float, float, bool]:
+    """The same walk in physics (``walk --validate``) in ``engine``: the distance [m] it walks in the same time, its
+    heading error [deg], whether it fell."""
+    from op2motion.gait import walk_summary
+    from op2motion.gait.controller import WalkController
+    from op2motion.physics import check
+
+    controller = WalkController.from_preset("forward", STEPS, spec)
+    report = check(controller, spec, (engine,))
+    summary = walk_summary(report, controller.plan.walk.start_s)["engines"][engine]
+    return summary["distance_m"], summary["heading_error_deg"], summary["fell"]
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "pybullet"])
+def test_twenty_steps_through_the_bus_walk_as_in_physics(spec, tmp_path, engine):
+    distance, heading, fell = validated(spec, engine)          # before the emulator: it would share this interpreter
+    assert not fell
+    with emulated(spec, tmp_path, engine=engine) as (emulator, link):
+        before = emulator.truth()
+        code, out, err = run("robot", "walk", "--port", link, "--steps", str(STEPS), "--json")
+        time.sleep(0.5)
+        after = emulator.truth()
+    result = json.loads(out)
+    assert code == 0, err
+    assert math.degrees(after["tilt_rad"]) < 15.0 and result["ended"] == "done"             # no fall, ends standing
+    travel = math.hypot(after["x_m"] - before["x_m"], after["y_m"] - before["y_m"])
+    assert abs(travel - distance) <= SPEED_TOL * distance, (travel, distance)             # same time: same speed
+    turned = math.degrees(math.remainder(after["yaw_rad"] - before["yaw_rad"], 2 * math.pi))
+    assert abs(turned - heading) <= HEADING_TOL_DEG, (turned, heading)
+    walk = result["runs"]["walk"]
+    assert walk["max_blind_ticks"] < 5 and walk["period_ms"]["p50"] == pytest.approx(8.0, abs=0.5)
+    assert abs(result["travel"]["distance_m"] - travel) <= SPEED_TOL * distance           # leg odometry
