@@ -95,3 +95,28 @@ def test_twenty_steps_through_the_bus_walk_as_in_physics(spec, tmp_path, engine)
     walk = result["runs"]["walk"]
     assert walk["max_blind_ticks"] < 5 and walk["period_ms"]["p50"] == pytest.approx(8.0, abs=0.5)
     assert abs(result["travel"]["distance_m"] - travel) <= SPEED_TOL * distance           # leg odometry
+
+
+def test_the_robot_follows_a_target_at_a_capped_speed(spec, tmp_path):
+    from op2motion.bus.follow import FOLLOW_SPEED_RAD_S, Follower
+
+    joint = spec.joint_names.index("r_sho_pitch")        # an arm: a joint alone would tip the robot over
+    with emulated(spec, tmp_path) as (emulator, link):
+        follower = Follower(link, spec)
+        follower.start()
+        try:
+            start = follower.pose()
+            target = start.copy()
+            target[joint] += math.radians(30.0)
+            follower.set_target(target)
+            time.sleep(0.2)
+            moved = math.radians(abs((emulator.servos[joint].u16("goal_position") - 2048) * 360 / 4096)) - abs(
+                start[joint])
+            assert 0.0 < moved <= FOLLOW_SPEED_RAD_S * 0.2 + math.radians(2.0)           # capped, not a jump
+            time.sleep(0.8)
+            goal_deg = (emulator.servos[joint].u16("goal_position") - 2048) * 360 / 4096
+            assert goal_deg == pytest.approx(math.degrees(target[joint]), abs=0.2)
+            assert follower.running()
+        finally:
+            report = follower.close()
+    assert report.ended == "stopped" and report.fault is None
