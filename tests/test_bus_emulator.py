@@ -100,7 +100,7 @@ def test_twenty_steps_through_the_bus_walk_as_in_physics(spec, tmp_path, engine)
 def test_the_robot_follows_a_target_at_a_capped_speed(spec, tmp_path):
     from op2motion.bus.follow import FOLLOW_SPEED_RAD_S, Follower
 
-    joint = spec.joint_names.index("r_sho_pitch")        # an arm: a joint alone would tip the robot over
+    joint = spec.joint_names.index("r_sho_pitch")        # an arm: a knee alone would tip the robot over
     with emulated(spec, tmp_path) as (emulator, link):
         follower = Follower(link, spec)
         follower.start()
