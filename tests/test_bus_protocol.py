@@ -125,12 +125,12 @@ class _State:
 def test_preflight_names_each_problem(spec):
     board = _State(voltage_v=12.0)
     assert preflight_problems(board, [_State()], spec) == []
-    problems = preflight_problems(_State(voltage_v=10.0), [_State(answers=False, joint="l_knee", id=14),
+    problems = preflight_problems(_State(voltage_v=9.5), [_State(answers=False, joint="l_knee", id=14),
                                                           _State(temperature_c=HOT_START_C),
                                                           _State(errors=("overload",))], spec)
     kinds = [(f.kind, f.id) for f in problems]
     assert kinds == [("low supply", 200), ("not answering", 14), ("hot", 13), ("overload", 13)]
-    assert min_supply_v(spec) == pytest.approx(11.1)
+    assert min_supply_v(spec) == pytest.approx(10.0)
     assert "l_knee (ID 14): not answering" in problems[1].describe()
 
 

@@ -182,7 +182,7 @@ def test_lost_and_corrupted_replies_are_ridden_through(spec, tmp_path):
 
 @pytest.mark.physics
 def test_a_low_supply_refuses_to_start(spec, tmp_path, capsys):
-    with emulated(spec, tmp_path, faults=Faults(supply_v=10.5)) as (_, link):
+    with emulated(spec, tmp_path, faults=Faults(supply_v=9.5)) as (_, link):
         code, _, err = run_cli(capsys, "robot", "play", "--port", link, str(POSES / "walkready.json"))
     assert code == 1 and "refused to start" in err and "low supply" in _one_line(err)
 

@@ -28,18 +28,39 @@ from op2motion.robot.support import Support
 MIN_MOVE_S = 0.6                   # a move to the first pose takes at least this long (longer if the speed says so)
 HOLD_AFTER_S = 0.3                 # the last goal is sent this long after a motion's last row
 LYING_TILT_RAD = math.radians(60.0)   # tilted this far the robot lies: physics cannot check a motion from there yet
+READY_HIP_LOWER_M = 0.02           # the via pose's hips below straight legs (the stock gait's walk-ready height)
 CHECK_ENGINE = "mujoco"            # the faster engine checks what the robot is about to play
+
+
+def ready_pose(spec: Spec) -> Pose:
+    """The gait's standing pose (both feet under the hips, knees bent): the via pose of a move the planner cannot
+    make directly (from straight legs onto one foot, the weight shift it inserts has the arms through the torso)."""
+    from dataclasses import replace
+
+    from op2motion.gait import load_preset, plan_gait
+
+    params = replace(load_preset(None).with_steps(1), hip_lower_m=READY_HIP_LOWER_M)
+    return Pose("ready", Support.DOUBLE, plan_gait(params, spec).joints[0])
 
 
 def move(current: np.ndarray, target: Pose, spec: Spec, support: Support | str = Support.DOUBLE) -> Trajectory:
     """From ``current`` servo angles (20,) [rad] (the robot on ``support``) to ``target``, within the servos'
-    speed."""
+    speed; through :func:`ready_pose` where no direct way is found."""
+    from op2motion.errors import CheckFailed
     from op2motion.motion.planner import plan
     from op2motion.motion.waypoint import Waypoint
 
-    points = [Waypoint("present", np.asarray(current, dtype=float), 0.0, 0.0, Support.of(support)),
-              Waypoint(target.name, target.servo, MIN_MOVE_S, 0.0, target.support)]
-    return plan(points, spec)
+    here = Waypoint("present", np.asarray(current, dtype=float), 0.0, 0.0, Support.of(support))
+    there = Waypoint(target.name, target.servo, MIN_MOVE_S, 0.0, target.support)
+    try:
+        return plan([here, there], spec)
+    except CheckFailed as direct:
+        ready = ready_pose(spec)
+        try:
+            return plan([here, Waypoint(ready.name, ready.servo, MIN_MOVE_S, 0.0, ready.support, stop=True), there],
+                        spec)
+        except CheckFailed:
+            raise direct from None
 
 
 def then(first: Trajectory, second: Trajectory) -> Trajectory:

@@ -2,7 +2,7 @@
 
 Before a motion (:func:`preflight`): every servo answers, none reports an error, none is at or above
 :data:`HOT_START_C`, and the supply (board and servos) is at least the MX-28's lowest rated voltage (the spec's
-``[[servo.rating]]``, 11.1 V): otherwise the motion is refused, naming the joint and its ID (exit 1).
+``operating_voltage_v``, 10 V): otherwise the motion is refused, naming the joint and its ID (exit 1).
 
 During a motion (:class:`Watch`, every 8 ms tick), a fault stops it:
 
@@ -72,8 +72,8 @@ class Refused(CheckFailed):
 
 
 def min_supply_v(spec: Spec) -> float:
-    """The lowest supply the MX-28 is rated at (the spec's ratings) [V]."""
-    return min(r.voltage_v for r in spec.servo.ratings)
+    """The lowest supply the MX-28 is rated to work at (the spec's ``operating_voltage_v``: 10 V) [V]."""
+    return spec.servo.operating_voltage_v[0]
 
 
 def preflight_problems(board: Any, servos: Sequence[Any], spec: Spec) -> list[Fault]:

@@ -89,6 +89,7 @@ class Servo:
     friction_nm: float
     viscous_nm_s_rad: float
     backlash_rad: float
+    operating_voltage_v: tuple[float, float] = (10.0, 14.8)
 
     @property
     def rad_per_tick(self) -> float:

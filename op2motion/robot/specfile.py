@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+from dataclasses import replace
 import math
 import sys
 from importlib import resources
@@ -71,6 +72,12 @@ def _servo(r: TableReader) -> Servo:
               r.number("max_duty", positive=True), r.number("armature_kg_m2", nonnegative=True),
               r.number("friction_nm", nonnegative=True), r.number("viscous_nm_s_rad", nonnegative=True),
               r.number("backlash_rad", nonnegative=True))
+    if "operating_voltage_v" in r.table:
+        low, high = r.vector("operating_voltage_v", 2)
+        if not 0.0 < low < high:
+            raise SpecError(f"expected 0 < lowest < highest, got [{low}, {high}]",
+                            f"{r.path}: servo.operating_voltage_v")
+        s = replace(s, operating_voltage_v=(low, high))
     r.done()
     if not (0 <= s.min_tick < s.center_tick < s.max_tick < s.ticks_per_rev):
         raise SpecError("expected 0 <= min_tick < center_tick < max_tick < ticks_per_rev", f"{r.path}: servo")
