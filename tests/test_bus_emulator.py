@@ -9,7 +9,7 @@ import math
 import time
 
 import pytest
-from bus_support import emulated, run
+from bus_support import cli, emulated, finish, run
 
 from op2motion.bus import protocol as p
 from op2motion.bus.client import Bus
@@ -63,28 +63,18 @@ def test_power_switch_bulk_read_and_broadcast(spec, tmp_path):
             assert all(s.get("led") == 1 for s in emulator.servos if s.id != 5)
 
 
-def validated(spec, engine: str) -> tuple[float, float, bool]:
-    """The same walk in physics (``walk --validate``) in ``engine``: the distance [m] it walks in the same time, its
-    heading error [deg], whether it fell."""
-    from op2motion.gait import walk_summary
-    from op2motion.gait.controller import WalkController
-    from op2motion.physics import check
-
-    controller = WalkController.from_preset("forward", STEPS, spec)
-    report = check(controller, spec, (engine,))
-    summary = walk_summary(report, controller.plan.walk.start_s)["engines"][engine]
-    return summary["distance_m"], summary["heading_error_deg"], summary["fell"]
-
-
 @pytest.mark.parametrize("engine", ["mujoco", "pybullet"])
 def test_twenty_steps_through_the_bus_walk_as_in_physics(spec, tmp_path, engine):
-    distance, heading, fell = validated(spec, engine)          # before the emulator: it would share this interpreter
-    assert not fell
+    validate = cli("walk", "--steps", str(STEPS), "--validate", "--engine", engine, "--json")   # meanwhile
     with emulated(spec, tmp_path, engine=engine) as (emulator, link):
         before = emulator.truth()
         code, out, err = run("robot", "walk", "--port", link, "--steps", str(STEPS), "--json")
         time.sleep(0.5)
         after = emulator.truth()
+    done, physics, why = finish(validate)
+    assert done == 0, why
+    summary = json.loads(physics)["physics"]["engines"][engine]
+    distance, heading = summary["distance_m"], summary["heading_error_deg"]
     result = json.loads(out)
     assert code == 0, err
     assert math.degrees(after["tilt_rad"]) < 15.0 and result["ended"] == "done"             # no fall, ends standing

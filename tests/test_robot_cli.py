@@ -155,8 +155,8 @@ def test_ctrl_c_mid_walk_stops_standing(spec, tmp_path):
 
 @pytest.mark.physics
 def test_an_overheating_knee_stops_the_walk(spec, tmp_path):
-    with emulated(spec, tmp_path, faults=Faults(overheat=[(13, 4.5, 85.0)])) as (_, link):
-        code, out, err = run("robot", "walk", "--port", link, "--steps", "8", "--json")
+    with emulated(spec, tmp_path, faults=Faults(overheat=[(13, 4.0, 85.0)])) as (_, link):
+        code, out, err = run("robot", "walk", "--port", link, "--steps", "6", "--json")
     walk = json.loads(out)["runs"]["walk"]
     assert code == 1 and "r_knee (ID 13): overheating" in _one_line(err)
     assert walk["ended"] == "fault" and walk["fault"]["id"] == 13 and walk["seconds"] > 2.0     # mid-walk

@@ -32,6 +32,7 @@ import numpy as np
 
 from op2motion.bus import safety
 from op2motion.bus.imu import decode
+from op2motion.bus.realtime import LOOP_PRIORITY, realtime
 from op2motion.bus.robot import OP2, angle_of
 from op2motion.bus.tables import (
     BOARD_SPAN,
@@ -77,7 +78,7 @@ class LoopReport:
     :data:`LATE_S`), missed reads (device reads that held their last values), ticks that needed a second read,
     the longest run of missed reads of one device, clipped goals per joint, how it ended (``done``, ``stopped``,
     ``fault``), the fault, the last goals and positions (20,) [rad], the integrated gyro yaw [rad], the largest
-    tilt [rad] and the bus's counters."""
+    tilt [rad], the bus's counters, and whether the loop ran at real-time priority (:mod:`.realtime`)."""
 
     ticks: int = 0
     seconds: float = 0.0
@@ -96,6 +97,7 @@ class LoopReport:
     yaw_rad: float = 0.0
     tilt_max_rad: float = 0.0
     bus: dict[str, Any] = field(default_factory=dict)
+    realtime: bool = False
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready (angles in degrees)."""
@@ -108,7 +110,7 @@ class LoopReport:
                 "fault": None if self.fault is None else self.fault.as_dict(),
                 "yaw_deg": round(math.degrees(self.yaw_rad), 2),
                 "tilt_max_deg": round(math.degrees(self.tilt_max_rad), 1),
-                "bus": dict(self.bus)}
+                "bus": dict(self.bus), "realtime": self.realtime}
 
     def describe(self) -> str:
         """One line of timing and reads."""
@@ -322,9 +324,17 @@ def run_controller(controller: Controller, port: str | OP2, spec: Spec | None = 
             session.ready_for_motion()
             return run_controller(controller, session.robot, duration_s=duration_s, stop=stop, on_tick=on_tick,
                                   watch=watch)
-    run, stops = _Run(controller, port, watch), _Stops()
-    report = run.report
-    duration = controller.plan.duration_s if duration_s is None else duration_s
+    with realtime(LOOP_PRIORITY) as report_realtime:
+        report = _loop(_Run(controller, port, watch), controller.plan.duration_s if duration_s is None else duration_s,
+                       stop, on_tick)
+    report.realtime = report_realtime
+    return report
+
+
+def _loop(run: _Run, duration: float, stop: threading.Event | None, on_tick: Callable[[Tick], None] | None
+          ) -> LoopReport:
+    """The ticks of one run (see :func:`run_controller`)."""
+    stops, report = _Stops(), run.report
     periods: list[float] = []
     start = time.monotonic()
     clock, last, k = start, None, 0

@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import functools
 import hashlib
-from dataclasses import replace
 import math
 import sys
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 from typing import Mapping

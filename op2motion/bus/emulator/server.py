@@ -31,6 +31,7 @@ from op2motion.bus import protocol as p
 from op2motion.bus.emulator.body import EmulatedBody
 from op2motion.bus.emulator.devices import Board, Servo
 from op2motion.bus.emulator.faults import Faults
+from op2motion.bus.realtime import EMULATOR_PRIORITY, realtime
 from op2motion.bus.tables import CM730_ID
 from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
@@ -154,10 +155,15 @@ class Emulator:
 
     # --- serving -------------------------------------------------------------------------------------------------
     def serve(self, stop: threading.Event | None = None) -> None:
-        """Answer packets and step the body in real time until ``stop`` (or :meth:`stop`) is set."""
+        """Answer packets and step the body in real time until ``stop`` (or :meth:`stop`) is set (at real-time
+        priority where the system allows it: :mod:`..realtime`)."""
         if self.master is None:
             raise RuntimeError("open() the emulator before serving")
-        stop = stop or self._stop
+        with realtime(EMULATOR_PRIORITY):
+            self._serve(stop or self._stop)
+
+    def _serve(self, stop: threading.Event) -> None:
+        assert self.master is not None
         dt = self.body.dt
         t0 = time.monotonic()
         done = 0
