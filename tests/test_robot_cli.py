@@ -100,10 +100,10 @@ def test_read_limp_then_holds_what_it_read(spec, tmp_path, capsys):
 @pytest.mark.physics
 def test_play_a_pose_commands_every_servo(robot, spec):
     emulator, link = robot
-    code, out, _ = run("robot", "play", "--port", link, str(POSES / "walkready.json"), "--json")
+    code, out, err = run("robot", "play", "--port", link, str(POSES / "walkready.json"), "--json")
     result = json.loads(out)
     target = np.degrees(read_pose(POSES / "walkready.json", spec).servo)
-    assert code == 0 and result["ended"] == "done" and result["checked"].startswith("checked in physics")
+    assert code == 0 and result["ended"] == "done" and result["checked"].startswith("checked in physics"), err
     assert np.max(np.abs(_goals_deg(emulator, spec) - target)) <= GOAL_TOL_DEG
     assert result["runs"]["motion"]["max_blind_ticks"] < 5
 
@@ -113,9 +113,9 @@ def test_play_an_action_page_and_refuse_a_file_without_page(robot, capsys):
     _, link = robot
     code, _, err = run_cli(capsys, "robot", "play", "--port", link, str(STOCK))
     assert code == 2 and "--page: " in _one_line(err)
-    code, out, _ = run_cli(capsys, "robot", "play", "--port", link, str(STOCK), "--page", "9", "--json")
+    code, out, err = run("robot", "play", "--port", link, str(STOCK), "--page", "9", "--json")
     result = json.loads(out)
-    assert code == 0 and result["what"].startswith("page 9") and result["runs"]["motion"]["ticks"] > 100
+    assert code == 0 and result["what"].startswith("page 9") and result["runs"]["motion"]["ticks"] > 100, err
 
 
 @pytest.mark.physics
@@ -163,9 +163,9 @@ def test_an_overheating_knee_stops_the_walk(spec, tmp_path):
 
 
 @pytest.mark.physics
-def test_a_servo_unplugged_mid_motion_stops_it(spec, tmp_path, capsys):
+def test_a_servo_unplugged_mid_motion_stops_it(spec, tmp_path):
     with emulated(spec, tmp_path, faults=Faults(unplug=[(5, 0.3)])) as (_, link):
-        code, out, err = run_cli(capsys, "robot", "play", "--port", link, str(POSES / "walkready.json"), "--json")
+        code, out, err = run("robot", "play", "--port", link, str(POSES / "walkready.json"), "--json")
     assert code == 1 and "r_el (ID 5): not answering" in _one_line(err)
     assert json.loads(out)["runs"]["motion"]["max_blind_ticks"] >= 5
 
