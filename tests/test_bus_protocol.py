@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import math
 import os
+import subprocess
+import sys
 import threading
 import time
 import tty
@@ -209,6 +211,15 @@ def test_port_refuses_what_is_not_a_free_serial_device(tmp_path):
         finally:
             first.close()
         open_port(name).close()                                   # free again
+        holder = subprocess.Popen([sys.executable, "-c", f"import time; f = open({name!r}, 'rb'); time.sleep(30)"])
+        try:
+            while not any(os.path.realpath(f"/proc/{holder.pid}/fd/{fd}") == name
+                          for fd in os.listdir(f"/proc/{holder.pid}/fd")):
+                time.sleep(0.01)
+            open_port(name).close()          # an emulator may hold its pseudo-terminal's other side: not "busy"
+        finally:
+            holder.kill()
+            holder.wait()
     finally:
         os.close(master)
         os.close(slave)
@@ -254,3 +265,17 @@ def test_client_retries_through_lost_and_damaged_replies():
         port.close()
         thread.join(timeout=2)
         os.close(master)
+
+
+def test_gyro_centres_only_from_a_still_robot(spec):
+    from op2motion.bus.imu import GYRO_STILL_SD, gyro_centres
+
+    imu = imu_of(spec)
+    rng = np.random.default_rng(7)
+    biased = [{c.register: 515 + int(rng.integers(0, 2)) for c in imu.gyro} for _ in range(100)]
+    centres = gyro_centres(imu, biased)
+    assert all(515.0 <= v <= 516.0 for v in centres.values())
+    gyro, _ = decode(imu, {**biased[0], **{c.register: 512 for c in imu.accel}}, centres)
+    assert np.all(np.abs(gyro) <= imu.gyro[0].scale)                      # the bias is gone
+    moving = [{c.register: 512 + int(4 * GYRO_STILL_SD * math.sin(k)) for c in imu.gyro} for k in range(100)]
+    assert gyro_centres(imu, moving) is None

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from typing import Mapping
+from typing import Mapping, Sequence
 
 import numpy as np
 
@@ -32,10 +32,15 @@ def registers(imu: ImuSpec) -> tuple[int, ...]:
     return tuple(c.register for c in (*imu.gyro, *imu.accel))
 
 
-def decode(imu: ImuSpec, words: Mapping[int, int]) -> tuple[np.ndarray, np.ndarray]:
-    """Gyro (3,) [rad/s] and accelerometer (3,) [m/s²] in the torso frame from the board's words {register: count}."""
+def decode(imu: ImuSpec, words: Mapping[int, int], centres: Mapping[int, float] | None = None
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """Gyro (3,) [rad/s] and accelerometer (3,) [m/s²] in the torso frame from the board's words {register: count};
+    ``centres`` {register: count} replaces the nominal centre where a channel was calibrated (:func:`gyro_centres`)."""
+    centres = centres or {}
+
     def axis(channels: tuple) -> np.ndarray:
-        return np.array([c.sign * (words[c.register] - imu.centre_count) * c.scale for c in channels])
+        return np.array([c.sign * (words[c.register] - centres.get(c.register, imu.centre_count)) * c.scale
+                         for c in channels])
 
     return axis(imu.gyro), axis(imu.accel)
 
@@ -44,6 +49,25 @@ def decode_span(imu: ImuSpec, data: bytes, start: int) -> tuple[np.ndarray, np.n
     """:func:`decode` from a block of the board's table read from address ``start``."""
     words = {r: data[r - start] | (data[r - start + 1] << 8) for r in registers(imu)}
     return decode(imu, words)
+
+
+GYRO_SAMPLES = 100                 # the framework's GYRO_WINDOW_SIZE: samples averaged for the gyro's centres
+GYRO_STILL_SD = 2.0                # ... taken only if every channel's standard deviation is below this [counts]
+
+
+def gyro_centres(imu: ImuSpec, samples: Sequence[Mapping[int, int]]) -> dict[int, float] | None:
+    """The gyro's zero-rate counts {register: count} from ``samples`` of the board's words taken while the robot
+    is still (the framework's calibration in ``MotionManager::Process``: the mean, if every channel's standard
+    deviation is below :data:`GYRO_STILL_SD`); None if the robot moved (the nominal centre stays)."""
+    if not samples:
+        return None
+    out = {}
+    for c in imu.gyro:
+        values = np.array([s[c.register] for s in samples], dtype=float)
+        if values.std() >= GYRO_STILL_SD:
+            return None
+        out[c.register] = float(values.mean())
+    return out
 
 
 def encode(imu: ImuSpec, gyro_rad_s: np.ndarray, accel_m_s2: np.ndarray) -> dict[int, int]:

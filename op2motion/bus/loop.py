@@ -185,7 +185,7 @@ class _Run:
         if board is not None:
             data = board.params
             self.words = {r: data[r - board_address] | (data[r - board_address + 1] << 8) for r in self.words}
-            self.gyro, self.accel = decode(self.robot.imu, self.words)
+            self.gyro, self.accel = decode(self.robot.imu, self.words, self.robot.gyro_centre)
         for i, d in enumerate(self.ids):
             packet = got.get(d)
             if packet is not None:

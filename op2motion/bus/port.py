@@ -3,8 +3,10 @@
 :func:`open_port` refuses, as bad input naming ``--port`` (exit 2), a path that does not exist, that is not a
 character device, whose device is not a terminal (checked against ``/proc/devices`` *before* opening: opening some
 character devices, a watchdog for one, has effects), and a port another program holds: an advisory lock
-(``flock``) that every op2motion process takes, a scan of the other processes' open files (the stock framework
-takes no lock), and then ``TIOCEXCL`` so that nobody else opens it while we drive the robot. The port runs at
+(``flock``) that every op2motion process takes, and for a real serial device a scan of the other processes' open
+files (the stock framework takes no lock) and then ``TIOCEXCL`` so that nobody else opens it while we drive the
+robot. A pseudo-terminal (an emulated robot) gets the lock only: its other side belongs to the emulator, which may
+well hold the terminal side open too. The port runs at
 1 Mbps, raw, with the FTDI's low-latency mode where the driver has it (a pseudo-terminal has none).
 
 :class:`Port` reads and writes with deadlines (``select``): nothing here blocks forever. A port that fails mid-run
@@ -35,23 +37,29 @@ class PortFailed(CheckFailed):
     """The port stopped working mid-run (unplugged, I/O error, stuck)."""
 
 
-def _tty_majors() -> set[int] | None:
-    """Character-device majors whose driver is a terminal, from ``/proc/devices`` (None where there is none)."""
+def _drivers() -> dict[int, set[str]] | None:
+    """Character-device drivers by major number, from ``/proc/devices`` (None where there is none)."""
     try:
         text = Path("/proc/devices").read_text()
     except OSError:
         return None
-    majors: set[int] = set()
-    block = False
-    for line in text.splitlines():
-        if line.startswith("Block"):
-            block = True
+    drivers: dict[int, set[str]] = {}
+    for line in text.split("Block", 1)[0].splitlines():
         parts = line.split(None, 1)
-        if block or len(parts) != 2 or not parts[0].isdigit():
-            continue
-        if any(parts[1] == d or parts[1].startswith(d) for d in TTY_DRIVERS):
-            majors.add(int(parts[0]))
-    return majors
+        if len(parts) == 2 and parts[0].isdigit():
+            drivers.setdefault(int(parts[0]), set()).add(parts[1].strip())
+    return drivers
+
+
+def _is_tty(names: set[str]) -> bool:
+    return any(n == d or n.startswith(d) for n in names for d in TTY_DRIVERS)
+
+
+def is_pseudo_terminal(device: os.stat_result) -> bool:
+    """Whether ``device`` is the terminal side of a pseudo-terminal (an emulator's port: its other side is, by
+    design, held by the program that made it)."""
+    drivers = _drivers()
+    return drivers is not None and "pts" in drivers.get(os.major(device.st_rdev), set())
 
 
 def _check_device(path: str) -> os.stat_result:
@@ -71,8 +79,8 @@ def _check_device(path: str) -> os.stat_result:
         kind = "directory" if stat.S_ISDIR(st.st_mode) else "regular file" if stat.S_ISREG(st.st_mode) else \
             "block device" if stat.S_ISBLK(st.st_mode) else "socket or pipe"
         raise InputError(f"expected a serial device, got a {kind}: {path}", PARAM)
-    majors = _tty_majors()
-    if majors is not None and os.major(st.st_rdev) not in majors:
+    drivers = _drivers()
+    if drivers is not None and not _is_tty(drivers.get(os.major(st.st_rdev), set())):
         raise InputError(f"expected a serial device, got another kind of character device: {path}", PARAM)
     return st
 
@@ -197,13 +205,14 @@ def open_port(path: str, baud: int = BAUD) -> Port:
             if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN):
                 raise InputError(f"busy: another op2motion holds {path}", PARAM) from None
             raise InputError(f"cannot lock {path}: {exc.strerror or exc}", PARAM) from None
-        others = holders(device)
-        if others:
-            pid, name = others[0]
-            raise InputError(f"busy: process {pid} ({name}) holds {path}; stop it first (the stock framework "
-                             f"must not hold the port at the same time)", PARAM)
-        with contextlib.suppress(OSError):
-            fcntl.ioctl(ser.fileno(), termios.TIOCEXCL)
+        if not is_pseudo_terminal(device):
+            others = holders(device)
+            if others:
+                pid, name = others[0]
+                raise InputError(f"busy: process {pid} ({name}) holds {path}; stop it first (the stock framework "
+                                 f"must not hold the port at the same time)", PARAM)
+            with contextlib.suppress(OSError):
+                fcntl.ioctl(ser.fileno(), termios.TIOCEXCL)
         with contextlib.suppress(Exception):
             ser.set_low_latency_mode(True)           # FTDI: 1 ms latency timer instead of 16 ms
     except BaseException:

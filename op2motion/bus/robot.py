@@ -18,7 +18,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from op2motion.bus.client import Bus
-from op2motion.bus.imu import attitude, decode_span, imu_of
+from op2motion.bus.imu import GYRO_SAMPLES, attitude, decode_span, gyro_centres, imu_of
 from op2motion.bus.tables import (
     CM730,
     CM730_ID,
@@ -35,7 +35,8 @@ from op2motion.robot.spec import Spec
 
 POWER_ON_WAIT_S = 0.3              # the framework's wait after switching the servos' power on (CM730::DXLPowerOn)
 BOARD_READ = (0, CM730["voltage"].end)             # the board's table up to the supply voltage (0..50)
-SERVO_READ = (0, MX28["punch"].end)                # a servo's table up to punch (0..49)
+SERVO_READ = (0, MX28["present_temperature"].end)  # a servo's table up to its temperature (0..43): every register
+                                                   # the status needs, none a firmware might leave out
 
 
 @dataclass(frozen=True)
@@ -127,6 +128,7 @@ class OP2:
         self.ids = tuple(j.id for j in spec.joints)
         self.joint_of = {j.id: j.name for j in spec.joints}
         self.return_level: dict[int, int] = {}
+        self.gyro_centre: dict[int, float] | None = None
 
     # --- the board -------------------------------------------------------------------------------------------
     def connect(self, power: bool = True) -> None:
@@ -159,6 +161,19 @@ class OP2:
         return BoardState(_u16(data, 0, start), data[2], data[CM730["dynamixel_power"].address] == 1,
                           data[CM730["voltage"].address] * VOLTS_PER_UNIT, data[CM730["button"].address], gyro, accel,
                           pitch, roll, tilt, words, reply.errors)
+
+    def calibrate_gyro(self, samples: int = GYRO_SAMPLES) -> dict[int, float] | None:
+        """Measure the gyro's zero-rate counts while the robot is still (:func:`~.imu.gyro_centres`); kept in
+        :attr:`gyro_centre` for the loop (None, the nominal centre, if the robot moved or the board is silent)."""
+        registers = [c.register for c in self.imu.gyro]
+        start, end = min(registers), max(registers) + 2
+        words = []
+        for _ in range(samples):
+            reply = self.bus.read(CM730_ID, start, end - start, retries=0)
+            if reply is not None:
+                words.append({r: _u16(reply.params, r, start) for r in registers})
+        self.gyro_centre = gyro_centres(self.imu, words) if len(words) >= samples // 2 else None
+        return self.gyro_centre
 
     # --- the servos ------------------------------------------------------------------------------------------
     def servo(self, device: int) -> ServoState:

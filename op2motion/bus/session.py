@@ -101,7 +101,9 @@ class Session:
         preflight(status.board, status.servos, self.spec)
 
     def take_control(self, status: RobotStatus, p_gains: dict[int, int] | None = None) -> None:
-        """Every torque on with the goals where the joints are (as ``status`` read them)."""
+        """The gyro's zero-rate counts measured while the robot is still (as the framework does before it moves
+        anything), then every torque on with the goals where the joints are (as ``status`` read them)."""
+        self.robot.calibrate_gyro()
         failed = self.robot.take_control({s.id: s.position_rad for s in status.servos}, p_gains)
         if failed:
             names = ", ".join(f"{self.robot.joint_of[d]} (ID {d})" for d in failed)
