@@ -1,9 +1,11 @@
-"""What the bus tests share: an emulated OP2 served from this process (a thread; the client under test runs in
-another process, or in this one where timing does not matter), and the CLI run as a real subprocess."""
+"""What the bus tests share: an emulated OP2 in a process of its own (``op2motion robot emulate``, as it would run
+beside a client: a motion's 8 ms loop needs it answering on time, which a thread of the test's busy interpreter
+cannot promise) or, where no motion runs, served from this process; and the CLI run as a real subprocess."""
 
 from __future__ import annotations
 
 import contextlib
+import json
 import os
 import signal
 import subprocess
@@ -35,6 +37,54 @@ def emulated(spec: Spec, folder: Path, engine: str = "mujoco", start: str = "sta
         emulator.close()
 
 
+class EmulatorProcess:
+    """``op2motion robot emulate`` running in its own process: its port (``link``), and what it reports
+    (``--truth``: :meth:`report`, :meth:`truth`)."""
+
+    def __init__(self, folder: Path, engine: str, start: str, flags: tuple[str, ...]):
+        self.link, self.path = str(folder / f"op2-{engine}-{start}"), folder / f"truth-{engine}-{start}.json"
+        self.process = cli("robot", "emulate", "--link", self.link, "--engine", engine, "--start", start,
+                           "--truth", str(self.path), *flags)
+        deadline = time.monotonic() + CLI_TIMEOUT_S
+        while not (os.path.lexists(self.link) and self.path.exists()):
+            if self.process.poll() is not None or time.monotonic() > deadline:
+                raise RuntimeError(f"the emulated OP2 did not start: {self.process.communicate()[1]}")
+            time.sleep(0.02)
+
+    def report(self) -> dict:
+        """The emulator's latest report (torso, motion time, servos' goals and torque limits, counters)."""
+        for _ in range(100):
+            try:
+                return json.loads(self.path.read_text())
+            except (OSError, ValueError):
+                time.sleep(0.01)
+        raise RuntimeError("no report from the emulated OP2")
+
+    def truth(self) -> dict:
+        """The simulated torso now."""
+        return self.report()["truth"]
+
+    def close(self) -> None:
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGTERM)
+        try:
+            self.process.communicate(timeout=20)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.communicate()
+
+
+@contextlib.contextmanager
+def emulator_process(folder: Path, engine: str = "mujoco", start: str = "standing", *flags: str
+                     ) -> Iterator[EmulatorProcess]:
+    """An emulated OP2 in its own process, with the faults given as ``robot emulate`` flags."""
+    emulator = EmulatorProcess(folder, engine, start, flags)
+    try:
+        yield emulator
+    finally:
+        emulator.close()
+
+
 def cli(*argv: str, timeout: float = CLI_TIMEOUT_S) -> subprocess.Popen:
     """``op2motion ARGV`` started as a subprocess (stdout and stderr piped)."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
@@ -53,13 +103,13 @@ def run(*argv: str, timeout: float = CLI_TIMEOUT_S) -> tuple[int, str, str]:
     return finish(cli(*argv), timeout)
 
 
-def interrupt_after(process: subprocess.Popen, emulator: Emulator, motion_s: float) -> float:
+def interrupt_after(process: subprocess.Popen, emulator: EmulatorProcess, motion_s: float) -> float:
     """Send Ctrl-C (SIGINT) ``motion_s`` simulated seconds after the client's first SYNC_WRITE; the wall time
     [s] it was sent."""
     deadline = time.monotonic() + CLI_TIMEOUT_S
     while time.monotonic() < deadline and process.poll() is None:
-        if emulator.motion_t0 is not None and emulator.truth()["t_s"] - emulator.motion_t0 >= motion_s:
+        if (emulator.report()["motion_s"] or 0.0) >= motion_s:
             break
-        time.sleep(0.01)
+        time.sleep(0.02)
     process.send_signal(signal.SIGINT)
     return time.monotonic()

@@ -9,7 +9,7 @@ import math
 import time
 
 import pytest
-from bus_support import cli, emulated, finish, run
+from bus_support import cli, emulated, emulator_process, finish, run
 
 from op2motion.bus import protocol as p
 from op2motion.bus.client import Bus
@@ -66,9 +66,9 @@ def test_power_switch_bulk_read_and_broadcast(spec, tmp_path):
 @pytest.mark.parametrize("engine", ["mujoco", "pybullet"])
 def test_twenty_steps_through_the_bus_walk_as_in_physics(spec, tmp_path, engine):
     validate = cli("walk", "--steps", str(STEPS), "--validate", "--engine", engine, "--json")   # meanwhile
-    with emulated(spec, tmp_path, engine=engine) as (emulator, link):
+    with emulator_process(tmp_path, engine) as emulator:
         before = emulator.truth()
-        code, out, err = run("robot", "walk", "--port", link, "--steps", str(STEPS), "--json")
+        code, out, err = run("robot", "walk", "--port", emulator.link, "--steps", str(STEPS), "--json")
         time.sleep(0.5)
         after = emulator.truth()
     done, physics, why = finish(validate)
@@ -91,8 +91,8 @@ def test_the_robot_follows_a_target_at_a_capped_speed(spec, tmp_path):
     from op2motion.bus.follow import FOLLOW_SPEED_RAD_S, Follower
 
     joint = spec.joint_names.index("r_sho_pitch")        # an arm: a knee alone would tip the robot over
-    with emulated(spec, tmp_path) as (emulator, link):
-        follower = Follower(link, spec)
+    with emulator_process(tmp_path) as emulator:
+        follower = Follower(emulator.link, spec)
         follower.start()
         try:
             start = follower.pose()
@@ -100,11 +100,10 @@ def test_the_robot_follows_a_target_at_a_capped_speed(spec, tmp_path):
             target[joint] += math.radians(30.0)
             follower.set_target(target)
             time.sleep(0.2)
-            moved = math.radians(abs((emulator.servos[joint].u16("goal_position") - 2048) * 360 / 4096)) - abs(
-                start[joint])
+            moved = math.radians(abs((emulator.report()["goal_ticks"][joint] - 2048) * 360 / 4096)) - abs(start[joint])
             assert 0.0 < moved <= FOLLOW_SPEED_RAD_S * 0.2 + math.radians(2.0)           # capped, not a jump
             time.sleep(0.8)
-            goal_deg = (emulator.servos[joint].u16("goal_position") - 2048) * 360 / 4096
+            goal_deg = (emulator.report()["goal_ticks"][joint] - 2048) * 360 / 4096
             assert goal_deg == pytest.approx(math.degrees(target[joint]), abs=0.2)
             assert follower.running()
         finally:

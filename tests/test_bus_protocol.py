@@ -279,3 +279,15 @@ def test_gyro_centres_only_from_a_still_robot(spec):
     assert np.all(np.abs(gyro) <= imu.gyro[0].scale)                      # the bias is gone
     moving = [{c.register: 512 + int(4 * GYRO_STILL_SD * math.sin(k)) for c in imu.gyro} for k in range(100)]
     assert gyro_centres(imu, moving) is None
+
+
+def test_timed_fault_flags():
+    from op2motion.bus.emulator.faults import parse_timed
+
+    assert parse_timed("13@4:85", "overheat", 85.0) == (13, 4.0, 85.0)
+    assert parse_timed("13@4.5", "overheat", 85.0) == (13, 4.5, 85.0)
+    assert parse_timed("5@0.3", "unplug")[:2] == (5, 0.3)
+    for bad in ("5@0.3:9", "x@1", "5"):
+        with pytest.raises(InputError) as e:
+            parse_timed(bad, "unplug")
+        assert e.value.param == "unplug"

@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 import pytest
-from bus_support import cli, emulated, finish, interrupt_after, run
+from bus_support import cli, emulated, emulator_process, finish, interrupt_after, run
 from helpers import POSES, STOCK, run_cli
 
 from op2motion.bus.emulator.faults import Faults
@@ -33,7 +33,10 @@ def robot(spec, tmp_path):
 
 
 def _goals_deg(emulator, spec) -> np.ndarray:
-    return np.array([(s.u16("goal_position") - spec.servo.center_tick) * TICK_DEG for s in emulator.servos])
+    """The servos' goals [deg], from an emulator in this process or one in its own (its report)."""
+    if hasattr(emulator, "servos"):
+        return np.array([(s.u16("goal_position") - spec.servo.center_tick) * TICK_DEG for s in emulator.servos])
+    return (np.array(emulator.report()["goal_ticks"]) - spec.servo.center_tick) * TICK_DEG
 
 
 def _one_line(err: str) -> str:
@@ -98,22 +101,23 @@ def test_read_limp_then_holds_what_it_read(spec, tmp_path, capsys):
 
 
 @pytest.mark.physics
-def test_play_a_pose_commands_every_servo(robot, spec):
-    emulator, link = robot
-    code, out, err = run("robot", "play", "--port", link, str(POSES / "walkready.json"), "--json")
+def test_play_a_pose_commands_every_servo(spec, tmp_path):
+    with emulator_process(tmp_path) as emulator:
+        code, out, err = run("robot", "play", "--port", emulator.link, str(POSES / "walkready.json"), "--json")
+        goals = _goals_deg(emulator, spec)
     result = json.loads(out)
     target = np.degrees(read_pose(POSES / "walkready.json", spec).servo)
     assert code == 0 and result["ended"] == "done" and result["checked"].startswith("checked in physics"), err
-    assert np.max(np.abs(_goals_deg(emulator, spec) - target)) <= GOAL_TOL_DEG
+    assert np.max(np.abs(goals - target)) <= GOAL_TOL_DEG
     assert result["runs"]["motion"]["max_blind_ticks"] < 5
 
 
 @pytest.mark.physics
-def test_play_an_action_page_and_refuse_a_file_without_page(robot, capsys):
-    _, link = robot
-    code, _, err = run_cli(capsys, "robot", "play", "--port", link, str(STOCK))
-    assert code == 2 and "--page: " in _one_line(err)
-    code, out, err = run("robot", "play", "--port", link, str(STOCK), "--page", "9", "--json")
+def test_play_an_action_page_and_refuse_a_file_without_page(tmp_path):
+    with emulator_process(tmp_path) as emulator:
+        code, _, err = run("robot", "play", "--port", emulator.link, str(STOCK))
+        assert code == 2 and "--page: " in _one_line(err)
+        code, out, err = run("robot", "play", "--port", emulator.link, str(STOCK), "--page", "9", "--json")
     result = json.loads(out)
     assert code == 0 and result["what"].startswith("page 9") and result["runs"]["motion"]["ticks"] > 100, err
 
@@ -124,25 +128,23 @@ def test_refused_unless_forced_and_a_fall_lowers_the_torque(spec, tmp_path, caps
     for name, sign in (("r_ank_pitch", -1), ("l_ank_pitch", 1)):
         stand[spec.joint_names.index(name)] = math.radians(45.0) * sign        # toes far down: it tips over
     write_pose(Pose("tipping", "double", stand), tmp_path / "tipping.json", spec)
-    with emulated(spec, tmp_path) as (emulator, link):
+    with emulator_process(tmp_path) as emulator:
         before = _goals_deg(emulator, spec)
-        code, _, err = run_cli(capsys, "robot", "play", "--port", link, str(tmp_path / "tipping.json"))
+        code, _, err = run_cli(capsys, "robot", "play", "--port", emulator.link, str(tmp_path / "tipping.json"))
         assert code == 1 and "refused" in _one_line(err) and "--force" in err
         assert np.array_equal(_goals_deg(emulator, spec), before)             # nothing moved
-        limits = []
-        process = cli("robot", "play", "--port", link, str(tmp_path / "tipping.json"), "--force")
-        while process.poll() is None:
-            limits.append(emulator.servos[12].u16("torque_limit"))
-            time.sleep(0.004)
-        code, _, err = finish(process)
+        code, _, err = run("robot", "play", "--port", emulator.link, str(tmp_path / "tipping.json"), "--force")
+        time.sleep(0.3)
+        report = emulator.report()
     assert code == 1 and "fell" in _one_line(err)
-    assert min(limits) == FALL_TORQUE_LIMIT and limits[-1] > FALL_TORQUE_LIMIT  # lowered while falling, then back
+    assert report["torque_limit_min"] == FALL_TORQUE_LIMIT                    # lowered while it fell
+    assert min(report["torque_limit"]) > FALL_TORQUE_LIMIT                    # ... and back up once it lay
 
 
 @pytest.mark.physics
-def test_ctrl_c_mid_walk_stops_standing(spec, tmp_path):
-    with emulated(spec, tmp_path) as (emulator, link):
-        walk = cli("robot", "walk", "--port", link, "--steps", "20")
+def test_ctrl_c_mid_walk_stops_standing(tmp_path):
+    with emulator_process(tmp_path) as emulator:
+        walk = cli("robot", "walk", "--port", emulator.link, "--steps", "20")
         sent = interrupt_after(walk, emulator, 5.2)        # 1.7 s approach, 1.5 s lead-in, then about 2 s of steps
         code, _, err = finish(walk)
         took = time.monotonic() - sent
@@ -154,29 +156,31 @@ def test_ctrl_c_mid_walk_stops_standing(spec, tmp_path):
 
 
 @pytest.mark.physics
-def test_an_overheating_knee_stops_the_walk(spec, tmp_path):
-    with emulated(spec, tmp_path, faults=Faults(overheat=[(13, 4.0, 85.0)])) as (_, link):
-        code, out, err = run("robot", "walk", "--port", link, "--steps", "6", "--json")
+def test_an_overheating_knee_stops_the_walk(tmp_path):
+    with emulator_process(tmp_path, "mujoco", "standing", "--overheat", "13@4:85") as emulator:
+        code, out, err = run("robot", "walk", "--port", emulator.link, "--steps", "6", "--json")
     walk = json.loads(out)["runs"]["walk"]
     assert code == 1 and "r_knee (ID 13): overheating" in _one_line(err)
     assert walk["ended"] == "fault" and walk["fault"]["id"] == 13 and walk["seconds"] > 2.0     # mid-walk
 
 
 @pytest.mark.physics
-def test_a_servo_unplugged_mid_motion_stops_it(spec, tmp_path):
-    with emulated(spec, tmp_path, faults=Faults(unplug=[(5, 0.3)])) as (_, link):
-        code, out, err = run("robot", "play", "--port", link, str(POSES / "walkready.json"), "--json")
+def test_a_servo_unplugged_mid_motion_stops_it(tmp_path):
+    with emulator_process(tmp_path, "mujoco", "standing", "--unplug", "5@0.3") as emulator:
+        code, out, err = run("robot", "play", "--port", emulator.link, str(POSES / "walkready.json"), "--json")
     assert code == 1 and "r_el (ID 5): not answering" in _one_line(err)
     assert json.loads(out)["runs"]["motion"]["max_blind_ticks"] >= 5
 
 
 @pytest.mark.physics
-def test_lost_and_corrupted_replies_are_ridden_through(spec, tmp_path):
-    with emulated(spec, tmp_path, faults=Faults(lose=0.02, corrupt=0.01, seed=3)) as (emulator, link):
-        code, out, err = run("robot", "play", "--port", link, str(POSES / "walkready.json"), "--json")
+def test_lost_and_corrupted_replies_are_ridden_through(tmp_path):
+    flags = ("--lose", "0.02", "--corrupt", "0.01", "--seed", "3")
+    with emulator_process(tmp_path, "mujoco", "standing", *flags) as emulator:
+        code, out, err = run("robot", "play", "--port", emulator.link, str(POSES / "walkready.json"), "--json")
+        stats = emulator.report()["stats"]
     motion = json.loads(out)["runs"]["motion"]
     assert code == 0, err
-    assert emulator.stats["lost"] > 0 and emulator.stats["corrupted"] > 0
+    assert stats["lost"] > 0 and stats["corrupted"] > 0
     assert motion["retried_ticks"] > 0 and motion["max_blind_ticks"] < 5
 
 

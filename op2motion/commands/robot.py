@@ -90,6 +90,9 @@ def _emulate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=whole(0, 2 ** 31 - 1), default=0, help="seed of the lost and corrupted replies")
     p.add_argument("--seconds", type=number(0.0, 86400.0, "s"), default=None, metavar="S",
                    help="stop after S seconds (default: run until Ctrl-C)")
+    p.add_argument("--truth", type=output_path, metavar="JSON",
+                   help="keep this file up to date (every 0.1 s) with what the emulated robot does: the torso's "
+                        "position, heading and tilt, each servo's goal, torque and torque limit")
 
 
 @contextlib.contextmanager
@@ -209,7 +212,7 @@ def cmd_emulate(args: argparse.Namespace, spec: Spec) -> int:
 
     faults = Faults(set(args.missing), [parse_timed(u, "unplug")[:2] for u in args.unplug], args.lose, args.corrupt,
                     [parse_timed(o, "overheat", 85.0) for o in args.overheat], args.supply, args.seed)
-    emulator = Emulator(spec, args.engine, args.start, faults)
+    emulator = Emulator(spec, args.engine, args.start, faults, args.truth)
     interrupted = False
     try:
         with stop_on_signals() as stop:

@@ -64,7 +64,7 @@ class Faults:
 def parse_timed(text: str, param: str, default_value: float | None = None) -> tuple[int, float, float]:
     """``ID@SECONDS[:VALUE]`` (e.g. ``13@4:85``) -> (id, seconds, value); bad input names ``param``."""
     m = _TIMED.match(text.strip())
-    if not m or (m.group(3) is None and default_value is None):
+    if not m or (m.group(3) is not None and default_value is None):
         form = "ID@SECONDS[:CELSIUS]" if default_value is not None else "ID@SECONDS"
         raise InputError(f"expected {form} (e.g. 13@4{':85' if default_value is not None else ''}), got {text!r}",
                          param)

@@ -32,7 +32,7 @@ from op2motion.bus.emulator.body import EmulatedBody
 from op2motion.bus.emulator.devices import Board, Servo
 from op2motion.bus.emulator.faults import Faults
 from op2motion.bus.realtime import EMULATOR_PRIORITY, realtime
-from op2motion.bus.tables import CM730_ID
+from op2motion.bus.tables import CM730_ID, TORQUE_LIMIT_FULL
 from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
 
@@ -41,13 +41,17 @@ MAX_BEHIND_S = 0.05                # further behind the wall clock than this, si
 BOOT_S = 0.1                       # the servos' silence after their power is switched on
 HANGUP_SLEEP_S = 0.002             # with no program on the port, look again this often
 TRACE_EVERY_S = 0.05               # the ground truth is recorded this often [simulated s]
+PUBLISH_EVERY_S = 0.1              # ... and written to the truth file this often
 
 
 class Emulator:
     """An emulated OP2 (see the module docstring)."""
 
-    def __init__(self, spec: Spec, engine: str = "mujoco", start: str = "standing", faults: Faults | None = None):
+    def __init__(self, spec: Spec, engine: str = "mujoco", start: str = "standing", faults: Faults | None = None,
+                 truth_path: str | Path | None = None):
         self.spec = spec
+        self.truth_path = None if truth_path is None else Path(truth_path)
+        self.torque_limit_min = TORQUE_LIMIT_FULL
         self.faults = faults or Faults()
         supply = self.faults.supply_v if self.faults.supply_v is not None else spec.servo.supply_voltage_v
         self.body = EmulatedBody(spec, engine, start, supply)
@@ -116,6 +120,7 @@ class Emulator:
     def close(self) -> None:
         """Stop serving, remove the link, close the pseudo-terminal, release the engine."""
         self.stop()
+        self._publish()
         if self.link is not None:
             with contextlib.suppress(OSError):
                 if os.readlink(self.link) == self.pty_name:
@@ -145,6 +150,27 @@ class Emulator:
         """The simulated torso now: ``t_s``, ``x_m``, ``y_m``, ``z_m``, ``yaw_rad``, ``tilt_rad``."""
         return dict(self._truth)
 
+    def report(self) -> dict[str, Any]:
+        """What a program did to the emulated robot, for checking it from outside: the torso now (:meth:`truth`),
+        the simulated seconds since the motion started (the first SYNC_WRITE; None before), the lowest torque limit
+        any servo has had, each servo's goal [tick], torque enable and torque limit, and the counters."""
+        return {"truth": self.truth(), "motion_s": None if self.motion_t0 is None else self._now() - self.motion_t0,
+                "torque_limit_min": self.torque_limit_min, "goal_ticks": [s.u16("goal_position") for s in self.servos],
+                "torque_enable": [s.get("torque_enable") for s in self.servos],
+                "torque_limit": [s.u16("torque_limit") for s in self.servos], "stats": dict(self.stats),
+                "slipped_s": round(self.slipped_s, 4)}
+
+    def _publish(self) -> None:
+        """Write :meth:`report` to the truth file (replaced whole: a reader never sees half of it)."""
+        if self.truth_path is None:
+            return
+        import json
+
+        tmp = self.truth_path.with_name(self.truth_path.name + ".tmp")
+        with contextlib.suppress(OSError):
+            tmp.write_text(json.dumps(self.report()))
+            os.replace(tmp, self.truth_path)
+
     def overheat(self, device: int, celsius: float) -> None:
         """Servo ``device``'s temperature jumps to ``celsius`` now."""
         self.temperature_overrides[device] = float(celsius)
@@ -169,7 +195,7 @@ class Emulator:
         done = 0
         poller = select.poll()
         poller.register(self.master, select.POLLIN)
-        next_trace = 0.0
+        next_trace = next_publish = 0.0
         while not stop.is_set() and not self._stop.is_set():
             now = time.monotonic()
             wait = t0 + self.slipped_s + (done + 1) * dt - now
@@ -191,9 +217,13 @@ class Emulator:
                 done += n
                 self.body.sense(self.servos, self.board, self.temperature_overrides)
                 self._truth = self.body.truth()
+                self.torque_limit_min = min(self.torque_limit_min, *(s.u16("torque_limit") for s in self.servos))
                 if self._truth["t_s"] >= next_trace:
                     self.trace.append(self._truth)
                     next_trace = self._truth["t_s"] + TRACE_EVERY_S
+                if self._truth["t_s"] >= next_publish:
+                    self._publish()
+                    next_publish = self._truth["t_s"] + PUBLISH_EVERY_S
 
     def _powered(self) -> bool:
         return self.board.get("dynamixel_power") == 1
