@@ -291,3 +291,15 @@ def test_timed_fault_flags():
         with pytest.raises(InputError) as e:
             parse_timed(bad, "unplug")
         assert e.value.param == "unplug"
+
+
+def test_a_stop_waits_for_both_feet_on_a_walk_only(spec):
+    from op2motion.bus.stopping import stop_row
+    from op2motion.physics import Plan
+
+    contact = ("double", "double", "left", "left", "left", "double", "double", "double", "right", "right")
+    goals, gains = np.zeros((len(contact), 20)), np.full((len(contact), 20), 32.0)
+    walk = Plan("walk", goals, gains, contact, 0.008, 0.0, 1.0, contact=contact)
+    assert (stop_row(walk, 0), stop_row(walk, 2), stop_row(walk, 8)) == (1, 6, 8)   # one row into a double support
+    motion = Plan("motion", goals, gains, contact, 0.008, 0.0, 1.0)
+    assert stop_row(motion, 3) == 3                                             # anything else: where it is

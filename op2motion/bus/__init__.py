@@ -10,8 +10,13 @@ Layers inside the wing, lowest first:
 * :mod:`.imu` (the board's register words <-> the torso's gyro [rad/s] and accelerometer [m/s²], by the spec's
   ``[imu]`` mapping), :mod:`.robot` (the OP2 on the bus: power, status, torque, gains, present state),
   :mod:`.safety` (the named policy and thresholds);
+* :mod:`.session` (the port, the board found, the servos powered, the whole robot read, the torque on without a
+  jump);
 * :mod:`.loop` (:func:`.loop.run_controller`: any physics :class:`~op2motion.physics.Controller` on the robot, one
-  bulk read and one sync write every 8 ms) and :mod:`.tasks` (what the ``op2motion robot`` commands do);
+  bulk read and one sync write every 8 ms, at real-time priority where allowed: :mod:`.realtime`; how a run ends:
+  :mod:`.stopping`), :mod:`.plans` (moves from where the robot is, checked in physics), :mod:`.tasks` (what the
+  ``op2motion robot`` commands do), :mod:`.follow` (a target pose followed at a capped speed: the studio's), and
+  :mod:`.bench` (the loop's and the status's speed through the emulator);
 * :mod:`.emulator` (the emulated OP2: the control tables byte for byte, physics and the servo model behind them).
 
 Nothing here is imported at package import time: each module imports what it needs.

@@ -34,6 +34,7 @@ from op2motion.bus import safety
 from op2motion.bus.imu import decode
 from op2motion.bus.realtime import LOOP_PRIORITY, realtime
 from op2motion.bus.robot import OP2, angle_of
+from op2motion.bus.stopping import Stops
 from op2motion.bus.tables import (
     BOARD_SPAN,
     CM730_ID,
@@ -47,14 +48,12 @@ from op2motion.physics import Controller
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.joints import servo_to_ticks
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import Support
 
 READ_LATENCY_S = 0.003             # the bulk read's allowance beyond its wire time (USB adapter, devices' delay)
 READ_BUDGET_S = 0.005              # a tick's reads end this long after it starts (the controller and the write
                                    # need the rest of the 8 ms)
 RETRY_LEFT_S = 0.0015              # devices that missed are asked again if this much of the budget is left
 LATE_S = 0.020                     # a period longer than this is a late tick
-STOP_HOLD_S = 0.3                  # after a stop, the held goals are sent this long before the loop ends
 MAX_P_GAIN = 254
 
 
@@ -126,19 +125,6 @@ def controller_time(k: int, phase_s: float) -> float:
     if k == 0:
         return 0.0
     return k * CONTROL_PERIOD_S - (CONTROL_PERIOD_S - phase_s) % CONTROL_PERIOD_S
-
-
-def stop_row(plan: Any, row: int) -> int:
-    """Where a stop request at plan row ``row`` freezes the goals: a walk's next row on both feet (one row into
-    its double support when it lasts that long); any other plan the row it is at."""
-    contacts = plan.contacts if plan.contact is not None else None
-    if contacts is None:
-        return row
-    for r in range(row, len(contacts)):
-        if contacts[r] is Support.DOUBLE:
-            nxt = min(r + 1, len(contacts) - 1)
-            return nxt if contacts[nxt] is Support.DOUBLE else r
-    return row
 
 
 class _Run:
@@ -243,45 +229,7 @@ def _percentile(values: list[float], q: float) -> float:
     return float(np.percentile(values, q)) * 1000.0 if values else 0.0
 
 
-class _Stops:
-    """How a run ends: the row a stop froze the goals at, when the loop ends after holding them, a fall's settling."""
-
-    def __init__(self) -> None:
-        self.frozen_at: int | None = None
-        self.end_at: float | None = None
-        self.fall_until: float | None = None
-
-    def fault(self, fault: safety.Fault, robot: OP2, plan: Any, row: int, k: int, now: float) -> None:
-        """React to the run's first fault (:mod:`.safety`'s policy)."""
-        if fault.kind == "fell":
-            robot.torque_limit(safety.FALL_TORQUE_LIMIT)
-            self.frozen_at, self.fall_until = row, now + safety.FALL_SETTLE_S
-        elif fault.kind == "not answering" and fault.id == CM730_ID:
-            self.frozen_at = row
-        else:
-            self.frozen_at = stop_row(plan, row) if k else 0
-
-    def request(self, plan: Any, row: int, k: int) -> None:
-        """A stop request (Ctrl-C): a walk on its next double support, anything else at once."""
-        if self.frozen_at is None:
-            self.frozen_at = stop_row(plan, row) if k else 0
-
-    def frozen(self, row: int, now: float) -> bool:
-        """Whether the goals are frozen at ``row`` (the hold's end is timed from the first frozen tick)."""
-        if self.frozen_at is None or row < self.frozen_at:
-            return False
-        if self.end_at is None:
-            self.end_at = now + STOP_HOLD_S
-        return True
-
-    def over(self, now: float, t: float, duration: float) -> bool:
-        """Whether the loop ends after this tick."""
-        if self.frozen_at is None:
-            return t >= duration
-        return self.end_at is not None and now >= self.end_at and self.fall_until is None
-
-
-def _step(run: _Run, stops: _Stops, k: int, now: float, stop: threading.Event | None) -> tuple[float, int]:
+def _step(run: _Run, stops: Stops, k: int, now: float, stop: threading.Event | None) -> tuple[float, int]:
     """One tick after its read: the watch, the controller (or the frozen goals), the sync write; (t, row)."""
     controller, report, plan = run.controller, run.report, run.controller.plan
     fault = run.check(run.answered)
@@ -334,7 +282,7 @@ def run_controller(controller: Controller, port: str | OP2, spec: Spec | None = 
 def _loop(run: _Run, duration: float, stop: threading.Event | None, on_tick: Callable[[Tick], None] | None
           ) -> LoopReport:
     """The ticks of one run (see :func:`run_controller`)."""
-    stops, report = _Stops(), run.report
+    stops, report = Stops(), run.report
     periods: list[float] = []
     start = time.monotonic()
     clock, last, k = start, None, 0

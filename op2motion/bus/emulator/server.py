@@ -2,11 +2,9 @@
 
 :meth:`Emulator.open` makes a pseudo-terminal and a symbolic link to its terminal side at the path asked for
 (pyserial and dynamixel-sdk open it like the real port). :meth:`Emulator.serve` is one thread doing two things in
-turn: answering packets the moment they arrive (:mod:`.devices`: the CM-730 at ID 200 and the 20 MX-28; the servos
-are silent until the board's power register is 1 and :data:`BOOT_S` has passed; a broadcast gets no reply; a bulk
-read is answered device by device in the order asked, and a silent device silences the ones listed after it, as
-MX firmware waits for the previous device's reply) and stepping the body (:mod:`.body`) in batches of at most
-:data:`BATCH_STEPS` physics steps, kept on the wall clock. One thread, no locks: a reply waits at most for one
+turn: answering packets the moment they arrive (:mod:`.wire`: the CM-730 at ID 200 and the 20 MX-28 of
+:mod:`.devices`, byte for byte) and stepping the body (:mod:`.body`) in batches of at most :data:`BATCH_STEPS`
+physics steps, kept on the wall clock. One thread, no locks: a reply waits at most for one
 batch (0.2 ms with MuJoCo, about 1 ms with PyBullet), never for the interpreter's thread switch. If the machine
 cannot keep up, simulated time slips behind the wall clock rather than running in bursts (``slipped_s``).
 
@@ -19,7 +17,6 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
-import random
 import select
 import threading
 import time
@@ -27,18 +24,17 @@ import tty
 from pathlib import Path
 from typing import Any
 
-from op2motion.bus import protocol as p
 from op2motion.bus.emulator.body import EmulatedBody
-from op2motion.bus.emulator.devices import Board, Servo
+from op2motion.bus.emulator.devices import Servo
 from op2motion.bus.emulator.faults import Faults
+from op2motion.bus.emulator.wire import BOOT_S, Wire
 from op2motion.bus.realtime import EMULATOR_PRIORITY, realtime
-from op2motion.bus.tables import CM730_ID, TORQUE_LIMIT_FULL
+from op2motion.bus.tables import TORQUE_LIMIT_FULL
 from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
 
 BATCH_STEPS = 4                    # physics steps between two looks at the port
 MAX_BEHIND_S = 0.05                # further behind the wall clock than this, simulated time slips instead
-BOOT_S = 0.1                       # the servos' silence after their power is switched on
 HANGUP_SLEEP_S = 0.002             # with no program on the port, look again this often
 TRACE_EVERY_S = 0.05               # the ground truth is recorded this often [simulated s]
 PUBLISH_EVERY_S = 0.1              # ... and written to the truth file this often
@@ -56,21 +52,12 @@ class Emulator:
         supply = self.faults.supply_v if self.faults.supply_v is not None else spec.servo.supply_voltage_v
         self.body = EmulatedBody(spec, engine, start, supply)
         self.engine_name, self.start_kind = engine, start
-        self.rng = random.Random(self.faults.seed)
-        self.board = Board()
-        self.servos = [Servo(j.id) for j in spec.joints]
-        self.by_id: dict[int, Any] = {s.id: s for s in self.servos}
-        self.by_id[CM730_ID] = self.board
-        self.parser = p.StreamParser()
+        self.wire = Wire(spec, self.faults, self._now, self._present_ticks)
+        self.board, self.servos, self.stats = self.wire.board, self.wire.servos, self.wire.stats
         self.master: int | None = None
         self.link: Path | None = None
         self.pty_name = ""
-        self.powered_at: float | None = None
-        self.motion_t0: float | None = None
         self.temperature_overrides: dict[int, float] = {}
-        self.unplugged: set[int] = set()
-        self.pending: dict[int, tuple[int, bytes]] = {}
-        self.stats = {"packets": 0, "replies": 0, "lost": 0, "corrupted": 0, "bad_packets": 0}
         self.slipped_s = 0.0
         self.trace: list[dict[str, float]] = []
         self._truth: dict[str, float] = self.body.truth()
@@ -82,7 +69,7 @@ class Emulator:
     def _powered_holding(self) -> None:
         """The start: servos powered, torque on, holding the start pose (as the stock framework leaves them)."""
         self.board.set("dynamixel_power", 1)
-        self.powered_at = -BOOT_S
+        self.wire.powered_at = -BOOT_S
         ticks = self._present_ticks()
         for servo, tick in zip(self.servos, ticks):
             servo.power_up(tick)
@@ -177,7 +164,12 @@ class Emulator:
 
     def unplug(self, device: int) -> None:
         """Servo ``device`` goes silent and limp now."""
-        self.unplugged.add(device)
+        self.wire.unplugged.add(device)
+
+    @property
+    def motion_t0(self) -> float | None:
+        """When the motion started (the first SYNC_WRITE) [simulated s]; None before."""
+        return self.wire.motion_t0
 
     # --- serving -------------------------------------------------------------------------------------------------
     def serve(self, stop: threading.Event | None = None) -> None:
@@ -213,7 +205,7 @@ class Emulator:
             if due > 0:
                 n = min(due, BATCH_STEPS)
                 self._timed_faults()
-                self.body.step(n, self._limp_servos(), self._powered())
+                self.body.step(n, self._limp_servos(), self.wire.powered())
                 done += n
                 self.body.sense(self.servos, self.board, self.temperature_overrides)
                 self._truth = self.body.truth()
@@ -225,13 +217,10 @@ class Emulator:
                     self._publish()
                     next_publish = self._truth["t_s"] + PUBLISH_EVERY_S
 
-    def _powered(self) -> bool:
-        return self.board.get("dynamixel_power") == 1
-
     def _limp_servos(self) -> list[Servo]:
         """The servos as the body sees them: a missing or unplugged servo has no torque."""
         for servo in self.servos:
-            if servo.id in self.faults.missing or servo.id in self.unplugged:
+            if self.wire.silent(servo.id):
                 servo.set("torque_enable", 0)
         return self.servos
 
@@ -244,21 +233,10 @@ class Emulator:
         since = self._now() - self.motion_t0
         for device, at in self.faults.unplug:
             if since >= at:
-                self.unplugged.add(device)
+                self.wire.unplugged.add(device)
         for device, at, celsius in self.faults.overheat:
             if since >= at and device not in self.temperature_overrides:
                 self.temperature_overrides[device] = celsius
-
-    def _present(self, device: int) -> Any:
-        """The device at ``device`` if it would answer now (a powered, booted servo on the bus; the board)."""
-        if device == CM730_ID:
-            return self.board
-        servo = self.by_id.get(device)
-        if servo is None or device in self.faults.missing or device in self.unplugged or not self._powered():
-            return None
-        if self.powered_at is not None and self._now() - self.powered_at < BOOT_S:
-            return None
-        return servo
 
     def _receive(self) -> None:
         assert self.master is not None
@@ -268,115 +246,9 @@ class Emulator:
             return
         except OSError as exc:
             if exc.errno == errno.EIO:                              # the client closed the port
-                self.parser.clear()
+                self.wire.parser.clear()
                 return
             raise
-        bad = self.parser.bad_checksums
-        for packet in self.parser.feed(data):
-            self.stats["packets"] += 1
-            self._handle(packet)
-        self.stats["bad_packets"] += self.parser.bad_checksums - bad
-
-    def _reply(self, device: Any, error: int, params: bytes = b"", level: int = 2, out: bytearray | None = None
-               ) -> None:
-        """A status packet, if the device's status return level allows it; lost or corrupted at the fault rates.
-        Written at once, or added to ``out`` (a bulk read's replies go out back to back, in one write)."""
-        if device.return_level < level:
-            return
-        packet = bytearray(p.status(device.id, error, params))
-        if self.faults.lose and self.rng.random() < self.faults.lose:
-            self.stats["lost"] += 1
-            return
-        if self.faults.corrupt and self.rng.random() < self.faults.corrupt:
-            i = self.rng.randrange(2, len(packet))
-            packet[i] ^= 1 << self.rng.randrange(8)
-            self.stats["corrupted"] += 1
-        self.stats["replies"] += 1
-        if out is not None:
-            out += packet
-        else:
-            self._send(bytes(packet))
-
-    def _send(self, data: bytes) -> None:
-        assert self.master is not None
-        with contextlib.suppress(BlockingIOError, OSError):
-            os.write(self.master, data)
-
-    def _write(self, device: Any, address: int, data: bytes) -> int:
-        was_powered = self._powered()
-        error = device.write(address, data)
-        if device is self.board and self.board.power_changed:
-            self.board.power_changed = False
-            powered = self._powered()
-            if powered and not was_powered:
-                self.powered_at = self._now()
-                for servo, tick in zip(self.servos, self._present_ticks()):
-                    servo.power_up(tick)
-            elif was_powered and not powered:
-                for servo in self.servos:
-                    servo.set("torque_enable", 0)
-        return error
-
-    def _handle(self, packet: p.Packet) -> None:
-        code, params = packet.code, packet.params
-        if code == p.Instruction.SYNC_WRITE:
-            self._sync_write(params)
-            return
-        if code == p.Instruction.BULK_READ:
-            self._bulk_read(params)
-            return
-        targets = [d for d in self.by_id if self._present(d)] if packet.id == p.BROADCAST_ID else [packet.id]
-        for target in targets:
-            device = self._present(target)
-            if device is None:
-                continue
-            reply = packet.id != p.BROADCAST_ID
-            if code == p.Instruction.PING:
-                if reply:
-                    self._reply(device, device.conditions(), level=0)
-            elif code == p.Instruction.READ and len(params) == 2:
-                error, data = device.read(params[0], params[1])
-                if reply:
-                    self._reply(device, error, data or b"", level=1)
-            elif code == p.Instruction.WRITE and len(params) >= 2:
-                error = self._write(device, params[0], bytes(params[1:]))
-                if reply:
-                    self._reply(device, error)
-            elif code == p.Instruction.REG_WRITE and len(params) >= 2:
-                self.pending[target] = (params[0], bytes(params[1:]))
-                if reply:
-                    self._reply(device, device.conditions())
-            elif code == p.Instruction.ACTION and not params:
-                address, data = self.pending.pop(target, (0, b""))
-                error = self._write(device, address, data) if data else device.conditions()
-                if reply:
-                    self._reply(device, error)
-            elif reply:                            # RESET is not emulated (it would renumber the servo), nor others
-                self._reply(device, device.conditions() | p.INSTRUCTION)
-
-    def _sync_write(self, params: bytes) -> None:
-        if len(params) < 2 or params[1] == 0 or (len(params) - 2) % (params[1] + 1):
-            self.stats["bad_packets"] += 1
-            return
-        address, length = params[0], params[1]
-        if self.motion_t0 is None:
-            self.motion_t0 = self._now()
-        for k in range(2, len(params), length + 1):
-            device = self._present(params[k])
-            if device is not None:
-                self._write(device, address, bytes(params[k + 1:k + 1 + length]))
-
-    def _bulk_read(self, params: bytes) -> None:
-        if len(params) < 4 or (len(params) - 1) % 3:
-            self.stats["bad_packets"] += 1
-            return
-        out = bytearray()
-        for k in range(1, len(params), 3):
-            length, target, address = params[k], params[k + 1], params[k + 2]
-            device = self._present(target)
-            if device is None:
-                break                              # the devices listed after it wait for its reply in vain
-            error, data = device.read(address, length)
-            self._reply(device, error, data or b"", level=0, out=out)
-        if out:
-            self._send(bytes(out))
+        for chunk in self.wire.feed(data):
+            with contextlib.suppress(BlockingIOError, OSError):
+                os.write(self.master, chunk)
