@@ -9,7 +9,7 @@ import math
 import time
 
 import pytest
-from bus_support import cli, emulated, emulator_process, finish, run
+from bus_support import BLIND_BUS, cli, emulated, emulator_process, finish, run
 
 from op2motion.bus import protocol as p
 from op2motion.bus.client import Bus
@@ -67,8 +67,11 @@ def test_power_switch_bulk_read_and_broadcast(spec, tmp_path):
 def test_twenty_steps_through_the_bus_walk_as_in_physics(spec, tmp_path, engine):
     validate = cli("walk", "--steps", str(STEPS), "--validate", "--engine", engine, "--json")   # meanwhile
     with emulator_process(tmp_path, engine) as emulator:
-        before = emulator.truth()
-        code, out, err = run("robot", "walk", "--port", emulator.link, "--steps", str(STEPS), "--json")
+        for _ in range(2):                               # once more only if the whole bus went blind (BLIND_BUS)
+            before = emulator.truth()
+            code, out, err = run("robot", "walk", "--port", emulator.link, "--steps", str(STEPS), "--json")
+            if not (code == 1 and BLIND_BUS in err):
+                break
         time.sleep(0.5)
         after = emulator.truth()
     done, physics, why = finish(validate)

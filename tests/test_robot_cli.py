@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 import pytest
-from bus_support import cli, emulated, emulator_process, finish, interrupt_after, run
+from bus_support import cli, emulated, emulator_process, finish, interrupt_after, run, run_motion
 from helpers import POSES, STOCK, run_cli
 
 from op2motion.bus.emulator.faults import Faults
@@ -103,11 +103,12 @@ def test_read_limp_then_holds_what_it_read(spec, tmp_path, capsys):
 @pytest.mark.physics
 def test_play_a_pose_commands_every_servo(spec, tmp_path):
     with emulator_process(tmp_path) as emulator:
-        code, out, err = run("robot", "play", "--port", emulator.link, str(POSES / "walkready.json"), "--json")
+        code, out, err = run_motion("robot", "play", "--port", emulator.link, str(POSES / "walkready.json"),
+                                    "--json")
         goals = _goals_deg(emulator, spec)
     result = json.loads(out)
     target = np.degrees(read_pose(POSES / "walkready.json", spec).servo)
-    assert code == 0 and result["ended"] == "done" and result["checked"].startswith("checked in physics"), err
+    assert code == 0 and result["ended"] == "done" and result["checked"].startswith("checked in physics"), (err, out)
     assert np.max(np.abs(goals - target)) <= GOAL_TOL_DEG
     assert result["runs"]["motion"]["max_blind_ticks"] < 5
 
@@ -117,7 +118,7 @@ def test_play_an_action_page_and_refuse_a_file_without_page(tmp_path):
     with emulator_process(tmp_path) as emulator:
         code, _, err = run("robot", "play", "--port", emulator.link, str(STOCK))
         assert code == 2 and "--page: " in _one_line(err)
-        code, out, err = run("robot", "play", "--port", emulator.link, str(STOCK), "--page", "9", "--json")
+        code, out, err = run_motion("robot", "play", "--port", emulator.link, str(STOCK), "--page", "9", "--json")
     result = json.loads(out)
     assert code == 0 and result["what"].startswith("page 9") and result["runs"]["motion"]["ticks"] > 100, err
 
@@ -176,7 +177,8 @@ def test_a_servo_unplugged_mid_motion_stops_it(tmp_path):
 def test_lost_and_corrupted_replies_are_ridden_through(tmp_path):
     flags = ("--lose", "0.02", "--corrupt", "0.01", "--seed", "3")
     with emulator_process(tmp_path, "mujoco", "standing", *flags) as emulator:
-        code, out, err = run("robot", "play", "--port", emulator.link, str(POSES / "walkready.json"), "--json")
+        code, out, err = run_motion("robot", "play", "--port", emulator.link, str(POSES / "walkready.json"),
+                                    "--json")
         stats = emulator.report()["stats"]
     motion = json.loads(out)["runs"]["motion"]
     assert code == 0, err
