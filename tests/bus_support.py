@@ -55,8 +55,8 @@ class EmulatorProcess:
         """The emulator's latest report (torso, motion time, servos' goals and torque limits, counters)."""
         for _ in range(100):
             try:
-                return json.loads(self.path.read_text())
-            except (OSError, ValueError):
+                return json.loads(self.path.read_text().strip())
+            except (OSError, ValueError):                 # not there yet, or caught half written
                 time.sleep(0.01)
         raise RuntimeError("no report from the emulated OP2")
 

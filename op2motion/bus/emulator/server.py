@@ -38,6 +38,7 @@ MAX_BEHIND_S = 0.05                # further behind the wall clock than this, si
 HANGUP_SLEEP_S = 0.002             # with no program on the port, look again this often
 TRACE_EVERY_S = 0.05               # the ground truth is recorded this often [simulated s]
 PUBLISH_EVERY_S = 0.1              # ... and written to the truth file this often
+TRUTH_BYTES = 16384                # the truth file's size (its JSON padded with spaces)
 
 
 class Emulator:
@@ -47,6 +48,7 @@ class Emulator:
                  truth_path: str | Path | None = None):
         self.spec = spec
         self.truth_path = None if truth_path is None else Path(truth_path)
+        self._truth_map: Any = None
         self.torque_limit_min = TORQUE_LIMIT_FULL
         self.faults = faults or Faults()
         supply = self.faults.supply_v if self.faults.supply_v is not None else spec.servo.supply_voltage_v
@@ -117,6 +119,9 @@ class Emulator:
             with contextlib.suppress(OSError):
                 os.close(self.master)
             self.master = None
+        if self._truth_map is not None:
+            self._truth_map.close()
+            self._truth_map = None
         self.body.close()
 
     # --- Python API ----------------------------------------------------------------------------------------------
@@ -148,15 +153,21 @@ class Emulator:
                 "slipped_s": round(self.slipped_s, 4)}
 
     def _publish(self) -> None:
-        """Write :meth:`report` to the truth file (replaced whole: a reader never sees half of it)."""
+        """Write :meth:`report` into the truth file: JSON padded with spaces to :data:`TRUTH_BYTES`, written into
+        the file's memory map (no file-system call that could stall the serving thread; a reader that catches a
+        half-written report reads again)."""
         if self.truth_path is None:
             return
         import json
+        import mmap
 
-        tmp = self.truth_path.with_name(self.truth_path.name + ".tmp")
-        with contextlib.suppress(OSError):
-            tmp.write_text(json.dumps(self.report()))
-            os.replace(tmp, self.truth_path)
+        if self._truth_map is None:
+            with open(self.truth_path, "wb") as f:
+                f.write(b" " * TRUTH_BYTES)
+            with open(self.truth_path, "r+b") as f:
+                self._truth_map = mmap.mmap(f.fileno(), TRUTH_BYTES)
+        data = json.dumps(self.report()).encode()[:TRUTH_BYTES]
+        self._truth_map[:] = data.ljust(TRUTH_BYTES)
 
     def overheat(self, device: int, celsius: float) -> None:
         """Servo ``device``'s temperature jumps to ``celsius`` now."""
