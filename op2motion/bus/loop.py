@@ -32,7 +32,7 @@ import numpy as np
 
 from op2motion.bus import safety
 from op2motion.bus.imu import decode
-from op2motion.bus.realtime import LOOP_PRIORITY, realtime
+from op2motion.bus.realtime import LOOP_PRIORITY, realtime, steady
 from op2motion.bus.robot import OP2, angle_of
 from op2motion.bus.stopping import Stops
 from op2motion.bus.tables import (
@@ -272,7 +272,7 @@ def run_controller(controller: Controller, port: str | OP2, spec: Spec | None = 
             session.ready_for_motion()
             return run_controller(controller, session.robot, duration_s=duration_s, stop=stop, on_tick=on_tick,
                                   watch=watch)
-    with realtime(LOOP_PRIORITY) as report_realtime:
+    with realtime(LOOP_PRIORITY) as report_realtime, steady():
         report = _loop(_Run(controller, port, watch), controller.plan.duration_s if duration_s is None else duration_s,
                        stop, on_tick)
     report.realtime = report_realtime

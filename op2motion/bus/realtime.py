@@ -7,11 +7,16 @@ OP2's serving thread, which stands in for the robot's own firmware, one step bel
 puts the thread back as it was afterwards. Without the privilege (not root, no ``CAP_SYS_NICE``, not Linux) the
 thread runs as it is and the block learns so. Both threads sleep most of each period, so they cannot starve the
 system.
+
+:func:`steady` keeps Python's garbage collector from pausing such a thread for long: a full collection walks every
+object the process holds (the physics engines, the planners: 10–20 ms here, more on a loaded machine, longer than
+five 8 ms ticks); inside the block it walks only what was made since the block began.
 """
 
 from __future__ import annotations
 
 import contextlib
+import gc
 import os
 from typing import Iterator
 
@@ -33,3 +38,15 @@ def realtime(priority: int) -> Iterator[bool]:
     finally:
         with contextlib.suppress(OSError):
             os.sched_setscheduler(0, policy, param)
+
+
+@contextlib.contextmanager
+def steady() -> Iterator[None]:
+    """Collect now and freeze what exists (:func:`gc.freeze`), so that the collections inside the block are short;
+    unfreeze after it."""
+    gc.collect()
+    gc.freeze()
+    try:
+        yield
+    finally:
+        gc.unfreeze()

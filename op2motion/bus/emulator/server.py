@@ -28,7 +28,7 @@ from op2motion.bus.emulator.body import EmulatedBody
 from op2motion.bus.emulator.devices import Servo
 from op2motion.bus.emulator.faults import Faults
 from op2motion.bus.emulator.wire import BOOT_S, Wire
-from op2motion.bus.realtime import EMULATOR_PRIORITY, realtime
+from op2motion.bus.realtime import EMULATOR_PRIORITY, realtime, steady
 from op2motion.bus.tables import TORQUE_LIMIT_FULL
 from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
@@ -188,7 +188,7 @@ class Emulator:
         priority where the system allows it: :mod:`..realtime`)."""
         if self.master is None:
             raise RuntimeError("open() the emulator before serving")
-        with realtime(EMULATOR_PRIORITY):
+        with realtime(EMULATOR_PRIORITY), steady():
             self._serve(stop or self._stop)
 
     def _serve(self, stop: threading.Event) -> None:
