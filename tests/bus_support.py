@@ -118,12 +118,13 @@ def run_motion(*argv: str) -> tuple[int, str, str]:
     return code, out, err
 
 
-def interrupt_after(process: subprocess.Popen, emulator: EmulatorProcess, motion_s: float) -> float:
-    """Send Ctrl-C (SIGINT) ``motion_s`` simulated seconds after the client's first SYNC_WRITE; the wall time
-    [s] it was sent."""
+def interrupt_when_walked(process: subprocess.Popen, emulator: EmulatorProcess, x_m: float) -> float:
+    """Send Ctrl-C (SIGINT) once the emulated torso has walked ``x_m`` [m] forward (mid-walk); the wall time [s] it
+    was sent."""
+    start = emulator.truth()["x_m"]
     deadline = time.monotonic() + CLI_TIMEOUT_S
     while time.monotonic() < deadline and process.poll() is None:
-        if (emulator.report()["motion_s"] or 0.0) >= motion_s:
+        if emulator.truth()["x_m"] - start >= x_m:
             break
         time.sleep(0.02)
     process.send_signal(signal.SIGINT)

@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 import pytest
-from bus_support import cli, emulated, emulator_process, finish, interrupt_after, run, run_motion
+from bus_support import cli, emulated, emulator_process, finish, interrupt_when_walked, run, run_motion
 from helpers import POSES, STOCK, run_cli
 
 from op2motion.bus.emulator.faults import Faults
@@ -23,6 +23,7 @@ GOAL_TOL_DEG = 1.5             # the acceptance's "every servo commanded within 
 TICK_DEG = 360.0 / 4096        # one position tick
 STANDING_TILT_DEG = 15.0       # a torso tilted less than this still stands
 CTRL_C_EXIT_S = 3.0            # Ctrl-C mid-walk: exit 130 within this long
+WALKED_M = 0.2                 # ... sent once the robot has walked this far [m]
 
 
 @pytest.fixture()
@@ -146,14 +147,14 @@ def test_refused_unless_forced_and_a_fall_lowers_the_torque(spec, tmp_path, caps
 def test_ctrl_c_mid_walk_stops_standing(tmp_path):
     with emulator_process(tmp_path) as emulator:
         walk = cli("robot", "walk", "--port", emulator.link, "--steps", "20")
-        sent = interrupt_after(walk, emulator, 5.2)        # 1.7 s approach, 1.5 s lead-in, then about 2 s of steps
+        sent = interrupt_when_walked(walk, emulator, WALKED_M)
         code, _, err = finish(walk)
         took = time.monotonic() - sent
         time.sleep(0.5)
         truth = emulator.truth()
     assert code == 130 and "stopped on request" in _one_line(err), err
     assert took < CTRL_C_EXIT_S
-    assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and truth["x_m"] > 0.15    # walked, then stood
+    assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and truth["x_m"] > WALKED_M   # walked, then stood
 
 
 @pytest.mark.physics

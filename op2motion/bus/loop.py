@@ -272,7 +272,7 @@ def run_controller(controller: Controller, port: str | OP2, spec: Spec | None = 
             session.ready_for_motion()
             return run_controller(controller, session.robot, duration_s=duration_s, stop=stop, on_tick=on_tick,
                                   watch=watch)
-    with realtime(LOOP_PRIORITY) as report_realtime, steady():
+    with steady(), realtime(LOOP_PRIORITY) as report_realtime:        # the collection before the priority
         report = _loop(_Run(controller, port, watch), controller.plan.duration_s if duration_s is None else duration_s,
                        stop, on_tick)
     report.realtime = report_realtime

@@ -188,7 +188,7 @@ class Emulator:
         priority where the system allows it: :mod:`..realtime`)."""
         if self.master is None:
             raise RuntimeError("open() the emulator before serving")
-        with realtime(EMULATOR_PRIORITY), steady():
+        with steady(), realtime(EMULATOR_PRIORITY):
             self._serve(stop or self._stop)
 
     def _serve(self, stop: threading.Event) -> None:
