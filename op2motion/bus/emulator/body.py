@@ -37,6 +37,7 @@ OVERLOAD_SHARE = 0.98              # "at the limit"
 SETTLE_S = 1.5                     # simulated before serving, so the robot rests where it starts
 LYING_HEIGHT_M = 0.12              # the torso's origin above the floor when a lying start is dropped into place
 MOVING_RAD = math.radians(0.5)     # a set point this far from the joint counts as moving
+MOVING_RAD_S = 0.05                # ... and so does a joint this fast
 
 
 class EmulatedBody:
@@ -84,7 +85,7 @@ class EmulatedBody:
         for _ in range(int(round(SETTLE_S / self.dt))):
             q, _ = self.engine.state()
             self.engine.step(self.model.active_torque(self.pose, q, kp))
-        self.sensor.read(self.engine, self.engine.state()[0], 1.0)
+        self.gyro, self.accel, _ = self.sensor.read(self.engine, self.engine.state()[0], 1.0)
 
     def step(self, n: int, servos: Sequence[Servo], powered: bool) -> None:
         """``n`` physics steps with the servos' registers as they are now."""
@@ -123,16 +124,16 @@ class EmulatedBody:
         temperatures {id: °C})."""
         q, dq = self.engine.state()
         s = self.spec.servo
-        ticks = np.clip(np.rint(q / s.rad_per_tick).astype(int) + s.center_tick, s.min_tick, s.max_tick)
+        ticks = np.clip(np.rint(q / s.rad_per_tick).astype(int) + s.center_tick, s.min_tick, s.max_tick).tolist()
+        speed = [magnitude(v) for v in (dq / SPEED_RAD_S_PER_UNIT).tolist()]
+        load = [magnitude(v) for v in (self.torque / self.model.torque_max * TORQUE_LIMIT_FULL).tolist()]
+        moving = ((np.abs(self.command - q) > MOVING_RAD) | (np.abs(dq) > MOVING_RAD_S)).tolist()
+        volts = int(round(self.supply_v * 10))
         for i, servo in enumerate(servos):
             servo.temperature_c = overrides.get(servo.id, float(self.temperature[i]))
             servo.voltage_v = self.supply_v
-            servo.set("present_position", int(ticks[i]))
-            servo.set("present_speed", magnitude(dq[i] / SPEED_RAD_S_PER_UNIT))
-            servo.set("present_load", magnitude(self.torque[i] / self.model.torque_max * TORQUE_LIMIT_FULL))
-            servo.set("present_voltage", int(round(self.supply_v * 10)))
-            servo.set("present_temperature", int(min(max(round(servo.temperature_c), 0), 255)))
-            servo.set("moving", int(abs(self.command[i] - q[i]) > MOVING_RAD or abs(dq[i]) > 0.05))
+            servo.present(ticks[i], speed[i], load[i], volts, int(min(max(round(servo.temperature_c), 0), 255)),
+                          int(moving[i]))
             servo.enforce_alarms()
         for register, count in encode(self.imu, self.gyro, self.accel).items():
             board.table[register:register + 2] = count.to_bytes(2, "little")

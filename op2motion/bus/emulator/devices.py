@@ -11,8 +11,15 @@ torque off), the latched overload, the input-voltage and overheating conditions 
 
 from __future__ import annotations
 
+import struct
+
 from op2motion.bus import protocol as p
 from op2motion.bus.tables import CM730, CM730_ID, MX28, TORQUE_LIMIT_FULL, ControlTable
+
+MIN_VOLTS, MAX_VOLTS = MX28["min_voltage_limit"].address, MX28["max_voltage_limit"].address
+TEMPERATURE_LIMIT, ALARM_SHUTDOWN = MX28["temperature_limit"].address, MX28["alarm_shutdown"].address
+TORQUE_ENABLE, MOVING, PRESENT = MX28["torque_enable"].address, MX28["moving"].address, MX28["present_position"].address
+PRESENT_LAYOUT = struct.Struct("<HHHBB")          # present position, speed, load, voltage, temperature (36..43)
 
 #: Largest value a writable register takes (others: what fits its size).
 RANGES = {"torque_enable": 1, "p_gain": 254, "i_gain": 254, "d_gain": 254, "goal_position": 4095,
@@ -28,21 +35,22 @@ class Device:
         self.id, self.spec = device_id, table
         self.table = table.defaults()
         self.table[table["id"].address] = device_id
+        self.span = {r.name: (r.address, r.end) for r in table.registers}     # looked up hundreds of times a tick
 
     def u16(self, name: str) -> int:
         """A word register."""
-        r = self.spec[name]
-        return self.table[r.address] | (self.table[r.address + 1] << 8)
+        a = self.span[name][0]
+        return self.table[a] | (self.table[a + 1] << 8)
 
     def set(self, name: str, value: int) -> None:
         """Set a register (the device itself, any access)."""
-        r = self.spec[name]
-        self.table[r.address:r.end] = int(value).to_bytes(r.size, "little")
+        a, end = self.span[name]
+        self.table[a:end] = int(value).to_bytes(end - a, "little")
 
     def get(self, name: str) -> int:
         """A register's value."""
-        r = self.spec[name]
-        return int.from_bytes(self.table[r.address:r.end], "little")
+        a, end = self.span[name]
+        return int.from_bytes(self.table[a:end], "little")
 
     @property
     def return_level(self) -> int:
@@ -124,10 +132,10 @@ class Servo(Device):
 
     def conditions(self) -> int:
         error = 0
-        volts = round(self.voltage_v * 10)
-        if not self.get("min_voltage_limit") <= volts <= self.get("max_voltage_limit"):
+        volts, t = round(self.voltage_v * 10), self.table
+        if not t[MIN_VOLTS] <= volts <= t[MAX_VOLTS]:
             error |= p.INPUT_VOLTAGE
-        if self.temperature_c > self.get("temperature_limit"):
+        if self.temperature_c > t[TEMPERATURE_LIMIT]:
             error |= p.OVERHEATING
         if self.overloaded:
             error |= p.OVERLOAD
@@ -135,8 +143,14 @@ class Servo(Device):
 
     def enforce_alarms(self) -> None:
         """The alarm shutdown: a standing condition in its mask switches the torque off."""
-        if self.conditions() & self.get("alarm_shutdown") and self.get("torque_enable"):
-            self.set("torque_enable", 0)
+        if self.table[TORQUE_ENABLE] and self.conditions() & self.table[ALARM_SHUTDOWN]:
+            self.table[TORQUE_ENABLE] = 0
+
+    def present(self, ticks: int, speed: int, load: int, volts: int, celsius: int, moving: int) -> None:
+        """The present-state registers (36..43 and 46) in one go: position, speed, load, voltage, temperature,
+        moving."""
+        self.table[PRESENT:PRESENT + 8] = PRESENT_LAYOUT.pack(ticks, speed, load, volts, celsius)
+        self.table[MOVING] = moving
 
     def changed(self, name: str, value: int) -> None:
         if name == "torque_enable" and value == 1:

@@ -201,7 +201,7 @@ class Emulator:
         next_trace = next_publish = 0.0
         while not stop.is_set() and not self._stop.is_set():
             now = time.monotonic()
-            wait = t0 + self.slipped_s + (done + 1) * dt - now
+            wait = t0 + self.slipped_s + (done + BATCH_STEPS) * dt - now       # sleep until a batch is due
             events = poller.poll(max(0.0, wait) * 1000.0)
             if events:
                 if events[0][1] & select.POLLIN:
