@@ -5,11 +5,13 @@ cannot promise) or, where no motion runs, served from this process; and the CLI 
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import json
 import os
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 from typing import Iterator
@@ -74,15 +76,32 @@ class EmulatorProcess:
             self.process.communicate()
 
 
+#: One real-time bus at a time across the test workers: an emulator and a client loop both run at real-time priority,
+#: and two such pairs on a 2-core machine starve each other (a blind bus is then the right verdict, and the test fails).
+REALTIME_LOCK = Path(tempfile.gettempdir()) / "op2motion-tests-realtime-bus.lock"
+
+
+@contextlib.contextmanager
+def _one_realtime_bus() -> Iterator[None]:
+    with open(REALTIME_LOCK, "a") as lock:
+        fcntl.flock(lock.fileno(), fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock.fileno(), fcntl.LOCK_UN)
+
+
 @contextlib.contextmanager
 def emulator_process(folder: Path, engine: str = "mujoco", start: str = "standing", *flags: str
                      ) -> Iterator[EmulatorProcess]:
-    """An emulated OP2 in its own process, with the faults given as ``robot emulate`` flags."""
-    emulator = EmulatorProcess(folder, engine, start, flags)
-    try:
-        yield emulator
-    finally:
-        emulator.close()
+    """An emulated OP2 in its own process, with the faults given as ``robot emulate`` flags (one at a time across
+    the test workers: :data:`REALTIME_LOCK`)."""
+    with _one_realtime_bus():
+        emulator = EmulatorProcess(folder, engine, start, flags)
+        try:
+            yield emulator
+        finally:
+            emulator.close()
 
 
 def cli(*argv: str, timeout: float = CLI_TIMEOUT_S) -> subprocess.Popen:

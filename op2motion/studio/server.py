@@ -52,13 +52,11 @@ class Studio(Edits, LongWork, ActionPanel, RobotPanel):
         action_path: An action file opened with the studio (inside ``workspace``), or "".
         workspace: The folder the page may read and write (default: the current folder).
         pose_path: The pose file the session came from (inside ``workspace``), the save box's default.
-        secret: The address's secret (default: a fresh one).
         follower: A robot following the pose (:class:`op2motion.bus.follow.Follower`, started), or None.
     """
 
     def __init__(self, spec: Spec, session: Session, host: str = "127.0.0.1", port: int = 0, action_path: str = "",
-                 workspace: Workspace | None = None, pose_path: str = "", secret: str | None = None,
-                 follower: Any = None):
+                 workspace: Workspace | None = None, pose_path: str = "", follower: Any = None):
         import yourdfpy
         from viser.extras import ViserUrdf
 
@@ -67,7 +65,7 @@ class Studio(Edits, LongWork, ActionPanel, RobotPanel):
         self._opened_path = self.workspace.relative(self.workspace.claim(action_path)) if action_path else ""
         self._pose_path = self.workspace.relative(self.workspace.claim(pose_path)) if pose_path else ""
         self._quiet = False
-        self.gate = Gate(host, secret or new_secret())
+        self.gate = Gate(host, new_secret())                  # a fresh secret for every run
         with contextlib.redirect_stdout(io.StringIO()):        # viser's banner: the CLI prints its own line
             self.server = guarded_viser(host, port, self.gate)
         self.port = int(self.server.get_port())
