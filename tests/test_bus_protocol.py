@@ -17,7 +17,6 @@ import pytest
 
 from op2motion.bus import protocol as p
 from op2motion.bus.emulator.devices import Board, Servo
-from op2motion.bus.imu import FallWatch, attitude, decode, encode, imu_of
 from op2motion.bus.safety import (
     BLIND_TICKS,
     FALL_TILT_RAD,
@@ -31,6 +30,7 @@ from op2motion.bus.safety import (
 )
 from op2motion.bus.tables import CM730, MX28, magnitude, signed
 from op2motion.errors import InputError
+from op2motion.robot.imu import FallWatch, attitude, decode, encode, imu_of
 from op2motion.robot.spec import GRAVITY_M_S2
 
 GYRO_TOL_RAD_S = 0.03          # half a count of the gyro (0.0545 rad/s a count)
@@ -268,7 +268,7 @@ def test_client_retries_through_lost_and_damaged_replies():
 
 
 def test_gyro_centres_only_from_a_still_robot(spec):
-    from op2motion.bus.imu import GYRO_STILL_SD, gyro_centres
+    from op2motion.robot.imu import GYRO_STILL_SD, gyro_centres
 
     imu = imu_of(spec)
     rng = np.random.default_rng(7)

@@ -7,8 +7,9 @@ Layers inside the wing, lowest first:
   CM-730's control tables as data);
 * :mod:`.port` (a serial port opened safely: only a tty, held exclusively, 1 Mbps, bounded timeouts) and
   :mod:`.client` (ping, read, write, sync write, bulk read with bounded retries);
-* :mod:`.imu` (the board's register words <-> the torso's gyro [rad/s] and accelerometer [m/s²], by the spec's
-  ``[imu]`` mapping), :mod:`.robot` (the OP2 on the bus: power, status, torque, gains, present state),
+* :mod:`op2motion.robot.imu` (below the wing, shared with the stock gait's emulation: the board's register words
+  <-> the torso's gyro [rad/s] and accelerometer [m/s²], by the spec's ``[imu]`` mapping), :mod:`.robot` (the OP2
+  on the bus: power, status, torque, gains, present state),
   :mod:`.safety` (the named policy and thresholds);
 * :mod:`.session` (the port, the board found, the servos powered, the whole robot read, the torque on without a
   jump);

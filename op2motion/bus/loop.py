@@ -31,7 +31,6 @@ from typing import Any, Callable
 import numpy as np
 
 from op2motion.bus import safety
-from op2motion.bus.imu import decode
 from op2motion.bus.realtime import LOOP_PRIORITY, realtime, steady
 from op2motion.bus.robot import OP2, angle_of
 from op2motion.bus.stopping import Stops
@@ -46,6 +45,7 @@ from op2motion.bus.tables import (
 from op2motion.errors import InputError
 from op2motion.physics import Controller
 from op2motion.robot.framework import CONTROL_PERIOD_S
+from op2motion.robot.imu import decode
 from op2motion.robot.joints import servo_to_ticks
 from op2motion.robot.spec import Spec
 

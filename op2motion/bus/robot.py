@@ -18,7 +18,6 @@ from typing import Any, Sequence
 import numpy as np
 
 from op2motion.bus.client import Bus
-from op2motion.bus.imu import GYRO_SAMPLES, attitude, decode_span, gyro_centres, imu_of
 from op2motion.bus.tables import (
     CM730,
     CM730_ID,
@@ -30,6 +29,7 @@ from op2motion.bus.tables import (
 )
 from op2motion.errors import InputError
 from op2motion.robot.framework import DEFAULT_P_GAIN
+from op2motion.robot.imu import GYRO_SAMPLES, attitude, decode_span, gyro_centres, imu_of
 from op2motion.robot.joints import servo_to_ticks, ticks_to_servo
 from op2motion.robot.spec import Spec
 

@@ -27,8 +27,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from op2motion.bus.imu import FallWatch, attitude
 from op2motion.errors import CheckFailed
+from op2motion.robot.imu import FallWatch, attitude
 from op2motion.robot.joints import joint_range
 from op2motion.robot.spec import ImuSpec, Spec
 

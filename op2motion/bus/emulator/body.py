@@ -8,7 +8,7 @@ limit (the active torque clipped at that share of the model's most torque, and s
 rated voltage). Back to the tables: present position, speed and load, voltage, temperature (a first-order thermal
 model: :data:`RISE_AT_STALL_C` above :data:`AMBIENT_C` at sustained stall torque, time constant
 :data:`THERMAL_TAU_S`), moving; and the board's gyro and accelerometer (:class:`~op2motion.physics.sensors.Imu`,
-sampled every 8 ms of simulated time) through the spec's IMU mapping (:func:`op2motion.bus.imu.encode`), its supply
+sampled every 8 ms of simulated time) through the spec's IMU mapping (:func:`op2motion.robot.imu.encode`), its supply
 voltage. A servo held at its torque limit for :data:`OVERLOAD_S` latches the overload error.
 
 Starts (:data:`STARTS`): ``standing`` (the book's standing pose on both feet, torque on), ``lying_front`` (face
@@ -23,8 +23,8 @@ from typing import Sequence
 import numpy as np
 
 from op2motion.bus.emulator.devices import Board, Servo
-from op2motion.bus.imu import encode, imu_of
 from op2motion.bus.tables import SPEED_RAD_S_PER_UNIT, TORQUE_LIMIT_FULL, magnitude
+from op2motion.robot.imu import encode, imu_of
 from op2motion.robot.spec import Spec
 
 STARTS = ("standing", "lying_front", "lying_back")
