@@ -174,6 +174,14 @@ def _walk_figures(spec: Spec, repeat: int) -> dict[str, Any]:
             "check_walk_speed_mps": round(min(run.walk.mean_speed_mps, other.walk.mean_speed_mps), 4)}
 
 
+def _robot_figures(spec: Spec) -> dict[str, Any]:
+    """``robot_loop_p99_ms`` and ``robot_status_ms``: the 8 ms loop and a status read through the emulated OP2 in a
+    process beside this one (:mod:`op2motion.bus.bench`)."""
+    from op2motion.bus.bench import robot_figures
+
+    return robot_figures(spec)
+
+
 def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
               action: ActionFile | None = None, wall_runs: int = 0, wall_library: bool = True) -> dict[str, Any]:
     """Time batched forward kinematics + CoM for ``n`` poses with each model, one physics validation, one PSO
@@ -227,5 +235,6 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
         **_motion_figures(spec, action, repeat),
         **_planning_figures(spec, action, repeat),
         **_walk_figures(spec, repeat),
+        **_robot_figures(spec),
         **(wall_figures(wall_runs, wall_library) if wall_runs else {}),
     }

@@ -20,14 +20,26 @@ from op2motion.version import __version__
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of every subcommand (each command module registers its own)."""
-    from op2motion.commands import bench, common, files, kinematics, library, motion, physics, posture, studio, walk
+    from op2motion.commands import (
+        bench,
+        common,
+        files,
+        kinematics,
+        library,
+        motion,
+        physics,
+        posture,
+        robot,
+        studio,
+        walk,
+    )
 
     parser = common.Parser(prog="op2motion", description="Whole-body motion for the ROBOTIS OP2, checked in physics.")
     parser.add_argument("--version", action="version", version=f"op2motion {__version__}")
     parser.add_argument("--spec", metavar="FILE", help="robot spec TOML (default: the shipped specs/op2.toml)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=common.Parser,
                                 title="commands", help="run 'op2motion COMMAND --help' for its options")
-    for module in (kinematics, posture, library, files, physics, motion, walk, studio, bench):
+    for module in (kinematics, posture, library, files, physics, motion, walk, robot, studio, bench):
         module.register(sub)
     return parser
 

@@ -24,7 +24,8 @@ def test_bench_reports_every_figure_and_its_work_is_right(spec):
     for key in ("fk_pb_40k_ms", "fk_dh_40k_ms", "fk_dh_full_com_40k_ms", "pinocchio_com_40k_ms", "validate_ms",
                 "pso_solve_ms", "self_clearance_swarm_ms", "motion_play_ms", "motion_validate_ms",
                 "walk_plan_ms", "walk_validate_ms", "validate_mujoco_ms", "walk_validate_mujoco_ms", "help_wall_s",
-                "optimize_wall_s", "optimize_validate_wall_s", "studio_update_ms"):
+                "optimize_wall_s", "optimize_validate_wall_s", "studio_update_ms", "robot_loop_p99_ms",
+                "robot_status_ms"):
         assert result[key] > 0, key
     assert result["check_help_ok"] and result["check_optimize_reached"] and result["check_optimize_validate_stands"]
     assert "library_poses_per_min" not in result          # asked not to: the library figure is the next test's
@@ -37,6 +38,7 @@ def test_bench_reports_every_figure_and_its_work_is_right(spec):
     assert result["check_motion_ticks"] == 464 and result["check_motion_stands"] is True
     assert result["check_walk_fell"] is False and result["check_walk_speed_mps"] > WALK_SPEED_MPS
     assert result["check_studio_readout"] is True
+    assert result["check_robot_status_servos"] == 20 and result["robot_loop_ticks"] > 300
     assert result["check_route_clearance_m"] >= SELF_CLEARANCE_M and result["check_line_deviation_m"] <= LINE_TOL_M
     assert result["book_matlab_dh_40k_ms"] == 3350.0 and result["book_matlab_pb_40k_ms"] == 780.0
 

@@ -52,6 +52,11 @@ def cmd_bench(args: argparse.Namespace, spec: Spec) -> int:
               f"({r['walk_simulated_s']:g} s simulated): PyBullet {r['walk_validate_ms']:.0f} ms, MuJoCo "
               f"{r['walk_validate_mujoco_ms']:.0f} ms ({r['check_walk_speed_mps']:.3f} m/s steady)"]
     lines.append(f"pose studio: one joint edit and its readout {r['studio_update_ms']:.2f} ms")
+    lines.append(f"robot loop through the emulated OP2 ({r['robot_emulator_engine']}, its own process; "
+                 f"{r['robot_loop_ticks']} ticks): period p50 {r['robot_loop_p50_ms']:.2f} ms, p99 "
+                 f"{r['robot_loop_p99_ms']:.2f} ms, max {r['robot_loop_max_ms']:.2f} ms, "
+                 f"{r['check_robot_loop_missed_reads']} missed reads; robot status (21 reads) "
+                 f"{r['robot_status_ms']:.1f} ms")
     if "help_wall_s" in r:
         lines += [f"from the shell (median of {r['wall_runs']}): --help {r['help_wall_s']:.2f} s, optimize "
                   f"{r['optimize_wall_s']:.2f} s, optimize --validate {r['optimize_validate_wall_s']:.2f} s",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import errno
 import socket
 import sys
@@ -33,6 +34,9 @@ def register(sub: Any) -> None:
     p.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default 127.0.0.1, this machine only; another address lets other "
                         "machines that have the printed address edit and save files in the folder)")
+    p.add_argument("--robot", metavar="PORT",
+                   help="an OP2 on this serial port (or an emulated one, op2motion robot emulate) follows the pose at "
+                        "a capped speed; the page can read the pose from it (README On your robot)")
     p.add_argument("--workdir", metavar="DIR",
                    help="the one folder the page may open and save files in (default: the folder of POSE, or the "
                         "current folder)")
@@ -118,8 +122,15 @@ def cmd_studio(args: argparse.Namespace, spec: Spec) -> int:
     session = Session(spec, pose)
     if action:
         session.open_action(args.pose)
-    studio = Studio(spec, session, args.host, args.port, action_path=args.pose if action else "",
-                    workspace=workspace, pose_path="" if action or not args.pose else args.pose)
+    follower = _follower(args.robot, spec)
+    try:
+        studio = Studio(spec, session, args.host, args.port, action_path=args.pose if action else "",
+                        workspace=workspace, pose_path="" if action or not args.pose else args.pose,
+                        follower=follower)
+    except BaseException:
+        if follower is not None:
+            follower.close()
+        raise
     try:                                  # Ctrl-C from the moment the address is printed ends it cleanly
         if not is_loopback(args.host):
             print(f"op2motion studio: warning: listening on {args.host}, not only this machine: whoever has the "
@@ -133,11 +144,26 @@ def cmd_studio(args: argparse.Namespace, spec: Spec) -> int:
         _stop(studio)
 
 
+def _follower(port: str | None, spec: Spec) -> Any:
+    """The robot on ``port`` following the pose (started: torque on where its joints are), or None."""
+    if port is None:
+        return None
+    from op2motion.bus.follow import Follower
+
+    follower = Follower(port, spec)
+    follower.start()
+    return follower
+
+
 def _stop(studio: Any) -> None:
-    """End the server, waiting at most :data:`STOP_WAIT_S` (a client that stopped reading cannot hold the exit)."""
+    """End the server, waiting at most :data:`STOP_WAIT_S` (a client that stopped reading cannot hold the exit);
+    a robot following the pose stops where it is (the servos hold)."""
     from op2motion.fileio import remove_temps
 
     closer = threading.Thread(target=studio.stop, daemon=True)
     closer.start()
+    if studio.follower is not None:
+        with contextlib.suppress(Exception):
+            studio.follower.close()
     closer.join(STOP_WAIT_S)
     remove_temps()

@@ -89,6 +89,7 @@ class Servo:
     friction_nm: float
     viscous_nm_s_rad: float
     backlash_rad: float
+    operating_voltage_v: tuple[float, float] = (10.0, 14.8)
 
     @property
     def rad_per_tick(self) -> float:
@@ -241,6 +242,39 @@ class Geometry:
 
 
 @dataclass(frozen=True)
+class ImuChannel:
+    """One IMU register of the sub-controller and what it measures in the torso frame: ``value = sign * (count -
+    centre) * scale``, ``scale`` in rad/s (gyro) or m/s² (accelerometer) per count; ``axis`` 0 x, 1 y, 2 z; where
+    the mapping comes from (``source``) and why (``reasoning``)."""
+
+    sensor: str
+    register: int
+    axis: int
+    sign: int
+    scale: float
+    source: str
+    reasoning: str
+
+
+@dataclass(frozen=True)
+class ImuSpec:
+    """The sub-controller's IMU on the bus (spec ``[imu]``): the board's ID, the counts' centre and top, the gyro
+    and accelerometer channels by torso axis (x, y, z), the accelerometer's other stated scale [m/s² per count],
+    and the framework's fall test: the fore-aft accelerometer count (the channel along x) averaged over
+    ``fallen_window`` samples below ``fallen_front_count`` (face down) or above ``fallen_back_count`` (face up)."""
+
+    board_id: int
+    centre_count: int
+    max_count: int
+    gyro: tuple[ImuChannel, ImuChannel, ImuChannel]
+    accel: tuple[ImuChannel, ImuChannel, ImuChannel]
+    accel_scale_other: float
+    fallen_front_count: int
+    fallen_back_count: int
+    fallen_window: int
+
+
+@dataclass(frozen=True)
 class Spec:
     """The whole validated OP2 spec."""
 
@@ -257,6 +291,7 @@ class Spec:
     path: str
     sha256: str
     sources: Mapping[str, str] = field(default_factory=dict)
+    imu: ImuSpec | None = None
 
     @property
     def joint_names(self) -> tuple[str, ...]:

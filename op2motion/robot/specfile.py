@@ -16,6 +16,7 @@ import functools
 import hashlib
 import math
 import sys
+from dataclasses import replace
 from importlib import resources
 from pathlib import Path
 from typing import Mapping
@@ -27,11 +28,14 @@ from op2motion.fileio import read_text
 from op2motion.robot.spec import (
     BOOK_VARS,
     COLLISION_SIZES,
+    GRAVITY_M_S2,
     SCHEMA,
     BookMap,
     Collision,
     Foot,
     Geometry,
+    ImuChannel,
+    ImuSpec,
     Inertial,
     Joint,
     LumpedMass,
@@ -69,6 +73,12 @@ def _servo(r: TableReader) -> Servo:
               r.number("max_duty", positive=True), r.number("armature_kg_m2", nonnegative=True),
               r.number("friction_nm", nonnegative=True), r.number("viscous_nm_s_rad", nonnegative=True),
               r.number("backlash_rad", nonnegative=True))
+    if "operating_voltage_v" in r.table:
+        low, high = r.vector("operating_voltage_v", 2)
+        if not 0.0 < low < high:
+            raise SpecError(f"expected 0 < lowest < highest, got [{low}, {high}]",
+                            f"{r.path}: servo.operating_voltage_v")
+        s = replace(s, operating_voltage_v=(low, high))
     r.done()
     if not (0 <= s.min_tick < s.center_tick < s.max_tick < s.ticks_per_rev):
         raise SpecError("expected 0 <= min_tick < center_tick < max_tick < ticks_per_rev", f"{r.path}: servo")
@@ -324,6 +334,56 @@ def _masses(top: TableReader, sources: Mapping[str, str]) -> tuple[list[LumpedMa
     return masses, inertials, collisions
 
 
+IMU_SENSORS = {"gyro": ("scale_deg_s", math.radians(1.0)), "accel": ("scale_g", GRAVITY_M_S2)}
+AXES = ("x", "y", "z")
+
+
+def _imu_channel(r: TableReader) -> ImuChannel:
+    sensor = r.get("sensor", str)
+    if sensor not in IMU_SENSORS:
+        raise SpecError(f"{r.path}: {r.where}.sensor: expected gyro or accel, got {sensor!r}")
+    axis, sign, register = r.get("axis", str), r.get("sign", int), r.get("register", int)
+    if axis not in AXES:
+        raise SpecError(f"{r.path}: {r.where}.axis: expected x, y or z, got {axis!r}")
+    if sign not in (-1, 1):
+        raise SpecError(f"{r.path}: {r.where}.sign: expected 1 or -1, got {sign!r}")
+    if not 0 <= register <= 254:
+        raise SpecError(f"{r.path}: {r.where}.register: expected a register address 0..254, got {register!r}")
+    key, si = IMU_SENSORS[sensor]
+    channel = ImuChannel(sensor, register, AXES.index(axis), sign, r.number(key, positive=True) * si,
+                         r.get("source", str), r.get("reasoning", str))
+    r.done()
+    return channel
+
+
+def _imu(r: TableReader) -> ImuSpec:
+    """The ``[imu]`` table: one gyro and one accelerometer channel per torso axis, registers all different."""
+    channels = [_imu_channel(c) for c in r.array("channel")]
+    by_sensor: dict[str, list[ImuChannel]] = {}
+    for sensor in IMU_SENSORS:
+        mine = sorted((c for c in channels if c.sensor == sensor), key=lambda c: c.axis)
+        if [c.axis for c in mine] != [0, 1, 2]:
+            raise SpecError(f"{r.path}: imu.channel: expected one {sensor} channel per axis x, y, z, got "
+                            f"{[AXES[c.axis] for c in mine]}")
+        by_sensor[sensor] = mine
+    registers = [c.register for c in channels]
+    if len(set(registers)) != len(registers):
+        raise SpecError(f"{r.path}: imu.channel: expected each register once, got {registers}")
+    centre, top = r.get("centre_count", int), r.get("max_count", int)
+    front, back = r.get("fallen_front_count", int), r.get("fallen_back_count", int)
+    if not 0 < front < centre < back < top:
+        raise SpecError(f"{r.path}: imu: expected 0 < fallen_front_count < centre_count < fallen_back_count < "
+                        f"max_count, got {front}, {centre}, {back}, {top}")
+    g, a = by_sensor["gyro"], by_sensor["accel"]
+    imu = ImuSpec(r.get("board_id", int), centre, top, (g[0], g[1], g[2]), (a[0], a[1], a[2]),
+                  r.number("accel_scale_other_g", positive=True) * GRAVITY_M_S2, front, back,
+                  r.get("fallen_window", int))
+    if imu.fallen_window < 1:
+        raise SpecError(f"{r.path}: imu.fallen_window: expected at least 1 sample, got {imu.fallen_window}")
+    r.done()
+    return imu
+
+
 def parse_spec(text: str, path: str = "<spec>") -> Spec:
     """Check TOML text and return its :class:`Spec`; ``path`` names the file in error messages."""
     try:
@@ -355,6 +415,7 @@ def parse_spec(text: str, path: str = "<spec>") -> Spec:
     joints.sort(key=lambda j: j.id)
     sources = _sources(top)
     masses, inertials, collisions = _masses(top, sources)
+    imu = _imu(top.sub("imu")) if "imu" in top.table else None
     top.done()
     links = {root} | {j.child for j in joints}
     named = [(p.link, f"points.{k}") for k, p in points.items()] + [(i.link, "inertial") for i in inertials] + \
@@ -370,7 +431,7 @@ def parse_spec(text: str, path: str = "<spec>") -> Spec:
                 raise SpecError(f"({m.name}): body point {end!r} does not exist", f"{path}: lumped_mass")
     geometry = _geometry(path, {j.name: j for j in joints}, points, foot)
     return Spec(name, root, servo, foot, points, tuple(joints), tuple(masses), tuple(inertials), tuple(collisions),
-                geometry, path, hashlib.sha256(encoded).hexdigest(), sources)
+                geometry, path, hashlib.sha256(encoded).hexdigest(), sources, imu)
 
 
 def load_spec(path: str | Path | None = None) -> Spec:

@@ -33,6 +33,7 @@ from op2motion.studio.edits import Edits
 from op2motion.studio.folder import Workspace
 from op2motion.studio.guard import Gate, guarded_viser, new_secret
 from op2motion.studio.place import root_in_sole, wxyz
+from op2motion.studio.robot_panel import RobotPanel
 from op2motion.studio.session import Readout, Session
 from op2motion.studio.work import LongWork
 
@@ -40,7 +41,7 @@ JOG_STEPS = ("-5°", "-1°", "+1°", "+5°")
 PURPLE, GREEN = (0.55, 0.25, 0.75), (0.1, 0.6, 0.1)
 
 
-class Studio(Edits, LongWork, ActionPanel):
+class Studio(Edits, LongWork, ActionPanel, RobotPanel):
     """A running studio page on ``host:port`` (port 0: a free one, read back in :attr:`port`); open :attr:`url`.
 
     Args:
@@ -51,20 +52,20 @@ class Studio(Edits, LongWork, ActionPanel):
         action_path: An action file opened with the studio (inside ``workspace``), or "".
         workspace: The folder the page may read and write (default: the current folder).
         pose_path: The pose file the session came from (inside ``workspace``), the save box's default.
-        secret: The address's secret (default: a fresh one).
+        follower: A robot following the pose (:class:`op2motion.bus.follow.Follower`, started), or None.
     """
 
     def __init__(self, spec: Spec, session: Session, host: str = "127.0.0.1", port: int = 0, action_path: str = "",
-                 workspace: Workspace | None = None, pose_path: str = "", secret: str | None = None):
+                 workspace: Workspace | None = None, pose_path: str = "", follower: Any = None):
         import yourdfpy
         from viser.extras import ViserUrdf
 
-        self.spec, self.session = spec, session
+        self.spec, self.session, self.follower = spec, session, follower
         self.workspace = workspace if workspace is not None else Workspace(".")
         self._opened_path = self.workspace.relative(self.workspace.claim(action_path)) if action_path else ""
         self._pose_path = self.workspace.relative(self.workspace.claim(pose_path)) if pose_path else ""
         self._quiet = False
-        self.gate = Gate(host, secret or new_secret())
+        self.gate = Gate(host, new_secret())                  # a fresh secret for every run
         with contextlib.redirect_stdout(io.StringIO()):        # viser's banner: the CLI prints its own line
             self.server = guarded_viser(host, port, self.gate)
         self.port = int(self.server.get_port())
@@ -126,6 +127,7 @@ class Studio(Edits, LongWork, ActionPanel):
             self._save_button = gui.add_button("save pose")
             self._save_button.on_click(self._save)
         self._build_action_gui()
+        self._build_robot_gui()
         with gui.add_folder("joint table", expand_by_default=False):
             self._table = gui.add_markdown("")
         self._sliders: dict[str, Any] = {}
@@ -202,6 +204,7 @@ class Studio(Edits, LongWork, ActionPanel):
             self._quiet = False
         marks = [f"{j.name} {j.degrees:+.1f}° ({j.ticks}){' outside cable-safe' if j.outside_cable_safe else ''}"
                  for j in readout.joints if j.outside_cable_safe]
+        self._follow()
         self._table.content = "| joint | deg | ticks | cable-safe |\n|---|---|---|---|\n" + "\n".join(
             f"| {j.name} | {j.degrees:+.1f} | {j.ticks} | {j.cable_safe[0]:.0f}..{j.cable_safe[1]:.0f}"
             f"{' **outside**' if j.outside_cable_safe else ''} |" for j in readout.joints)

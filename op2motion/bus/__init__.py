@@ -1,0 +1,24 @@
+"""The real OP2 on its own bus: Dynamixel Protocol 1.0 to the CM-730 and the 20 MX-28, the framework's 8 ms loop,
+safety, and an emulated OP2 on a pseudo-terminal to develop without a robot.
+
+Layers inside the wing, lowest first:
+
+* :mod:`.protocol` (packets, checksums, instructions, error bits by name) and :mod:`.tables` (the MX-28's and the
+  CM-730's control tables as data);
+* :mod:`.port` (a serial port opened safely: only a tty, held exclusively, 1 Mbps, bounded timeouts) and
+  :mod:`.client` (ping, read, write, sync write, bulk read with bounded retries);
+* :mod:`op2motion.robot.imu` (below the wing, shared with the stock gait's emulation: the board's register words
+  <-> the torso's gyro [rad/s] and accelerometer [m/s²], by the spec's ``[imu]`` mapping), :mod:`.robot` (the OP2
+  on the bus: power, status, torque, gains, present state),
+  :mod:`.safety` (the named policy and thresholds);
+* :mod:`.session` (the port, the board found, the servos powered, the whole robot read, the torque on without a
+  jump);
+* :mod:`.loop` (:func:`.loop.run_controller`: any physics :class:`~op2motion.physics.Controller` on the robot, one
+  bulk read and one sync write every 8 ms, at real-time priority where allowed: :mod:`.realtime`; how a run ends:
+  :mod:`.stopping`), :mod:`.plans` (moves from where the robot is, checked in physics), :mod:`.tasks` (what the
+  ``op2motion robot`` commands do), :mod:`.follow` (a target pose followed at a capped speed: the studio's), and
+  :mod:`.bench` (the loop's and the status's speed through the emulator);
+* :mod:`.emulator` (the emulated OP2: the control tables byte for byte, physics and the servo model behind them).
+
+Nothing here is imported at package import time: each module imports what it needs.
+"""

@@ -1,0 +1,72 @@
+"""Faults the emulated OP2 can be given, from Python or from ``op2motion robot emulate``'s flags.
+
+* ``missing``: servos not on the bus at all (silent, limp);
+* ``unplug``: (id, seconds) a servo that goes silent and limp that long into the motion;
+* ``lose``: the share of status packets lost on the way back (seeded);
+* ``corrupt``: the share of status packets with one byte changed (the checksum no longer matches);
+* ``overheat``: (id, seconds, °C) a servo whose temperature jumps to that much that long into the motion (above
+  its limit, 80 °C by default, it reports overheating and its alarm shutdown drops its torque);
+* ``supply_v``: the supply voltage [V] (below a servo's lowest voltage limit, 6 V, it reports an input-voltage
+  error).
+
+Times count from the motion's start: the first SYNC_WRITE the emulator receives (what a client sends every 8 ms
+while it drives the robot), so a fault lands at the same point of a motion however long the client took to start.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+from op2motion.errors import InputError
+
+MAX_RATE = 0.5                     # more lost or corrupted replies than this is no bus at all
+_TIMED = re.compile(r"^(\d+)@(\d+(?:\.\d*)?)(?::(\d+(?:\.\d*)?))?$")
+
+
+@dataclass
+class Faults:
+    """The faults of one emulator run (see the module docstring)."""
+
+    missing: set[int] = field(default_factory=set)
+    unplug: list[tuple[int, float]] = field(default_factory=list)
+    lose: float = 0.0
+    corrupt: float = 0.0
+    overheat: list[tuple[int, float, float]] = field(default_factory=list)
+    supply_v: float | None = None
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("lose", "corrupt"):
+            value = getattr(self, name)
+            if not 0.0 <= value <= MAX_RATE:
+                raise InputError(f"expected a share from 0 to {MAX_RATE:g}, got {value!r}", name)
+        for device in set(self.missing) | {d for d, _ in self.unplug} | {d for d, _, _ in self.overheat}:
+            if not 1 <= device <= 20:
+                raise InputError(f"expected a servo ID 1..20, got {device}", "missing")
+        if self.supply_v is not None and not 0.0 <= self.supply_v <= 25.5:
+            raise InputError(f"expected a supply of 0 to 25.5 V, got {self.supply_v!r}", "supply")
+
+    def describe(self) -> list[str]:
+        """One phrase per fault."""
+        out = [f"servo {d} missing" for d in sorted(self.missing)]
+        out += [f"servo {d} unplugged at {t:g} s" for d, t in self.unplug]
+        out += [f"servo {d} at {c:g} °C from {t:g} s" for d, t, c in self.overheat]
+        if self.lose:
+            out.append(f"{self.lose:.1%} of replies lost")
+        if self.corrupt:
+            out.append(f"{self.corrupt:.1%} of replies corrupted")
+        if self.supply_v is not None:
+            out.append(f"supply {self.supply_v:g} V")
+        return out
+
+
+def parse_timed(text: str, param: str, default_value: float | None = None) -> tuple[int, float, float]:
+    """``ID@SECONDS[:VALUE]`` (e.g. ``13@4:85``) -> (id, seconds, value); bad input names ``param``."""
+    m = _TIMED.match(text.strip())
+    if not m or (m.group(3) is not None and default_value is None):
+        form = "ID@SECONDS[:CELSIUS]" if default_value is not None else "ID@SECONDS"
+        raise InputError(f"expected {form} (e.g. 13@4{':85' if default_value is not None else ''}), got {text!r}",
+                         param)
+    value = float(m.group(3)) if m.group(3) is not None else float(default_value or 0.0)
+    return int(m.group(1)), float(m.group(2)), value

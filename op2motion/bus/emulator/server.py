@@ -1,0 +1,265 @@
+"""The emulated OP2 on a pseudo-terminal: what a program on the robot's PC sees on ``/dev/ttyUSB0``, byte for byte.
+
+:meth:`Emulator.open` makes a pseudo-terminal and a symbolic link to its terminal side at the path asked for
+(pyserial and dynamixel-sdk open it like the real port). :meth:`Emulator.serve` is one thread doing two things in
+turn: answering packets the moment they arrive (:mod:`.wire`: the CM-730 at ID 200 and the 20 MX-28 of
+:mod:`.devices`, byte for byte) and stepping the body (:mod:`.body`) in batches of at most :data:`BATCH_STEPS`
+physics steps, kept on the wall clock. One thread, no locks: a reply waits at most for one
+batch (0.2 ms with MuJoCo, about 1 ms with PyBullet), never for the interpreter's thread switch. If the machine
+cannot keep up, simulated time slips behind the wall clock rather than running in bursts (``slipped_s``).
+
+Faults (:class:`.faults.Faults`) are injected as replies are made and as the body is stepped. :meth:`Emulator.close`
+removes the link and closes the pseudo-terminal.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import os
+import select
+import threading
+import time
+import tty
+from pathlib import Path
+from typing import Any
+
+from op2motion.bus.emulator.body import EmulatedBody
+from op2motion.bus.emulator.devices import Servo
+from op2motion.bus.emulator.faults import Faults
+from op2motion.bus.emulator.wire import BOOT_S, Wire
+from op2motion.bus.realtime import EMULATOR_PRIORITY, realtime, steady
+from op2motion.bus.tables import TORQUE_LIMIT_FULL
+from op2motion.errors import InputError
+from op2motion.robot.spec import Spec
+
+BATCH_STEPS = 4                    # physics steps between two looks at the port
+MAX_BEHIND_S = 0.05                # further behind the wall clock than this, simulated time slips instead
+HANGUP_SLEEP_S = 0.002             # with no program on the port, look again this often
+TRACE_EVERY_S = 0.05               # the ground truth is recorded this often [simulated s]
+PUBLISH_EVERY_S = 0.1              # ... and written to the truth file this often
+TRUTH_BYTES = 16384                # the truth file's size (its JSON padded with spaces)
+
+
+class Emulator:
+    """An emulated OP2 (see the module docstring)."""
+
+    def __init__(self, spec: Spec, engine: str = "mujoco", start: str = "standing", faults: Faults | None = None,
+                 truth_path: str | Path | None = None):
+        self.spec = spec
+        self.truth_path = None if truth_path is None else Path(truth_path)
+        self._truth_map: Any = None
+        self.torque_limit_min = TORQUE_LIMIT_FULL
+        self.faults = faults or Faults()
+        supply = self.faults.supply_v if self.faults.supply_v is not None else spec.servo.supply_voltage_v
+        self.body = EmulatedBody(spec, engine, start, supply)
+        self.engine_name, self.start_kind = engine, start
+        self.wire = Wire(spec, self.faults, self._now, self._present_ticks)
+        self.board, self.servos, self.stats = self.wire.board, self.wire.servos, self.wire.stats
+        self.master: int | None = None
+        self.link: Path | None = None
+        self.pty_name = ""
+        self.temperature_overrides: dict[int, float] = {}
+        self.slipped_s = 0.0
+        self.trace: list[dict[str, float]] = []
+        self._truth: dict[str, float] = self.body.truth()
+        self._thread: threading.Thread | None = None
+        self._stop = threading.Event()
+        self._powered_holding()
+
+    # --- setup ---------------------------------------------------------------------------------------------------
+    def _powered_holding(self) -> None:
+        """The start: servos powered, torque on, holding the start pose (as the stock framework leaves them)."""
+        self.board.set("dynamixel_power", 1)
+        self.wire.powered_at = -BOOT_S
+        ticks = self._present_ticks()
+        for servo, tick in zip(self.servos, ticks):
+            servo.power_up(tick)
+            servo.set("goal_position", int(round(self.body.pose[servo.id - 1] / self.spec.servo.rad_per_tick))
+                      + self.spec.servo.center_tick)
+            servo.set("torque_enable", 1)
+        self.body.sense(self.servos, self.board, self.temperature_overrides)
+
+    def _present_ticks(self) -> list[int]:
+        s = self.spec.servo
+        return [int(round(q / s.rad_per_tick)) + s.center_tick for q in self.body.joint_angles()]
+
+    def open(self, link: str | Path) -> str:
+        """Make the pseudo-terminal and the link to it at ``link``; returns the terminal's own path."""
+        link = Path(link)
+        if link.is_symlink():
+            target = os.readlink(link)
+            if target.startswith("/dev/pts/") or not os.path.exists(link):
+                link.unlink()                     # a stale link of an earlier emulator
+        if os.path.lexists(link):
+            raise InputError(f"{link} exists and is not an emulator's link (expected a free path for the link)",
+                             "link")
+        if not link.parent.is_dir():
+            raise InputError(f"expected the link in an existing folder, got {link}", "link")
+        master, slave = os.openpty()
+        tty.setraw(slave)
+        self.pty_name = os.ttyname(slave)
+        os.close(slave)                           # the terminal side is the client's: only it holds it open
+        os.set_blocking(master, False)
+        self.master = master
+        os.symlink(self.pty_name, link)
+        self.link = link
+        return self.pty_name
+
+    def close(self) -> None:
+        """Stop serving, remove the link, close the pseudo-terminal, release the engine."""
+        self.stop()
+        self._publish()
+        if self.link is not None:
+            with contextlib.suppress(OSError):
+                if os.readlink(self.link) == self.pty_name:
+                    self.link.unlink()
+            self.link = None
+        if self.master is not None:
+            with contextlib.suppress(OSError):
+                os.close(self.master)
+            self.master = None
+        if self._truth_map is not None:
+            self._truth_map.close()
+            self._truth_map = None
+        self.body.close()
+
+    # --- Python API ----------------------------------------------------------------------------------------------
+    def start(self) -> None:
+        """Serve in a background thread (for use from Python; ``robot emulate`` serves in the foreground)."""
+        self._stop.clear()
+        self._thread = threading.Thread(target=self.serve, name="op2-emulator", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        """Ask the serving loop to end, and wait for its thread."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout=5.0)
+            self._thread = None
+
+    def truth(self) -> dict[str, float]:
+        """The simulated torso now: ``t_s``, ``x_m``, ``y_m``, ``z_m``, ``yaw_rad``, ``tilt_rad``."""
+        return dict(self._truth)
+
+    def report(self) -> dict[str, Any]:
+        """What a program did to the emulated robot, for checking it from outside: the torso now (:meth:`truth`),
+        the simulated seconds since the motion started (the first SYNC_WRITE; None before), the lowest torque limit
+        any servo has had, each servo's goal [tick], torque enable and torque limit, and the counters."""
+        return {"truth": self.truth(), "motion_s": None if self.motion_t0 is None else self._now() - self.motion_t0,
+                "torque_limit_min": self.torque_limit_min, "goal_ticks": [s.u16("goal_position") for s in self.servos],
+                "torque_enable": [s.get("torque_enable") for s in self.servos],
+                "torque_limit": [s.u16("torque_limit") for s in self.servos], "stats": dict(self.stats),
+                "slipped_s": round(self.slipped_s, 4)}
+
+    def _publish(self) -> None:
+        """Write :meth:`report` into the truth file: JSON padded with spaces to :data:`TRUTH_BYTES`, written into
+        the file's memory map (no file-system call that could stall the serving thread; a reader that catches a
+        half-written report reads again)."""
+        if self.truth_path is None:
+            return
+        import json
+        import mmap
+
+        if self._truth_map is None:
+            with open(self.truth_path, "wb") as f:
+                f.write(b" " * TRUTH_BYTES)
+            with open(self.truth_path, "r+b") as f:
+                self._truth_map = mmap.mmap(f.fileno(), TRUTH_BYTES)
+        data = json.dumps(self.report()).encode()[:TRUTH_BYTES]
+        self._truth_map[:] = data.ljust(TRUTH_BYTES)
+
+    def overheat(self, device: int, celsius: float) -> None:
+        """Servo ``device``'s temperature jumps to ``celsius`` now."""
+        self.temperature_overrides[device] = float(celsius)
+
+    def unplug(self, device: int) -> None:
+        """Servo ``device`` goes silent and limp now."""
+        self.wire.unplugged.add(device)
+
+    @property
+    def motion_t0(self) -> float | None:
+        """When the motion started (the first SYNC_WRITE) [simulated s]; None before."""
+        return self.wire.motion_t0
+
+    # --- serving -------------------------------------------------------------------------------------------------
+    def serve(self, stop: threading.Event | None = None) -> None:
+        """Answer packets and step the body in real time until ``stop`` (or :meth:`stop`) is set (at real-time
+        priority where the system allows it: :mod:`..realtime`)."""
+        if self.master is None:
+            raise RuntimeError("open() the emulator before serving")
+        with steady(), realtime(EMULATOR_PRIORITY):
+            self._serve(stop or self._stop)
+
+    def _serve(self, stop: threading.Event) -> None:
+        assert self.master is not None
+        dt = self.body.dt
+        t0 = time.monotonic()
+        done = 0
+        poller = select.poll()
+        poller.register(self.master, select.POLLIN)
+        next_trace = next_publish = 0.0
+        while not stop.is_set() and not self._stop.is_set():
+            now = time.monotonic()
+            wait = t0 + self.slipped_s + (done + BATCH_STEPS) * dt - now       # sleep until a batch is due
+            events = poller.poll(max(0.0, wait) * 1000.0)
+            if events:
+                if events[0][1] & select.POLLIN:
+                    self._receive()
+                else:                                               # no program holds the port
+                    time.sleep(min(max(wait, 0.0), HANGUP_SLEEP_S))
+            now = time.monotonic()
+            due = int((now - t0 - self.slipped_s) / dt) - done
+            if due * dt > MAX_BEHIND_S:
+                self.slipped_s += due * dt - MAX_BEHIND_S
+                due = int(MAX_BEHIND_S / dt)
+            if due > 0:
+                n = min(due, BATCH_STEPS)
+                self._timed_faults()
+                self.body.step(n, self._limp_servos(), self.wire.powered())
+                done += n
+                self.body.sense(self.servos, self.board, self.temperature_overrides)
+                self._truth = self.body.truth()
+                self.torque_limit_min = min(self.torque_limit_min, *(s.u16("torque_limit") for s in self.servos))
+                if self._truth["t_s"] >= next_trace:
+                    self.trace.append(self._truth)
+                    next_trace = self._truth["t_s"] + TRACE_EVERY_S
+                if self._truth["t_s"] >= next_publish:
+                    self._publish()
+                    next_publish = self._truth["t_s"] + PUBLISH_EVERY_S
+
+    def _limp_servos(self) -> list[Servo]:
+        """The servos as the body sees them: a missing or unplugged servo has no torque."""
+        for servo in self.servos:
+            if self.wire.silent(servo.id):
+                servo.set("torque_enable", 0)
+        return self.servos
+
+    def _now(self) -> float:
+        return self.body.steps * self.body.dt
+
+    def _timed_faults(self) -> None:
+        if self.motion_t0 is None:
+            return
+        since = self._now() - self.motion_t0
+        for device, at in self.faults.unplug:
+            if since >= at:
+                self.wire.unplugged.add(device)
+        for device, at, celsius in self.faults.overheat:
+            if since >= at and device not in self.temperature_overrides:
+                self.temperature_overrides[device] = celsius
+
+    def _receive(self) -> None:
+        assert self.master is not None
+        try:
+            data = os.read(self.master, 4096)
+        except BlockingIOError:
+            return
+        except OSError as exc:
+            if exc.errno == errno.EIO:                              # the client closed the port
+                self.wire.parser.clear()
+                return
+            raise
+        for chunk in self.wire.feed(data):
+            with contextlib.suppress(BlockingIOError, OSError):
+                os.write(self.master, chunk)

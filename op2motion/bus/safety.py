@@ -1,0 +1,175 @@
+"""What the robot commands will not do, by name: the thresholds and the policy when something goes wrong.
+
+Before a motion (:func:`preflight`): every servo answers, none reports an error, none is at or above
+:data:`HOT_START_C`, and the supply (board and servos) is at least the MX-28's lowest rated voltage (the spec's
+``operating_voltage_v``, 10 V): otherwise the motion is refused, naming the joint and its ID (exit 1).
+
+During a motion (:class:`Watch`, every 8 ms tick), a fault stops it:
+
+* a servo that misses :data:`BLIND_TICKS` reads in a row (40 ms blind; each missed read holds its last value);
+* a status error bit of :data:`STOP_ERRORS` (overheating, overload, input voltage), or a temperature of
+  :data:`HOT_STOP_C` or more (each servo's full state is read every 20 ticks, in turn);
+* a fall: the torso tilted beyond :data:`FALL_TILT_RAD` (the accelerometer's gravity, low-passed over
+  :data:`TILT_TAU_S`), or the framework's own test (the fore-aft count beyond FALLEN_F/B_LIMIT over 30 ticks).
+
+The policy (:data:`HOLD`): the goals stop where they are (a walk first reaches its next double support, at most a
+step away, so it stops on both feet) and stay held with the torque on: torque is never dropped under a standing
+robot unless the user asks (``robot read --limp``). A fall lowers every servo's torque limit to
+:data:`FALL_TORQUE_LIMIT` while it lasts (the gears take the impact softly), then the goals go to where the joints
+are and the limit back up. Goals are always clipped to the joints' mechanical ranges (:func:`clip_goals`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+from op2motion.errors import CheckFailed
+from op2motion.robot.imu import FallWatch, attitude
+from op2motion.robot.joints import joint_range
+from op2motion.robot.spec import ImuSpec, Spec
+
+HOT_START_C = 70                   # a servo this hot (or hotter) refuses to start a motion
+HOT_STOP_C = 75                    # ... and stops one (the MX-28 shuts itself down at 80 °C by default)
+BLIND_TICKS = 5                    # missed reads in a row (5 x 8 ms = 40 ms blind) stop the motion
+STOP_ERRORS = ("overheating", "overload", "input voltage")
+FALL_TILT_RAD = math.radians(45.0)   # a torso tilted this far from upright is falling
+ARM_TILT_RAD = math.radians(20.0)    # the fall watch arms once the torso is this close to upright
+TILT_TAU_S = 0.1                   # low-pass of the accelerometer before its tilt is taken (steps' impacts)
+FALL_TORQUE_LIMIT = 300            # every servo's torque limit while falling (of 1023)
+FALL_SETTLE_S = 1.0                # after a fall is seen, this long at the low limit before the goals relax
+HOLD = "hold"                      # the stop policy: hold the goals (a walk: on both feet)
+POLICIES = (HOLD,)
+
+
+@dataclass(frozen=True)
+class Fault:
+    """Why a motion stopped: ``kind`` (``not answering``, an error bit's name, ``hot``, ``fell``), the joint and
+    servo ID (None for the board or the whole robot), and the details in words."""
+
+    kind: str
+    joint: str | None
+    id: int | None
+    detail: str
+
+    def describe(self) -> str:
+        """``r_knee (ID 13): overheating (84 °C)``."""
+        who = f"{self.joint} (ID {self.id})" if self.joint else ("the sub-controller (ID 200)" if self.id else
+                                                                "the robot")
+        return f"{who}: {self.kind}" + (f" ({self.detail})" if self.detail else "")
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready."""
+        return {"kind": self.kind, "joint": self.joint, "id": self.id, "detail": self.detail,
+                "text": self.describe()}
+
+
+class Refused(CheckFailed):
+    """A motion refused before it started (preflight): exit 1."""
+
+
+def min_supply_v(spec: Spec) -> float:
+    """The lowest supply the MX-28 is rated to work at (the spec's ``operating_voltage_v``: 10 V) [V]."""
+    return spec.servo.operating_voltage_v[0]
+
+
+def preflight_problems(board: Any, servos: Sequence[Any], spec: Spec) -> list[Fault]:
+    """Everything that forbids starting a motion (see the module docstring), worst first."""
+    out: list[Fault] = []
+    low = min_supply_v(spec)
+    if board is not None and board.voltage_v < low:
+        out.append(Fault("low supply", None, 200, f"{board.voltage_v:.1f} V, below the MX-28's lowest rating "
+                                                   f"{low:g} V"))
+    for s in servos:
+        if not s.answers:
+            out.append(Fault("not answering", s.joint, s.id, "no reply to a read"))
+            continue
+        if s.errors:
+            out.append(Fault(", ".join(s.errors), s.joint, s.id, "status error bits"))
+        if s.temperature_c >= HOT_START_C:
+            out.append(Fault("hot", s.joint, s.id, f"{s.temperature_c} °C, at or above {HOT_START_C} °C"))
+        if s.voltage_v < low:
+            out.append(Fault("low supply", s.joint, s.id, f"{s.voltage_v:.1f} V, below {low:g} V"))
+    return out
+
+
+def preflight(board: Any, servos: Sequence[Any], spec: Spec) -> None:
+    """Refuse (:class:`Refused`, exit 1) a motion the robot is not fit to start, naming every problem."""
+    problems = preflight_problems(board, servos, spec)
+    if problems:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise Refused("refused to start: " + problems[0].describe() + more)
+
+
+def mechanical_bounds(spec: Spec) -> tuple[np.ndarray, np.ndarray]:
+    """The joints' mechanical ranges (lower (20,), upper (20,)) [rad]."""
+    lower, upper = zip(*(joint_range(j, "mechanical") for j in spec.joints))
+    return np.array(lower), np.array(upper)
+
+
+def clip_goals(goals: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Goals (20,) [rad] within the mechanical ranges, and which joints were clipped (bool (20,))."""
+    clipped = np.minimum(np.maximum(goals, lower), upper)
+    return clipped, clipped != goals
+
+
+class Watch:
+    """The per-tick checks of a running motion (see the module docstring)."""
+
+    def __init__(self, spec: Spec, imu: ImuSpec, dt: float, ids: Sequence[int], joints: Sequence[str]):
+        self.spec, self.dt = spec, dt
+        self.ids, self.joints = tuple(ids), tuple(joints)
+        self.missed = {d: 0 for d in (200, *self.ids)}
+        self.fall = FallWatch(imu)
+        self.gravity: np.ndarray | None = None
+        self.armed = False
+        self.tilt_rad = 0.0
+
+    def _joint(self, device: int) -> str | None:
+        return self.joints[self.ids.index(device)] if device in self.ids else None
+
+    def reads(self, answered: set[int]) -> Fault | None:
+        """Count the missed reads of this tick; a fault once a device has missed :data:`BLIND_TICKS` in a row."""
+        for device in self.missed:
+            self.missed[device] = 0 if device in answered else self.missed[device] + 1
+        for device, n in self.missed.items():
+            if n >= BLIND_TICKS:
+                return Fault("not answering", self._joint(device), device,
+                             f"{n} reads in a row missed ({n * self.dt * 1000:.0f} ms blind)")
+        return None
+
+    def status(self, device: int, errors: Sequence[str], temperature_c: int | None = None) -> Fault | None:
+        """A servo's error bits (every tick) and temperature (when read): a fault if it must stop the motion."""
+        stop = [e for e in errors if e in STOP_ERRORS]
+        if stop:
+            hot = temperature_c is not None and "overheating" in stop
+            detail = f"{temperature_c} °C" if hot else "status error bit"
+            return Fault(", ".join(stop), self._joint(device), device, detail)
+        if temperature_c is not None and temperature_c >= HOT_STOP_C:
+            return Fault("overheating", self._joint(device), device, f"{temperature_c} °C, at or above "
+                                                                      f"{HOT_STOP_C} °C")
+        return None
+
+    def body(self, accel_m_s2: np.ndarray, words: dict[int, int]) -> Fault | None:
+        """The IMU of this tick: a fault if the robot falls (only once it has been upright: a get-up from lying
+        does not count as a fall)."""
+        accel = np.asarray(accel_m_s2, dtype=float)
+        blend = self.dt / (TILT_TAU_S + self.dt)
+        self.gravity = accel.copy() if self.gravity is None else self.gravity + blend * (accel - self.gravity)
+        self.tilt_rad = attitude(self.gravity)[2]
+        framework = self.fall.add(words)
+        if not self.armed:
+            self.armed = self.tilt_rad < ARM_TILT_RAD
+            if self.armed:
+                self.fall.samples.clear()               # the window must not hold the time it lay
+            return None
+        if self.tilt_rad > FALL_TILT_RAD:
+            return Fault("fell", None, None, f"torso tilted {math.degrees(self.tilt_rad):.0f}° (limit "
+                                             f"{math.degrees(FALL_TILT_RAD):.0f}°)")
+        if framework is not None:
+            side = "face down" if framework == "front" else "face up"
+            return Fault("fell", None, None, f"{side}: the framework's accelerometer test (FALLEN_F/B_LIMIT)")
+        return None

@@ -1,0 +1,67 @@
+"""How a run of the 8 ms loop ends (:mod:`.loop`): by its plan's end, by a fault (:mod:`.safety`'s policy) or by a
+stop request (Ctrl-C). A stop freezes the goals at a row and holds them :data:`STOP_HOLD_S` before the loop ends: a
+walk's next row on both feet (:func:`stop_row`), anything else the row it is at; a fall lowers the torque limits
+and, :data:`~.safety.FALL_SETTLE_S` later, relaxes the goals to where the joints lie.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from op2motion.bus import safety
+from op2motion.bus.robot import OP2
+from op2motion.bus.tables import CM730_ID
+from op2motion.robot.support import Support
+
+STOP_HOLD_S = 0.3                  # after a stop, the held goals are sent this long before the loop ends
+
+
+def stop_row(plan: Any, row: int) -> int:
+    """Where a stop request at plan row ``row`` freezes the goals: a walk's next row on both feet (one row into
+    its double support when it lasts that long); any other plan the row it is at."""
+    contacts = plan.contacts if plan.contact is not None else None
+    if contacts is None:
+        return row
+    for r in range(row, len(contacts)):
+        if contacts[r] is Support.DOUBLE:
+            nxt = min(r + 1, len(contacts) - 1)
+            return nxt if contacts[nxt] is Support.DOUBLE else r
+    return row
+
+
+class Stops:
+    """How a run ends: the row a stop froze the goals at, when the loop ends after holding them, a fall's settling."""
+
+    def __init__(self) -> None:
+        self.frozen_at: int | None = None
+        self.end_at: float | None = None
+        self.fall_until: float | None = None
+
+    def fault(self, fault: safety.Fault, robot: OP2, plan: Any, row: int, k: int, now: float) -> None:
+        """React to the run's first fault (:mod:`.safety`'s policy)."""
+        if fault.kind == "fell":
+            robot.torque_limit(safety.FALL_TORQUE_LIMIT)
+            self.frozen_at, self.fall_until = row, now + safety.FALL_SETTLE_S
+        elif fault.kind == "not answering" and fault.id == CM730_ID:
+            self.frozen_at = row
+        else:
+            self.frozen_at = stop_row(plan, row) if k else 0
+
+    def request(self, plan: Any, row: int, k: int) -> None:
+        """A stop request (Ctrl-C): a walk on its next double support, anything else at once."""
+        if self.frozen_at is None:
+            self.frozen_at = stop_row(plan, row) if k else 0
+
+    def frozen(self, row: int, now: float) -> bool:
+        """Whether the goals are frozen at ``row`` (the hold's end is timed from the first frozen tick)."""
+        if self.frozen_at is None or row < self.frozen_at:
+            return False
+        if self.end_at is None:
+            self.end_at = now + STOP_HOLD_S
+        return True
+
+    def over(self, now: float, t: float, duration: float) -> bool:
+        """Whether the loop ends after this tick."""
+        if self.frozen_at is None:
+            return t >= duration
+        return self.end_at is not None and now >= self.end_at and self.fall_until is None

@@ -1,0 +1,173 @@
+"""The control tables of the OP2's devices as data: the MX-28 (Protocol 1.0, model number 29) and the CM-730
+sub-controller (ID 200), register by register: address, size [bytes], access, default, unit.
+
+Sources: ROBOTIS e-manual, MX-28 (Protocol 1.0) control table (emanual.robotis.com/docs/en/dxl/mx/mx-28); ROBOTIS
+DARwIn-OP framework v1.6.0 ``Framework/include/CM730.h`` and ``MX28.h`` (the CM-730's addresses, ``MAXNUM_ADDRESS``
+81); ``reference/bus_notes.md``. Multi-byte registers are little-endian words. The OP2's servos run at 1 Mbps
+(baud number 1) with a return delay of 0 (the framework's firmware installer sets both).
+
+Speed and load registers carry a magnitude in bits 0-9 and the direction in bit 10 (set: clockwise, i.e. the
+servo angle decreasing); :func:`signed` and :func:`magnitude` convert.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+MX28_MODEL_NUMBER = 29
+CM730_MODEL_NUMBER = 0x7300        # what the CM-730 reports at address 0 (Bold Hearts' CM730 snapshot, 0x7300)
+CM730_ID = 200                     # the sub-controller's Dynamixel ID (CM730.h ID_CM)
+BAUD_NUMBER_1MBPS = 1              # baud = 2 Mbps / (n + 1)
+SPEED_RPM_PER_UNIT = 0.114         # MX-28 moving / present speed unit [rpm]
+SPEED_RAD_S_PER_UNIT = SPEED_RPM_PER_UNIT * 2.0 * math.pi / 60.0
+LOAD_FULL_SCALE = 1023             # present load: 1023 = the most torque the motor gives (about 0.1 % a unit)
+TORQUE_LIMIT_FULL = 1023           # torque limit / max torque: 1023 = all of it
+DIRECTION_BIT = 0x400              # bit 10 of speed and load: clockwise (servo angle decreasing)
+VOLTS_PER_UNIT = 0.1               # voltage registers [V]
+
+
+@dataclass(frozen=True)
+class Register:
+    """One register: ``name``, ``address``, ``size`` [bytes], ``access`` ("R" or "RW"), ``default`` (None: set by
+    the device at power-up), ``unit`` and the memory ``area`` ("EEPROM" kept over power cycles, "RAM")."""
+
+    name: str
+    address: int
+    size: int
+    access: str
+    default: int | None
+    unit: str
+    area: str
+
+    @property
+    def end(self) -> int:
+        """The address after the register."""
+        return self.address + self.size
+
+
+@dataclass(frozen=True)
+class ControlTable:
+    """A device's control table: its registers and size [bytes]."""
+
+    device: str
+    model_number: int
+    size: int
+    registers: tuple[Register, ...]
+    by_name: dict[str, Register] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "by_name", {r.name: r for r in self.registers})
+
+    def __getitem__(self, name: str) -> Register:
+        try:
+            return self.by_name[name]
+        except KeyError:
+            raise KeyError(f"{self.device} has no register {name!r}") from None
+
+    def at(self, address: int) -> Register | None:
+        """The register that starts at ``address`` (None if none does)."""
+        return next((r for r in self.registers if r.address == address), None)
+
+    def writable(self, address: int) -> bool:
+        """Whether the byte at ``address`` belongs to a writable register."""
+        return any(r.address <= address < r.end and r.access == "RW" for r in self.registers)
+
+    def defaults(self) -> bytearray:
+        """The table's bytes after power-up (registers without a default are 0 until the device fills them)."""
+        table = bytearray(self.size)
+        for r in self.registers:
+            if r.default is not None:
+                table[r.address:r.end] = r.default.to_bytes(r.size, "little")
+        return table
+
+
+def _r(name: str, address: int, size: int, access: str, default: int | None, unit: str = "",
+       area: str = "RAM") -> Register:
+    return Register(name, address, size, access, default, unit, area)
+
+
+MX28 = ControlTable("MX-28", MX28_MODEL_NUMBER, 74, (
+    _r("model_number", 0, 2, "R", MX28_MODEL_NUMBER, area="EEPROM"),
+    _r("firmware_version", 2, 1, "R", 30, area="EEPROM"),
+    _r("id", 3, 1, "RW", 1, area="EEPROM"),
+    _r("baud_rate", 4, 1, "RW", 34, "2 Mbps/(n+1)", "EEPROM"),
+    _r("return_delay_time", 5, 1, "RW", 250, "2 µs", "EEPROM"),
+    _r("cw_angle_limit", 6, 2, "RW", 0, "tick", "EEPROM"),
+    _r("ccw_angle_limit", 8, 2, "RW", 4095, "tick", "EEPROM"),
+    _r("temperature_limit", 11, 1, "RW", 80, "°C", "EEPROM"),
+    _r("min_voltage_limit", 12, 1, "RW", 60, "0.1 V", "EEPROM"),
+    _r("max_voltage_limit", 13, 1, "RW", 160, "0.1 V", "EEPROM"),
+    _r("max_torque", 14, 2, "RW", 1023, "1/1023 of the most", "EEPROM"),
+    _r("status_return_level", 16, 1, "RW", 2, "0 ping only, 1 reads, 2 all", "EEPROM"),
+    _r("alarm_led", 17, 1, "RW", 36, "error bits", "EEPROM"),
+    _r("alarm_shutdown", 18, 1, "RW", 36, "error bits", "EEPROM"),
+    _r("multi_turn_offset", 20, 2, "RW", 0, "tick", "EEPROM"),
+    _r("resolution_divider", 22, 1, "RW", 1, "", "EEPROM"),
+    _r("torque_enable", 24, 1, "RW", 0),
+    _r("led", 25, 1, "RW", 0),
+    _r("d_gain", 26, 1, "RW", 0),
+    _r("i_gain", 27, 1, "RW", 0),
+    _r("p_gain", 28, 1, "RW", 32),
+    _r("goal_position", 30, 2, "RW", None, "tick"),
+    _r("moving_speed", 32, 2, "RW", 0, "0.114 rpm (0: as fast as it can)"),
+    _r("torque_limit", 34, 2, "RW", None, "1/1023 of the most"),
+    _r("present_position", 36, 2, "R", None, "tick"),
+    _r("present_speed", 38, 2, "R", None, "0.114 rpm, bit 10 clockwise"),
+    _r("present_load", 40, 2, "R", None, "1/1023 of the most, bit 10 clockwise"),
+    _r("present_voltage", 42, 1, "R", None, "0.1 V"),
+    _r("present_temperature", 43, 1, "R", None, "°C"),
+    _r("registered", 44, 1, "R", 0),
+    _r("moving", 46, 1, "R", 0),
+    _r("lock", 47, 1, "RW", 0),
+    _r("punch", 48, 2, "RW", 0),
+    _r("goal_acceleration", 73, 1, "RW", 0, "8.583 °/s²"),
+))
+
+CM730 = ControlTable("CM-730", CM730_MODEL_NUMBER, 81, (
+    _r("model_number", 0, 2, "R", CM730_MODEL_NUMBER, area="EEPROM"),
+    _r("firmware_version", 2, 1, "R", 0x0F, area="EEPROM"),
+    _r("id", 3, 1, "RW", CM730_ID, area="EEPROM"),
+    _r("baud_rate", 4, 1, "RW", BAUD_NUMBER_1MBPS, "2 Mbps/(n+1)", "EEPROM"),
+    _r("return_delay_time", 5, 1, "RW", 0, "2 µs", "EEPROM"),
+    _r("status_return_level", 16, 1, "RW", 2, "0 ping only, 1 reads, 2 all", "EEPROM"),
+    _r("dynamixel_power", 24, 1, "RW", 0, "1: the servos' supply on"),
+    _r("led_panel", 25, 1, "RW", 0, "bits"),
+    _r("led_head", 26, 2, "RW", 0, "RGB 5:5:5"),
+    _r("led_eye", 28, 2, "RW", 0, "RGB 5:5:5"),
+    _r("button", 30, 1, "R", 0, "bit 0 mode, bit 1 start"),
+    _r("gyro_z", 38, 2, "R", 512, "count, 512 = 0"),
+    _r("gyro_y", 40, 2, "R", 512, "count, 512 = 0"),
+    _r("gyro_x", 42, 2, "R", 512, "count, 512 = 0"),
+    _r("accel_x", 44, 2, "R", 512, "count, 512 = 0"),
+    _r("accel_y", 46, 2, "R", 512, "count, 512 = 0"),
+    _r("accel_z", 48, 2, "R", 512, "count, 512 = 0"),
+    _r("voltage", 50, 1, "R", None, "0.1 V"),
+    _r("left_mic", 51, 2, "R", 0),
+    _r("adc2", 53, 2, "R", 0), _r("adc3", 55, 2, "R", 0), _r("adc4", 57, 2, "R", 0), _r("adc5", 59, 2, "R", 0),
+    _r("adc6", 61, 2, "R", 0), _r("adc7", 63, 2, "R", 0), _r("adc8", 65, 2, "R", 0),
+    _r("right_mic", 67, 2, "R", 0),
+    _r("adc10", 69, 2, "R", 0), _r("adc11", 71, 2, "R", 0), _r("adc12", 73, 2, "R", 0), _r("adc13", 75, 2, "R", 0),
+    _r("adc14", 77, 2, "R", 0), _r("adc15", 79, 2, "R", 0),
+))
+
+#: The framework's per-tick read of the board: 30 bytes from the power register (24..53: power, LEDs, buttons,
+#: gyro, accelerometer, voltage).
+BOARD_SPAN = (CM730["dynamixel_power"].address, 30)
+#: The framework's per-tick sync write: 6 bytes a servo from the D gain: D, I, P, (reserved), goal low, goal high.
+SYNC_SPAN = (MX28["d_gain"].address, 6)
+#: A servo's status block read once per rotation: present position to present temperature (36..43).
+SERVO_STATE_SPAN = (MX28["present_position"].address,
+                    MX28["present_temperature"].end - MX28["present_position"].address)
+
+
+def signed(value: int) -> int:
+    """A speed or load register as a signed magnitude (counter-clockwise, the servo angle increasing, positive)."""
+    magnitude = value & (DIRECTION_BIT - 1)
+    return -magnitude if value & DIRECTION_BIT else magnitude
+
+
+def magnitude(value: float) -> int:
+    """A signed speed or load as its register value (bits 0-9 magnitude, clipped to 1023; bit 10 if negative)."""
+    m = min(int(round(abs(value))), DIRECTION_BIT - 1)
+    return m | DIRECTION_BIT if value < 0 and m else m

@@ -1,0 +1,274 @@
+"""What the ``op2motion robot`` commands do, as library functions: :func:`status`, :func:`teach` (read a pose),
+:func:`play` (a pose, a motion file or an action page) and :func:`walk`.
+
+Each opens a :class:`~.session.Session` on the port, reads the whole robot, and (for a motion) refuses to start an
+unfit robot (:mod:`.safety`), builds the motion from where the robot is (:mod:`.plans`), refuses what fails
+op2motion's own checks unless forced, switches the torque on without a jump and runs the 8 ms loop
+(:func:`~.loop.run_controller`). A ``stop`` event (the commands set it on Ctrl-C) ends a motion safely: a walk on
+its next double support. The result is a :class:`MotionResult`; a fault is in it, not raised.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from op2motion.bus.loop import LoopReport, Tick, run_controller
+from op2motion.bus.plans import (
+    CHECK_ENGINE,
+    LYING_TILT_RAD,
+    move,
+    page_start,
+    page_trajectory,
+    physics_problem,
+    robot_schedule,
+    then,
+)
+from op2motion.bus.safety import clip_goals, mechanical_bounds
+from op2motion.bus.session import RobotStatus, Session
+from op2motion.errors import CheckFailed, InputError
+from op2motion.robot.pose import Pose
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
+
+ACTION_FILE_BYTES = 256 * 512      # an action file: 256 pages of 512 bytes
+OnTick = Callable[[Tick], None]
+
+
+@dataclass(frozen=True)
+class Options:
+    """How a motion runs: ``force`` (play what op2motion's checks refuse), the ``stop`` event (set on Ctrl-C), a
+    callback per loop tick (progress) and one for the physics check's progress (done, total)."""
+
+    force: bool = False
+    stop: threading.Event | None = None
+    on_tick: OnTick | None = None
+    on_progress: Any = None
+
+    def stopped(self) -> bool:
+        """Whether a stop was asked for."""
+        return self.stop is not None and self.stop.is_set()
+
+
+@dataclass
+class MotionResult:
+    """A motion on the robot: what it was, its planned length [s], each run of the loop (the move to the first pose,
+    then the motion), the pose it was to end in (20,) [rad] if any, notes, and where the feet took the robot
+    (walks: leg odometry)."""
+
+    what: str
+    planned_s: float
+    runs: list[tuple[str, LoopReport]] = field(default_factory=list)
+    target: np.ndarray | None = None
+    notes: list[str] = field(default_factory=list)
+    travel: dict[str, float] = field(default_factory=dict)
+    checked: str = ""
+
+    @property
+    def last(self) -> LoopReport | None:
+        """The last run of the loop."""
+        return self.runs[-1][1] if self.runs else None
+
+    @property
+    def ended(self) -> str:
+        """``done``, ``stopped`` (a stop request) or ``fault``."""
+        for _, report in self.runs:
+            if report.ended != "done":
+                return report.ended
+        return "done"
+
+    @property
+    def fault(self) -> Any:
+        """The fault that stopped it (None if none)."""
+        return next((r.fault for _, r in self.runs if r.fault is not None), None)
+
+    def target_error_deg(self) -> float | None:
+        """The largest difference between the last goals sent and the target pose [deg]."""
+        if self.target is None or self.last is None or not len(self.last.goals):
+            return None
+        return float(np.degrees(np.max(np.abs(self.last.goals - self.target))))
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready."""
+        err = self.target_error_deg()
+        return {"what": self.what, "planned_s": round(self.planned_s, 3), "ended": self.ended,
+                "fault": None if self.fault is None else self.fault.as_dict(), "checked": self.checked,
+                "runs": {name: r.as_dict() for name, r in self.runs}, "notes": list(self.notes),
+                "target_error_deg": None if err is None else round(err, 3), "travel": dict(self.travel)}
+
+    def lines(self) -> list[str]:
+        """For people."""
+        out = [f"{self.what}: {self.planned_s:.2f} s planned; {self.checked}"]
+        out += [f"  {name}: {r.describe()}" for name, r in self.runs]
+        err = self.target_error_deg()
+        if err is not None:
+            out.append(f"  last goals within {err:.2f}° of the target pose")
+        if self.travel:
+            out.append("  leg odometry: " + ", ".join(f"{k} {v:+.3f}" for k, v in self.travel.items()))
+        if self.fault is not None:
+            out.append(f"  STOPPED: {self.fault.describe()}")
+        elif self.ended == "stopped":
+            out.append("  stopped on request, standing")
+        return out
+
+
+def status(port: str, spec: Spec) -> RobotStatus:
+    """The board and every servo (switching the servos' power on if it was off)."""
+    with Session(port, spec) as session:
+        return session.status()
+
+
+def teach(port: str, spec: Spec, name: str, support: str = "double", limp: bool = False,
+          wait: Callable[[], None] | None = None) -> tuple[Pose, list[str]]:
+    """The robot's present joint angles as a pose. With ``limp`` the torque goes off, ``wait`` lets the user move the
+    limbs, the angles are read, and the torque comes back on holding them. Angles beyond a joint's mechanical
+    range are clipped to it (a note says so)."""
+    with Session(port, spec) as session:
+        robot = session.robot
+        state = session.status()
+        missing = [f"{s.joint} (ID {s.id})" for s in state.servos if not s.answers]
+        if missing:
+            raise CheckFailed(f"cannot read a whole pose: {', '.join(missing)} not answering")
+        if limp:
+            robot.torque(False)
+            if wait is not None:
+                wait()
+            state = session.status()
+            missing = [f"{s.joint} (ID {s.id})" for s in state.servos if not s.answers]
+            if missing:
+                raise CheckFailed(f"cannot read a whole pose: {', '.join(missing)} not answering")
+        lower, upper = mechanical_bounds(spec)
+        angles, clipped = clip_goals(state.servo_angles, lower, upper)
+        notes = [f"{spec.joint_names[i]} read {math.degrees(state.servo_angles[i]):.1f}°, beyond its mechanical "
+                 f"range: clipped to {math.degrees(angles[i]):.1f}°" for i in np.flatnonzero(clipped)]
+        if limp:
+            robot.take_control({s.id: q for s, q in zip(state.servos, angles)})
+        pose = Pose(name, Support.of(support), angles, {},
+                    {"source": "robot", "port": port, "limp": limp, "tilt_deg": round(math.degrees(
+                        state.board.tilt_rad), 1)})
+        return pose.checked(spec), notes
+
+
+def load_motion(path: str, page: int | None, spec: Spec) -> tuple[str, Any]:
+    """What ``robot play`` was given: ("pose", Pose), ("motion", Motion) or ("page", ActionFile)."""
+    from op2motion.formats.action import ActionFile
+    from op2motion.formats.motionfile import is_motion_file, read_motion
+    from op2motion.formats.posefile import read_pose
+
+    p = Path(path)
+    if page is not None:
+        return "page", ActionFile.read(path)
+    if p.is_file() and p.stat().st_size == ACTION_FILE_BYTES:
+        raise InputError(f"{path} is an action file: expected --page N (the page to play)", "page")
+    if is_motion_file(path):
+        return "motion", read_motion(path, spec)
+    return "pose", read_pose(path, spec)
+
+
+def _checked(trajectory: Any, spec: Spec, state: RobotStatus, force: bool, what: str,
+             on_progress: Any = None) -> str:
+    """Refuse (exit 1) what physics says fails, or a start op2motion cannot check (lying), unless ``force``."""
+    tilt = state.board.tilt_rad
+    if tilt > LYING_TILT_RAD:
+        if not force:
+            raise CheckFailed(f"refused: the robot lies (tilted {math.degrees(tilt):.0f}°); op2motion cannot check "
+                              f"a motion from lying in physics yet: --force plays it unchecked")
+        return "not checked (the robot lies; forced)"
+    if force:
+        return "not checked (forced)"
+    problem = physics_problem(trajectory, spec, on_progress)
+    if problem:
+        raise CheckFailed(f"refused: {what} {problem} in physics ({CHECK_ENGINE}, the servo model, from the robot's "
+                          f"present pose); --force plays it anyway")
+    return f"checked in physics ({CHECK_ENGINE}, the servo model, from the robot's present pose)"
+
+
+def play(port: str, spec: Spec, path: str, page: int | None = None, options: Options = Options()) -> MotionResult:
+    """A pose, a motion file or an action page on the robot: a planned move from where it is to the first pose,
+    then the motion or the page tick for tick (see the module docstring)."""
+    from op2motion.motion.pipeline import plan_motion
+
+    kind, loaded = load_motion(path, page, spec)
+    with Session(port, spec) as session:
+        state = session.status()
+        session.preflight(state)
+        current = state.servo_angles
+        target = None
+        if kind == "pose":
+            trajectory = move(current, loaded, spec)
+            what, target = f"pose {loaded.name}", loaded.servo
+        elif kind == "motion":
+            motion = plan_motion(loaded, spec)
+            first = loaded.steps[0].pose
+            trajectory = then(move(current, first, spec), motion)
+            what = f"motion {loaded.name}"
+        else:
+            assert page is not None
+            start = page_start(loaded, page, spec, current)
+            trajectory = then(move(current, start, spec), page_trajectory(loaded, page, spec, start))
+            what = f"page {page} ({loaded.page(page, spec).name})"
+        result = MotionResult(what, trajectory.duration_s, target=target, notes=list(trajectory.notes))
+        result.checked = _checked(trajectory, spec, state, options.force, what, options.on_progress)
+        if options.stopped():
+            result.runs.append(("motion", LoopReport(ended="stopped")))
+            return result
+        session.take_control(state)
+        report = run_controller(robot_schedule(trajectory, spec), session.robot, stop=options.stop,
+                                on_tick=options.on_tick)
+        result.runs.append(("motion", report))
+        return result
+
+
+def walk(port: str, spec: Spec, preset: str | None = None, steps: int | None = None,
+         target: tuple[float, float, float] | None = None, options: Options = Options()) -> MotionResult:
+    """A walk on the robot: the preset's gait planned within the servos' speed (``steps`` steps, or to ``target``
+    (x [m], y [m], heading [rad])), a planned move to its first pose, then :class:`~op2motion.gait.controller.
+    WalkController` in the loop with the robot's IMU and joints until it stands at the end."""
+    from op2motion.gait import preset_path, read_preset
+    from op2motion.gait.controller import WalkController
+    from op2motion.gait.speeds import plan_within_speed
+
+    params = read_preset(preset_path(preset)).with_steps(steps)
+    gait = plan_within_speed(params, spec, target)
+    controller = WalkController(gait, spec)
+    with Session(port, spec) as session:
+        state = session.status()
+        session.preflight(state)
+        if state.board.tilt_rad > LYING_TILT_RAD:
+            raise CheckFailed(f"refused: the robot lies (tilted {math.degrees(state.board.tilt_rad):.0f}°); a walk "
+                              f"starts standing")
+        first = Pose("walk_start", Support.DOUBLE, controller.plan.goals[0])
+        approach = move(state.servo_angles, first, spec)
+        result = MotionResult(f"walk '{params.name}' ({gait.params.steps} steps)",
+                              approach.duration_s + controller.plan.duration_s, notes=list(approach.notes))
+        result.checked = _checked(approach, spec, state, options.force, "the move to the walk's first pose",
+                                  options.on_progress)
+        if options.stopped():
+            result.runs.append(("approach", LoopReport(ended="stopped")))
+            return result
+        session.take_control(state)
+        report = run_controller(robot_schedule(approach, spec), session.robot, stop=options.stop,
+                                on_tick=options.on_tick)
+        result.runs.append(("approach", report))
+        if report.ended != "done":
+            return result
+        report = run_controller(controller, session.robot, stop=options.stop, on_tick=options.on_tick)
+        result.runs.append(("walk", report))
+        result.travel = leg_travel(controller)
+        result.travel["gyro_heading_deg"] = math.degrees(report.yaw_rad)
+        return result
+
+
+def leg_travel(controller: Any) -> dict[str, float]:
+    """Where the feet took the robot, by leg odometry: the plan's travel of the feet's midpoint plus the placement
+    error the controller measured at each landing from the joint angles (plan frame: x forward, y left) [m]."""
+    feet = controller.gait.timeline.feet
+    start = np.mean([feet[side][0, :2] for side in ("left", "right")], axis=0)
+    end = np.mean([feet[side][-1, :2] for side in ("left", "right")], axis=0)
+    travel = end - start + np.asarray(controller.odometry.error, dtype=float)
+    return {"x_m": float(travel[0]), "y_m": float(travel[1]), "distance_m": float(np.hypot(*travel))}

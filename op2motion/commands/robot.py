@@ -1,0 +1,239 @@
+"""CLI command ``op2motion robot``: the real OP2 on its bus (status, read, play, walk) and the emulated one
+(emulate). Thin: each calls :mod:`op2motion.bus.tasks` or the emulator and prints."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import math
+import signal
+import sys
+import threading
+import time
+from typing import Any, Iterator
+
+from op2motion.commands.common import add_command, emit, number, output_path, pose_name, ticker, whole
+from op2motion.errors import CheckFailed, InputError, Interrupted
+from op2motion.robot.spec import Spec
+
+MAX_WAIT_S = 600.0
+
+
+def register(sub: Any) -> None:
+    """Add ``robot status|read|play|walk|emulate``."""
+    from op2motion.commands.common import Parser
+    from op2motion.formats.actionlayout import NUM_PAGES
+
+    top = sub.add_parser("robot", help="the real OP2 on its bus (status, read, play, walk) and an emulated one",
+                         description="Drive the real OP2 from Python over its USB serial bus (Dynamixel Protocol "
+                                     "1.0, the CM-730 at ID 200, 20 MX-28), safely; or run an emulated OP2 on a "
+                                     "pseudo-terminal to develop without one.")
+    inner = top.add_subparsers(dest="robot_command", metavar="ACTION", required=True, parser_class=Parser,
+                               help="status, read, play, walk or emulate")
+    p = add_command(inner, "status", cmd_status, "the sub-controller, every servo and the IMU; exit 1 if a servo "
+                                                 "is missing or reports an error")
+    _port(p)
+    p = add_command(inner, "read", cmd_read, "the robot's present joint angles as a pose file (teach by hand with "
+                                             "--limp)")
+    _port(p)
+    p.add_argument("--out", type=output_path, required=True, metavar="POSE", help="pose file to write (atomically)")
+    p.add_argument("--name", type=pose_name, help="pose name (default: the file's stem)")
+    p.add_argument("--support", choices=("left", "right", "double"), default="double",
+                   help="the support the pose stands on (default double)")
+    p.add_argument("--limp", action="store_true",
+                   help="switch the torque off first so you can move the limbs by hand (hold the robot!); the "
+                        "angles are read when you press Enter (or after --wait), then the torque holds them")
+    p.add_argument("--wait", type=number(0.0, MAX_WAIT_S, "s"), default=None, metavar="S",
+                   help="with --limp: read after S seconds instead of waiting for Enter")
+    p = add_command(inner, "play", cmd_play, "a pose, a motion file or an action page on the robot, from where it "
+                                             "is")
+    _port(p)
+    p.add_argument("file", metavar="FILE", help="a pose file, a motion file, or an action file with --page")
+    p.add_argument("--page", type=whole(1, NUM_PAGES - 1), help="with an action file: the page to play")
+    p.add_argument("--force", action="store_true",
+                   help="play it even if op2motion's checks (physics from the present pose) refuse it")
+    p = add_command(inner, "walk", cmd_walk, "walk (WalkController with the robot's IMU and joints); ends standing")
+    _port(p)
+    p.add_argument("--preset", metavar="TOML", help="gait preset file or shipped name (default forward)")
+    p.add_argument("--steps", type=whole(1, 200), help="number of steps (default: the preset's)")
+    p.add_argument("--target", type=float, nargs=3, metavar=("X", "Y", "YAW"),
+                   help="walk to this pose instead: x [m], y [m], heading [deg] from the start")
+    p.add_argument("--force", action="store_true", help="skip the physics check of the move to the first pose")
+    _emulate_args(add_command(inner, "emulate", cmd_emulate,
+                              "an emulated OP2 on a pseudo-terminal (a link at --link), byte for byte, physics "
+                              "behind it in real time"))
+
+
+def _port(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--port", required=True, metavar="PORT", help="the robot's serial port, e.g. /dev/ttyUSB0")
+
+
+def _emulate_args(p: argparse.ArgumentParser) -> None:
+    from op2motion.bus.emulator.body import STARTS
+    from op2motion.physics import ENGINES
+
+    p.add_argument("--link", required=True, metavar="PATH", help="where to put the link to the emulated port")
+    p.add_argument("--engine", choices=ENGINES, default="mujoco", help="physics engine (default mujoco: faster)")
+    p.add_argument("--start", choices=STARTS, default="standing", help="how the robot starts (default standing)")
+    p.add_argument("--missing", type=whole(1, 20), nargs="+", default=[], metavar="ID",
+                   help="servos not on the bus")
+    p.add_argument("--unplug", nargs="+", default=[], metavar="ID@S",
+                   help="a servo that goes silent S seconds into the motion (from the first SYNC_WRITE)")
+    p.add_argument("--overheat", nargs="+", default=[], metavar="ID@S[:C]",
+                   help="a servo at C °C (default 85) from S seconds into the motion")
+    p.add_argument("--lose", type=number(0.0, 0.5), default=0.0, metavar="SHARE",
+                   help="share of replies lost (e.g. 0.02)")
+    p.add_argument("--corrupt", type=number(0.0, 0.5), default=0.0, metavar="SHARE",
+                   help="share of replies with one byte changed")
+    p.add_argument("--supply", type=number(0.0, 25.5, "V"), default=None, metavar="V",
+                   help="supply voltage (default the spec's, 12 V)")
+    p.add_argument("--seed", type=whole(0, 2 ** 31 - 1), default=0, help="seed of the lost and corrupted replies")
+    p.add_argument("--seconds", type=number(0.0, 86400.0, "s"), default=None, metavar="S",
+                   help="stop after S seconds (default: run until Ctrl-C)")
+    p.add_argument("--truth", type=output_path, metavar="JSON",
+                   help="keep this file up to date (every 0.1 s) with what the emulated robot does: the torso's "
+                        "position, heading and tilt, each servo's goal, torque and torque limit")
+
+
+@contextlib.contextmanager
+def stop_on_signals() -> Iterator[threading.Event]:
+    """An event set by the first Ctrl-C (or SIGTERM): the motion stops safely; a second one raises at once."""
+    stop = threading.Event()
+    previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+
+    def handler(signum: int, frame: Any) -> None:
+        if stop.is_set():
+            raise KeyboardInterrupt
+        stop.set()
+
+    for s in previous:
+        signal.signal(s, handler)
+    try:
+        yield stop
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
+def cmd_status(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion robot status``."""
+    from op2motion.bus.tasks import status
+
+    state = status(args.port, spec)
+    emit(args, state.as_dict(), "\n".join(state.lines()))
+    if not state.ok:
+        raise CheckFailed(state.problems[0].describe() + (f" (and {len(state.problems) - 1} more)"
+                                                           if len(state.problems) > 1 else ""))
+    return 0
+
+
+def cmd_read(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion robot read``."""
+    from pathlib import Path
+
+    from op2motion.bus.tasks import teach
+    from op2motion.fileio import OutputSet
+    from op2motion.formats.posefile import pose_to_json
+
+    if args.wait is not None and not args.limp:
+        raise InputError("expected --limp with --wait (it is the time to move the limbs)", "wait")
+    outputs = OutputSet({"out": args.out})
+    name = args.name or pose_name_of(Path(args.out).stem)
+
+    def wait() -> None:
+        if args.wait is not None:
+            print(f"op2motion: the robot is limp: move its limbs; reading in {args.wait:g} s", file=sys.stderr)
+            time.sleep(args.wait)
+        elif sys.stdin.isatty():
+            print("op2motion: the robot is limp: move its limbs, then press Enter", file=sys.stderr)
+            sys.stdin.readline()
+
+    pose, notes = teach(args.port, spec, name, args.support, args.limp, wait)
+    outputs.put("out", pose_to_json(pose, spec))
+    written = outputs.commit()
+    result = {"pose": name, "support": args.support, "servo_deg": {n: round(math.degrees(q), 3) for n, q in
+                                                                   zip(spec.joint_names, pose.servo)},
+              "notes": notes, "path": str(written["out"]), "limp": args.limp}
+    emit(args, result, "\n".join([f"wrote {written['out']}: pose {name} ({args.support})"] + [f"  {n}" for n in notes]))
+    return 0
+
+
+def pose_name_of(stem: str) -> str:
+    """A pose name from a file stem."""
+    from op2motion.robot.pose import safe_pose_name
+
+    return safe_pose_name(stem, "robot")
+
+
+def _motion(args: argparse.Namespace, spec: Spec, run: Any) -> int:
+    """Run a motion task with Ctrl-C handling and progress; print; the exit code."""
+    from op2motion.bus.tasks import Options
+    from op2motion.commands.common import progress
+
+    with stop_on_signals() as stop, ticker(args, "robot", "s") as bar:
+        def on_tick(tick: Any) -> None:
+            bar.update(0.008)
+
+        with progress(args, "check", "s") as on_progress:
+            result = run(Options(args.force, stop, on_tick, on_progress))
+    emit(args, result.as_dict(), "\n".join(result.lines()))
+    if result.fault is not None:
+        raise CheckFailed(f"{result.what} stopped: {result.fault.describe()}")
+    if result.ended == "stopped" or stop.is_set():
+        raise Interrupted(f"{result.what} stopped on request; the robot holds its pose")
+    return 0
+
+
+def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion robot play``."""
+    from op2motion.bus.tasks import play
+
+    return _motion(args, spec, lambda options: play(args.port, spec, args.file, args.page, options))
+
+
+def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion robot walk``."""
+    from op2motion.bus.tasks import walk
+
+    if args.target is not None and args.steps is not None:
+        raise InputError("expected --steps or --target, not both (a target sets the number of steps)", "steps")
+    target = None
+    if args.target is not None:
+        if not all(math.isfinite(v) for v in args.target):
+            raise InputError(f"expected finite numbers, got {args.target}", "target")
+        target = (args.target[0], args.target[1], math.radians(args.target[2]))
+    return _motion(args, spec, lambda options: walk(args.port, spec, args.preset, args.steps, target, options))
+
+
+def cmd_emulate(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion robot emulate``."""
+    from op2motion.bus.emulator.faults import Faults, parse_timed
+    from op2motion.bus.emulator.server import Emulator
+
+    faults = Faults(set(args.missing), [parse_timed(u, "unplug")[:2] for u in args.unplug], args.lose, args.corrupt,
+                    [parse_timed(o, "overheat", 85.0) for o in args.overheat], args.supply, args.seed)
+    emulator = Emulator(spec, args.engine, args.start, faults, args.truth)
+    interrupted = False
+    try:
+        with stop_on_signals() as stop:
+            pty = emulator.open(args.link)
+            print(f"op2motion: emulated OP2 on {args.link} -> {pty} ({args.engine}, {args.start}"
+                  f"{', ' + ', '.join(faults.describe()) if faults.describe() else ''}); Ctrl-C stops it",
+                  file=sys.stderr, flush=True)
+            if args.seconds is not None:
+                timer = threading.Timer(args.seconds, stop.set)
+                timer.daemon = True
+                timer.start()
+            emulator.serve(stop)
+            interrupted = args.seconds is None
+    finally:
+        emulator.close()
+    result = {"link": args.link, "pty": emulator.pty_name, "engine": args.engine, "start": args.start,
+              "faults": faults.describe(), "stats": dict(emulator.stats), "slipped_s": round(emulator.slipped_s, 3),
+              "simulated_s": round(emulator.truth()["t_s"], 3), "truth": emulator.truth()}
+    emit(args, result, f"emulated OP2 stopped after {result['simulated_s']:.1f} s simulated "
+                       f"({emulator.slipped_s:.2f} s behind the wall clock), {emulator.stats['packets']} packets, "
+                       f"link removed")
+    if interrupted:
+        raise Interrupted("the emulated OP2 stopped; its link is removed")
+    return 0
