@@ -92,3 +92,18 @@ def test_the_config_file_round_trips_with_every_key():
 def test_bad_config_files_are_refused_naming_the_key(text, words):
     with pytest.raises(InputError, match=words):
         parse_stock_config(text, "mine.ini")
+
+
+@pytest.mark.physics
+def test_the_stock_walk_plays_in_physics_with_its_gyro_balance(spec):
+    """20 stock steps of 20 mm at the defaults in MuJoCo: no fall, the speed the module's own stride makes (two
+    amplitudes a step), and the balance's gyro words read the IMU as the framework does."""
+    from op2motion.gait.stock_controller import StockCommand, StockWalkController
+    from op2motion.physics import check
+
+    controller = StockWalkController(StockConfig(), spec, 20, StockCommand(20.0))
+    assert controller.plan.walk is not None and controller.plan.walk.walking_s > 20 * 0.3
+    run = check(controller, spec, ("mujoco",)).run
+    stride_speed = 2 * 0.020 / (StockConfig().period_time_ms / 2000.0)
+    assert not run.fell and run.walk is not None
+    assert run.walk.mean_speed_mps == pytest.approx(stride_speed, rel=0.3)
