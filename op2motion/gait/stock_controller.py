@@ -67,7 +67,9 @@ class _Player:
         self.steps, self.command = steps, command
         self.spec = spec
         self.start_row = int(round((RAMP_S + WALK_SETTLE_S) / CONTROL_PERIOD_S))
-        self.row, self.swings, self.previous = 0, [], None
+        self.row = 0
+        self.swings: list[int] = []
+        self.previous: str | None = None
         self.halt_row: int | None = None
         base = {name: angle_to_tick(deg) for name, deg in ARM_POSE_DEG.items()}
         self.ticks = np.full(len(spec.joint_names), spec.servo.center_tick, dtype=float)
