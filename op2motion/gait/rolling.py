@@ -45,6 +45,8 @@ from op2motion.robot.support import LIFTED_M, SIDES, other_side
 
 HISTORY_ROWS = 8            # rows already planned that lead each window (the differences at its start are right)
 LOOKAHEAD_S = 0.32          # the body is planned this far beyond the phase (the multibody correction's own preview)
+TAIL_ROWS = 8               # rows planned past the window and thrown away: the multibody ZMP's differences take the
+                            # rest padding there (the robot is not really about to stop)
 PLAN_AHEAD_ROWS = 12        # a phase's planning begins this many rows (96 ms) before the phase does
 KEEP_S = 2.0                # rows older than this [s] behind the one playing are dropped
 
@@ -66,6 +68,24 @@ class _Window:
     rows: int                        # the phase's own rows
 
 
+@dataclass
+class _History:
+    """The last :data:`HISTORY_ROWS` rows planned: soles, contact, torso poses, joints, ZMP reference."""
+
+    feet: dict[str, np.ndarray]
+    contact: tuple[str, ...]
+    pos: np.ndarray
+    rot: np.ndarray
+    joints: np.ndarray
+    ref: np.ndarray
+
+    @classmethod
+    def of(cls, w: _Window, rows: slice) -> "_History":
+        """The rows ``rows`` of a window."""
+        return cls({s: w.feet[s][rows].copy() for s in SIDES}, w.contact[rows], w.pos[rows].copy(),
+                   w.rot[rows].copy(), w.joints[rows].copy(), w.ref[rows].copy())
+
+
 class RollingPlanner:
     """Plans a steered walk phase by phase (see the module docstring). Rows are numbered from the walk's first."""
 
@@ -76,6 +96,8 @@ class RollingPlanner:
         self.rows = RowBuffer(len(spec.joints))
         self.phases: list[tuple[int, Phase]] = []              # (first row, phase) of the phases planned
         self.task: Iterator[None] | None = None
+        self.keep_all = False                                   # keep every row and phase (a dry run's plan)
+        self.stand_since: int | None = None                     # first row of the standing that was planned last
         self._standing_rows()
 
     def _standing_rows(self) -> None:
@@ -92,15 +114,14 @@ class RollingPlanner:
         self.com_height = p.com_height_m or float(com[0, 2])
         self.gains = preview_gains(CONTROL_PERIOD_S, self.com_height, p.preview_s, p.zmp_weight, p.jerk_weight)
         self.cart = CartState.rest(middle)
-        self.fixes = [CartState.rest(np.zeros(2)) for _ in range(p.zmp_passes)]
-        self.history = {"feet": {s: window.feet[s].copy() for s in SIDES}, "contact": window.contact,
-                        "pos": window.pos.copy(), "rot": window.rot.copy(), "joints": window.joints.copy(),
-                        "ref": np.repeat(middle[None], HISTORY_ROWS, axis=0)}
+        self._delta = np.zeros((0, 2))
+        window.ref = np.repeat(middle[None], HISTORY_ROWS, axis=0)
+        self.history = _History.of(window, slice(0, HISTORY_ROWS))
 
     @property
     def standing_goals(self) -> np.ndarray:
         """The planned joints (20,) [rad] of the standing robot before the first phase."""
-        return self.history["joints"][-1].copy()
+        return self.history.joints[-1].copy()
 
     def _window(self, feet: dict[str, np.ndarray], contact: tuple[str, ...], ref: np.ndarray, history: int,
                 rows: int) -> _Window:
@@ -142,7 +163,8 @@ class RollingPlanner:
             self.task = self._plan(intent())
         if self.task is not None and next(self.task, "done") == "done":
             self.task = None
-        self.rows.trim(k - int(round(KEEP_S / CONTROL_PERIOD_S)))
+        if not self.keep_all:
+            self.rows.trim(k - int(round(KEEP_S / CONTROL_PERIOD_S)))
 
     def _plan(self, intent: Intent) -> Iterator[None]:
         """Plan the next phase (the module docstring's steps), yielding between stages; commit it at the end."""
@@ -153,28 +175,41 @@ class RollingPlanner:
         yield
         h = self.history
         planned = [phase] + ahead
-        feet = {s: np.vstack([h["feet"][s]] + [ph.feet[s] for ph in planned]) for s in SIDES}
-        ref = np.vstack([h["ref"]] + [ph.zmp_ref for ph in planned])
-        contact = tuple(h["contact"]) + tuple(c for ph in planned for c in ph.contact)
+        feet = {s: np.vstack([h.feet[s]] + [ph.feet[s] for ph in planned]) for s in SIDES}
+        ref = np.vstack([h.ref] + [ph.zmp_ref for ph in planned])
+        contact = tuple(h.contact) + tuple(c for ph in planned for c in ph.contact)
         rows = phase.rows + int(round(LOOKAHEAD_S / CONTROL_PERIOD_S))
-        cart, self._next_cart = run_cart(self.gains, ref[HISTORY_ROWS:], rows, self.cart, phase.rows)
-        span = HISTORY_ROWS + rows
+        span = HISTORY_ROWS + rows + TAIL_ROWS
         w = self._window({s: feet[s][:span] for s in SIDES}, contact[:span], ref[:span], HISTORY_ROWS, phase.rows)
-        w.pos[:HISTORY_ROWS], w.rot[:HISTORY_ROWS], w.joints[:HISTORY_ROWS] = h["pos"], h["rot"], h["joints"]
-        w.target = np.vstack([h["pos"][:, :2] * 0.0, cart.com])
+        w.pos[:HISTORY_ROWS], w.rot[:HISTORY_ROWS], w.joints[:HISTORY_ROWS] = h.pos, h.rot, h.joints
+        aim = ref[HISTORY_ROWS:]
+        delta = self._carried_delta(rows)
         yield
-        self._next_fixes = []
         for p in range(self.params.zmp_passes + 1):
+            aimed = aim.copy()
+            aimed[:rows] += delta
+            aimed[rows:] += delta[-1]
+            cart, self._next_cart = run_cart(self.gains, aimed, rows + TAIL_ROWS, self.cart, phase.rows)
+            w.target = np.vstack([np.zeros((HISTORY_ROWS, 2)), cart.com])
             self._fit(w)
             yield
             com, zmp = w.body.zmp(w.body.configs(w.joints, w.pos, w.rot))
             if p < self.params.zmp_passes:
-                error = ref[HISTORY_ROWS:HISTORY_ROWS + rows] - zmp[HISTORY_ROWS:]
-                fix, kept = run_cart(self.gains, error, rows, self.fixes[p], phase.rows)
-                self._next_fixes.append(kept)
-                w.target[HISTORY_ROWS:] += fix.com
+                delta = delta + (aim[:rows] - zmp[HISTORY_ROWS:HISTORY_ROWS + rows])
             yield
+        self._delta = delta[phase.rows:]
+        com, zmp = com[:HISTORY_ROWS + rows], zmp[:HISTORY_ROWS + rows]
         self._commit(phase, after, w, com, zmp)
+
+    def _carried_delta(self, rows: int) -> np.ndarray:
+        """The multibody correction of the reference (rows, 2) [m] a window starts from: what the last window found
+        for the rows it planned beyond its phase (which this window begins with), held at its last value beyond."""
+        out = np.zeros((rows, 2))
+        overlap = min(len(self._delta), rows)
+        if overlap:
+            out[:overlap] = self._delta[:overlap]
+            out[overlap:] = self._delta[overlap - 1]
+        return out
 
     def _commit(self, phase: Phase, after: WalkState, w: _Window, com: np.ndarray, zmp: np.ndarray) -> None:
         """Keep the phase's own rows (with their feed-forward and what the controller needs per row); carry the
@@ -201,12 +236,14 @@ class RollingPlanner:
         start = self.rows.end
         self.rows.append(chunk)
         self.phases.append((start, phase))
-        del self.phases[:-8]
-        self.state, self.cart, self.fixes = after, self._next_cart, self._next_fixes
-        last = slice(h0 + n - HISTORY_ROWS, h0 + n)
-        self.history = {"feet": {s: w.feet[s][last].copy() for s in SIDES}, "contact": w.contact[last],
-                        "pos": w.pos[last].copy(), "rot": w.rot[last].copy(), "joints": w.joints[last].copy(),
-                        "ref": w.ref[last].copy()}
+        if not self.keep_all:
+            del self.phases[:-8]
+        if phase.kind != "stand":
+            self.stand_since = None
+        elif self.stand_since is None:
+            self.stand_since = start
+        self.state, self.cart = after, self._next_cart
+        self.history = _History.of(w, slice(h0 + n - HISTORY_ROWS, h0 + n))
 
     def _velocity(self, phase: Phase) -> np.ndarray:
         """The planned stride velocity (2,) [m/s] of a phase in the world frame (zero unless stepping)."""
@@ -226,7 +263,7 @@ class RollingPlanner:
         landing: list[Any] = [None] * n
         if phase.kind == "step" and phase.swing is not None:
             shape = _shape(self.state, phase)
-            learn = [(phase.swing, r, shape) for r in range(n)]
+            learn = [(phase.swing, r, shape, phase.step) for r in range(n)]
             first_double = phase.contact.index("double")
             landing[first_double] = (other_side(phase.swing), phase.swing, phase.closing, n - first_double)
         return {"learn": learn, "landing": landing}
