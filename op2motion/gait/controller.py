@@ -41,7 +41,7 @@ from op2motion.gait.odometry import FootOdometry, left_of
 from op2motion.gait.presets import load_preset
 from op2motion.gait.rows import REACH_SHARE, RowBuffer, rows_of_gait, swing_phase
 from op2motion.gait.schedule import gait_plan
-from op2motion.gait.stillness import Stillness
+from op2motion.motion.stillness import Stillness
 from op2motion.kinematics.leg_ik import leg_ik, leg_of, rot_x, rot_y, rot_z, within_reach
 from op2motion.physics import Plan, Schedule
 from op2motion.robot.framework import CONTROL_PERIOD_S
@@ -84,7 +84,7 @@ class WalkController:
     """A planned gait played with attitude stabilisation (see the module docstring).
 
     ``done`` says when the walk is over: its plan has run out (the last row held) and the body has kept still for
-    :data:`.stillness.STILL_S` (then the servos may hold the last goals); until then the stabiliser keeps balancing.
+    :data:`op2motion.motion.stillness.STILL_S` (then the servos may hold the last goals); until then the stabiliser keeps balancing.
     :meth:`steerable` makes the walk you steer while it walks (:mod:`.steer`)."""
 
     def __init__(self, gait: Gait, spec: Spec, feedback: Feedback = Feedback()):

@@ -9,7 +9,7 @@ servos' stiffness measured while standing, the swing leg's learnt feed-forward) 
   :data:`~.rolling.PLAN_AHEAD_ROWS` ticks later), the stride changing within the acceleration limits. While the command
   is zero the robot stands (balancing, not stepping); a zero command while walking slows down and closes the feet;
 * :meth:`SteerableWalk.stop`: ends within two steps, on both feet; :attr:`done` once the walk has stopped and the body
-  has kept still (:mod:`.stillness`). A command after a stop walks again;
+  has kept still (:mod:`op2motion.motion.stillness`). A command after a stop walks again;
 * :meth:`SteerableWalk.kick` (``right`` or ``left``): stop, kick with that foot, walk on (:mod:`.kick`);
 * :meth:`SteerableWalk.resume` after the robot was put back on its feet (a fall, :mod:`op2motion.motion.fall`): a fresh
   walk from standing that keeps the command and the clock.
