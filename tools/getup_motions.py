@@ -33,6 +33,7 @@ PAIRS = (("r_sho_pitch", "l_sho_pitch"), ("r_sho_roll", "l_sho_roll"), ("r_el", 
 READY = {"r_sho_pitch": -45, "r_sho_roll": -18, "r_el": 30, "r_hip_pitch": -36, "r_knee": 53, "r_ank_pitch": 30,
          "r_ank_roll": 1, "head_tilt": 10}
 LYING = {"r_sho_roll": -45, "r_el": -90}
+ABDUCT_DEG = 8.0        # the kicking leg turned out at the hip (the sole kept level): the feet pass clear
 
 
 def pose(name: str, right: dict[str, float], asym: dict[str, float] | None = None) -> dict[str, object]:
@@ -96,6 +97,50 @@ def roll(side: str) -> list[dict[str, object]]:
             step("lying_back", LYING, 0.8, 0.5)]
 
 
+def kick(side: str) -> list[dict[str, object]]:
+    """From walk-ready, on the other foot: the kicking leg drawn back, swung through nearly straight, drawn in,
+    set down (the planner puts in the weight shift, the lift and the set-down: :mod:`op2motion.motion.shift`)."""
+    stand = "left" if side == "right" else "right"
+    k = side[0]
+    sign = 1.0 if k == "r" else -1.0                  # left servos mirror the right ones
+
+    o = stand[0]
+
+    def leg(hip: float, knee: float, ankle: float) -> dict[str, float]:
+        # the kicking leg, and the standing one straighter than walk-ready's (the hip higher: the kicking foot clears
+        # the floor as it swings through under it)
+        return {f"{k}_hip_pitch": -hip * sign, f"{k}_knee": knee * sign, f"{k}_ank_pitch": ankle * sign,
+                f"{k}_hip_roll": ABDUCT_DEG * sign, f"{k}_ank_roll": ABDUCT_DEG * sign,
+                f"{o}_hip_pitch": 20.0 * sign, f"{o}_knee": -35.0 * sign, f"{o}_ank_pitch": -15.0 * sign}
+
+    def on_one_foot(name: str, duration: float, pause: float, swing: dict[str, float]) -> dict[str, object]:
+        out = step(name, READY, duration, pause, swing)
+        out["support"] = stand
+        out["servo_deg"] = balanced_on(out["servo_deg"], stand)        # type: ignore[arg-type]
+        return out
+
+    return [step("ready", READY, None),
+            on_one_foot("draw_back", 1.0, 0.3, leg(10.0, 90.0, 45.0)),
+            on_one_foot("through", 0.4, 0.0, leg(30.0, 80.0, 35.0)),
+            on_one_foot("kick", 0.3, 0.3, leg(40.0, 35.0, 10.0)),
+            on_one_foot("draw_in", 0.8, 0.3, leg(36.0, 80.0, 40.0)),
+            step("ready_again", READY, 1.0)]
+
+
+def balanced_on(servo_deg: dict[str, float], side: str) -> dict[str, float]:
+    """A one-foot pose leaned at the ankles until the CoM it settles at on the compliant servos is over the
+    ``side`` sole's centre (:func:`op2motion.motion.shift.weight_shift`), rounded to 0.01°."""
+    import math
+
+    from op2motion.motion.shift import weight_shift
+    from op2motion.robot.specfile import default_spec
+
+    spec = default_spec()
+    servo = [math.radians(servo_deg[n]) for n in spec.joint_names]
+    leaned = weight_shift(servo, side, spec)
+    return {n: round(math.degrees(v), 2) for n, v in zip(spec.joint_names, leaned)}
+
+
 def motion(name: str, steps: list[dict[str, object]]) -> dict[str, object]:
     """A motion file's document."""
     return {"schema": "op2motion.motion/1", "name": name, "profile": "quintic", "p_gain": 32, "steps": steps}
@@ -103,7 +148,7 @@ def motion(name: str, steps: list[dict[str, object]]) -> dict[str, object]:
 
 def main() -> None:
     documents = {"getup_front": getup_front(), "getup_back": getup_back(), "roll_left": roll("left"),
-                 "roll_right": roll("right")}
+                 "roll_right": roll("right"), "kick_right": kick("right"), "kick_left": kick("left")}
     for name, steps in documents.items():
         path = OUT / f"{name}.json"
         path.write_text(json.dumps(motion(name, steps), indent=2) + "\n", encoding="utf-8")

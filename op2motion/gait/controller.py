@@ -41,8 +41,8 @@ from op2motion.gait.odometry import FootOdometry, left_of
 from op2motion.gait.presets import load_preset
 from op2motion.gait.rows import REACH_SHARE, RowBuffer, rows_of_gait, swing_phase
 from op2motion.gait.schedule import gait_plan
-from op2motion.motion.stillness import Stillness
 from op2motion.kinematics.leg_ik import leg_ik, leg_of, rot_x, rot_y, rot_z, within_reach
+from op2motion.motion.stillness import Stillness
 from op2motion.physics import Plan, Schedule
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
@@ -84,7 +84,8 @@ class WalkController:
     """A planned gait played with attitude stabilisation (see the module docstring).
 
     ``done`` says when the walk is over: its plan has run out (the last row held) and the body has kept still for
-    :data:`op2motion.motion.stillness.STILL_S` (then the servos may hold the last goals); until then the stabiliser keeps balancing.
+    :data:`op2motion.motion.stillness.STILL_S` (then the servos may hold the last goals); until then the stabiliser
+    keeps balancing.
     :meth:`steerable` makes the walk you steer while it walks (:mod:`.steer`)."""
 
     def __init__(self, gait: Gait, spec: Spec, feedback: Feedback = Feedback()):
@@ -126,14 +127,15 @@ class WalkController:
 
     @classmethod
     def steerable(cls, spec: Spec | None = None, preset: str | None = None, feedback: Feedback = Feedback(),
-                  commands: Any = None) -> "WalkController":
+                  commands: Any = None, action: Any = None) -> Any:
         """A walk steered while it walks (:class:`.steer.SteerableWalk`): :meth:`~.steer.SteerableWalk.command`
         (vx [m/s], vy [m/s], yaw rate [rad/s]) at any tick, :meth:`~.steer.SteerableWalk.stop`; it stands while the
         command is zero. ``preset`` (default ``steer``) gives the step's timing and shape; ``commands`` (a
-        :class:`.commands.CommandTimeline`) feeds it by itself and gives :attr:`plan` for a physics check."""
+        :class:`.commands.CommandTimeline`) feeds it by itself and gives :attr:`plan` for a physics check; kicks are
+        the stock pages of ``action`` (an :class:`~op2motion.formats.action.ActionFile`) when it has them."""
         from op2motion.gait.steer import SteerableWalk
 
-        return SteerableWalk.make(spec, preset, feedback, commands)
+        return SteerableWalk.make(spec, preset, feedback, commands, action)
 
     @property
     def done(self) -> bool:
@@ -181,6 +183,8 @@ class WalkController:
         if np.any(turn) or heading or f.placement or f.accept_landing:
             change += self._leg_change(k, float(turn[0]), float(turn[1]), heading)
         planned = self._planned_goals(t_s, row)
+        if row >= 0 and self.rows.value("open", k):
+            return dict(zip(self.spec.joint_names, planned.tolist()))      # a kick inside a walk: as planned
         goals = planned + change
         if row >= 0:
             self._remember(k, self.rows.get("joints", k) + change, measured)

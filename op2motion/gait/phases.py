@@ -162,8 +162,9 @@ def _step(state: WalkState, stride: Stride, params: GaitParams, spec: Spec, clos
     start_ref = zmp_point(stand, params)
     ref = np.vstack([np.repeat(start_ref[None], n_single, 0), start_ref + ramp * (after - start_ref)])
     phase = Phase("step", feet, (stand.side,) * n_single + hold_contact, ref, stride, side, closing, state.steps)
-    nxt = replace(placed, centre=(float(centre[0]), float(centre[1]), float(centre[2])), stride=stride, swing=stand.side,
-                  mode="end" if closing else "walk", row=state.row + phase.rows, steps=state.steps + 1)
+    nxt = replace(placed, centre=(float(centre[0]), float(centre[1]), float(centre[2])), stride=stride,
+                  swing=stand.side, mode="end" if closing else "walk", row=state.row + phase.rows,
+                  steps=state.steps + 1)
     return phase, nxt
 
 

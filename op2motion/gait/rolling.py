@@ -25,11 +25,12 @@ planning begins: a command takes effect from the next step that begins at least 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Callable, Iterator, Mapping
 
 import numpy as np
 
+from op2motion.formats.action import ActionFile
 from op2motion.gait.envelope import Envelope
 from op2motion.gait.generator import COM_PASSES, _Body, arm_rows, servo_feedforward, standing_height, torso_rotations
 from op2motion.gait.params import GaitParams
@@ -89,8 +90,10 @@ class _History:
 class RollingPlanner:
     """Plans a steered walk phase by phase (see the module docstring). Rows are numbered from the walk's first."""
 
-    def __init__(self, params: GaitParams, spec: Spec, envelope: Envelope, legs: Mapping[str, Leg]):
-        self.params, self.spec, self.envelope, self.legs = params, spec, envelope, dict(legs)
+    def __init__(self, params: GaitParams, spec: Spec, envelope: Envelope, legs: Mapping[str, Leg],
+                 action: ActionFile | None = None):
+        self.params, self.spec, self.envelope, self.legs, self.action = params, spec, envelope, dict(legs), action
+        self.pending_kick: str | None = None                    # a kick asked for (right or left), not yet planned
         self.state: WalkState = initial_state(params, spec)
         self.height = standing_height(params, spec)
         self.rows = RowBuffer(len(spec.joints))
@@ -101,8 +104,9 @@ class RollingPlanner:
         self._standing_rows()
 
     def _standing_rows(self) -> None:
-        """The robot standing before the first phase: the history that leads the first window, the cart at rest over
-        the middle of the feet, the pendulum's height and the preview gains."""
+        """The robot standing where the feet are (before the first phase, and after a kick): the history that leads
+        the next window, the cart at rest over the middle of the feet, the pendulum's height and the preview
+        gains."""
         p = self.params
         feet = {side: np.repeat(np.array([[self.state.foot(side).x, self.state.foot(side).y, 0.0,
                                             self.state.foot(side).yaw]]), HISTORY_ROWS, axis=0) for side in SIDES}
@@ -167,7 +171,14 @@ class RollingPlanner:
             self.rows.trim(k - int(round(KEEP_S / CONTROL_PERIOD_S)))
 
     def _plan(self, intent: Intent) -> Iterator[None]:
-        """Plan the next phase (the module docstring's steps), yielding between stages; commit it at the end."""
+        """Plan the next phase (the module docstring's steps), yielding between stages; commit it at the end. A kick
+        asked for stops the walk first, and is the next phase once it stands."""
+        if self.pending_kick is not None:
+            if self.state.mode == "stand":
+                yield
+                self._kick(self.pending_kick)
+                return
+            intent = replace(intent, stop=True)
         phase, after = next_phase(self.state, intent, self.params, self.spec, self.envelope)
         preview = len(self.gains.gp)
         ahead = predict(after, intent, self.params, self.spec, self.envelope,
@@ -229,7 +240,7 @@ class RollingPlanner:
             "joints": w.joints[mine], "goals": goals, "p_gains": p_gains, "torso_pos": w.pos[mine],
             "torso_rot": w.rot[mine], "plan_yaw": torso_yaw(w.rot[mine], before),
             "velocity": np.repeat(self._velocity(phase)[None], n, axis=0), "zmp_ref": w.ref[mine],
-            "zmp": zmp[mine], "com": com[mine], "contact": contact,
+            "zmp": zmp[mine], "com": com[mine], "contact": contact, "open": np.zeros(n),
             "support": tuple(c if c == "double" or feet[other_side(c)][i, 2] >= LIFTED_M else "double"
                              for i, c in enumerate(contact)),
             **self._step_objects(phase), **chunk_fields(self.legs, feet, contact, w.pos[mine], w.rot[mine])}
@@ -244,6 +255,28 @@ class RollingPlanner:
             self.stand_since = start
         self.state, self.cart = after, self._next_cart
         self.history = _History.of(w, slice(h0 + n - HISTORY_ROWS, h0 + n))
+
+    def _kick(self, side: str) -> None:
+        """Commit a kick phase (:mod:`.kick`) from the standing robot; afterwards it stands where it stood."""
+        from op2motion.gait.kick import kick_chunk
+
+        stand = self.rows.get("goals", self.rows.end - 1).copy()
+        chunk = kick_chunk(self.spec, self.legs, self.state, stand, float(self.params.p_gain), side, self.action)
+        n = len(chunk["contact"])
+        feet, contact, pos, rot = chunk.pop("feet"), chunk["contact"], chunk["torso_pos"], chunk["torso_rot"]
+        before = float(self.rows.numeric["plan_yaw"][-1])
+        chunk.update({"plan_yaw": torso_yaw(rot, before), "velocity": np.zeros((n, 2)),
+                      "zmp_ref": chunk["com"][:, :2], "zmp": chunk["com"][:, :2], "open": np.ones(n),
+                      "support": tuple(c if c == "double" or feet[other_side(c)][i, 2] >= LIFTED_M else "double"
+                                       for i, c in enumerate(contact)),
+                      "learn": [None] * n, "landing": [None] * n, **chunk_fields(self.legs, feet, contact, pos, rot)})
+        start = self.rows.end
+        self.rows.append(chunk)
+        where = {s: chunk[f"feet_{s}"] for s in SIDES}
+        self.phases.append((start, Phase("kick", where, tuple(contact), chunk["zmp_ref"], swing=side)))
+        self.pending_kick, self.stand_since = None, None
+        self.state = replace(self.state, row=self.state.row + n)
+        self._standing_rows()
 
     def _velocity(self, phase: Phase) -> np.ndarray:
         """The planned stride velocity (2,) [m/s] of a phase in the world frame (zero unless stepping)."""

@@ -28,6 +28,7 @@ from typing import Mapping
 
 import numpy as np
 
+from op2motion.formats.action import ActionFile
 from op2motion.gait.commands import CommandTimeline
 from op2motion.gait.controller import LANDING_ROWS, WalkController
 from op2motion.gait.envelope import STEER_ENVELOPE, Envelope
@@ -53,30 +54,33 @@ class SteerableWalk(WalkController):
     """A walk planned while it walks, from commands (see the module docstring)."""
 
     def __init__(self, params: GaitParams, spec: Spec, feedback: Feedback = Feedback(),
-                 envelope: Envelope = STEER_ENVELOPE, commands: CommandTimeline | None = None):
+                 envelope: Envelope = STEER_ENVELOPE, commands: CommandTimeline | None = None,
+                 action: ActionFile | None = None):
         self.params, self.spec, self.feedback, self.envelope, self.commands = params, spec, feedback, envelope, commands
+        self.action = action
         self._setup_legs(spec, feedback)
         self.lead = int(round(LEAD_S / CONTROL_PERIOD_S))
         self._plan: Plan | None = None
         self._command = (0.0, 0.0, 0.0)
         self._stopping = False
-        self._kick: str | None = None
         self._fed: float | None = None
         self._clock_s = 0.0
         self._fresh()
 
     @classmethod
     def make(cls, spec: Spec | None = None, preset: str | None = None, feedback: Feedback = Feedback(),
-             commands: CommandTimeline | None = None) -> "SteerableWalk":
-        """The steered walk of a preset (default :data:`STEER_PRESET`) on ``spec`` (default: the shipped one)."""
+             commands: CommandTimeline | None = None, action: ActionFile | None = None) -> "SteerableWalk":
+        """The steered walk of a preset (default :data:`STEER_PRESET`) on ``spec`` (default: the shipped one); its
+        kicks are the stock pages 12/13 of ``action`` when it has them, op2motion's own otherwise."""
         from op2motion.robot.specfile import default_spec
 
-        return cls(load_preset(preset or STEER_PRESET), spec or default_spec(), feedback, commands=commands)
+        return cls(load_preset(preset or STEER_PRESET), spec or default_spec(), feedback, commands=commands,
+                   action=action)
 
     def _fresh(self) -> None:
         """A new walk from standing: the planner, the feedback's memories, row 0 planned."""
         f = self.feedback
-        self.planner = RollingPlanner(self.params, self.spec, self.envelope, self.legs)
+        self.planner = RollingPlanner(self.params, self.spec, self.envelope, self.legs, self.action)
         self.rows = self.planner.rows
         per_step = ticks(self.params.single_s) + ticks(self.params.double_s)
         self.learner = RollingLearner.rolling(self.rows, per_step, {s: np.array(leg.index) for s, leg in
@@ -104,7 +108,7 @@ class SteerableWalk(WalkController):
 
         if foot not in ("right", "left"):
             raise InputError(f"expected right or left, got {foot!r}", "foot")
-        self._kick = foot
+        self.planner.pending_kick = foot
 
     @property
     def commanded(self) -> tuple[float, float, float]:
@@ -184,7 +188,7 @@ class SteerableWalk(WalkController):
 def dry_run_plan(walk: SteerableWalk) -> Plan:
     """Plan ``walk``'s commands ahead, with no sensors (the planner alone), into a physics :class:`Plan`: the
     lead-in, every row until the walk stands still again after its stop, the walking clock."""
-    twin = SteerableWalk(walk.params, walk.spec, walk.feedback, walk.envelope, walk.commands)
+    twin = SteerableWalk(walk.params, walk.spec, walk.feedback, walk.envelope, walk.commands, walk.action)
     twin.planner.keep_all = True
     timeline = walk.commands
     end_s = timeline.duration_s if timeline is not None else STAND_PLAN_S

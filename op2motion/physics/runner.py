@@ -42,7 +42,7 @@ Progress = Callable[[float, float], object]      # (simulated seconds done, in a
 class Setup:
     """What every run of a check shares: the servo model (Kp scaled by ``stiffness``, a rated supply ``voltage`` [V],
     None: the spec's), the floor's Coulomb ``friction``, the ``sensors``' latency and noise; ``snapshot`` keeps a
-    picture of the main run's end (the first engine's), ``keep_track`` each main run's samples
+    picture of the main run's end (the first engine's), ``keep_track`` the samples of each main and pushed run
     (:class:`.track.Track`, e.g. to plot the joints); ``full_length`` plays every run for the plan's whole
     duration (by default a run ends once settled or fallen, :mod:`.stopping`); ``lying`` starts every run lying on
     the floor (``front``: face down, ``back``: face up, ``left`` or ``right``: on that side; the plan's first goals
@@ -171,7 +171,7 @@ class _Runner:
             dx, dy = PUSH_DIRECTIONS[direction]
             push = Push(np.array([dx, dy, 0.0]) * pushes.force_n, at, pushes.duration_s)
             out.append(PushResult(direction, pushes.force_n, at, pushes.duration_s,
-                                  self.run(engine_name, RunSetup(push=push))))
+                                  self.run(engine_name, RunSetup(push=push), keep_track=self.setup.keep_track)))
         return tuple(out)
 
 
