@@ -180,4 +180,5 @@ class Supervisor:
         again = getattr(self.inner, "resume", None)
         first = again(joint_positions, t_s) if again is not None else self.inner.start(joint_positions)
         target = np.array([first.get(n, joints[i]) for i, n in enumerate(self.spec.joint_names)])
-        self.rows, self.row, self.phase, self.hold = blend(joints, target, self.spec, RESUME_LEAST_S), 0, "blend", joints
+        self.rows, self.row, self.hold = blend(joints, target, self.spec, RESUME_LEAST_S), 0, joints
+        self.phase = "blend"
