@@ -35,6 +35,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
 
+import numpy as np
+
 from op2motion.errors import InputError
 
 SCHEMA = "op2motion.commands/1"
@@ -225,3 +227,17 @@ def timeline_of(steps: list[tuple[float, float, float, float] | tuple[float, str
             entries.append((_entry({"t_s": t, "vx_m_s": vx, "vy_m_s": vy,
                                     "yaw_rate_deg_s": math.degrees(float(yaw))}, where), where))
     return _timeline(entries, "<code>")
+
+
+def commanded_path(timeline: CommandTimeline, dt: float = 0.008) -> tuple[np.ndarray, np.ndarray]:
+    """The path the commands ask for, from the origin facing +X: times (N,) [s] and poses (N, 3) (x [m], y [m],
+    yaw [rad]), the command in force integrated in the body's frame every ``dt`` [s] until the last entry."""
+    steps = int(math.ceil(timeline.duration_s / dt)) + 1
+    times = np.arange(steps) * dt
+    poses = np.zeros((steps, 3))
+    for i in range(1, steps):
+        vx, vy, yaw_rate = timeline.command_at(times[i - 1])
+        x, y, yaw = poses[i - 1]
+        c, s = math.cos(yaw), math.sin(yaw)
+        poses[i] = (x + (c * vx - s * vy) * dt, y + (s * vx + c * vy) * dt, yaw + yaw_rate * dt)
+    return times, poses

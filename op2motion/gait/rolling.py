@@ -45,10 +45,12 @@ from op2motion.robot.spec import Spec
 from op2motion.robot.support import LIFTED_M, SIDES, other_side
 
 HISTORY_ROWS = 8            # rows already planned that lead each window (the differences at its start are right)
-LOOKAHEAD_S = 0.32          # the body is planned this far beyond the phase (the multibody correction's own preview)
+LOOKAHEAD_S = 0.64          # the body is planned this far beyond the phase (the multibody correction's own preview: two
+                            # steps; with one, the next lift-off fell near the window's end and its ZMP swung 60 mm)
 TAIL_ROWS = 8               # rows planned past the window and thrown away: the multibody ZMP's differences take the
                             # rest padding there (the robot is not really about to stop)
-PLAN_AHEAD_ROWS = 12        # a phase's planning begins this many rows (96 ms) before the phase does
+PLAN_AHEAD_ROWS = 24        # a phase's planning begins this many rows (192 ms) before the phase does: its 20 stages
+                            # (one a tick) are done before it begins
 KEEP_S = 2.0                # rows older than this [s] behind the one playing are dropped
 
 
@@ -141,8 +143,13 @@ class RollingPlanner:
         joints = body.goals(arm_rows(self.params, timeline, self.spec, rot, pos), pos, rot, REACH_SHARE)
         return _Window(feet, contact, ref, pos, rot, pos[:, :2].copy(), joints, body, history, rows)
 
-    def _fit(self, w: _Window) -> np.ndarray:
-        """Move the new rows' torsos until the whole-body CoM lies on the window's CoM path; the CoM (K, 3)."""
+    def _fit(self, w: _Window) -> None:
+        """Move the new rows' torsos until the whole-body CoM lies on the window's CoM path."""
+        for _ in self._fit_stages(w):
+            pass
+
+    def _fit_stages(self, w: _Window) -> Iterator[None]:
+        """:meth:`_fit` a fixed-point pass at a time (a stage each)."""
         timeline = w.body.timeline
         new = slice(w.history, None)
         for _ in range(COM_PASSES):
@@ -150,7 +157,7 @@ class RollingPlanner:
             w.pos[new, :2] += w.target[new] - com[new, :2]
             arms = arm_rows(self.params, timeline, self.spec, w.rot, w.pos)
             w.joints[new] = w.body.goals(arms, w.pos, w.rot, REACH_SHARE)[new]
-        return w.body.com(w.body.configs(w.joints, w.pos, w.rot))
+            yield
 
     # -- planning, one stage at a time --------------------------------------------------------------------------
 
@@ -202,8 +209,7 @@ class RollingPlanner:
             aimed[rows:] += delta[-1]
             cart, self._next_cart = run_cart(self.gains, aimed, rows + TAIL_ROWS, self.cart, phase.rows)
             w.target = np.vstack([np.zeros((HISTORY_ROWS, 2)), cart.com])
-            self._fit(w)
-            yield
+            yield from self._fit_stages(w)
             com, zmp = w.body.zmp(w.body.configs(w.joints, w.pos, w.rot))
             if p < self.params.zmp_passes:
                 delta = delta + (aim[:rows] - zmp[HISTORY_ROWS:HISTORY_ROWS + rows])

@@ -177,3 +177,17 @@ def rows_of_gait(gait: Gait, legs: Mapping[str, Leg]) -> RowBuffer:
     rows = RowBuffer(gait.joints.shape[1])
     rows.append(chunk)
     return rows
+
+
+def zmp_margins(rows: RowBuffer, spec: Any, count: int) -> np.ndarray:
+    """Margin [m] of each of the first ``count`` rows' planned (multibody) ZMP to the sole(s) of its planned contact
+    (positive inside)."""
+    from op2motion.gait.footsteps import Footstep, sole_rectangle
+    from op2motion.robot.balance import polygon_margin
+
+    out = np.empty(count)
+    for k in range(rows.first, rows.first + count):
+        support = Support.of(rows.obj("contact", k))
+        corners = {side: sole_rectangle(spec, Footstep(side, *rows.feet(side, k)[[0, 1, 3]])) for side in support.feet}
+        out[k - rows.first] = polygon_margin(rows.get("zmp", k), support.polygon(corners))[0]
+    return out

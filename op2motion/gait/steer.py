@@ -24,7 +24,7 @@ run of the same planner with the same commands, so the judge knows what the walk
 from __future__ import annotations
 
 import math
-from typing import Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -61,6 +61,8 @@ class SteerableWalk(WalkController):
         self._setup_legs(spec, feedback)
         self.lead = int(round(LEAD_S / CONTROL_PERIOD_S))
         self._plan: Plan | None = None
+        self.dry: SteerableWalk | None = None
+        self.dry_rows = 0
         self._command = (0.0, 0.0, 0.0)
         self._stopping = False
         self._fed: float | None = None
@@ -187,7 +189,16 @@ class SteerableWalk(WalkController):
 
 def dry_run_plan(walk: SteerableWalk) -> Plan:
     """Plan ``walk``'s commands ahead, with no sensors (the planner alone), into a physics :class:`Plan`: the
-    lead-in, every row until the walk stands still again after its stop, the walking clock."""
+    lead-in, every row until the walk stands still again after its stop, the walking clock. The dry run stays on
+    ``walk.dry`` (its rows: ``walk.dry.rows``, ``walk.dry_rows`` of them) for summaries and figures."""
+    twin, count = dry_run(walk)
+    walk.dry, walk.dry_rows = twin, count
+    return plan_of_rows(twin, count)
+
+
+def dry_run(walk: SteerableWalk) -> tuple[SteerableWalk, int]:
+    """A twin of ``walk`` fed its commands row by row with no sensors, until it stands still again after its stop
+    (or a minute past the last command); the twin and the rows it planned."""
     twin = SteerableWalk(walk.params, walk.spec, walk.feedback, walk.envelope, walk.commands, walk.action)
     twin.planner.keep_all = True
     timeline = walk.commands
@@ -207,7 +218,7 @@ def dry_run_plan(walk: SteerableWalk) -> Plan:
         if twin.stopping and since is not None and k >= since + ticks(SETTLE_AFTER_STOP_S):
             break
         k += 1
-    return plan_of_rows(twin, k + 1)
+    return twin, k + 1
 
 
 def plan_of_rows(twin: SteerableWalk, count: int) -> Plan:
@@ -236,4 +247,25 @@ def plan_of_rows(twin: SteerableWalk, count: int) -> Plan:
                 (contact[0],) * lead + contact, clock)
 
 
-__all__ = ["LEAD_S", "STEER_PRESET", "SteerableWalk", "dry_run_plan"]
+def planned_summary(walk: SteerableWalk) -> dict[str, Any]:
+    """The figures of ``walk``'s planned commands (its dry run): steps, kicks, length, the torso's path and end pose,
+    the planned ZMP's least margin to the soles on the floor."""
+    from op2motion.gait.rows import zmp_margins
+
+    walk.plan                                                     # the dry run, once
+    twin, n = walk.dry, walk.dry_rows
+    assert twin is not None
+    rows = twin.rows
+    kinds = [phase.kind for first, phase in twin.planner.phases if first < n]
+    pos = rows.numeric["torso_pos"][:n:25, :2]
+    yaw = float(rows.numeric["plan_yaw"][n - 1])
+    margin = zmp_margins(rows, walk.spec, n)
+    return {"rows": n, "duration_s": round(walk.plan.duration_s, 3), "steps": kinds.count("step"),
+            "kicks": kinds.count("kick"), "path_m": round(float(np.sum(np.hypot(*np.diff(pos, axis=0).T))), 4),
+            "end_pose": {"x_m": round(float(rows.numeric["torso_pos"][n - 1, 0]), 4),
+                         "y_m": round(float(rows.numeric["torso_pos"][n - 1, 1]), 4),
+                         "yaw_deg": round(math.degrees(yaw), 2)},
+            "zmp_margin_min_m": round(float(margin.min()), 4)}
+
+
+__all__ = ["LEAD_S", "STEER_PRESET", "SteerableWalk", "dry_run", "dry_run_plan", "planned_summary"]
