@@ -64,10 +64,10 @@ def _physics(args: argparse.Namespace, walk: Any, spec: Spec, result: dict[str, 
             return twin
 
         with progress(args, "robust", "run") as on_progress:
-            report = robust_check(fresh, spec, engines_of(args), commanded_judge, pushes, on_progress=on_progress)
-        result["robust"] = robust_summary(report)
-        result["robust"]["worst"] = report.worst(walk_badness).member.name
-        return report, robust_table(report)
+            family = robust_check(fresh, spec, engines_of(args), commanded_judge, pushes, on_progress=on_progress)
+        result["robust"] = robust_summary(family)
+        result["robust"]["worst"] = family.worst(walk_badness).member.name
+        return family, robust_table(family)
     with progress(args, "physics", "s") as on_progress:
         report = check(walk, spec, engines_of(args), pushes, setup=Setup(keep_track=bool(args.plot)),
                        on_progress=on_progress)
