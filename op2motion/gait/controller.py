@@ -178,7 +178,7 @@ class WalkController:
         kp = np.add(f.kp, np.multiply(f.soft_kp, self.calibration.softness))
         turn = -(kp * error + np.multiply(f.ki, self.state.integral) + np.multiply(f.kd, gyro))
         turn = np.clip(turn, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
-        change = self._damping(np.asarray(gyro_rad_s, dtype=float))
+        change = self._damping(np.asarray(gyro_rad_s, dtype=float)) * self.rows.value("damping", k)
         heading = self._heading(float(gyro_rad_s[2]), k)
         if np.any(turn) or heading or f.placement or f.accept_landing:
             change += self._leg_change(k, float(turn[0]), float(turn[1]), heading)

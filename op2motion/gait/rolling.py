@@ -51,6 +51,8 @@ TAIL_ROWS = 8               # rows planned past the window and thrown away: the 
                             # rest padding there (the robot is not really about to stop)
 PLAN_AHEAD_ROWS = 24        # a phase's planning begins this many rows (192 ms) before the phase does: its 20 stages
                             # (one a tick) are done before it begins
+DAMPING_FADE_S = 0.3        # standing still after walking, the gyro damping fades out over this long [s] (and back
+                            # in to walk again); before the first step it stays (soft servos stand better with it)
 KEEP_S = 2.0                # rows older than this [s] behind the one playing are dropped
 
 
@@ -247,6 +249,7 @@ class RollingPlanner:
             "torso_rot": w.rot[mine], "plan_yaw": torso_yaw(w.rot[mine], before),
             "velocity": np.repeat(self._velocity(phase)[None], n, axis=0), "zmp_ref": w.ref[mine],
             "zmp": zmp[mine], "com": com[mine], "contact": contact, "open": np.zeros(n),
+            "damping": self._damping(phase.kind != "stand" or self.state.steps == 0, n),
             "support": tuple(c if c == "double" or feet[other_side(c)][i, 2] >= LIFTED_M else "double"
                              for i, c in enumerate(contact)),
             **self._step_objects(phase), **chunk_fields(self.legs, feet, contact, w.pos[mine], w.rot[mine])}
@@ -273,6 +276,7 @@ class RollingPlanner:
         before = float(self.rows.numeric["plan_yaw"][-1])
         chunk.update({"plan_yaw": torso_yaw(rot, before), "velocity": np.zeros((n, 2)),
                       "zmp_ref": chunk["com"][:, :2], "zmp": chunk["com"][:, :2], "open": np.ones(n),
+                      "damping": np.zeros(n),
                       "support": tuple(c if c == "double" or feet[other_side(c)][i, 2] >= LIFTED_M else "double"
                                        for i, c in enumerate(contact)),
                       "learn": [None] * n, "landing": [None] * n, **chunk_fields(self.legs, feet, contact, pos, rot)})
@@ -283,6 +287,14 @@ class RollingPlanner:
         self.pending_kick, self.stand_since = None, None
         self.state = replace(self.state, row=self.state.row + n)
         self._standing_rows()
+
+    def _damping(self, on: bool, n: int) -> np.ndarray:
+        """The gyro damping's share over a phase's ``n`` rows: towards 1 (``on``: stepping or about to) or 0
+        (standing still) from where the last row left it, over :data:`DAMPING_FADE_S`."""
+        before = self.rows.value("damping", self.rows.end - 1) if self.rows.end > self.rows.first else 1.0
+        step = CONTROL_PERIOD_S / DAMPING_FADE_S
+        ramp = before + step * np.arange(1, n + 1) * (1.0 if on else -1.0)
+        return np.clip(ramp, 0.0, 1.0)
 
     def _velocity(self, phase: Phase) -> np.ndarray:
         """The planned stride velocity (2,) [m/s] of a phase in the world frame (zero unless stepping)."""

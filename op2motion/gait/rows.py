@@ -27,11 +27,12 @@ REACH_SHARE = 0.999                # a corrected leg stretches at most to this s
 #: torso position [m] and rotation, soles (x, y, z [m], yaw [rad]), the swing's phase 0..1, the planned heading [rad]
 #: (unwrapped), the planned stride velocity (2,) [m/s], the point the body turns about [m], each leg's planned servo
 #: angles (6,) [rad], the ZMP reference and the multibody ZMP (2,) [m], the whole-body CoM (3,) [m], and 1 where the
-#: row is played open loop (a kick inside a walk) else 0).
+#: row is played open loop (a kick inside a walk) else 0, and the share of the gyro damping applied (a steered walk
+#: standing still takes it out: with stiff servos and sensor latency it kept a standing robot rocking)).
 NUMERIC = {"joints": (20,), "goals": (20,), "p_gains": (20,), "torso_pos": (3,), "torso_rot": (3, 3),
            "feet_left": (4,), "feet_right": (4,), "swing_phase": (), "plan_yaw": (), "velocity": (2,),
            "support_point": (3,), "legs_left": (6,), "legs_right": (6,), "zmp_ref": (2,), "zmp": (2,),
-           "com": (3,), "open": ()}
+           "com": (3,), "open": (), "damping": ()}
 #: Per-row objects: the planned contact ("left", "right", "double"), the physics support, the step learner's place
 #: (swing side, row in the step, the step's number) or None, the leg odometry's landing (the foot stepped from, the
 #: foot that landed, whether it closed the feet) or None.
@@ -172,7 +173,7 @@ def rows_of_gait(gait: Gait, legs: Mapping[str, Leg]) -> RowBuffer:
              "velocity": stride_velocity(gait.torso_pos, stride), "zmp_ref": timeline.zmp_ref, "zmp": gait.zmp,
              "com": gait.com, "contact": timeline.contact, "support": timeline.supports,
              "learn": [None] * len(gait.joints), "landing": [None] * len(gait.joints),
-             "open": np.zeros(len(gait.joints)),
+             "open": np.zeros(len(gait.joints)), "damping": np.ones(len(gait.joints)),
              **chunk_fields(legs, timeline.feet, timeline.contact, gait.torso_pos, gait.torso_rot)}
     rows = RowBuffer(gait.joints.shape[1])
     rows.append(chunk)
