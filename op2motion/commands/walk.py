@@ -182,7 +182,7 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
     if args.commands is not None or args.action is not None:
         from op2motion.commands.walk_commands import commanded_walk
 
-        return commanded_walk(args, spec)
+        return commanded_walk(args, spec, _walk_line)
     outputs = OutputSet(_outputs(args))
     params = read_preset(preset_path(args.preset)).with_steps(args.steps)
     target = None if args.target is None else (args.target[0], args.target[1], math.radians(args.target[2]))

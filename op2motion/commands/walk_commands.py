@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -95,8 +95,9 @@ def _figure(walk: Any, report: Any) -> bytes:
     return render_steered(commanded, times, planned, planned_t, walked, f"walk --commands {walk.commands.source}")
 
 
-def commanded_walk(args: argparse.Namespace, spec: Spec) -> int:
-    """``walk --commands FILE`` (see the module docstring)."""
+def commanded_walk(args: argparse.Namespace, spec: Spec, walk_line: Callable[[str, dict[str, Any]], str]) -> int:
+    """``walk --commands FILE`` (see the module docstring); ``walk_line`` says one engine's walk in words (``walk``'s
+    own)."""
     from op2motion.fileio import OutputSet
     from op2motion.gait.steer import planned_summary
 
@@ -115,9 +116,7 @@ def commanded_walk(args: argparse.Namespace, spec: Spec) -> int:
     if table is not None:
         lines.append(table)
     elif report is not None:
-        from op2motion.commands.walk import _walk_line
-
-        lines += [_walk_line(e, s) for e, s in result["physics"]["engines"].items()]
+        lines += [walk_line(e, s) for e, s in result["physics"]["engines"].items()]
     failed = report is not None and (not report.passed if table is not None else report.fell)
     if args.plot:
         outputs.put("plot", _figure(walk, report))

@@ -17,7 +17,8 @@ from op2motion.gait.params import GaitParams, read_preset
 from op2motion.gait.presets import PRESETS, load_preset, preset_path
 from op2motion.gait.report import gait_csv, gait_summary, gait_webots, side_pushes, walk_summary
 from op2motion.gait.schedule import gait_plan, gait_schedule
+from op2motion.gait.steer import SteerableWalk
 
 __all__ = ["PRESETS", "STEER_ENVELOPE", "CommandTimeline", "Envelope", "Gait", "GaitParams", "WalkController",
            "gait_csv", "gait_plan", "gait_schedule", "gait_summary", "gait_webots", "load_preset", "plan_gait",
-           "preset_path", "read_commands", "read_preset", "side_pushes", "timeline_of", "walk_summary"]
+           "SteerableWalk", "preset_path", "read_commands", "read_preset", "side_pushes", "timeline_of", "walk_summary"]

@@ -125,6 +125,10 @@ class WalkController:
 
         return cls(plan_within_speed(load_preset(preset).with_steps(steps), spec), spec, feedback)
 
+    #: Makes the steerable walk (set by :mod:`.steer` when the package loads: the steered walk is a walk controller,
+    #: so this module cannot import it).
+    _steerable: Any = None
+
     @classmethod
     def steerable(cls, spec: Spec | None = None, preset: str | None = None, feedback: Feedback = Feedback(),
                   commands: Any = None, action: Any = None) -> Any:
@@ -133,9 +137,7 @@ class WalkController:
         command is zero. ``preset`` (default ``steer``) gives the step's timing and shape; ``commands`` (a
         :class:`.commands.CommandTimeline`) feeds it by itself and gives :attr:`plan` for a physics check; kicks are
         the stock pages of ``action`` (an :class:`~op2motion.formats.action.ActionFile`) when it has them."""
-        from op2motion.gait.steer import SteerableWalk
-
-        return SteerableWalk.make(spec, preset, feedback, commands, action)
+        return WalkController._steerable(spec, preset, feedback, commands, action)
 
     @property
     def done(self) -> bool:

@@ -268,4 +268,6 @@ def planned_summary(walk: SteerableWalk) -> dict[str, Any]:
             "zmp_margin_min_m": round(float(margin.min()), 4)}
 
 
+WalkController._steerable = SteerableWalk.make
+
 __all__ = ["LEAD_S", "STEER_PRESET", "SteerableWalk", "dry_run", "dry_run_plan", "planned_summary"]
