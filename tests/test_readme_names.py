@@ -17,6 +17,7 @@ def _names() -> list[tuple[str, str]]:
     """(module, name) pairs: ``from module import name`` and ``alias.name`` of ``import module as alias``."""
     out: list[tuple[str, str]] = []
     for code in BLOCKS:
+        code = re.sub(r"#.*", "", code)                 # comments name files (specs/op2.toml), not attributes
         aliases = {}
         for module, names in re.findall(r"^\s*from ([\w.]+) import ([\w, ]+)", code, re.M):
             out += [(module, n.strip()) for n in names.split(",") if n.strip()]
