@@ -49,12 +49,22 @@ def test_a_command_sequence_walks_without_a_fall_and_ends_done(spec, plan, engin
     assert run.walk.lateral_drift_m < END_TOL_M
 
 
-def test_a_kick_inside_a_walk_keeps_the_robot_up_and_it_walks_on(spec):
+@pytest.fixture(scope="module")
+def kick_walk(spec):
+    """The kick sequence's walk, planned once."""
     walk = WalkController.steerable(spec, commands=timeline_of(KICK))
-    plan = walk.plan
-    kinds = [p.kind for _, p in walk.dry.planner.phases]
+    walk.plan
+    return walk
+
+
+@pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
+def test_a_kick_inside_a_walk_keeps_the_robot_up_and_it_walks_on(spec, kick_walk, engine):
+    plan = kick_walk.plan
+    kinds = [p.kind for _, p in kick_walk.dry.planner.phases]
     kick = kinds.index("kick")
     assert "step" in kinds[kick:]                      # walks on after the kick
-    run = check(walk, spec, ("mujoco",)).run
+    walk = WalkController.steerable(spec, commands=timeline_of(KICK))
+    walk._plan = plan
+    run = check(walk, spec, (engine,)).run
     assert not run.fell, run.reasons
     assert run.walk.distance_m > 0.25 and plan.duration_s > 18.0
