@@ -15,7 +15,9 @@ with the torso past :data:`FRAMEWORK_GUARD_DEG`):
    timeline's clock), else ``start(joint_positions)``. With ``resume=False``, or when getting up failed, it reports
    instead: :attr:`Supervisor.done`, :attr:`Supervisor.events` says what happened and when.
 
-Its :attr:`plan` is the wrapped controller's, :data:`EXTRA_S` longer (a fall and a get-up take time).
+Its :attr:`plan` is the wrapped controller's, :data:`EXTRA_S` longer (a fall and a get-up take time). Check it in
+physics with ``Setup(full_length=True)``: a run ends early once the robot has fallen, which here is where the
+supervisor's work begins.
 """
 
 from __future__ import annotations
