@@ -141,7 +141,10 @@ class SteerableWalk(WalkController):
         return self._stopping and since is not None and k >= since
 
     def start(self, joint_positions: Mapping[str, float]) -> dict[str, float]:
-        """A fresh walk from standing (the command and stop request kept); the lead-in's first goals."""
+        """A fresh walk from standing; the lead-in's first goals. The command and a stop request are kept, unless a
+        timeline drives the walk (it starts over from its beginning)."""
+        if self.commands is not None:
+            self._command, self._stopping = (0.0, 0.0, 0.0), False
         self._fresh()
         self._fed, self._clock_s = None, 0.0
         return super().start(joint_positions)
@@ -161,10 +164,11 @@ class SteerableWalk(WalkController):
 
     def resume(self, joint_positions: Mapping[str, float], t_s: float) -> dict[str, float]:
         """Walk again from standing after the robot was put back on its feet at ``t_s`` [s] of an outer clock (a
-        supervisor's): a fresh walk whose timeline, if any, goes on from there; the first goals."""
-        clock = self._clock_s + t_s
+        supervisor's): a fresh walk with the command in force, whose timeline, if any, goes on from there; the first
+        goals."""
+        clock, command, stopping = self._clock_s + t_s, self._command, self._stopping
         goals = self.start(joint_positions)
-        self._clock_s, self._fed = clock, clock
+        self._clock_s, self._fed, self._command, self._stopping = clock, clock, command, stopping
         return goals
 
     def _landed(self, side: str, k: int) -> tuple[np.ndarray, float] | None:
