@@ -7,7 +7,7 @@ within 15 % of the way of the planned end), which sets the envelope, and by the 
 (:func:`op2motion.gait.robust.walk_judge`: drift at most 5 %, heading within 5°), whose failures the table lists; the
 walk's envelope is opened wide for the measurement (:data:`WIDE`), so the commands are not clamped.
 
-Run from the repository root: ``python tools/steer_envelope.py [direction ...]`` (default all; ~30 minutes on 2
+Run from the repository root: ``python tools/steer_envelope.py [direction ...]`` (default all; about an hour on 2
 cores).
 """
 
@@ -28,11 +28,11 @@ COMMAND_S = 8.0
 STAND_S = 2.0
 WIDE = Envelope(forward_m_s=0.5, backward_m_s=0.4, sideways_m_s=0.2, turn_rad_s=1.5, combined=4.0)
 #: The commands tried per direction, slowest first: (vx [m/s], vy [m/s], yaw rate [rad/s]).
-SPEEDS = {"forward": [(0.20, 0.0, 0.0), (0.25, 0.0, 0.0), (0.28, 0.0, 0.0)],
-          "backward": [(-0.10, 0.0, 0.0), (-0.12, 0.0, 0.0), (-0.15, 0.0, 0.0)],
-          "sideways": [(0.0, 0.05, 0.0), (0.0, 0.06, 0.0), (0.0, 0.08, 0.0)],
-          "turning": [(0.0, 0.0, 0.6), (0.0, 0.0, 0.75), (0.0, 0.0, 0.9)],
-          "forward and turning": [(0.15, 0.0, 0.3), (0.15, 0.0, 0.45), (0.2, 0.0, 0.45)]}
+SPEEDS = {"forward": [(0.2, 0.0, 0.0), (0.25, 0.0, 0.0)],
+          "backward": [(-0.12, 0.0, 0.0), (-0.15, 0.0, 0.0)],
+          "sideways": [(0.0, 0.05, 0.0), (0.0, 0.07, 0.0)],
+          "turning": [(0.0, 0.0, 0.6), (0.0, 0.0, 0.8)],
+          "forward and turning": [(0.1, 0.0, 0.3), (0.15, 0.0, 0.45)]}
 
 
 def run(command: tuple[float, float, float]) -> tuple[int, int, int, list[str], float]:

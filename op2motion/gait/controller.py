@@ -51,6 +51,8 @@ from op2motion.robot.support import SIDES
 MAX_HEADING_RAD = 0.2             # the swing foot is steered at most this far per step (11°)
 MAX_TRIM_RAD = 0.15                # a leg joint's integral trim stays within this [rad] (8.6°)
 MAX_CORRECTION_RAD = 0.25          # the stabiliser turns the body at most this far (14°)
+STIFF_FROM = 1.1                   # servos measured this much stiffer than the model begin to lose the standing damping
+STIFF_FULL = 1.25                  # ... and lose all of it from here on (the family's x1.6 servos read 1.28)
 LANDING_ROWS = 2                   # a landing is measured this many rows past the latency into its double support
 
 
@@ -180,7 +182,7 @@ class WalkController:
         kp = np.add(f.kp, np.multiply(f.soft_kp, self.calibration.softness))
         turn = -(kp * error + np.multiply(f.ki, self.state.integral) + np.multiply(f.kd, gyro))
         turn = np.clip(turn, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
-        change = self._damping(np.asarray(gyro_rad_s, dtype=float)) * self.rows.value("damping", k)
+        change = self._damping(np.asarray(gyro_rad_s, dtype=float)) * self._standing_share(k)
         heading = self._heading(float(gyro_rad_s[2]), k)
         if np.any(turn) or heading or f.placement or f.accept_landing:
             change += self._leg_change(k, float(turn[0]), float(turn[1]), heading)
@@ -252,6 +254,14 @@ class WalkController:
         error = s.attitude - attitude_of(self.rows.get("torso_rot", k))
         s.integral = np.clip(s.integral + error * dt, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
         return error
+
+    def _standing_share(self, k: int) -> float:
+        """The share of the gyro damping at gait row ``k``: all of it, except where the plan stands still after
+        walking (the rows' ``damping`` fades to 0 there) and the servos were measured stiffer than the model: with
+        servos 1.6 times as stiff and 16 ms of latency the damping kept a standing robot rocking, while soft servos
+        need it to stand (taken out for them, the heavy, soft body fell over standing)."""
+        stiff = float(np.clip((self.calibration.estimate - STIFF_FROM) / (STIFF_FULL - STIFF_FROM), 0.0, 1.0))
+        return 1.0 - (1.0 - self.rows.value("damping", k)) * stiff
 
     def _damping(self, gyro: np.ndarray) -> np.ndarray:
         """The stock-style gyro damping (20,) [rad]: each leg's hip roll, knee, ankle pitch and ankle roll turned so

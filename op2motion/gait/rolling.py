@@ -51,8 +51,9 @@ TAIL_ROWS = 8               # rows planned past the window and thrown away: the 
                             # rest padding there (the robot is not really about to stop)
 PLAN_AHEAD_ROWS = 24        # a phase's planning begins this many rows (192 ms) before the phase does: its 20 stages
                             # (one a tick) are done before it begins
-DAMPING_FADE_S = 0.3        # standing still after walking, the gyro damping fades out over this long [s] (and back
-                            # in to walk again); before the first step it stays (soft servos stand better with it)
+DAMPING_FADE_S = 0.3        # standing still after walking, the gyro damping of stiff servos fades out over this long
+                            # [s] (and back in to walk again; the controller decides whose, by their measured
+                            # stiffness); before the first step it stays
 KEEP_S = 2.0                # rows older than this [s] behind the one playing are dropped
 
 

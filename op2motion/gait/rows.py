@@ -27,8 +27,9 @@ REACH_SHARE = 0.999                # a corrected leg stretches at most to this s
 #: torso position [m] and rotation, soles (x, y, z [m], yaw [rad]), the swing's phase 0..1, the planned heading [rad]
 #: (unwrapped), the planned stride velocity (2,) [m/s], the point the body turns about [m], each leg's planned servo
 #: angles (6,) [rad], the ZMP reference and the multibody ZMP (2,) [m], the whole-body CoM (3,) [m], and 1 where the
-#: row is played open loop (a kick inside a walk) else 0, and the share of the gyro damping applied (a steered walk
-#: standing still takes it out: with stiff servos and sensor latency it kept a standing robot rocking)).
+#: row is played open loop (a kick inside a walk) else 0, and the share of the gyro damping servos stiffer than the
+#: model keep (a steered walk standing still after walking takes it out: with stiff servos and sensor latency it kept a
+#: standing robot rocking; :meth:`.controller.WalkController._standing_share`)).
 NUMERIC = {"joints": (20,), "goals": (20,), "p_gains": (20,), "torso_pos": (3,), "torso_rot": (3, 3),
            "feet_left": (4,), "feet_right": (4,), "swing_phase": (), "plan_yaw": (), "velocity": (2,),
            "support_point": (3,), "legs_left": (6,), "legs_right": (6,), "zmp_ref": (2,), "zmp": (2,),
