@@ -1,10 +1,10 @@
 """Regenerate the README's getting-up tables and figure: ``GetUp()`` from lying face down, face up and on either side,
 on every member of the robustness family in PyBullet and MuJoCo (MX-28 model, 1 kHz, 16 ms IMU latency, 20 s each),
-with op2motion's own motions, and on the nominal body with the stock pages 10/11 (``tests/data/motion_4096.bin``); the
-supervisor catching a 30 N push mid-walk from each direction; and ``docs/getup.png`` (the torso's height and tilt while
-getting up, nominal body, both engines).
+with op2motion's own motions, and on the nominal body with the stock pages 10/11 (``tests/data/motion_4096.bin``);
+op2motion's rolls alone from each side on the family; the supervisor catching a 30 N push mid-walk from each
+direction; and ``docs/getup.png`` (the torso's height and tilt while getting up, nominal body, both engines).
 
-Run from the repository root: ``python tools/getup_table.py [own|stock|falls|figure ...]`` (default all; about an
+Run from the repository root: ``python tools/getup_table.py [own|stock|rolls|falls|figure ...]`` (default all; about an
 hour on 2 cores).
 """
 
@@ -61,6 +61,29 @@ def family_table(action: Path | None, whole: bool = True) -> None:
                   flush=True)
 
 
+def rolls_table() -> None:
+    """op2motion's rolls alone (planned, played open loop) from lying on their side: where each member ends."""
+    from op2motion.formats.motionfile import read_motion
+    from op2motion.motion.lying import lying_side
+    from op2motion.motion.pipeline import plan_motion
+    from op2motion.motion.ways import motion_path
+
+    spec = default_spec()
+    print("| roll | engine | ends on its back | ends otherwise |")
+    print("|---|---|---|---|")
+    for side in ("left", "right"):
+        trajectory = plan_motion(read_motion(motion_path(f"roll_{side}"), spec), spec, planner="none")
+        for engine in ENGINES:
+            ends = []
+            for m in family(spec):
+                setup = replace(m.setup(), keep_track=True, full_length=True, lying=side)
+                track = check(trajectory.schedule(m.body(spec)), m.body(spec), (engine,), setup=setup).run.track
+                ends.append(lying_side(track.rot[-1].T @ np.array([0.0, 0.0, 1.0])))
+            others = [f"{e}" for e in ends if e != "back"]
+            print(f"| `roll_{side}` from the {side} side | {engine} | {ends.count('back')}/{len(ends)} | "
+                  f"{', '.join(others) or '–'} |", flush=True)
+
+
 def falls_table() -> None:
     """A steered walk at 0.15 m/s pushed with 30 N for 0.1 s from each side, nominal body, both engines."""
     spec = default_spec()
@@ -114,11 +137,13 @@ def figure() -> None:
 
 
 def main() -> None:
-    asked = sys.argv[1:] or ["own", "stock", "falls", "figure"]
+    asked = sys.argv[1:] or ["own", "stock", "rolls", "falls", "figure"]
     if "own" in asked:
         family_table(None)
     if "stock" in asked:
         family_table(STOCK, whole=False)
+    if "rolls" in asked:
+        rolls_table()
     if "falls" in asked:
         falls_table()
     if "figure" in asked:
