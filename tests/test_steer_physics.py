@@ -57,7 +57,7 @@ def kick_walk(spec):
     return walk
 
 
-@pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
+@pytest.mark.parametrize("engine", ["mujoco"])      # both engines, every kick: tools/kick_table.py
 def test_a_kick_inside_a_walk_keeps_the_robot_up_and_it_walks_on(spec, kick_walk, engine):
     plan = kick_walk.plan
     kinds = [p.kind for _, p in kick_walk.dry.planner.phases]
