@@ -27,7 +27,7 @@ STOCK = ROOT / "tests" / "data" / "motion_4096.bin"
 SIDES = ("front", "back", "left", "right")
 UPRIGHT_TILT_DEG, UPRIGHT_HEIGHT_M = 25.0, 0.25
 PUSH_N, PUSH_AT_S = 30.0, 3.5
-WALK = [(0.0, 0.0, 0.0, 0.0), (1.0, 0.15, 0.0, 0.0), (22.0, "stop")]
+WALK = [(0.0, 0.0, 0.0, 0.0), (1.0, 0.15, 0.0, 0.0), (30.0, "stop")]
 
 
 def up_at(track) -> float | None:
