@@ -118,12 +118,13 @@ def test_the_cli_plans_a_commanded_walk(capsys, tmp_path):
 # -- the envelope and the phase program --------------------------------------------------------------------------
 
 
-def test_the_envelope_clamps_each_axis_and_their_sum():
-    env = Envelope(forward_m_s=0.2, backward_m_s=0.1, sideways_m_s=0.05, turn_rad_s=0.5, combined=1.0)
+def test_the_envelope_clamps_each_axis_and_their_sum_keeping_the_turn():
+    env = Envelope(forward_m_s=0.2, backward_m_s=0.1, sideways_m_s=0.05, turn_rad_s=0.5, combined=1.2)
     assert env.clamp(1.0, 0.0, 0.0) == pytest.approx((0.2, 0.0, 0.0))
     assert env.clamp(-1.0, 0.0, 0.0) == pytest.approx((-0.1, 0.0, 0.0))
-    vx, vy, w = env.clamp(0.2, 0.0, 0.5)                   # both at their limit: scaled to half each
-    assert vx / 0.2 + w / 0.5 == pytest.approx(1.0) and vx == pytest.approx(0.1)
+    assert env.clamp(0.1, 0.0, 0.25) == pytest.approx((0.1, 0.0, 0.25))       # shares 0.5 + 0.5: inside
+    vx, vy, w = env.clamp(0.2, 0.02, 0.5)                  # too much together: the steps shorten, the turn stays
+    assert w == pytest.approx(0.5) and vx / 0.2 + vy / 0.05 == pytest.approx(0.2) and vx / vy == pytest.approx(10.0)
     with pytest.raises(InputError):
         env.clamp(float("nan"), 0.0, 0.0)
 
