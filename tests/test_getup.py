@@ -136,8 +136,8 @@ def test_getup_plays_the_stock_page_when_the_action_file_has_it(spec):
 # -- the supervisor ----------------------------------------------------------------------------------------------
 
 PUSH_N = 30.0               # the acceptance's push
-PUSH_AT_S = 3.5             # mid-walk [s]
-WALK = [(0.0, 0.0, 0.0, 0.0), (1.0, 0.15, 0.0, 0.0), (20.0, "stop")]
+PUSH_AT_S = 2.8             # as the first step begins [s]
+WALK = [(0.0, 0.0, 0.0, 0.0), (1.0, 0.15, 0.0, 0.0), (18.0, "stop")]
 WALKED_ON_M = 0.15          # after resuming, the torso gets at least this far [m]
 
 
