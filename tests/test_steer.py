@@ -231,6 +231,20 @@ def test_a_command_takes_effect_from_the_next_step_and_stop_ends_in_done(spec):
     assert walk.done
 
 
+@pytest.mark.parametrize("late", range(0, 40, 4))
+def test_a_stop_at_any_tick_ends_within_two_steps(spec, late):
+    """Whenever in a step the stop comes (a phase's planning may have begun with the walking command), at most two
+    steps begin after it, the last closing the feet."""
+    walk = WalkController.steerable(spec)
+    _drive(walk, LEAD_S + 1.0, spec)
+    _drive_more(walk, LEAD_S + 1.0, 3.0 + late * DT, spec, lambda w: w.command(0.25, 0.0, 0.0))
+    t = LEAD_S + 4.0 + late * DT
+    stop_row = walk._row(t)
+    _drive_more(walk, t, 2.5, spec, lambda w: w.stop())
+    after = [p for first, p in walk.planner.phases if p.kind == "step" and first > stop_row]
+    assert 1 <= len(after) <= 2 and after[-1].closing
+
+
 def _drive_more(walk: SteerableWalk, t0: float, seconds: float, spec, first) -> None:
     """Go on stepping ``walk`` from ``t0`` [s] for ``seconds``, calling ``first(walk)`` before the first tick."""
     first(walk)

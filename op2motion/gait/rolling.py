@@ -99,6 +99,8 @@ class RollingPlanner:
                  action: ActionFile | None = None):
         self.params, self.spec, self.envelope, self.legs, self.action = params, spec, envelope, dict(legs), action
         self.pending_kick: str | None = None                    # a kick asked for (right or left), not yet planned
+        self.row_now = -1                                       # the last row handed to the controller
+        self.stop_row: int | None = None                        # the row a stop was asked at
         self.state: WalkState = initial_state(params, spec)
         self.height = standing_height(params, spec)
         self.rows = RowBuffer(len(spec.joints))
@@ -167,6 +169,7 @@ class RollingPlanner:
     def tick(self, k: int, intent: Callable[[], Intent]) -> None:
         """Row ``k`` is about to play: make sure it is planned (finishing any planning at once if it must), begin
         planning the next phase when it is :data:`PLAN_AHEAD_ROWS` away (reading ``intent()``), run one stage."""
+        self.row_now = k
         while self.rows.end <= k:
             if self.task is None:
                 self.task = self._plan(intent())
@@ -180,6 +183,13 @@ class RollingPlanner:
         if not self.keep_all:
             self.rows.trim(k - int(round(KEEP_S / CONTROL_PERIOD_S)))
 
+    def stop(self) -> None:
+        """A stop asked now: drop the planning in progress (it read the intent before; it starts again at the next
+        tick, finishing at once if the phase is due before its stages are through), and note the row, so that a
+        step already planned to begin after it counts as one of the two steps a stop may take."""
+        self.task = None
+        self.stop_row = self.row_now
+
     def _plan(self, intent: Intent) -> Iterator[None]:
         """Plan the next phase (the module docstring's steps), yielding between stages; commit it at the end. A kick
         asked for stops the walk first, and is the next phase once it stands."""
@@ -189,6 +199,9 @@ class RollingPlanner:
                 self._kick(self.pending_kick)
                 return
             intent = replace(intent, stop=True)
+        if intent.stop and self.stop_row is not None and self.state.mode == "walk" and any(
+                p.kind == "step" and first > self.stop_row for first, p in self.phases):
+            self.state = replace(self.state, halved=True)     # a step already began after the stop: close next
         phase, after = next_phase(self.state, intent, self.params, self.spec, self.envelope)
         preview = len(self.gains.gp)
         ahead = predict(after, intent, self.params, self.spec, self.envelope,

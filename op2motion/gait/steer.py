@@ -101,7 +101,10 @@ class SteerableWalk(WalkController):
         self._stopping = False
 
     def stop(self) -> None:
-        """End the walk within two steps, on both feet (:attr:`done` once still)."""
+        """End the walk within two steps, on both feet (:attr:`done` once still): a step whose planning had begun is
+        planned again with the stop."""
+        if not self._stopping:
+            self.planner.stop()
         self._stopping = True
 
     def kick(self, foot: str) -> None:
@@ -111,6 +114,7 @@ class SteerableWalk(WalkController):
         if foot not in ("right", "left"):
             raise InputError(f"expected right or left, got {foot!r}", "foot")
         self.planner.pending_kick = foot
+        self.planner.stop()
 
     @property
     def commanded(self) -> tuple[float, float, float]:
