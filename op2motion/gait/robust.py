@@ -58,3 +58,30 @@ def robust_table(report: RobustReport) -> str:
     """A walk's family as Markdown: speed, drift, heading, pushes, verdict per run; the summary line."""
     head = ["steady speed [m/s]", "drift", "heading", "pushes survived"]
     return robust_markdown(report, head, _walk_cells, walk_badness)
+
+
+MAX_COMMANDED_HEADING_DEG = 15.0    # a commanded walk ends within this of its planned heading [deg]
+MAX_COMMANDED_DRIFT_SHARE = 0.15    # ... and this share of its distance off the planned end across the way it went
+MIN_COMMANDED_DRIFT_M = 0.1         # ... (at least this much: a commanded walk turns and side-steps)
+
+
+def commanded_judge(report: EngineReport) -> str | None:
+    """A commanded walk's judge (``walk --commands``): no fall (nor when pushed), the heading within
+    :data:`MAX_COMMANDED_HEADING_DEG` of the plan's and the end within :data:`MAX_COMMANDED_DRIFT_SHARE` of the
+    distance of the planned end across the way it went (dead reckoning over turns and side steps adds up: looser than
+    a straight walk's :func:`walk_judge`); None when it passed."""
+    run = report.run
+    if run.fell:
+        return run.reason
+    fallen = [p.direction for p in report.pushes if p.fell]
+    if fallen:
+        return f"fell when pushed {', '.join(fallen)}"
+    walk = run.walk
+    if walk is None:
+        return "no walk measured"
+    allowed = max(MIN_COMMANDED_DRIFT_M, MAX_COMMANDED_DRIFT_SHARE * walk.distance_m)
+    if walk.lateral_drift_m > allowed:
+        return f"drifted {walk.lateral_drift_m * 1000:.0f} mm (allowed {allowed * 1000:.0f} mm)"
+    if abs(walk.heading_error_deg) > MAX_COMMANDED_HEADING_DEG:
+        return f"heading off by {walk.heading_error_deg:+.1f}°"
+    return None
