@@ -12,7 +12,7 @@ from helpers import STOCK
 
 from op2motion.gait import WalkController, timeline_of
 from op2motion.motion import GetUp, Supervisor
-from op2motion.motion.lying import FALLEN_B_M_S2, FALLEN_F_M_S2, framework_fallen, lying_side, tilt_deg
+from op2motion.motion.lying import lying_side, tilt_deg
 from op2motion.physics import LYING, Plan, Pushes, Setup, check
 from op2motion.physics.body import Body, lowest_point, lying_placement
 from op2motion.robot.spec import GRAVITY_M_S2
@@ -51,12 +51,16 @@ def test_a_lying_start_touches_the_floor_with_that_side_down(spec, side):
     assert lying_side(up_in_torso) == side
 
 
-def test_the_framework_fall_limits_in_si_and_the_tilt():
-    # FALLEN_F_LIMIT 390 and FALLEN_B_LIMIT 580 of 1023 counts about 512, 3 g over 512 counts
-    assert FALLEN_F_M_S2 == pytest.approx(-122 * 3 * GRAVITY_M_S2 / 512)
-    assert FALLEN_B_M_S2 == pytest.approx(68 * 3 * GRAVITY_M_S2 / 512)
-    assert framework_fallen([-GRAVITY_M_S2] * 30) == "front" and framework_fallen([GRAVITY_M_S2] * 30) == "back"
-    assert framework_fallen([0.0] * 30) is None and framework_fallen([-GRAVITY_M_S2] * 29) is None
+def test_the_framework_fall_test_in_counts_and_the_tilt(spec):
+    # the framework's test in the board's counts (the spec's [imu] mapping, as on the robot: robot.imu.FallWatch)
+    from op2motion.robot.imu import FallWatch, encode
+
+    board = spec.imu
+    for accel, verdict in (((-GRAVITY_M_S2, 0.0, 0.0), "front"), ((GRAVITY_M_S2, 0.0, 0.0), "back"),
+                           ((0.0, 0.0, GRAVITY_M_S2), None)):
+        watch = FallWatch(board)
+        verdicts = [watch.add(encode(board, np.zeros(3), np.array(accel))) for _ in range(board.fallen_window)]
+        assert verdicts[-2] is None and verdicts[-1] == verdict
     assert tilt_deg(np.array([0.0, 0.0, GRAVITY_M_S2])) == pytest.approx(0.0)
     assert tilt_deg(np.array([GRAVITY_M_S2, 0.0, 0.0])) == pytest.approx(90.0)
     assert lying_side(np.array([0.0, 0.0, GRAVITY_M_S2])) == "upright"
@@ -137,7 +141,8 @@ def test_getup_plays_the_stock_page_when_the_action_file_has_it(spec):
 
 PUSH_N = 30.0               # the acceptance's push
 PUSH_AT_S = 2.8             # as the first step begins [s]
-WALK = [(0.0, 0.0, 0.0, 0.0), (1.0, 0.15, 0.0, 0.0), (18.0, "stop")]
+WALK = [(0.0, 0.0, 0.0, 0.0), (1.0, 0.15, 0.0, 0.0), (24.0, "stop")]   # the supervisor's clock: a fall, a wait
+                                                                    # and a get-up take up to ~14 s of it
 WALKED_ON_M = 0.15          # after resuming, the torso gets at least this far [m]
 
 

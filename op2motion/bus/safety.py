@@ -28,7 +28,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from op2motion.errors import CheckFailed
-from op2motion.robot.imu import FallWatch, attitude
+from op2motion.robot.imu import ARM_TILT_RAD, FALL_TILT_RAD, FallWatch, attitude
 from op2motion.robot.joints import joint_range
 from op2motion.robot.spec import ImuSpec, Spec
 
@@ -36,8 +36,6 @@ HOT_START_C = 70                   # a servo this hot (or hotter) refuses to sta
 HOT_STOP_C = 75                    # ... and stops one (the MX-28 shuts itself down at 80 °C by default)
 BLIND_TICKS = 5                    # missed reads in a row (5 x 8 ms = 40 ms blind) stop the motion
 STOP_ERRORS = ("overheating", "overload", "input voltage")
-FALL_TILT_RAD = math.radians(45.0)   # a torso tilted this far from upright is falling
-ARM_TILT_RAD = math.radians(20.0)    # the fall watch arms once the torso is this close to upright
 TILT_TAU_S = 0.1                   # low-pass of the accelerometer before its tilt is taken (steps' impacts)
 FALL_TORQUE_LIMIT = 300            # every servo's torque limit while falling (of 1023)
 FALL_SETTLE_S = 1.0                # after a fall is seen, this long at the low limit before the goals relax

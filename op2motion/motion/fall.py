@@ -1,7 +1,8 @@
 """Falls: :class:`Supervisor` wraps any controller, sees it fall, lets it land softly, gets it up and walks on.
 
 Every 8 ms the supervisor watches the IMU (an attitude filter of the gyro and the accelerometer, as the walk's, and
-the ROBOTIS framework's averaged fore-aft test, :mod:`.lying`) and, while the robot is up, passes the tick on to the
+the ROBOTIS framework's averaged fore-aft test on the board's counts, :class:`op2motion.robot.imu.FallWatch`, the
+robot's own) and, while the robot is up, passes the tick on to the
 controller it wraps. When the robot is down (the torso past :data:`~.lying.FALL_TILT_DEG`, or the framework's test
 with the torso past :data:`FRAMEWORK_GUARD_DEG`):
 
@@ -29,10 +30,11 @@ from typing import Any, Mapping
 import numpy as np
 
 from op2motion.motion.getup import GetUp
-from op2motion.motion.lying import FALL_TILT_DEG, framework_fallen
+from op2motion.motion.lying import FALL_TILT_DEG
 from op2motion.motion.stillness import Stillness
 from op2motion.physics import Controller, Plan
 from op2motion.robot.framework import CONTROL_PERIOD_S
+from op2motion.robot.imu import FallWatch, board_of, encode
 from op2motion.robot.spec import GRAVITY_M_S2, Spec
 
 FALLING_TORQUE_SHARE = 0.3      # the servos' torque limit while the robot falls and lies
@@ -95,7 +97,9 @@ class Supervisor:
     def _reset(self) -> None:
         self.phase, self.since, self.offset = "run", 0.0, 0.0
         self.attitude, self.stillness = Attitude(), Stillness()
-        self.fore_aft: list[float] = []
+        self.board = board_of(self.spec)
+        self.fall_watch = FallWatch(self.board)
+        self.fallen: str | None = None
         self.hold = np.zeros(len(self.spec.joints))
         self.rows: np.ndarray | None = None
         self.row = 0
@@ -134,13 +138,12 @@ class Supervisor:
         self.attitude.update(gyro_rad_s, accel_m_s2)
         self.stillness.update(np.asarray(gyro_rad_s, dtype=float), joints)
         if self.attitude.angles is not None:
-            self.fore_aft.append(float(accel_m_s2[0]))
-        del self.fore_aft[:-64]
+            self.fallen = self.fall_watch.add(encode(self.board, np.asarray(gyro_rad_s, dtype=float),
+                                                     np.asarray(accel_m_s2, dtype=float)))
         if self.phase == "run":
             armed = self.attitude.angles is not None
             tilt = self.attitude.tilt_deg
-            down = armed and (tilt > FALL_TILT_DEG or (tilt > FRAMEWORK_GUARD_DEG and framework_fallen(self.fore_aft)
-                                                         is not None))
+            down = armed and (tilt > FALL_TILT_DEG or (tilt > FRAMEWORK_GUARD_DEG and self.fallen is not None))
             if not down:
                 return self.inner.step(t_s - self.offset, gyro_rad_s, accel_m_s2, joint_positions)
             self.falls += 1
