@@ -10,7 +10,9 @@ During a motion (:class:`Watch`, every 8 ms tick), a fault stops it:
 * a status error bit of :data:`STOP_ERRORS` (overheating, overload, input voltage), or a temperature of
   :data:`HOT_STOP_C` or more (each servo's full state is read every 20 ticks, in turn);
 * a fall: the torso tilted beyond :data:`FALL_TILT_RAD` (the accelerometer's gravity, low-passed over
-  :data:`TILT_TAU_S`), or the framework's own test (the fore-aft count beyond FALLEN_F/B_LIMIT over 30 ticks).
+  :data:`TILT_TAU_S`), or the framework's own test (the fore-aft count beyond FALLEN_F/B_LIMIT over 30 ticks);
+  not for a controller that deals with falls itself (``handles_falls``: a supervisor lets the robot land with the
+  torque limits lowered, gets it up and walks on).
 
 The policy (:data:`HOLD`): the goals stop where they are (a walk first reaches its next double support, at most a
 step away, so it stops on both feet) and stay held with the torque on: torque is never dropped under a standing
@@ -117,8 +119,9 @@ def clip_goals(goals: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tuple
 class Watch:
     """The per-tick checks of a running motion (see the module docstring)."""
 
-    def __init__(self, spec: Spec, imu: ImuSpec, dt: float, ids: Sequence[int], joints: Sequence[str]):
-        self.spec, self.dt = spec, dt
+    def __init__(self, spec: Spec, imu: ImuSpec, dt: float, ids: Sequence[int], joints: Sequence[str],
+                 falls: bool = True):
+        self.spec, self.dt, self.falls = spec, dt, falls
         self.ids, self.joints = tuple(ids), tuple(joints)
         self.missed = {d: 0 for d in (200, *self.ids)}
         self.fall = FallWatch(imu)
@@ -159,6 +162,8 @@ class Watch:
         self.gravity = accel.copy() if self.gravity is None else self.gravity + blend * (accel - self.gravity)
         self.tilt_rad = attitude(self.gravity)[2]
         framework = self.fall.add(words)
+        if not self.falls:                              # the controller deals with falls (a supervisor)
+            return None
         if not self.armed:
             self.armed = self.tilt_rad < ARM_TILT_RAD
             if self.armed:

@@ -85,6 +85,8 @@ class Attitude:
 class Supervisor:
     """Wraps a controller: fall, land, wait, get up, resume (see the module docstring)."""
 
+    handles_falls = True        # on the robot, the bus's safety watch leaves falls to it (op2motion.bus.loop)
+
     def __init__(self, controller: Controller, getup: GetUp | None = None, spec: Spec | None = None,
                  resume: bool = True, extra_s: float = EXTRA_S):
         self.inner, self.resume = controller, resume
@@ -125,6 +127,13 @@ class Supervisor:
         """The wrapped controller is done (after any falls), or the robot could not get up, or it got up and was
         not to resume."""
         return self.phase in ("gave_up", "up") or (self.phase == "run" and self.inner.done)
+
+    def stop(self) -> None:
+        """Pass a stop request on to the wrapped controller if it can stop itself (a steered walk); down or getting up,
+        it goes on to the stop once it runs again."""
+        ender = getattr(self.inner, "stop", None)
+        if callable(ender):
+            ender()
 
     def start(self, joint_positions: Mapping[str, float]) -> Mapping[str, float]:
         """Start over, and the wrapped controller with it."""
