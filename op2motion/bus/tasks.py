@@ -214,11 +214,19 @@ def play(port: str, spec: Spec, path: str, page: int | None = None, options: Opt
             what = f"page {page} ({loaded.page(page, spec).name})"
         result = MotionResult(what, trajectory.duration_s, target=target, notes=list(trajectory.notes))
         result.checked = checked(trajectory, spec, state, options.force, what, options.on_progress)
-        if options.stopped():
-            result.runs.append(("motion", LoopReport(ended="stopped")))
-            return result
-        session.take_control(state)
-        report = run_controller(robot_schedule(trajectory, spec), session.robot, stop=options.stop,
-                                on_tick=options.on_tick)
-        result.runs.append(("motion", report))
+        run_planned(session, state, trajectory, result, "motion", options)
         return result
+
+
+def run_planned(session: Session, state: RobotStatus, trajectory: Any, result: MotionResult, name: str,
+                options: Options) -> bool:
+    """Play a checked trajectory from where the robot is (the torque on without a jump first), as the run ``name``
+    of ``result``; whether it ran to its end (not on a stop request before it began, a stop or a fault)."""
+    if options.stopped():
+        result.runs.append((name, LoopReport(ended="stopped")))
+        return False
+    session.take_control(state)
+    report = run_controller(robot_schedule(trajectory, session.robot.spec), session.robot, stop=options.stop,
+                            on_tick=options.on_tick)
+    result.runs.append((name, report))
+    return report.ended == "done"

@@ -21,9 +21,9 @@ from typing import Any
 import numpy as np
 
 from op2motion.bus.loop import LoopReport, run_controller
-from op2motion.bus.plans import CHECK_ENGINE, LYING_TILT_RAD, move, robot_schedule
+from op2motion.bus.plans import CHECK_ENGINE, LYING_TILT_RAD, move
 from op2motion.bus.session import Session
-from op2motion.bus.tasks import MotionResult, Options, checked
+from op2motion.bus.tasks import MotionResult, Options, checked, run_planned
 from op2motion.errors import CheckFailed
 from op2motion.robot.imu import FALL_TILT_RAD
 from op2motion.robot.pose import Pose
@@ -99,14 +99,7 @@ def _on_robot(port: str, spec: Spec, controller: Any, what: str, options: Option
         result = MotionResult(what, approach.duration_s + planned, notes=list(approach.notes))
         result.checked = checked(approach, spec, state, options.force, "the move to the walk's first pose",
                                  options.on_progress)
-        if options.stopped():
-            result.runs.append(("approach", LoopReport(ended="stopped")))
-            return result
-        session.take_control(state)
-        report = run_controller(robot_schedule(approach, spec), session.robot, stop=options.stop,
-                                on_tick=options.on_tick)
-        result.runs.append(("approach", report))
-        if report.ended != "done":
+        if not run_planned(session, state, approach, result, "approach", options):
             return result
         report = run_controller(controller, session.robot, duration_s=duration_s, stop=options.stop,
                                 on_tick=options.on_tick, until_done=True)
