@@ -182,8 +182,9 @@ def test_stock_page_played_in_physics(spec):
 
 
 @pytest.mark.physics
-@pytest.mark.parametrize("name", sorted(p.stem for p in (POSES / "motions").glob("*.json")))
-def test_every_example_motion_stands_in_both_engines(spec, name):
+@pytest.mark.parametrize("name", sorted(p.stem for p in (POSES / "motions").glob("*.json")   # those lying and the
+                                         if not p.stem.startswith(("getup_", "roll_", "kick_"))))  # kicks: tools/
+def test_every_example_motion_stands_in_both_engines(spec, name):         # getup_table.py, kick_table.py, test_getup
     from op2motion.motion.pipeline import plan_motion
     from op2motion.physics import check
 

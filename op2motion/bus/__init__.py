@@ -16,7 +16,8 @@ Layers inside the wing, lowest first:
 * :mod:`.loop` (:func:`.loop.run_controller`: any physics :class:`~op2motion.physics.Controller` on the robot, one
   bulk read and one sync write every 8 ms, at real-time priority where allowed: :mod:`.realtime`; how a run ends:
   :mod:`.stopping`), :mod:`.plans` (moves from where the robot is, checked in physics), :mod:`.tasks` (what the
-  ``op2motion robot`` commands do), :mod:`.follow` (a target pose followed at a capped speed: the studio's), and
+  ``op2motion robot`` commands do; the walks and getting up: :mod:`.walks`, keys steering a walk: :mod:`.teleop`),
+  :mod:`.follow` (a target pose followed at a capped speed: the studio's), and
   :mod:`.bench` (the loop's and the status's speed through the emulator);
 * :mod:`.emulator` (the emulated OP2: the control tables byte for byte, physics and the servo model behind them).
 

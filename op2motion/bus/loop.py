@@ -15,8 +15,10 @@ Every :data:`~op2motion.robot.framework.CONTROL_PERIOD_S`, on an absolute clock:
 4. **one sync write** from register 26, 6 bytes a servo: D, I, P, 0, goal (the framework's own packet).
 
 The loop measures its period (tick start to tick start: p50, p99, max), counts late ticks and missed reads, and
-ends when the plan's duration is over, on a fault (:mod:`.safety`'s policy) or on a stop request (Ctrl-C: a walk
-first reaches its next double support, so it stops on both feet, at most a step later).
+ends when the plan's duration is over (or the controller is done, when asked to end then), on a fault
+(:mod:`.safety`'s policy) or on a stop request (Ctrl-C: a controller that can stop itself, a steered walk, is told
+to and ends done, within :data:`~.stopping.SOFT_STOP_MAX_S`; a planned walk first reaches its next double support,
+so it stops on both feet, at most a step later). A controller's ``torque_limits`` are written when they change.
 """
 
 from __future__ import annotations
@@ -137,7 +139,8 @@ class _Run:
         self.ids = robot.ids
         self.index = {n: i for i, n in enumerate(self.names)}
         self.lower, self.upper = safety.mechanical_bounds(self.spec)
-        self.watch = safety.Watch(self.spec, robot.imu, CONTROL_PERIOD_S, self.ids, self.names) if watch else None
+        self.watch = safety.Watch(self.spec, robot.imu, CONTROL_PERIOD_S, self.ids, self.names,
+                                  falls=not getattr(controller, "handles_falls", False)) if watch else None
         params = inspect.signature(controller.step).parameters
         feet = params.get("foot_forces_n")
         if feet is not None and feet.default is inspect.Parameter.empty:
@@ -151,6 +154,7 @@ class _Run:
         self.answered: set[int] = set()
         self.got: dict[int, Any] = {}
         self.rotating = self.ids[0]
+        self.limits: np.ndarray | None = None          # torque limits a controller set (None: full)
 
     def read(self, k: int, started: float) -> set[int]:
         """One bulk read (and one retry for the silent devices); the devices that answered."""
@@ -216,6 +220,19 @@ class _Run:
             gains = np.array([override.get(n, g) for n, g in zip(self.names, gains)], dtype=float)
         return np.clip(np.rint(gains), 0, MAX_P_GAIN).astype(int)
 
+    def limit(self, shares: Any) -> None:
+        """The controller's torque limits ({joint: share of the most}, or None for full), written when they change
+        (a supervisor lowers them while the robot falls)."""
+        values = np.full(len(self.names), TORQUE_LIMIT_FULL, dtype=int)
+        for name, share in (shares or {}).items():
+            if name in self.index:
+                values[self.index[name]] = int(round(min(max(float(share), 0.0), 1.0) * TORQUE_LIMIT_FULL))
+        if self.limits is None and not shares:
+            return
+        if self.limits is None or not np.array_equal(values, self.limits):
+            self.robot.sync("torque_limit", {d: int(values[i]) for i, d in enumerate(self.ids)})
+            self.limits = None if not shares else values
+
     def send(self, gains: np.ndarray) -> None:
         """The framework's sync write: D, I, P, 0, goal low, goal high for every servo."""
         ticks = servo_to_ticks(self.goals, self.spec)
@@ -239,9 +256,10 @@ def _step(run: _Run, stops: Stops, k: int, now: float, stop: threading.Event | N
     if fault is not None and report.fault is None:
         report.fault, report.ended = fault, "fault"
         stops.fault(fault, run.robot, plan, row, k, now)
-    if stop is not None and stop.is_set() and stops.frozen_at is None:
+    if stop is not None and stop.is_set() and stops.frozen_at is None and stops.soft_until is None:
         report.ended = "stopped"
-        stops.request(plan, row, k)
+        stops.request(plan, row, k, controller, now)
+    stops.soft_over(row, now)
     positions = dict(zip(run.names, run.positions.tolist()))
     goals: Any = {}
     if k == 0:
@@ -254,16 +272,21 @@ def _step(run: _Run, stops: Stops, k: int, now: float, stop: threading.Event | N
         run.robot.torque_limit(TORQUE_LIMIT_FULL)
         stops.fall_until, stops.end_at = None, now
     run.send(run.apply(goals, row))
+    run.limit(getattr(controller, "torque_limits", None))
     return t, row
 
 
 def run_controller(controller: Controller, port: str | OP2, spec: Spec | None = None, *,
                    duration_s: float | None = None, stop: threading.Event | None = None,
-                   on_tick: Callable[[Tick], None] | None = None, watch: bool = True) -> LoopReport:
+                   on_tick: Callable[[Tick], None] | None = None, watch: bool = True,
+                   until_done: bool = False) -> LoopReport:
     """Run ``controller`` on the robot at ``port`` (a path: opened, connected, checked by
     :func:`~.safety.preflight` and taken control of here; or an :class:`~.robot.OP2` already set up) every 8 ms
-    for ``duration_s`` (default: its plan's duration), until ``stop`` is set or a fault stops it (see the module
-    docstring). ``on_tick`` gets every :class:`Tick`. The servos keep holding the last goals afterwards."""
+    for ``duration_s`` (default: its plan's duration; with ``until_done`` also ending as soon as the controller is
+    done, e.g. a steered walk standing still after its stop, a get-up standing), until ``stop`` is set or a fault
+    stops it (see the module docstring). ``on_tick`` gets every :class:`Tick`. The servos keep holding the last
+    goals afterwards. A controller with ``handles_falls`` (a :class:`~op2motion.motion.fall.Supervisor`) deals with
+    falls itself: the watch does not stop it for one."""
     if isinstance(port, str):
         from op2motion.bus.session import Session
         from op2motion.robot.specfile import default_spec
@@ -271,16 +294,16 @@ def run_controller(controller: Controller, port: str | OP2, spec: Spec | None = 
         with Session(port, spec or default_spec()) as session:
             session.ready_for_motion()
             return run_controller(controller, session.robot, duration_s=duration_s, stop=stop, on_tick=on_tick,
-                                  watch=watch)
+                                  watch=watch, until_done=until_done)
     with steady(), realtime(LOOP_PRIORITY) as report_realtime:        # the collection before the priority
         report = _loop(_Run(controller, port, watch), controller.plan.duration_s if duration_s is None else duration_s,
-                       stop, on_tick)
+                       stop, on_tick, until_done)
     report.realtime = report_realtime
     return report
 
 
-def _loop(run: _Run, duration: float, stop: threading.Event | None, on_tick: Callable[[Tick], None] | None
-          ) -> LoopReport:
+def _loop(run: _Run, duration: float, stop: threading.Event | None, on_tick: Callable[[Tick], None] | None,
+          until_done: bool = False) -> LoopReport:
     """The ticks of one run (see :func:`run_controller`)."""
     stops, report = Stops(), run.report
     periods: list[float] = []
@@ -303,7 +326,7 @@ def _loop(run: _Run, duration: float, stop: threading.Event | None, on_tick: Cal
             on_tick(Tick(k, t, row, run.positions.copy(), run.gyro.copy(), run.accel.copy(), run.goals.copy()))
         k += 1
         clock += CONTROL_PERIOD_S
-        if stops.over(now, t, duration):
+        if stops.over(now, t, duration, lambda: k > 1 and bool(run.controller.done), until_done):
             break
     report.ticks, report.seconds = k, time.monotonic() - start
     report.period_p50_ms, report.period_p99_ms = _percentile(periods, 50), _percentile(periods, 99)

@@ -10,7 +10,9 @@ During a motion (:class:`Watch`, every 8 ms tick), a fault stops it:
 * a status error bit of :data:`STOP_ERRORS` (overheating, overload, input voltage), or a temperature of
   :data:`HOT_STOP_C` or more (each servo's full state is read every 20 ticks, in turn);
 * a fall: the torso tilted beyond :data:`FALL_TILT_RAD` (the accelerometer's gravity, low-passed over
-  :data:`TILT_TAU_S`), or the framework's own test (the fore-aft count beyond FALLEN_F/B_LIMIT over 30 ticks).
+  :data:`TILT_TAU_S`), or the framework's own test (the fore-aft count beyond FALLEN_F/B_LIMIT over 30 ticks);
+  not for a controller that deals with falls itself (``handles_falls``: a supervisor lets the robot land with the
+  torque limits lowered, gets it up and walks on).
 
 The policy (:data:`HOLD`): the goals stop where they are (a walk first reaches its next double support, at most a
 step away, so it stops on both feet) and stay held with the torque on: torque is never dropped under a standing
@@ -28,7 +30,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from op2motion.errors import CheckFailed
-from op2motion.robot.imu import FallWatch, attitude
+from op2motion.robot.imu import ARM_TILT_RAD, FALL_TILT_RAD, FallWatch, attitude
 from op2motion.robot.joints import joint_range
 from op2motion.robot.spec import ImuSpec, Spec
 
@@ -36,8 +38,6 @@ HOT_START_C = 70                   # a servo this hot (or hotter) refuses to sta
 HOT_STOP_C = 75                    # ... and stops one (the MX-28 shuts itself down at 80 °C by default)
 BLIND_TICKS = 5                    # missed reads in a row (5 x 8 ms = 40 ms blind) stop the motion
 STOP_ERRORS = ("overheating", "overload", "input voltage")
-FALL_TILT_RAD = math.radians(45.0)   # a torso tilted this far from upright is falling
-ARM_TILT_RAD = math.radians(20.0)    # the fall watch arms once the torso is this close to upright
 TILT_TAU_S = 0.1                   # low-pass of the accelerometer before its tilt is taken (steps' impacts)
 FALL_TORQUE_LIMIT = 300            # every servo's torque limit while falling (of 1023)
 FALL_SETTLE_S = 1.0                # after a fall is seen, this long at the low limit before the goals relax
@@ -119,8 +119,9 @@ def clip_goals(goals: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tuple
 class Watch:
     """The per-tick checks of a running motion (see the module docstring)."""
 
-    def __init__(self, spec: Spec, imu: ImuSpec, dt: float, ids: Sequence[int], joints: Sequence[str]):
-        self.spec, self.dt = spec, dt
+    def __init__(self, spec: Spec, imu: ImuSpec, dt: float, ids: Sequence[int], joints: Sequence[str],
+                 falls: bool = True):
+        self.spec, self.dt, self.falls = spec, dt, falls
         self.ids, self.joints = tuple(ids), tuple(joints)
         self.missed = {d: 0 for d in (200, *self.ids)}
         self.fall = FallWatch(imu)
@@ -161,6 +162,8 @@ class Watch:
         self.gravity = accel.copy() if self.gravity is None else self.gravity + blend * (accel - self.gravity)
         self.tilt_rad = attitude(self.gravity)[2]
         framework = self.fall.add(words)
+        if not self.falls:                              # the controller deals with falls (a supervisor)
+            return None
         if not self.armed:
             self.armed = self.tilt_rad < ARM_TILT_RAD
             if self.armed:

@@ -1,12 +1,14 @@
 """How a run of the 8 ms loop ends (:mod:`.loop`): by its plan's end, by a fault (:mod:`.safety`'s policy) or by a
-stop request (Ctrl-C). A stop freezes the goals at a row and holds them :data:`STOP_HOLD_S` before the loop ends: a
-walk's next row on both feet (:func:`stop_row`), anything else the row it is at; a fall lowers the torque limits
-and, :data:`~.safety.FALL_SETTLE_S` later, relaxes the goals to where the joints lie.
+stop request (Ctrl-C). A controller with a ``stop()`` of its own (a steered walk) is told to stop and runs on until
+it is done, at most :data:`SOFT_STOP_MAX_S`. Otherwise a stop freezes the goals at a row and holds them
+:data:`STOP_HOLD_S` before the loop ends: a planned walk's next row on both feet (:func:`stop_row`), anything else the
+row it is at; a fall lowers the torque limits and, :data:`~.safety.FALL_SETTLE_S` later, relaxes the goals to where
+the joints lie.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 from op2motion.bus import safety
 from op2motion.bus.robot import OP2
@@ -14,6 +16,8 @@ from op2motion.bus.tables import CM730_ID
 from op2motion.robot.support import Support
 
 STOP_HOLD_S = 0.3                  # after a stop, the held goals are sent this long before the loop ends
+SOFT_STOP_MAX_S = 2.0              # a controller that stops itself (a steered walk: two steps, 1.2 s, then still)
+                                   # gets this long to be done; then its goals freeze where they are
 
 
 def stop_row(plan: Any, row: int) -> int:
@@ -36,6 +40,7 @@ class Stops:
         self.frozen_at: int | None = None
         self.end_at: float | None = None
         self.fall_until: float | None = None
+        self.soft_until: float | None = None
 
     def fault(self, fault: safety.Fault, robot: OP2, plan: Any, row: int, k: int, now: float) -> None:
         """React to the run's first fault (:mod:`.safety`'s policy)."""
@@ -47,10 +52,22 @@ class Stops:
         else:
             self.frozen_at = stop_row(plan, row) if k else 0
 
-    def request(self, plan: Any, row: int, k: int) -> None:
-        """A stop request (Ctrl-C): a walk on its next double support, anything else at once."""
-        if self.frozen_at is None:
+    def request(self, plan: Any, row: int, k: int, controller: Any = None, now: float = 0.0) -> None:
+        """A stop request (Ctrl-C): a controller that stops itself is told to; a planned walk freezes on its next
+        double support, anything else at once."""
+        if self.frozen_at is not None or self.soft_until is not None:
+            return
+        ender = getattr(controller, "stop", None)
+        if k and callable(ender):
+            ender()
+            self.soft_until = now + SOFT_STOP_MAX_S
+        else:
             self.frozen_at = stop_row(plan, row) if k else 0
+
+    def soft_over(self, row: int, now: float) -> None:
+        """A controller told to stop that is not done in time: its goals freeze where they are."""
+        if self.soft_until is not None and self.frozen_at is None and now >= self.soft_until:
+            self.frozen_at = row
 
     def frozen(self, row: int, now: float) -> bool:
         """Whether the goals are frozen at ``row`` (the hold's end is timed from the first frozen tick)."""
@@ -60,8 +77,10 @@ class Stops:
             self.end_at = now + STOP_HOLD_S
         return True
 
-    def over(self, now: float, t: float, duration: float) -> bool:
-        """Whether the loop ends after this tick."""
+    def over(self, now: float, t: float, duration: float, done: Callable[[], bool], until_done: bool) -> bool:
+        """Whether the loop ends after this tick (``done``: whether the controller is done)."""
         if self.frozen_at is None:
-            return t >= duration
+            if self.soft_until is not None:
+                return done()
+            return t >= duration or (until_done and done())
         return self.end_at is not None and now >= self.end_at and self.fall_until is None

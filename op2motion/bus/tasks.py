@@ -1,5 +1,5 @@
-"""What the ``op2motion robot`` commands do, as library functions: :func:`status`, :func:`teach` (read a pose),
-:func:`play` (a pose, a motion file or an action page) and :func:`walk`.
+"""What the ``op2motion robot`` commands do, as library functions: :func:`status`, :func:`teach` (read a pose) and
+:func:`play` (a pose, a motion file or an action page); the walks and getting up: :mod:`.walks`.
 
 Each opens a :class:`~.session.Session` on the port, reads the whole robot, and (for a motion) refuses to start an
 unfit robot (:mod:`.safety`), builds the motion from where the robot is (:mod:`.plans`), refuses what fails
@@ -170,7 +170,7 @@ def load_motion(path: str, page: int | None, spec: Spec) -> tuple[str, Any]:
     return "pose", read_pose(path, spec)
 
 
-def _checked(trajectory: Any, spec: Spec, state: RobotStatus, force: bool, what: str,
+def checked(trajectory: Any, spec: Spec, state: RobotStatus, force: bool, what: str,
              on_progress: Any = None) -> str:
     """Refuse (exit 1) what physics says fails, or a start op2motion cannot check (lying), unless ``force``."""
     tilt = state.board.tilt_rad
@@ -213,62 +213,20 @@ def play(port: str, spec: Spec, path: str, page: int | None = None, options: Opt
             trajectory = then(move(current, start, spec), page_trajectory(loaded, page, spec, start))
             what = f"page {page} ({loaded.page(page, spec).name})"
         result = MotionResult(what, trajectory.duration_s, target=target, notes=list(trajectory.notes))
-        result.checked = _checked(trajectory, spec, state, options.force, what, options.on_progress)
-        if options.stopped():
-            result.runs.append(("motion", LoopReport(ended="stopped")))
-            return result
-        session.take_control(state)
-        report = run_controller(robot_schedule(trajectory, spec), session.robot, stop=options.stop,
-                                on_tick=options.on_tick)
-        result.runs.append(("motion", report))
+        result.checked = checked(trajectory, spec, state, options.force, what, options.on_progress)
+        run_planned(session, state, trajectory, result, "motion", options)
         return result
 
 
-def walk(port: str, spec: Spec, preset: str | None = None, steps: int | None = None,
-         target: tuple[float, float, float] | None = None, options: Options = Options()) -> MotionResult:
-    """A walk on the robot: the preset's gait planned within the servos' speed (``steps`` steps, or to ``target``
-    (x [m], y [m], heading [rad])), a planned move to its first pose, then :class:`~op2motion.gait.controller.
-    WalkController` in the loop with the robot's IMU and joints until it stands at the end."""
-    from op2motion.gait import preset_path, read_preset
-    from op2motion.gait.controller import WalkController
-    from op2motion.gait.speeds import plan_within_speed
-
-    params = read_preset(preset_path(preset)).with_steps(steps)
-    gait = plan_within_speed(params, spec, target)
-    controller = WalkController(gait, spec)
-    with Session(port, spec) as session:
-        state = session.status()
-        session.preflight(state)
-        if state.board.tilt_rad > LYING_TILT_RAD:
-            raise CheckFailed(f"refused: the robot lies (tilted {math.degrees(state.board.tilt_rad):.0f}°); a walk "
-                              f"starts standing")
-        first = Pose("walk_start", Support.DOUBLE, controller.plan.goals[0])
-        approach = move(state.servo_angles, first, spec)
-        result = MotionResult(f"walk '{params.name}' ({gait.params.steps} steps)",
-                              approach.duration_s + controller.plan.duration_s, notes=list(approach.notes))
-        result.checked = _checked(approach, spec, state, options.force, "the move to the walk's first pose",
-                                  options.on_progress)
-        if options.stopped():
-            result.runs.append(("approach", LoopReport(ended="stopped")))
-            return result
-        session.take_control(state)
-        report = run_controller(robot_schedule(approach, spec), session.robot, stop=options.stop,
-                                on_tick=options.on_tick)
-        result.runs.append(("approach", report))
-        if report.ended != "done":
-            return result
-        report = run_controller(controller, session.robot, stop=options.stop, on_tick=options.on_tick)
-        result.runs.append(("walk", report))
-        result.travel = leg_travel(controller)
-        result.travel["gyro_heading_deg"] = math.degrees(report.yaw_rad)
-        return result
-
-
-def leg_travel(controller: Any) -> dict[str, float]:
-    """Where the feet took the robot, by leg odometry: the plan's travel of the feet's midpoint plus the placement
-    error the controller measured at each landing from the joint angles (plan frame: x forward, y left) [m]."""
-    feet = controller.gait.timeline.feet
-    start = np.mean([feet[side][0, :2] for side in ("left", "right")], axis=0)
-    end = np.mean([feet[side][-1, :2] for side in ("left", "right")], axis=0)
-    travel = end - start + np.asarray(controller.odometry.error, dtype=float)
-    return {"x_m": float(travel[0]), "y_m": float(travel[1]), "distance_m": float(np.hypot(*travel))}
+def run_planned(session: Session, state: RobotStatus, trajectory: Any, result: MotionResult, name: str,
+                options: Options) -> bool:
+    """Play a checked trajectory from where the robot is (the torque on without a jump first), as the run ``name``
+    of ``result``; whether it ran to its end (not on a stop request before it began, a stop or a fault)."""
+    if options.stopped():
+        result.runs.append((name, LoopReport(ended="stopped")))
+        return False
+    session.take_control(state)
+    report = run_controller(robot_schedule(trajectory, session.robot.spec), session.robot, stop=options.stop,
+                            on_tick=options.on_tick)
+    result.runs.append((name, report))
+    return report.ended == "done"

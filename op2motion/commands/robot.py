@@ -20,16 +20,16 @@ MAX_WAIT_S = 600.0
 
 
 def register(sub: Any) -> None:
-    """Add ``robot status|read|play|walk|emulate``."""
+    """Add ``robot status|read|play|walk|getup|emulate``."""
     from op2motion.commands.common import Parser
     from op2motion.formats.actionlayout import NUM_PAGES
 
-    top = sub.add_parser("robot", help="the real OP2 on its bus (status, read, play, walk) and an emulated one",
+    top = sub.add_parser("robot", help="the real OP2 on its bus (status, read, play, walk, getup) and an emulated one",
                          description="Drive the real OP2 from Python over its USB serial bus (Dynamixel Protocol "
                                      "1.0, the CM-730 at ID 200, 20 MX-28), safely; or run an emulated OP2 on a "
                                      "pseudo-terminal to develop without one.")
     inner = top.add_subparsers(dest="robot_command", metavar="ACTION", required=True, parser_class=Parser,
-                               help="status, read, play, walk or emulate")
+                               help="status, read, play, walk, getup or emulate")
     p = add_command(inner, "status", cmd_status, "the sub-controller, every servo and the IMU; exit 1 if a servo "
                                                  "is missing or reports an error")
     _port(p)
@@ -58,7 +58,21 @@ def register(sub: Any) -> None:
     p.add_argument("--steps", type=whole(1, 200), help="number of steps (default: the preset's)")
     p.add_argument("--target", type=float, nargs=3, metavar=("X", "Y", "YAW"),
                    help="walk to this pose instead: x [m], y [m], heading [deg] from the start")
+    p.add_argument("--commands", metavar="FILE",
+                   help="steer the walk by a command timeline (CSV or JSON, as walk --commands); ends standing "
+                        "after its stop")
+    p.add_argument("--teleop", action="store_true",
+                   help="steer the walk from the keyboard (w/s a/d q/e, space stands, z/c kick, x ends)")
+    p.add_argument("--action", metavar="FILE", help="steered walks: an action file whose kick pages the kicks play")
+    p.add_argument("--get-up", action="store_true",
+                   help="steered walks: a fall lowers the torque, the robot gets up and walks on (otherwise a fall "
+                        "stops the walk)")
     p.add_argument("--force", action="store_true", help="skip the physics check of the move to the first pose")
+    p = add_command(inner, "getup", cmd_getup, "get up from lying (face down, face up or on a side); checked in "
+                                               "physics from that side first")
+    _port(p)
+    p.add_argument("--action", metavar="FILE", help="an action file: its stock pages 10/11 get up when it has them")
+    p.add_argument("--force", action="store_true", help="play it even if the physics check says it does not stand")
     _emulate_args(add_command(inner, "emulate", cmd_emulate,
                               "an emulated OP2 on a pseudo-terminal (a link at --link), byte for byte, physics "
                               "behind it in real time"))
@@ -87,6 +101,8 @@ def _emulate_args(p: argparse.ArgumentParser) -> None:
                    help="share of replies with one byte changed")
     p.add_argument("--supply", type=number(0.0, 25.5, "V"), default=None, metavar="V",
                    help="supply voltage (default the spec's, 12 V)")
+    p.add_argument("--push", nargs="+", default=[], metavar="N@S",
+                   help="push the robot forward with N newtons for 0.1 s, S seconds into the motion (e.g. 30@4)")
     p.add_argument("--seed", type=whole(0, 2 ** 31 - 1), default=0, help="seed of the lost and corrupted replies")
     p.add_argument("--seconds", type=number(0.0, 86400.0, "s"), default=None, metavar="S",
                    help="stop after S seconds (default: run until Ctrl-C)")
@@ -193,8 +209,14 @@ def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
 
 def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot walk``."""
-    from op2motion.bus.tasks import walk
+    from op2motion.bus.walks import walk
 
+    if args.commands is not None or args.teleop:
+        return _steered(args, spec)
+    for flag in ("action", "get_up"):
+        if getattr(args, flag):
+            raise InputError(f"expected --{flag.replace('_', '-')} only with --commands or --teleop (a steered walk)",
+                             flag)
     if args.target is not None and args.steps is not None:
         raise InputError("expected --steps or --target, not both (a target sets the number of steps)", "steps")
     target = None
@@ -205,13 +227,46 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
     return _motion(args, spec, lambda options: walk(args.port, spec, args.preset, args.steps, target, options))
 
 
+def _steered(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion robot walk --commands FILE | --teleop``."""
+    from op2motion.bus.teleop import HELP, Teleop, read_keys
+    from op2motion.bus.walks import steered_walk
+    from op2motion.formats.action import ActionFile
+    from op2motion.gait.commands import read_commands
+    from op2motion.gait.envelope import STEER_ENVELOPE
+
+    for flag in ("steps", "target"):
+        if getattr(args, flag) is not None:
+            raise InputError(f"expected --{flag} only with a planned walk, not with --commands or --teleop", flag)
+    commands = read_commands(args.commands) if args.commands is not None else None
+    action = ActionFile.read(args.action) if args.action is not None else None
+    if not args.teleop:
+        return _motion(args, spec, lambda options: steered_walk(args.port, spec, args.preset, commands, None, action,
+                                                                args.get_up, options))
+    teleop = Teleop(STEER_ENVELOPE, lambda line: print(f"op2motion: {line}", file=sys.stderr, flush=True))
+    print(f"op2motion: {HELP}", file=sys.stderr, flush=True)
+    with read_keys(sys.stdin.fileno(), teleop):
+        return _motion(args, spec, lambda options: steered_walk(args.port, spec, args.preset, commands, teleop,
+                                                                action, args.get_up, options))
+
+
+def cmd_getup(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion robot getup``."""
+    from op2motion.bus.walks import getup
+    from op2motion.formats.action import ActionFile
+
+    action = ActionFile.read(args.action) if args.action is not None else None
+    return _motion(args, spec, lambda options: getup(args.port, spec, action, options))
+
+
 def cmd_emulate(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot emulate``."""
     from op2motion.bus.emulator.faults import Faults, parse_timed
     from op2motion.bus.emulator.server import Emulator
 
     faults = Faults(set(args.missing), [parse_timed(u, "unplug")[:2] for u in args.unplug], args.lose, args.corrupt,
-                    [parse_timed(o, "overheat", 85.0) for o in args.overheat], args.supply, args.seed)
+                    [parse_timed(o, "overheat", 85.0) for o in args.overheat], args.supply, args.seed,
+                    [(float(n), t) for n, t, _ in (parse_timed(p, "push", first="N") for p in args.push)])
     emulator = Emulator(spec, args.engine, args.start, faults, args.truth)
     interrupted = False
     try:

@@ -34,7 +34,14 @@ def register(sub: Any) -> None:
                     "correction, leg IK, goals every 8 ms; with --validate play them into the servo model in "
                     "physics.")
     p.add_argument("--preset", metavar="TOML", help="gait preset file or shipped name (forward, backward, "
-                                                    "sideways, turn_left, turn_right; default forward)")
+                                                    "sideways, turn_left, turn_right, steer; default forward, "
+                                                    "with --commands steer)")
+    p.add_argument("--commands", type=str, metavar="FILE",
+                   help="walk steered by a command timeline (.csv or .json: times with vx [m/s], vy [m/s], yaw "
+                        "rate [deg/s] and events stop, kick_right, kick_left), planned while it walks")
+    p.add_argument("--action", type=str, metavar="FILE",
+                   help="with --commands: an action file whose kick pages (12 right, 13 left) the kick events play "
+                        "(default: op2motion's own kicks)")
     p.add_argument("--steps", type=whole(1, 200), help="number of steps (default: the preset's)")
     p.add_argument("--target", type=float, nargs=3, metavar=("X", "Y", "YAW"),
                    help="walk to this pose instead: x [m], y [m], heading [deg] from the start")
@@ -55,7 +62,9 @@ def register(sub: Any) -> None:
     p.add_argument("--retime", action="store_true",
                    help="lengthen the step when a joint would pass 90%% of the servo's no-load speed "
                         "(default: refuse the plan and name the joint)")
-    p.add_argument("--plot", type=png_path, metavar="PNG", help="footsteps, ZMP and CoM from above and in time")
+    p.add_argument("--plot", type=png_path, metavar="PNG", help="footsteps, ZMP and CoM from above and in time "
+                                                              "(with --commands: the commanded, planned and walked "
+                                                              "paths and headings)")
     p.add_argument("--out", type=output_path, nargs="+", metavar="FILE",
                    help="write the goals every 8 ms: .csv (CSV) and/or .motion (Webots)")
 
@@ -170,6 +179,10 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
         raise InputError("expected --steps or --target, not both (a target sets the number of steps)", "steps")
     if args.preset is not None and not args.preset.strip():
         raise InputError("expected a gait preset file or a shipped name, got an empty string", "preset")
+    if args.commands is not None or args.action is not None:
+        from op2motion.commands.walk_commands import commanded_walk
+
+        return commanded_walk(args, spec, _walk_line)
     outputs = OutputSet(_outputs(args))
     params = read_preset(preset_path(args.preset)).with_steps(args.steps)
     target = None if args.target is None else (args.target[0], args.target[1], math.radians(args.target[2]))

@@ -65,10 +65,14 @@ class StiffnessCalibration:
         """Forget the samples."""
         self.sums = np.zeros(2)
 
+    def _ff(self, k: int) -> np.ndarray | None:
+        """The feed-forward (n,) [rad] of the calibrated joints at gait row ``k`` (None beyond the plan)."""
+        return self.feed_forward[k] if 0 <= k < len(self.feed_forward) else None
+
     def observe(self, k: int, goals: np.ndarray, measured: np.ndarray) -> None:
         """Gait row ``k``'s goals sent and joint angles measured (20,) [rad]: a sample while standing."""
-        if self.start_row <= k < self.end_row:
-            ff = self.feed_forward[k]
+        ff = self._ff(k) if self.start_row <= k < self.end_row else None
+        if ff is not None:
             sag = (goals - measured)[self.index]
             self.sums += np.array([float(ff @ sag), float(ff @ ff)])
 
@@ -92,6 +96,7 @@ class StiffnessCalibration:
         ramp = self.first_step - self.end_row
         weight = 1.0 if ramp <= 0 else float(np.clip((k - self.end_row) / ramp, 0.0, 1.0))
         lack = max(1.0 / self.estimate - 1.0, 0.0)
-        if weight and lack and 0 <= k < len(self.feed_forward):
-            out[self.index] = weight * lack * self.feed_forward[k]
+        ff = self._ff(k) if weight and lack else None
+        if ff is not None:
+            out[self.index] = weight * lack * ff
         return out

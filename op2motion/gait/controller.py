@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -39,17 +39,20 @@ from op2motion.gait.generator import Gait
 from op2motion.gait.learning import StepLearner
 from op2motion.gait.odometry import FootOdometry, left_of
 from op2motion.gait.presets import load_preset
+from op2motion.gait.rows import REACH_SHARE, RowBuffer, rows_of_gait, swing_phase
 from op2motion.gait.schedule import gait_plan
 from op2motion.kinematics.leg_ik import leg_ik, leg_of, rot_x, rot_y, rot_z, within_reach
+from op2motion.motion.stillness import Stillness
 from op2motion.physics import Plan, Schedule
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import SIDES, Support
+from op2motion.robot.support import SIDES
 
-REACH_SHARE = 0.999                # a corrected leg stretches at most to this share of its length
 MAX_HEADING_RAD = 0.2             # the swing foot is steered at most this far per step (11°)
 MAX_TRIM_RAD = 0.15                # a leg joint's integral trim stays within this [rad] (8.6°)
 MAX_CORRECTION_RAD = 0.25          # the stabiliser turns the body at most this far (14°)
+STIFF_FROM = 1.1                   # servos measured this much stiffer than the model begin to lose the standing damping
+STIFF_FULL = 1.25                  # ... and lose all of it from here on (the family's x1.6 servos read 1.28)
 LANDING_ROWS = 2                   # a landing is measured this many rows past the latency into its double support
 
 
@@ -60,24 +63,7 @@ def attitude_of(rot: np.ndarray) -> np.ndarray:
     return np.array([math.atan2(z[0], z[2]), math.atan2(-z[1], math.hypot(z[0], z[2]))])
 
 
-def _stride_velocity(gait: Gait) -> np.ndarray:
-    """Per row (K, 2): the plan's torso velocity [m/s] averaged over a stride (two steps), the sway left out."""
-    rows = max(1, int(round(2.0 * (gait.params.single_s + gait.params.double_s) / CONTROL_PERIOD_S)))
-    velocity = np.gradient(gait.torso_pos[:, :2], CONTROL_PERIOD_S, axis=0)
-    kernel = np.ones(rows) / rows
-    return np.stack([np.convolve(velocity[:, i], kernel, mode="same") for i in range(2)], axis=1)
-
-
-def _swing_phase(contact: tuple[str, ...]) -> np.ndarray:
-    """Per row (K,): 0 -> 1 across each single-support phase (0 on both feet)."""
-    phase = np.zeros(len(contact))
-    start = 0
-    for i in range(1, len(contact) + 1):
-        if i == len(contact) or contact[i] != contact[start]:
-            if contact[start] != "double":
-                phase[start:i] = np.linspace(1.0 / (i - start), 1.0, i - start)
-            start = i
-    return phase
+_swing_phase = swing_phase           # the name the tests knew
 
 
 __all__ = ["Feedback", "GYRO_GAINS_S", "OPEN_LOOP", "STOCK_GYRO_GAINS_S", "WalkController", "attitude_of"]
@@ -97,39 +83,38 @@ class _State:
 
 
 class WalkController:
-    """A planned gait played with attitude stabilisation (see the module docstring)."""
+    """A planned gait played with attitude stabilisation (see the module docstring).
+
+    ``done`` says when the walk is over: its plan has run out (the last row held) and the body has kept still for
+    :data:`op2motion.motion.stillness.STILL_S` (then the servos may hold the last goals); until then the stabiliser
+    keeps balancing.
+    :meth:`steerable` makes the walk you steer while it walks (:mod:`.steer`)."""
 
     def __init__(self, gait: Gait, spec: Spec, feedback: Feedback = Feedback()):
         self.gait, self.spec, self.feedback = gait, spec, feedback
         self.plan: Plan = gait_plan(gait)
         self.schedule = Schedule(self.plan, spec.joint_names)
         self.lead = len(self.plan.goals) - len(gait.goals)
-        self.legs = {side: leg_of(spec, side) for side in SIDES}
-        self.leg_index = np.array(sorted(i for leg in self.legs.values() for i in leg.index))
-        self.plan_yaw = np.unwrap(np.arctan2(gait.torso_rot[:, 1, 0], gait.torso_rot[:, 0, 0]))   # turns pass ±180°
-        self.swing_phase = _swing_phase(gait.timeline.contact)
-        self.plan_velocity = _stride_velocity(gait)
+        self._setup_legs(spec, feedback)
+        self.rows: RowBuffer = rows_of_gait(gait, self.legs)
         self.learner = StepLearner.of(gait, {side: np.array(leg.index) for side, leg in self.legs.items()},
                                       feedback.learn_gain, feedback.learn_shift_rows)
-        self.delay_rows = int(round(feedback.latency_s / CONTROL_PERIOD_S))
         self.calibration = StiffnessCalibration.of(gait, self.leg_index)
         self.odometry = FootOdometry.of(gait, self.legs, self.delay_rows + LANDING_ROWS)
-        self.sole_rots = {side: rot_z(gait.timeline.feet[side][:, 3]) for side in SIDES}   # (K, 3, 3) each
-        self.planned_legs = self._planned_legs()
-        self.support_points = self._support_points()
-        self.state = _State()
 
-    def _planned_legs(self) -> dict[str, np.ndarray]:
-        """Each leg's servo angles (K, 6) [rad] that put its sole where the plan does, every gait row (the
-        reference :meth:`_leg_change` turns from; worked out once, in one batch)."""
-        pos, rot = self.gait.torso_pos, self.gait.torso_rot
-        out = {}
-        for side, leg in self.legs.items():
-            feet = self.gait.timeline.feet[side]
-            sole = np.einsum("kji,kj->ki", rot, feet[:, :3] - pos)                    # rot.T @ (sole - pos)
-            sole_rot = np.swapaxes(rot, 1, 2) @ self.sole_rots[side]
-            out[side] = leg_ik(leg, *within_reach(leg, sole, sole_rot, REACH_SHARE))
-        return out
+    def _setup_legs(self, spec: Spec, feedback: Feedback) -> None:
+        """What both kinds of walk share: the legs, the latency in rows, the state."""
+        self.legs = {side: leg_of(spec, side) for side in SIDES}
+        self.leg_index = np.array(sorted(i for leg in self.legs.values() for i in leg.index))
+        self.delay_rows = int(round(feedback.latency_s / CONTROL_PERIOD_S))
+        self.state = _State()
+        self.stillness = Stillness()
+        self._k = -1
+
+    @property
+    def plan_yaw(self) -> np.ndarray:
+        """The planned heading of every row kept (K,) [rad], unwrapped."""
+        return self.rows.numeric["plan_yaw"]
 
     @classmethod
     def from_preset(cls, preset: str | None = None, steps: int | None = None, spec: Spec | None = None,
@@ -142,45 +127,78 @@ class WalkController:
 
         return cls(plan_within_speed(load_preset(preset).with_steps(steps), spec), spec, feedback)
 
+    #: Makes the steerable walk (set by :mod:`.steer` when the package loads: the steered walk is a walk controller,
+    #: so this module cannot import it).
+    _steerable: Any = None
+
+    @classmethod
+    def steerable(cls, spec: Spec | None = None, preset: str | None = None, feedback: Feedback = Feedback(),
+                  commands: Any = None, action: Any = None) -> Any:
+        """A walk steered while it walks (:class:`.steer.SteerableWalk`): :meth:`~.steer.SteerableWalk.command`
+        (vx [m/s], vy [m/s], yaw rate [rad/s]) at any tick, :meth:`~.steer.SteerableWalk.stop`; it stands while the
+        command is zero. ``preset`` (default ``steer``) gives the step's timing and shape; ``commands`` (a
+        :class:`.commands.CommandTimeline`) feeds it by itself and gives :attr:`plan` for a physics check; kicks are
+        the stock pages of ``action`` (an :class:`~op2motion.formats.action.ActionFile`) when it has them."""
+        return WalkController._steerable(spec, preset, feedback, commands, action)
+
     @property
     def done(self) -> bool:
-        """Never: after the plan's last row the stabiliser keeps balancing the pose it holds."""
-        return False
+        """The plan has run out and the body has kept still (see the class docstring)."""
+        return self._plan_over(self._k) and self.stillness.still
+
+    def _plan_over(self, k: int) -> bool:
+        """Has the plan run out at gait row ``k``?"""
+        return k >= self.rows.end - 1
+
+    def _row(self, t_s: float) -> int:
+        """The gait row of time ``t_s`` [s] (negative during the lead-in)."""
+        return self.plan.row(t_s) - self.lead
+
+    def _planned_goals(self, t_s: float, k: int) -> np.ndarray:
+        """The plan's goals (20,) [rad] at ``t_s`` (gait row ``k``)."""
+        return self.schedule.goals_at(t_s)
 
     def start(self, joint_positions: Mapping[str, float]) -> dict[str, float]:
         """Reset the estimator and the integrals; the plan's first goals."""
         self.state = _State()
+        self.stillness = Stillness()
+        self._k = -1
         self.learner.reset()
         self.calibration.reset()
         self.odometry.reset()
-        return dict(self.schedule.start(joint_positions))
+        return dict(zip(self.spec.joint_names, self._planned_goals(0.0, self._row(0.0)).tolist()))
 
     def step(self, t_s: float, gyro_rad_s: np.ndarray, accel_m_s2: np.ndarray,
              joint_positions: Mapping[str, float]) -> dict[str, float]:
         """The goals at ``t_s`` [s]: the plan's, with the body turned against the torso's attitude error."""
-        row = self.plan.row(t_s)
-        k = max(row - self.lead, 0)                       # the gait's own row (its first during the lead-in)
+        row = self._row(t_s)
+        k = max(row, 0)                                   # the gait's own row (its first during the lead-in)
+        self._k = row
+        measured = np.array([joint_positions[name] for name in self.spec.joint_names])
+        self.stillness.update(np.asarray(gyro_rad_s, dtype=float), measured)
         gyro = np.array([gyro_rad_s[1], gyro_rad_s[0]])   # pitch rate (about y), roll rate (about x)
         error = self._estimate(gyro, np.asarray(accel_m_s2, dtype=float), k)
         f = self.feedback
         kp = np.add(f.kp, np.multiply(f.soft_kp, self.calibration.softness))
         turn = -(kp * error + np.multiply(f.ki, self.state.integral) + np.multiply(f.kd, gyro))
         turn = np.clip(turn, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
-        change = self._damping(np.asarray(gyro_rad_s, dtype=float))
+        change = self._damping(np.asarray(gyro_rad_s, dtype=float)) * self._standing_share(k)
         heading = self._heading(float(gyro_rad_s[2]), k)
         if np.any(turn) or heading or f.placement or f.accept_landing:
             change += self._leg_change(k, float(turn[0]), float(turn[1]), heading)
-        goals = self.schedule.goals_at(t_s) + change
-        if row >= self.lead:
-            measured = np.array([joint_positions[name] for name in self.spec.joint_names])
-            self._remember(k, self.gait.joints[k] + change, measured)
+        planned = self._planned_goals(t_s, row)
+        if row >= 0 and self.rows.value("open", k):
+            return dict(zip(self.spec.joint_names, planned.tolist()))      # a kick inside a walk: as planned
+        goals = planned + change
+        if row >= 0:
+            self._remember(k, self.rows.get("joints", k) + change, measured)
             if f.placement or f.accept_landing:
                 self.odometry.observe(k, measured)
             if f.joint_ki:
                 goals += self._joint_trim(k, measured)
             goals += self.learner.correction(k)
             if f.calibrate:
-                self.calibration.observe(k, self.schedule.goals_at(t_s), measured)
+                self.calibration.observe(k, planned, measured)
                 goals += self.calibration.compensation(k, len(goals))
         return dict(zip(self.spec.joint_names, goals.tolist()))
 
@@ -199,8 +217,8 @@ class WalkController:
         error (the plan's stride velocity turned by the heading error, integrated)."""
         s, f, dt = self.state, self.feedback, CONTROL_PERIOD_S
         s.yaw += yaw_rate * dt
-        error = s.yaw - self.plan_yaw[k]
-        velocity = self.plan_velocity[k]
+        error = s.yaw - self.rows.value("plan_yaw", k)
+        velocity = self.rows.get("velocity", k)
         s.offset += (rot_z(error)[:2, :2] @ velocity - velocity) * dt
         left = left_of(velocity)
         if left is not None:
@@ -215,7 +233,7 @@ class WalkController:
         if s.joint_integral is None:
             s.joint_integral = np.zeros(len(self.spec.joints))
         measured = measured_all[self.leg_index]
-        error = self.gait.joints[k, self.leg_index] - measured
+        error = self.rows.get("joints", k)[self.leg_index] - measured
         trim = s.joint_integral[self.leg_index] + self.feedback.joint_ki * error * CONTROL_PERIOD_S
         s.joint_integral[self.leg_index] = np.clip(trim, -MAX_TRIM_RAD, MAX_TRIM_RAD)
         return s.joint_integral
@@ -233,9 +251,17 @@ class WalkController:
             s.attitude, s.started = measured, True
         blend = dt / (self.feedback.attitude_tau_s + dt)
         s.attitude = (1.0 - blend) * (s.attitude + gyro * dt) + blend * measured
-        error = s.attitude - attitude_of(self.gait.torso_rot[k])
+        error = s.attitude - attitude_of(self.rows.get("torso_rot", k))
         s.integral = np.clip(s.integral + error * dt, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
         return error
+
+    def _standing_share(self, k: int) -> float:
+        """The share of the gyro damping at gait row ``k``: all of it, except where the plan stands still after
+        walking (the rows' ``damping`` fades to 0 there) and the servos were measured stiffer than the model: with
+        servos 1.6 times as stiff and 16 ms of latency the damping kept a standing robot rocking, while soft servos
+        need it to stand (taken out for them, the heavy, soft body fell over standing)."""
+        stiff = float(np.clip((self.calibration.estimate - STIFF_FROM) / (STIFF_FULL - STIFF_FROM), 0.0, 1.0))
+        return 1.0 - (1.0 - self.rows.value("damping", k)) * stiff
 
     def _damping(self, gyro: np.ndarray) -> np.ndarray:
         """The stock-style gyro damping (20,) [rad]: each leg's hip roll, knee, ankle pitch and ankle roll turned so
@@ -248,35 +274,39 @@ class WalkController:
             out[list(leg.index)] = natural * leg.sign
         return out
 
-    def _support_points(self) -> np.ndarray:
-        """The point (K, 3) [m] the body turns about at each gait row: the planned contact sole's centre, midway
-        between the soles on two feet."""
-        feet = self.gait.timeline.feet
-        return np.array([np.mean([feet[side][k, :3] for side in Support.of(contact).feet], axis=0)
-                         for k, contact in enumerate(self.gait.timeline.contact)])
+    def _landed(self, side: str, k: int) -> tuple[np.ndarray, float] | None:
+        """Where the ``side`` foot is held instead of its plan (its measured landing's miss: position (3,) [m] and
+        yaw [rad]) at gait row ``k``, or None: after the closing step, the landed foot where it landed."""
+        last = self.odometry.last
+        if self.feedback.accept_landing and last is not None and last[0] == side:
+            return np.array([*last[1], 0.0]), last[2]
+        return None
 
     def _leg_change(self, k: int, pitch: float, roll: float, heading: float = 0.0) -> np.ndarray:
         """The servo change (20,) [rad] that turns the whole body by (pitch, roll) [rad] about the support point,
         the soles staying where the plan puts them, and the swing sole turned by ``heading`` [rad] about the stance
         sole's centre (in full at landing) and moved against the feet's placement error (leg odometry); after the
         closing step, the landed sole where it landed."""
-        pos, rot = self.gait.torso_pos[k], self.gait.torso_rot[k]
-        pivot, turn = self.support_points[k], rot_y(pitch) @ rot_x(roll)
+        rows = self.rows
+        pos, rot = rows.get("torso_pos", k), rows.get("torso_rot", k)
+        pivot, turn = rows.get("support_point", k), rot_y(pitch) @ rot_x(roll)
         moved_pos, moved_rot = pivot + turn @ (pos - pivot), turn @ rot
-        contact = self.gait.timeline.contact[k]
+        contact = rows.obj("contact", k)
+        phase = rows.value("swing_phase", k)
         out = np.zeros(len(self.spec.joints))
         for side, leg in self.legs.items():
-            sole, sole_rot = self.gait.timeline.feet[side][k, :3], self.sole_rots[side][k]
+            foot = rows.feet(side, k)
+            sole, sole_rot = foot[:3], rot_z(foot[3])
             if contact not in ("double", side) and heading:
-                steer = rot_z(heading * self.swing_phase[k])
-                stance = self.gait.timeline.feet[contact][k, :3]
+                steer = rot_z(heading * phase)
+                stance = rows.feet(contact, k)[:3]
                 sole, sole_rot = stance + steer @ (sole - stance), steer @ sole_rot
-            last = self.odometry.last
-            if self.feedback.accept_landing and last is not None and last[0] == side:
-                sole, sole_rot = sole + np.array([*last[1], 0.0]), rot_z(last[2]) @ sole_rot
+            landed = self._landed(side, k)
+            if landed is not None:
+                sole, sole_rot = sole + landed[0], rot_z(landed[1]) @ sole_rot
             if contact not in ("double", side) and self.feedback.placement:
-                sole = sole + self.swing_phase[k] * self.odometry.shift(self.feedback.placement, self.plan_velocity[k])
-            planned = self.planned_legs[side][k]
+                sole = sole + phase * self.odometry.shift(self.feedback.placement, rows.get("velocity", k))
+            planned = rows.legs(side, k)
             moved = leg_ik(leg, *within_reach(leg, moved_rot.T @ (sole - moved_pos), moved_rot.T @ sole_rot,
                                               REACH_SHARE))[0]
             out[list(leg.index)] = moved - planned

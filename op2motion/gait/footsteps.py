@@ -62,15 +62,15 @@ class FootPlan:
         return where[other], where[side]
 
 
-def _moved(pose: np.ndarray, dx: float, dy: float, dyaw: float) -> np.ndarray:
+def moved(pose: np.ndarray, dx: float, dy: float, dyaw: float) -> np.ndarray:
     """``pose`` (x, y, yaw) moved by (dx, dy) in its own frame and turned by ``dyaw``."""
     c, s = math.cos(pose[2]), math.sin(pose[2])
     return np.array([pose[0] + c * dx - s * dy, pose[1] + s * dx + c * dy, pose[2] + dyaw])
 
 
-def _foot_at(side: str, centre: np.ndarray, width: float) -> Footstep:
+def foot_at(side: str, centre: np.ndarray, width: float) -> Footstep:
     half = width / 2.0 if side == "left" else -width / 2.0
-    x, y, yaw = _moved(centre, 0.0, half, 0.0)
+    x, y, yaw = moved(centre, 0.0, half, 0.0)
     return Footstep(side, float(x), float(y), float(yaw))
 
 
@@ -92,14 +92,14 @@ def plan_footsteps(params: GaitParams, spec: Spec, target: tuple[float, float, f
     largest per step), the last step closing the feet."""
     width = step_width(params, spec)
     centre = np.zeros(3)
-    start = {side: _foot_at(side, centre, width) for side in ("left", "right")}
+    start = {side: foot_at(side, centre, width) for side in ("left", "right")}
     moves = _target_moves(params, target) if target is not None else (
         [(params.step_length_m, params.step_side_m, params.turn_rad)] * (params.steps - 1))
     side = first_side(params) if target is None else _target_side(moves)
     steps = []
     for dx, dy, dyaw in list(moves) + [(0.0, 0.0, 0.0)]:
-        centre = _moved(centre, dx, dy, dyaw)
-        steps.append(_foot_at(side, centre, width))
+        centre = moved(centre, dx, dy, dyaw)
+        steps.append(foot_at(side, centre, width))
         side = "right" if side == "left" else "left"
     plan = FootPlan(start, tuple(steps))
     check_clear(plan, spec)
@@ -158,14 +158,22 @@ def _overlap(a: np.ndarray, b: np.ndarray) -> bool:
     return True
 
 
+def swing_clear(stand: Footstep, before: Footstep, step: Footstep, spec: Spec) -> bool:
+    """Does the swing from ``before`` to ``step`` keep the soles :data:`FOOT_GAP_M` apart from the ``stand`` foot's
+    all along its path seen from above (start, landing and the straight line between)?"""
+    fixed = sole_rectangle(spec, stand, FOOT_GAP_M / 2.0)
+    for u in np.linspace(0.0, 1.0, PATH_SAMPLES):
+        moving = Footstep(step.side, *(before.pose + u * (step.pose - before.pose)))
+        if _overlap(sole_rectangle(spec, moving, FOOT_GAP_M / 2.0), fixed):
+            return False
+    return True
+
+
 def check_clear(plan: FootPlan, spec: Spec) -> None:
     """Raise :class:`InputError` if a swing foot comes within :data:`FOOT_GAP_M` of the standing foot."""
     for k, step in enumerate(plan.steps):
         stand, before = plan.stance_before(k)
-        fixed = sole_rectangle(spec, stand, FOOT_GAP_M / 2.0)
-        for u in np.linspace(0.0, 1.0, PATH_SAMPLES):
-            moving = Footstep(step.side, *(before.pose + u * (step.pose - before.pose)))
-            if _overlap(sole_rectangle(spec, moving, FOOT_GAP_M / 2.0), fixed):
-                raise InputError(f"expected the feet to stay {FOOT_GAP_M * 1000:.0f} mm apart, got step {k + 1} "
-                                 f"({step.side} foot to x {step.x:.3f} m, y {step.y:.3f} m, yaw "
-                                 f"{math.degrees(step.yaw):.1f}°) touching the {stand.side} foot", "footsteps")
+        if not swing_clear(stand, before, step, spec):
+            raise InputError(f"expected the feet to stay {FOOT_GAP_M * 1000:.0f} mm apart, got step {k + 1} "
+                             f"({step.side} foot to x {step.x:.3f} m, y {step.y:.3f} m, yaw "
+                             f"{math.degrees(step.yaw):.1f}°) touching the {stand.side} foot", "footsteps")

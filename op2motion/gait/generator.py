@@ -28,7 +28,7 @@ from op2motion.gait.footsteps import FootPlan, Footstep, plan_footsteps, sole_re
 from op2motion.gait.params import GaitParams
 from op2motion.gait.preview import preview_gains, track_reference
 from op2motion.gait.timeline import Timeline, build_timeline
-from op2motion.kinematics.leg_ik import leg_ik, leg_of, rot_y, rot_z
+from op2motion.kinematics.leg_ik import leg_ik, leg_of, rot_y, rot_z, within_reach
 from op2motion.model.dynamics import dynamics_for
 from op2motion.model.servo import ServoModel
 from op2motion.motion.checks import SMOOTH_ROWS, contact_torques, multibody_zmp, smoothed
@@ -140,12 +140,17 @@ class _Body:
         self.legs = {side: leg_of(spec, side) for side in ("left", "right")}
         self.sole_rot = {side: rot_z(timeline.feet[side][:, 3]) for side in ("left", "right")}
 
-    def goals(self, arms: np.ndarray, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
+    def goals(self, arms: np.ndarray, pos: np.ndarray, rot: np.ndarray, reach: float | None = None) -> np.ndarray:
+        """Servo rows (K, 20) [rad]: ``arms`` with both legs by IK for the torso poses; a leg asked beyond its
+        length is an error, or (``reach``: a share of its length) stretched only that far towards the sole."""
         out = arms.copy()
         for side, leg in self.legs.items():
             sole = np.einsum("kji,kj->ki", rot, self.timeline.feet[side][:, :3] - pos)
+            sole_rot = np.transpose(rot, (0, 2, 1)) @ self.sole_rot[side]
+            if reach is not None:
+                sole, sole_rot = within_reach(leg, sole, sole_rot, reach)
             try:
-                out[:, list(leg.index)] = leg_ik(leg, sole, np.transpose(rot, (0, 2, 1)) @ self.sole_rot[side])
+                out[:, list(leg.index)] = leg_ik(leg, sole, sole_rot)
             except InputError as e:                # a preset whose values are in range but not together
                 raise InputError(f"expected a gait the legs can reach; the {side} leg cannot: {e.message} (lower "
                                  f"the hips more, shorten the steps or lift the swing foot less)", "preset") from None
@@ -169,22 +174,38 @@ class _Body:
         return com[inner], zmp[inner]
 
     def feedforward(self, p_gains: np.ndarray) -> np.ndarray:
-        """Goal offsets (K, 20) [rad] that make the servo model (:mod:`op2motion.model.servo`) drive the last planned
-        motion: the joint torque it needs (inverse dynamics with the plan's contacts) plus the servo's own losses
-        and rotor inertia (damping x speed, armature x acceleration, friction), over Kp; smoothed over
-        :data:`SMOOTH_ROWS` rows and clipped to the servo's linear range (its largest torque over Kp: 11° at
-        P = 32; the PWM saturates beyond)."""
+        """Goal offsets (K, 20) [rad] that make the servo model drive the last planned motion
+        (:func:`servo_feedforward`)."""
         configs, v, a = self.last_motion
-        torques = contact_torques(self.dyn, configs, v, a, self.timeline.contact)
-        servo = ServoModel.of(self.spec, p_gains[0])
-        dq, ddq = v[:, self.dyn.v_index], a[:, self.dyn.v_index]
-        torques += servo.damping * dq + servo.armature * ddq + servo.friction * np.tanh(dq / FRICTION_SMOOTH_RAD_S)
-        linear = servo.torque_max / servo.kp
-        return np.clip(smoothed(torques / servo.kp, SMOOTH_ROWS), -linear, linear)
+        return servo_feedforward(self.spec, configs, v, a, self.timeline.contact, p_gains[0])
 
     def com(self, configs: np.ndarray) -> np.ndarray:
         pin, model, data = self.dyn.pin, self.dyn.model, self.dyn.data
         return np.array([pin.centerOfMass(model, data, c) for c in configs])
+
+
+def servo_feedforward(spec: Spec, configs: np.ndarray, v: np.ndarray, a: np.ndarray, contact: tuple[str, ...],
+                      p_gains: np.ndarray) -> np.ndarray:
+    """Goal offsets (K, 20) [rad] that make the servo model (:mod:`op2motion.model.servo`) at P gains (20,) drive a
+    planned motion (pinocchio configurations (K, nq), velocities and accelerations (K, nv), each row on its planned
+    ``contact``): the joint torque it needs (inverse dynamics with the plan's contacts) plus the servo's own losses
+    and rotor inertia (damping x speed, armature x acceleration, friction), over Kp; smoothed over
+    :data:`SMOOTH_ROWS` rows and clipped to the servo's linear range (its largest torque over Kp: 11° at P = 32; the
+    PWM saturates beyond)."""
+    dyn = dynamics_for(spec)
+    torques = contact_torques(dyn, configs, v, a, contact)
+    servo = ServoModel.of(spec, p_gains)
+    dq, ddq = v[:, dyn.v_index], a[:, dyn.v_index]
+    torques += servo.damping * dq + servo.armature * ddq + servo.friction * np.tanh(dq / FRICTION_SMOOTH_RAD_S)
+    linear = servo.torque_max / servo.kp
+    return np.clip(smoothed(torques / servo.kp, SMOOTH_ROWS), -linear, linear)
+
+
+def torso_rotations(feet: dict[str, np.ndarray], params: GaitParams) -> np.ndarray:
+    """The torso's rotation (K, 3, 3) at each row of the soles (K, 4): the feet's mean heading, the preset's lean."""
+    yaw = feet["left"][:, 3] + 0.5 * np.remainder(feet["right"][:, 3] - feet["left"][:, 3] + np.pi, 2 * np.pi) - (
+        0.5 * np.pi)
+    return rot_z(yaw) @ rot_y(math.radians(params.torso_pitch_deg))
 
 
 def standing_height(params: GaitParams, spec: Spec) -> float:
@@ -204,9 +225,7 @@ def plan_gait(params: GaitParams, spec: Spec, target: tuple[float, float, float]
     timeline = build_timeline(params, plan)
     body = _Body(spec, timeline)
     feet = timeline.feet
-    yaw = feet["left"][:, 3] + 0.5 * np.remainder(feet["right"][:, 3] - feet["left"][:, 3] + np.pi, 2 * np.pi) - (
-        0.5 * np.pi)
-    rot = rot_z(yaw) @ rot_y(math.radians(params.torso_pitch_deg))
+    rot = torso_rotations(feet, params)
     k = len(timeline.times)
     pos = np.zeros((k, 3))
     pos[:, 2] = standing_height(params, spec)

@@ -94,17 +94,23 @@ class FootOdometry:
         if k not in self.rows:
             return
         stance, landed = self.rows[k]
+        feet = self.gait.timeline.feet
+        self._landing(measured, stance, landed, feet[stance][k], feet[landed][k], k == max(self.rows))
+
+    def _landing(self, measured: np.ndarray, stance: str, landed: str, stance_plan: np.ndarray,
+                 landed_plan: np.ndarray, closing: bool) -> None:
+        """One landing measured: the ``landed`` foot against the ``stance`` one from the joints (20,) [rad], less
+        the plan's soles (x, y, z [m], yaw [rad]); a ``closing`` landing's miss is kept in :attr:`last`."""
         (p0, r0), (p1, r1) = (leg_fk(self.legs[side], measured[list(self.legs[side].index)])
                               for side in (stance, landed))
-        feet = self.gait.timeline.feet
-        yaw = float(feet[stance][k, 3])
+        yaw = float(stance_plan[3])
         actual = (r0[0].T @ (p1[0] - p0[0]))[:2]
-        planned = (rot_z(yaw).T @ (feet[landed][k, :3] - feet[stance][k, :3]))[:2]
+        planned = (rot_z(yaw).T @ (landed_plan[:3] - stance_plan[:3]))[:2]
         miss = rot_z(yaw)[:2, :2] @ (actual - planned)
         self.error = self.error + miss
-        if k == max(self.rows):
+        if closing:
             turned = r0[0].T @ r1[0]
-            yaw_miss = math.atan2(turned[1, 0], turned[0, 0]) - (float(feet[landed][k, 3]) - yaw)
+            yaw_miss = math.atan2(turned[1, 0], turned[0, 0]) - (float(landed_plan[3]) - yaw)
             self.last = (landed, miss, math.remainder(yaw_miss, 2.0 * math.pi))
 
     def shift(self, gain: float, velocity: np.ndarray) -> np.ndarray:

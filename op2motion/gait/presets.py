@@ -12,7 +12,7 @@ from pathlib import Path
 from op2motion.errors import InputError
 from op2motion.gait.params import GaitParams, read_preset
 
-PRESETS = ("forward", "backward", "sideways", "turn_left", "turn_right")
+PRESETS = ("forward", "backward", "sideways", "turn_left", "turn_right", "steer")
 DEFAULT_PRESET = "forward"
 
 

@@ -83,25 +83,60 @@ class CartTrack:
     zmp: np.ndarray
 
 
-def track_reference(gains: PreviewGains, zmp_ref: np.ndarray, start: np.ndarray | None = None) -> CartTrack:
-    """Run the controller along ``zmp_ref`` (K, 2) [m] (held at its last value beyond the end for the preview),
-    from the CoM at rest over ``start`` (2,) [m] (default: the first reference point)."""
-    ref = np.asarray(zmp_ref, dtype=float)
+@dataclass(frozen=True)
+class CartState:
+    """Where the cart is between two ticks: its state ``x`` (3, 2) (position [m], velocity [m/s], acceleration
+    [m/s²] of both axes) and the summed ZMP error (2,) [m] of the integral action. A walk planned in pieces carries
+    it from one piece to the next, so the CoM path runs on as if it had been planned in one go."""
+
+    x: np.ndarray
+    summed: np.ndarray
+
+    @classmethod
+    def rest(cls, at: np.ndarray) -> "CartState":
+        """At rest over ``at`` (2,) [m], no error summed."""
+        x = np.zeros((3, 2))
+        x[0] = np.asarray(at, dtype=float)
+        return cls(x, np.zeros(2))
+
+
+def _check_ref(ref: np.ndarray) -> np.ndarray:
+    ref = np.asarray(ref, dtype=float)
     if ref.ndim != 2 or ref.shape[1] != 2 or len(ref) < 1 or not np.all(np.isfinite(ref)):
         raise InputError(f"expected a finite ZMP reference of shape (K, 2), got {ref.shape}", "zmp_ref")
-    k, n = len(ref), len(gains.gp)
-    padded = np.vstack([ref, np.repeat(ref[-1:], n, axis=0)])
+    return ref
+
+
+def run_cart(gains: PreviewGains, zmp_ref: np.ndarray, rows: int, state: CartState, keep: int | None = None
+             ) -> tuple[CartTrack, CartState]:
+    """Run the controller from ``state`` for ``rows`` ticks along ``zmp_ref`` (at least ``rows`` long; rows beyond
+    are its preview, held at the last value beyond the end); the track, and the state after ``keep`` ticks
+    (default: after all of them)."""
+    ref = _check_ref(zmp_ref)
+    n = len(gains.gp)
+    padded = np.vstack([ref, np.repeat(ref[-1:], n + 1, axis=0)])
     # the preview sum of every tick at once: window[k, j] = ref[k + 1 + j]
-    windows = np.lib.stride_tricks.sliding_window_view(padded[1:], n, axis=0)[:k]   # (K, 2, N)
-    preview = windows @ gains.gp                                                    # (K, 2)
-    x = np.zeros((3, 2))
-    x[0] = ref[0] if start is None else np.asarray(start, dtype=float)
-    summed = np.zeros(2)
-    out = np.empty((k, 4, 2))
-    for i in range(k):
+    windows = np.lib.stride_tricks.sliding_window_view(padded[1:], n, axis=0)[:rows]   # (rows, 2, N)
+    preview = windows @ gains.gp                                                        # (rows, 2)
+    x, summed = state.x.copy(), state.summed.copy()
+    keep = rows if keep is None else keep
+    kept = CartState(x.copy(), summed.copy())
+    out = np.empty((rows, 4, 2))
+    for i in range(rows):
+        if i == keep:
+            kept = CartState(x.copy(), summed.copy())
         p = gains.c @ x
         summed += p - ref[i]
         u = -gains.gi * summed - gains.gx @ x - preview[i]
         out[i, :3], out[i, 3] = x, p
         x = gains.a @ x + gains.b @ u[None]
-    return CartTrack(out[:, 0].copy(), out[:, 1].copy(), out[:, 2].copy(), out[:, 3].copy())
+    if keep >= rows:
+        kept = CartState(x.copy(), summed.copy())
+    return CartTrack(out[:, 0].copy(), out[:, 1].copy(), out[:, 2].copy(), out[:, 3].copy()), kept
+
+
+def track_reference(gains: PreviewGains, zmp_ref: np.ndarray, start: np.ndarray | None = None) -> CartTrack:
+    """Run the controller along ``zmp_ref`` (K, 2) [m] (held at its last value beyond the end for the preview),
+    from the CoM at rest over ``start`` (2,) [m] (default: the first reference point)."""
+    ref = _check_ref(zmp_ref)
+    return run_cart(gains, ref, len(ref), CartState.rest(ref[0] if start is None else start))[0]

@@ -80,14 +80,36 @@ def zmp_point(step: Footstep, params: GaitParams) -> np.ndarray:
     return np.array([step.x + c * params.zmp_offset_x_m - s * inward, step.y + s * params.zmp_offset_x_m + c * inward])
 
 
-def _ticks(seconds: float) -> int:
+def ticks(seconds: float) -> int:
+    """Whole control ticks in ``seconds`` [s] (at least one)."""
     return max(1, int(round(seconds / CONTROL_PERIOD_S)))
+
+
+def landing(start: np.ndarray, step: Footstep) -> np.ndarray:
+    """Where a foot standing at ``start`` (x, y, z [m], yaw [rad]) lands for ``step``: on the floor, its yaw
+    reached the short way round from the start's (so a walk's yaw stays continuous)."""
+    goal = np.array([step.x, step.y, 0.0, step.yaw])
+    goal[3] = start[3] + math.remainder(goal[3] - start[3], 2.0 * math.pi)
+    return goal
+
+
+def swing_path(params: GaitParams, start: np.ndarray, step: Footstep) -> np.ndarray:
+    """The swing foot's sole (x, y, z [m], yaw [rad]) at each single-support row (n, 4) from ``start`` (4,) to
+    ``step``: the cruise blend on x, y and yaw (completed ``swing_settle`` before landing, the yaw the short way
+    round), the lift profile on z."""
+    n_single = ticks(params.single_s)
+    s = np.arange(1, n_single + 1) / n_single
+    blend = cruise_blend(s / (1.0 - params.swing_settle), params.swing_ramp)[:, None]
+    goal = landing(start, step)
+    path = start + blend * (goal - start)
+    path[:, 2] = params.step_height_m * lift_profile(s)
+    return path
 
 
 def build_timeline(params: GaitParams, plan: FootPlan) -> Timeline:
     """Rows every :data:`CONTROL_PERIOD_S` for the whole walk (see the module docstring)."""
-    n_start, n_single, n_double, n_end = (_ticks(params.start_s), _ticks(params.single_s), _ticks(params.double_s),
-                                          _ticks(params.end_s))
+    n_start, n_single, n_double, n_end = (ticks(params.start_s), ticks(params.single_s), ticks(params.double_s),
+                                          ticks(params.end_s))
     where = {side: np.array([f.x, f.y, 0.0, f.yaw]) for side, f in plan.start.items()}
     middle = 0.5 * (where["left"][:2] + where["right"][:2])
     rows_step, rows_contact, refs = [], [], []
@@ -101,19 +123,14 @@ def build_timeline(params: GaitParams, plan: FootPlan) -> Timeline:
         refs.append(ref)
 
     first_support = plan.stance_before(0)[0]
-    n_lead = _ticks(LEAD_S)
+    n_lead = ticks(LEAD_S)
     hold(n_lead, -1, np.repeat(middle[None], n_lead, axis=0))
     ramp = quintic_blend(np.arange(1, n_start + 1) / n_start)[:, None]
     hold(n_start, -1, middle + ramp * (zmp_point(first_support, params) - middle))
     for k, step in enumerate(plan.steps):
         stand, before = plan.stance_before(k)
-        s = (np.arange(1, n_single + 1) / n_single)
-        blend = cruise_blend(s / (1.0 - params.swing_settle), params.swing_ramp)[:, None]
-        start, goal = where[step.side], np.array([step.x, step.y, 0.0, step.yaw])
-        goal[3] = start[3] + math.remainder(goal[3] - start[3], 2.0 * math.pi)
-        path = start + blend * (goal - start)
-        path[:, 2] = params.step_height_m * lift_profile(s)
-        feet[step.side].append(path)
+        feet[step.side].append(swing_path(params, where[step.side], step))
+        goal = landing(where[step.side], step)
         feet[stand.side].append(np.repeat(where[stand.side][None], n_single, axis=0))
         rows_step.append(np.full(n_single, k))
         rows_contact.extend([stand.side] * n_single)

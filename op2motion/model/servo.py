@@ -78,16 +78,19 @@ class ServoModel:
         """Total viscous damping at the joint [N·m·s/rad]: back-EMF plus viscous friction."""
         return self.kd_emf + self.viscous
 
-    def active_torque(self, goal: np.ndarray, q: np.ndarray, kp: np.ndarray | None = None) -> np.ndarray:
+    def active_torque(self, goal: np.ndarray, q: np.ndarray, kp: np.ndarray | None = None,
+                      limit: np.ndarray | None = None) -> np.ndarray:
         """The torque the PWM drives [N·m] (before damping and friction): clip(Kp (goal - q), ±torque_max), with
-        this model's Kp or the given one (a motion's P gains)."""
+        this model's Kp or the given one (a motion's P gains), and within a lower per-joint ``limit`` [N·m] if
+        given (the servo's torque-limit register)."""
         torque = (self.kp if kp is None else kp) * (goal - q)
-        return np.minimum(np.maximum(torque, -self.torque_max), self.torque_max)    # np.clip, at a third the cost
+        cap = self.torque_max if limit is None else np.minimum(limit, self.torque_max)
+        return np.minimum(np.maximum(torque, -cap), cap)    # np.clip, at a third the cost
 
-    def motor_torque(self, goal: np.ndarray, q: np.ndarray, dq: np.ndarray, kp: np.ndarray | None = None
-                     ) -> np.ndarray:
+    def motor_torque(self, goal: np.ndarray, q: np.ndarray, dq: np.ndarray, kp: np.ndarray | None = None,
+                     limit: np.ndarray | None = None) -> np.ndarray:
         """The torque the motor delivers to the joint [N·m]: active torque minus back-EMF and viscous damping."""
-        return self.active_torque(goal, q, kp) - self.damping * dq
+        return self.active_torque(goal, q, kp, limit) - self.damping * dq
 
     def available(self, dq: np.ndarray, torque: np.ndarray | None = None) -> np.ndarray:
         """Largest torque magnitude [N·m] the motor can deliver at joint speed ``dq`` [rad/s]: at full duty,

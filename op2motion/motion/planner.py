@@ -96,6 +96,18 @@ def _timed(waypoints: Sequence[Waypoint], v_max: float, peak: Callable[[np.ndarr
     return durations, notes
 
 
+def blend(q0: np.ndarray, q1: np.ndarray, spec: Spec, least_s: float = CONTROL_PERIOD_S) -> np.ndarray:
+    """Goals (K, 20) [rad] every 8 ms from ``q0`` to ``q1`` (rest to rest), a quintic as long as the fastest joint
+    needs to stay within :data:`SPEED_FRACTION` of the no-load speed, at least ``least_s`` [s]; the first row is
+    the row after ``q0``, the last is ``q1``."""
+    q0, q1 = np.asarray(q0, dtype=float), np.asarray(q1, dtype=float)
+    v_max = SPEED_FRACTION * spec.servo.no_load_speed_rad_s
+    length = _units(max(least_s, 1.875 * float(np.max(np.abs(q1 - q0), initial=0.0)) / v_max)) * CONTROL_PERIOD_S
+    t = np.arange(1, int(round(length / CONTROL_PERIOD_S)) + 1) * CONTROL_PERIOD_S
+    zero = np.zeros_like(q0)
+    return _quintic(q0, q1, zero, zero, length, t)
+
+
 def _units_array(seconds: np.ndarray) -> np.ndarray:
     return np.maximum(1, np.ceil(seconds / CONTROL_PERIOD_S - 1e-9))
 

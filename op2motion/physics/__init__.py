@@ -14,6 +14,7 @@ controller's :class:`Plan`. The result is a typed :class:`CheckReport`::
 
 from __future__ import annotations
 
+from op2motion.physics.body import LYING
 from op2motion.physics.controller import Controller, Goals, Schedule
 from op2motion.physics.engine import Engine, make_engine
 from op2motion.physics.plan import (
@@ -48,8 +49,9 @@ from op2motion.physics.sensors import Sensors
 from op2motion.physics.walk import WALK_HOLD_S, WALK_SETTLE_S
 
 __all__ = ["DEFAULT_SECONDS", "ENGINES", "FALL_REASONS", "FLOOR_FRICTION", "MAX_PUSH_N", "MAX_SECONDS",
-           "MIN_SECONDS", "MOTION_HOLD_S", "MOTION_SETTLE_S", "RAMP_S", "REASONS", "TIME_STEP_S", "WALK_HOLD_S",
-           "WALK_SETTLE_S", "CheckReport", "Controller", "Engine", "EngineReport", "Failure", "FootLoad", "Goals",
+           "LYING", "MIN_SECONDS", "MOTION_HOLD_S", "MOTION_SETTLE_S", "RAMP_S", "REASONS", "TIME_STEP_S",
+           "WALK_HOLD_S", "WALK_SETTLE_S", "CheckReport", "Controller", "Engine", "EngineReport", "Failure",
+           "FootLoad", "Goals",
            "Member", "MotionMeasures", "Plan", "PushResult", "Pushes", "RobustReport", "RobustRun", "RunReport",
            "Schedule", "Sensors", "Setup", "Trials",
            "TrialsResult", "WalkClock", "WalkMeasures", "WorstTorque", "check", "family", "make_engine",

@@ -8,7 +8,8 @@ soles, 105 x 66 mm), not the book's support rectangle.
 :func:`placement` puts a pose on the floor: the support sole flat at the origin (X forward, Y left); in double
 support the lower, more level sole is laid flat (the one that leaves the other foot at or above the floor, its
 lowest corner touching when the soles are parallel); then the robot is lifted if any foot corner would start
-below the floor, so nothing starts inside the ground.
+below the floor, so nothing starts inside the ground. :func:`lying_placement` lays a pose on the floor instead: face
+down, face up or on a side, its lowest collision shape touching the floor.
 """
 
 from __future__ import annotations
@@ -17,13 +18,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from op2motion.errors import InputError
 from op2motion.model.dynamics import dynamics_for
 from op2motion.model.urdf import foot_box_corners, foot_link
 from op2motion.robot.balance import polygon_margin
-from op2motion.robot.spec import Spec
+from op2motion.robot.spec import Collision, Spec, rpy_matrix
 from op2motion.robot.support import SIDES, Support
 
 GROUND_TOLERANCE_M = 1e-9
+#: How a run may start lying, and the torso's rotation for each: face down (``front``: the torso's x axis, its front,
+#: points down), face up (``back``), or on its ``left`` or ``right`` side (that side's y axis points down).
+LYING = {"front": ((0.0, 1.0, 0.0), 0.5 * np.pi), "back": ((0.0, 1.0, 0.0), -0.5 * np.pi),
+         "left": ((1.0, 0.0, 0.0), -0.5 * np.pi), "right": ((1.0, 0.0, 0.0), 0.5 * np.pi)}
 
 
 @dataclass(frozen=True)
@@ -98,3 +104,46 @@ def placement(body: Body, q: np.ndarray, support: str) -> tuple[np.ndarray, np.n
 def margin_to(state: BodyState, support: Support, xy: np.ndarray) -> float:
     """Margin [m] of a point (2,) to the support polygon of ``support`` in ``state`` (positive inside)."""
     return float(polygon_margin(xy, support.polygon(state.corners))[0])
+
+
+def _axis_rotation(axis: tuple[float, float, float], angle: float) -> np.ndarray:
+    """The rotation (3, 3) by ``angle`` [rad] about a unit ``axis``."""
+    a = np.asarray(axis, dtype=float)
+    k = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
+
+
+def shape_bottom(shape: Collision, link_pos: np.ndarray, link_rot: np.ndarray) -> float:
+    """The lowest world z [m] of a collision shape on a link placed at (``link_pos``, ``link_rot``)."""
+    rot = link_rot @ rpy_matrix(shape.origin_rpy)
+    centre = link_pos + link_rot @ np.asarray(shape.origin_xyz, dtype=float)
+    if shape.shape == "sphere":
+        return float(centre[2] - shape.size[0])
+    if shape.shape == "cylinder":
+        radius, length = shape.size
+        up = abs(float(rot[2, 2]))                      # vertical share of the cylinder's axis
+        return float(centre[2] - 0.5 * length * up - radius * np.sqrt(max(0.0, 1.0 - up * up)))
+    half = 0.5 * np.asarray(shape.size, dtype=float)
+    signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
+    return float((centre + (signs * half) @ rot.T)[:, 2].min())
+
+
+def lowest_point(body: Body, base_pos: np.ndarray, base_rot: np.ndarray, q: np.ndarray) -> float:
+    """The lowest world z [m] of any collision shape of the robot at that torso pose and joint angles [rad]."""
+    pin, model, data = body.pin, body.dyn.model, body.dyn.data
+    pin.framesForwardKinematics(model, data, body._configuration(base_pos, base_rot, q))
+    out = np.inf
+    for shape in body.spec.collisions:
+        frame = data.oMf[model.getFrameId(shape.link)]
+        out = min(out, shape_bottom(shape, frame.translation, frame.rotation))
+    return float(out)
+
+
+def lying_placement(body: Body, q: np.ndarray, lying: str) -> tuple[np.ndarray, np.ndarray]:
+    """Where a pose starts lying (:data:`LYING`: ``front``, ``back``, ``left`` or ``right``): torso (position [m],
+    rotation), its lowest collision shape just touching the floor."""
+    if lying not in LYING:
+        raise InputError(f"expected one of {', '.join(LYING)}, got {lying!r}", "lying")
+    rot = _axis_rotation(*LYING[lying])
+    bottom = lowest_point(body, np.zeros(3), rot, q)
+    return np.array([0.0, 0.0, -bottom + GROUND_TOLERANCE_M]), rot

@@ -15,7 +15,9 @@ The physics loop (:mod:`.loop`) calls a controller every :data:`~op2motion.robot
 Positions and goals are ``{official joint name: rad}``; a goal left out keeps its previous value. A controller
 carries the :class:`~.plan.Plan` it follows (``plan``): where the robot starts, the P gains, and what the judge
 compares the run with (the planned supports and torso). An optional ``p_gains`` attribute ({joint: P}) overrides the
-plan's P gains while it is set.
+plan's P gains while it is set; an optional ``torque_limits`` attribute ({joint: share of the servo's available
+torque, 0 to 1}; joints left out keep all of it) lowers the servos' torque limit while it is set (the MX-28's
+torque-limit register, e.g. while the robot falls).
 
 :class:`Schedule` is the open-loop controller: it ignores its sensors and sends the plan's goals row by row. A held
 pose, a planned motion, a played action page and a planned gait are each a schedule.

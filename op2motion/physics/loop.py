@@ -6,10 +6,14 @@
    full strength, so the start is neither an impact nor a transient. A plan with torso poses (a walk), a pose for
    which no such equilibrium exists, and one whose sag would press a foot meant to swing into the floor (it was
    not standing on one leg) start at their goals instead while gravity rises from zero over :data:`.plan.RAMP_S`.
+   A run set up to start lying (:attr:`RunSetup.lying`: face down, face up or on a side) lays the plan's first goals
+   on the floor that way (:func:`.body.lying_placement`), at rest, gravity at full strength.
 2. Every :data:`~op2motion.robot.framework.CONTROL_PERIOD_S` the controller gets the time, the torso's gyro and
    accelerometer (torso frame; the acceleration is the torso origin's velocity change over the last period) and the
    joint angles (:mod:`.controller`), and returns the goals the servos hold until the next call. The first call
-   (``start``) comes at time 0; the ticks fall where the plan's rows change (:attr:`.plan.Plan.tick_phase_s`).
+   (``start``) comes at time 0; the ticks fall where the plan's rows change (:attr:`.plan.Plan.tick_phase_s`). A
+   controller's optional ``p_gains`` ({joint: P}) and ``torque_limits`` ({joint: share of the available torque,
+   0 to 1}, as the MX-28's torque-limit register) are read after every call.
 3. Every physics step (1 kHz) the servo model turns goals and joint angles into motor torques; a push, if any,
    acts on the torso's centre of mass; every :data:`.track.SAMPLE_S` the state is recorded (:class:`.track.Track`).
 """
@@ -26,7 +30,7 @@ import numpy as np
 from op2motion.errors import InputError
 from op2motion.model.equilibrium import sagged_angles
 from op2motion.model.servo import ServoModel
-from op2motion.physics.body import Body, BodyState, margin_to, placement
+from op2motion.physics.body import Body, BodyState, lying_placement, margin_to, placement
 from op2motion.physics.controller import Controller, Goals
 from op2motion.physics.engine import Engine
 from op2motion.physics.plan import RAMP_S, PlannedStates, planned_states
@@ -50,13 +54,15 @@ class Push:
 @dataclass(frozen=True)
 class RunSetup:
     """What differs between the runs of one check: a push, joint offsets (20,) [rad] at the start (a perturbed
-    start: the joints start that far from where the plan puts them), the sensors' latency and noise, and
-    ``full_length``: run the plan's whole duration even when the verdict is known earlier."""
+    start: the joints start that far from where the plan puts them), the sensors' latency and noise,
+    ``full_length``: run the plan's whole duration even when the verdict is known earlier, and ``lying``: start
+    lying on the floor (:data:`.body.LYING`: ``front``, ``back``, ``left``, ``right``; None: on the feet)."""
 
     push: Push | None = None
     start_offset: np.ndarray | None = None
     sensors: Sensors = Sensors()
     full_length: bool = False
+    lying: str | None = None
 
 
 @dataclass(frozen=True)
@@ -70,12 +76,15 @@ class StartFacts:
     ended: str = FULL
 
 
-def start_pose(body: Body, controller: Controller, servo: ServoModel
+def start_pose(body: Body, controller: Controller, servo: ServoModel, lying: str | None = None
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, PlannedStates, bool]:
     """Where a run starts (see the module docstring): joint angles (20,) [rad], torso position [m] and rotation,
     the planned states (with the start's flat foot and gap), and whether gravity must be ramped in."""
     plan = controller.plan
     planned = planned_states(body, plan)
+    if lying is not None:
+        pos, rot = lying_placement(body, plan.goals[0], lying)
+        return plan.goals[0], pos, rot, planned, False
     if plan.base is None:
         q0 = sagged_angles(plan.goals[0], plan.supports[0], body.spec, servo.kp_of(plan.p_gains[0]),
                            servo.torque_max)
@@ -95,6 +104,7 @@ class _Servos:
         self.index = {n: i for i, n in enumerate(self.names)}
         self.goals = controller.plan.goals[0].copy()
         self.kp = servo.kp_of(controller.plan.p_gains[0])
+        self.limit: np.ndarray | None = None          # per joint [N·m], when the controller lowers its servos' limit
         self.feet = "foot_forces_n" in inspect.signature(controller.step).parameters
         self.foot_links = body.foot_links
 
@@ -109,6 +119,9 @@ class _Servos:
         if gains is not None:
             plan_gains = np.array([gains.get(n, p) for n, p in zip(self.names, plan_gains)], dtype=float)
         self.kp = self.servo.kp_of(plan_gains)
+        limits = getattr(self.controller, "torque_limits", None)
+        self.limit = None if not limits else self.servo.torque_max * np.array(
+            [min(max(float(limits.get(n, 1.0)), 0.0), 1.0) for n in self.names])
 
     def start(self, q: np.ndarray) -> None:
         """Ask the controller for its first goals."""
@@ -133,7 +146,7 @@ def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoMod
     with ``setup.full_length``); ``on_tick`` gets the simulated time [s] after every control period. Returns the
     samples and where the run started (with why it ended)."""
     plan = controller.plan
-    q0, base_pos, base_rot, planned, ramp = start_pose(body, controller, servo)
+    q0, base_pos, base_rot, planned, ramp = start_pose(body, controller, servo, setup.lying)
     engine.reset(base_pos, base_rot, q0 + (0.0 if setup.start_offset is None else setup.start_offset))
     dt = engine.time_step
     per_tick, every = max(1, int(round(CONTROL_PERIOD_S / dt))), max(1, int(round(SAMPLE_S / dt)))
@@ -156,7 +169,7 @@ def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoMod
             servos.start(imu.read(engine, q, gravity)[2])
         elif (k - phase) % per_tick == 0 and not controller.done:
             servos.tick(engine, t, imu.read(engine, q, gravity))
-        engine.step(servo.active_torque(servos.goals, q, servos.kp), force if k in pushing else None)
+        engine.step(servo.active_torque(servos.goals, q, servos.kp, servos.limit), force if k in pushing else None)
         last = k == steps - 1
         if (k - phase) % per_tick == per_tick - 1:
             if on_tick is not None:
@@ -165,7 +178,7 @@ def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoMod
                 last = last or stop.tick((k + 1) * dt, dq, *engine.base_velocity()[::-1])
         if k % every == every - 1 or last:
             row = plan.row(t)
-            recorder.sample(engine, (k + 1) * dt, row, servos.goals, servos.kp)
+            recorder.sample(engine, (k + 1) * dt, row, servos.goals, servos.kp, servos.limit)
             state = recorder.lists["states"][-1]
             last = stop.sample((k + 1) * dt, float(state.com[2]), float(planned.states[row].com[2]),
                                functools.partial(margin_to, state, plan.supports[row], state.com[:2])) or last

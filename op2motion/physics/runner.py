@@ -17,7 +17,7 @@ import numpy as np
 
 from op2motion.errors import InputError
 from op2motion.model.servo import ServoModel
-from op2motion.physics.body import Body
+from op2motion.physics.body import LYING, Body
 from op2motion.physics.controller import Controller
 from op2motion.physics.engine import ENGINES, make_engine, snapshot_png
 from op2motion.physics.judge import TILT_LIMIT_DEG, judge
@@ -43,9 +43,11 @@ Progress = Callable[[float, float], object]      # (simulated seconds done, in a
 class Setup:
     """What every run of a check shares: the servo model (Kp scaled by ``stiffness``, a rated supply ``voltage`` [V],
     None: the spec's), the floor's Coulomb ``friction``, the ``sensors``' latency and noise; ``snapshot`` keeps a
-    picture of the main run's end (the first engine's), ``keep_track`` each main run's samples
+    picture of the main run's end (the first engine's), ``keep_track`` the samples of each main and pushed run
     (:class:`.track.Track`, e.g. to plot the joints); ``full_length`` plays every run for the plan's whole
-    duration (by default a run ends once settled or fallen, :mod:`.stopping`)."""
+    duration (by default a run ends once settled or fallen, :mod:`.stopping`); ``lying`` starts every run lying on
+    the floor (``front``: face down, ``back``: face up, ``left`` or ``right``: on that side; the plan's first goals
+    laid on the floor, :func:`.body.lying_placement`) instead of on the feet."""
 
     stiffness: float = 1.0
     voltage: float | None = None
@@ -54,11 +56,14 @@ class Setup:
     friction: float = FLOOR_FRICTION
     sensors: Sensors = Sensors()
     full_length: bool = False
+    lying: str | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.friction) and 0.0 < self.friction <= MAX_FRICTION):
             raise InputError(f"expected a friction coefficient in (0, {MAX_FRICTION:g}], got {self.friction!r}",
                              "friction")
+        if self.lying is not None and self.lying not in LYING:
+            raise InputError(f"expected one of {', '.join(LYING)} (or none), got {self.lying!r}", "lying")
 
 
 @dataclass(frozen=True)
@@ -142,7 +147,8 @@ class _Runner:
             keep_track: bool = False) -> RunReport:
         """One run in a fresh world, judged and measured."""
         engine = make_engine(engine_name, self.spec, self.servo, self.setup.friction)
-        run = replace(run, sensors=self.setup.sensors, full_length=run.full_length or self.setup.full_length)
+        run = replace(run, sensors=self.setup.sensors, full_length=run.full_length or self.setup.full_length,
+                      lying=self.setup.lying)
         plan = self.controller.plan
         try:
             track, start = simulate(engine, self.body, self.controller, self.servo, run, self._tick)
@@ -166,7 +172,7 @@ class _Runner:
             dx, dy = PUSH_DIRECTIONS[direction]
             push = Push(np.array([dx, dy, 0.0]) * pushes.force_n, at, pushes.duration_s)
             out.append(PushResult(direction, pushes.force_n, at, pushes.duration_s,
-                                  self.run(engine_name, RunSetup(push=push))))
+                                  self.run(engine_name, RunSetup(push=push), keep_track=self.setup.keep_track)))
         return tuple(out)
 
 

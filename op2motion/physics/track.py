@@ -29,7 +29,7 @@ class Track:
     full-inertia CoM (n, 3) [m], sole positions {side: (n, 3)} [m], joint angles, goals sent (n, 20) [rad], servo
     torques (n, 20) [N·m, signed] and the torque available then (n, 20) [N·m], the centre of pressure (2,) [m] or
     None (off the floor), each foot's load and own CoP, the links pressing on the floor, the link pairs pressing on
-    each other, and the measured body states."""
+    each other, the measured body states, and the torso link frame's position (n, 3) [m]."""
 
     times: np.ndarray
     rows: np.ndarray
@@ -45,6 +45,7 @@ class Track:
     ground: tuple[frozenset[str], ...]
     self_pairs: tuple[frozenset[tuple[str, str]], ...]
     states: tuple[BodyState, ...] = field(repr=False)
+    base_pos: np.ndarray | None = None
 
 
 def centre_of_pressure(contacts: list[Contact]) -> np.ndarray | None:
@@ -85,22 +86,23 @@ class Recorder:
         self.body, self.servo = body, servo
         self.lists: dict[str, list] = {name: [] for name in (
             "times", "rows", "rot", "com", "soles", "q", "goals", "torque", "available", "cop", "feet", "ground",
-            "self_pairs", "states")}
+            "self_pairs", "states", "base_pos")}
 
-    def sample(self, engine: Engine, t: float, row: int, goals: np.ndarray, kp: np.ndarray) -> None:
+    def sample(self, engine: Engine, t: float, row: int, goals: np.ndarray, kp: np.ndarray,
+               limit: np.ndarray | None = None) -> None:
         """Record the engine's state at time ``t`` [s], the servos holding ``goals`` (20,) [rad] at stiffness
-        ``kp`` (20,) [N·m/rad] (plan row ``row``)."""
+        ``kp`` (20,) [N·m/rad] (plan row ``row``) within a torque ``limit`` (20,) [N·m] if the controller set one."""
         q, dq = engine.state()
         pos, rot = engine.base()
         state = self.body.state(pos, rot, q)
         contacts = engine.contacts()
         ground = [c for c in contacts if c.other is None and c.normal_force > 0.0]
         floor, pairs = pressed([c for c in contacts if c.other is not None or c.normal_force > 0.0])
-        torque = self.servo.motor_torque(goals, q, dq, kp)
+        torque = self.servo.motor_torque(goals, q, dq, kp, limit)
         values = {"times": t, "rows": row, "rot": rot, "com": state.com, "soles": state.soles, "q": q,
                   "goals": np.array(goals), "torque": torque, "available": self.servo.available(dq, torque),
                   "cop": centre_of_pressure(ground), "feet": foot_loads(ground, self.body.foot_links),
-                  "ground": floor, "self_pairs": pairs, "states": state}
+                  "ground": floor, "self_pairs": pairs, "states": state, "base_pos": pos}
         for name, value in values.items():
             self.lists[name].append(value)
 
@@ -111,4 +113,4 @@ class Recorder:
         return Track(np.array(s["times"]), np.array(s["rows"], dtype=int), np.array(s["rot"]), np.array(s["com"]),
                      soles, np.array(s["q"]), np.array(s["goals"]), np.array(s["torque"]), np.array(s["available"]),
                      tuple(s["cop"]), tuple(s["feet"]), tuple(s["ground"]), tuple(s["self_pairs"]),
-                     tuple(s["states"]))
+                     tuple(s["states"]), np.array(s["base_pos"]))

@@ -19,6 +19,9 @@ import numpy as np
 from op2motion.errors import SpecError
 from op2motion.robot.spec import ImuSpec, Spec
 
+FALL_TILT_RAD = math.radians(45.0)  # the torso this far from upright is down (a walk's own tilt stays under 14°)
+ARM_TILT_RAD = math.radians(20.0)   # a fall watch arms once the torso is this close to upright
+
 
 def imu_of(spec: Spec) -> ImuSpec:
     """The spec's IMU mapping; a spec without an ``[imu]`` table cannot drive a robot."""
@@ -94,6 +97,16 @@ def attitude(accel_m_s2: np.ndarray) -> tuple[float, float, float]:
 def fore_aft_count(imu: ImuSpec, words: Mapping[int, int]) -> int:
     """The framework's FB_ACCEL: the raw count of the accelerometer channel along the torso's x axis."""
     return words[imu.accel[0].register]
+
+
+def board_of(spec: Spec) -> ImuSpec:
+    """The spec's IMU mapping, or the shipped OP2's when the spec states none (a simulated body's sensors still read
+    as the robot's board would: the fall test in counts)."""
+    if spec.imu is not None:
+        return spec.imu
+    from op2motion.robot.specfile import default_spec
+
+    return imu_of(default_spec())
 
 
 class FallWatch:

@@ -14,8 +14,9 @@ What is independent here (written for this harness alone, sharing nothing with `
   :data:`FALL_HEIGHT_M`;
 * the floor: a MuJoCo plane with MuJoCo's default contact softness and the given sliding friction (also set on every
   robot geom, since MuJoCo combines two geoms' frictions by their maximum);
-* the initial placement: the joints at the controller's first goals, the torso level, and the lowest point of any
-  robot geom :data:`START_GAP_M` above the floor, everything at rest, gravity at full strength from the start.
+* the initial placement: the joints at the controller's first goals, the torso level (or, asked to start lying, turned
+  a quarter turn face down, face up or onto a side: :data:`LYING_QUATERNIONS`), and the lowest point of any robot geom
+  :data:`START_GAP_M` above the floor, everything at rest, gravity at full strength from the start.
 
 What comes from outside: the URDF text (links, masses, inertias, joint axes and collision shapes) and the controller
 (an object with ``start(positions)`` and ``step(t, gyro, accel, positions)`` returning ``{joint: goal [rad]}``).
@@ -43,6 +44,11 @@ TORSIONAL_FRICTION = 0.005      # MuJoCo's default torsional and rolling frictio
 ROLLING_FRICTION = 0.0001
 DEFAULT_STALL_NM = 2.5          # a 12 V MX-28 class servo: stall torque [N·m] ...
 DEFAULT_NO_LOAD_RAD_S = 5.76    # ... and no-load speed [rad/s]
+_HALF = math.sqrt(0.5)
+#: The torso's orientation (w, x, y, z) for a start lying: face down (front: a quarter turn about y, the torso's front
+#: to the floor), face up (back), on the left side (a quarter turn about -x) or the right one.
+LYING_QUATERNIONS = {"front": (_HALF, 0.0, _HALF, 0.0), "back": (_HALF, 0.0, -_HALF, 0.0),
+                     "left": (_HALF, -_HALF, 0.0, 0.0), "right": (_HALF, _HALF, 0.0, 0.0)}
 
 
 @dataclass(frozen=True)
@@ -161,15 +167,16 @@ def _geom_bottom(model: Any, data: Any, g: int) -> float:
     return float(corners[:, 2].min())
 
 
-def _place(robot: _Robot, goals: Mapping[str, float]) -> None:
-    """Joints at ``goals``, torso level, at rest, the lowest robot point :data:`START_GAP_M` above the floor."""
+def _place(robot: _Robot, goals: Mapping[str, float], lying: str | None = None) -> None:
+    """Joints at ``goals``, torso level (or lying as :data:`LYING_QUATERNIONS` says), at rest, the lowest robot point
+    :data:`START_GAP_M` above the floor."""
     m, d = robot.model, robot.data
     mujoco.mj_resetData(m, d)
     for name, adr in zip(robot.names, robot.qadr):
         d.qpos[adr] = goals.get(name, 0.0)
     a = robot.free_qadr
     d.qpos[a:a + 3] = (0.0, 0.0, 1.0)
-    d.qpos[a + 3:a + 7] = (1.0, 0.0, 0.0, 0.0)
+    d.qpos[a + 3:a + 7] = (1.0, 0.0, 0.0, 0.0) if lying is None else LYING_QUATERNIONS[lying]
     d.qvel[:] = 0.0
     mujoco.mj_forward(m, d)
     bottom = min(_geom_bottom(m, d, g) for g in range(m.ngeom) if m.geom_bodyid[g] != 0)
@@ -224,7 +231,8 @@ def _apply(goal: np.ndarray, index: dict[str, int], goals: Mapping[str, float]) 
 
 
 def simulate(urdf_text: str, controller: Any, seconds: float, friction: float = 0.8, time_step_s: float = 0.001,
-             servo: ServoModel = ServoModel(), latency_ticks: int = 1) -> dict[str, Any]:
+             servo: ServoModel = ServoModel(), latency_ticks: int = 1, lying: str | None = None,
+             until: Any = None) -> dict[str, Any]:
     """Run ``controller`` on the robot of ``urdf_text`` standing on a flat floor for ``seconds`` of simulated time.
 
     Args:
@@ -236,13 +244,16 @@ def simulate(urdf_text: str, controller: Any, seconds: float, friction: float = 
         time_step_s: Physics time step [s] (a divisor of :data:`CONTROL_PERIOD_S`).
         servo: The servo model of every joint.
         latency_ticks: How many control ticks late the readings reach the controller.
+        lying: Start lying (a key of :data:`LYING_QUATERNIONS`) instead of standing; then a fall is not looked for.
+        until: Called with the time [s] after every control tick; the run ends when it returns True.
 
     Returns:
         ``fell``, ``fall_time_s`` (None if it did not fall), ``start_xy`` and ``end_xy`` (torso origin [m]),
         ``end_yaw_deg`` (torso heading), ``distance_m`` (forward, along x), ``lateral_m`` (along y), ``seconds``
         (simulated, up to the fall), ``end_tilt_deg`` and ``max_tilt_deg`` (torso z axis from vertical, the latter
         over the control ticks), ``last_gyro`` [rad/s] and ``last_accel`` [m/s²] (the last reading the controller
-        got).
+        got), ``trace``: per control tick (time [s], torso origin height [m], torso tilt [deg], heading [deg], x [m],
+        y [m]).
     """
     if not (time_step_s > 0.0 and seconds >= 0.0 and latency_ticks >= 0):
         raise ValueError(f"expected a positive time step, seconds >= 0 and latency >= 0, got {time_step_s!r}, "
@@ -253,20 +264,25 @@ def simulate(urdf_text: str, controller: Any, seconds: float, friction: float = 
     index = {n: i for i, n in enumerate(robot.names)}
     goal = np.zeros(len(robot.names))
     _apply(goal, index, controller.start({n: 0.0 for n in robot.names}))
-    _place(robot, dict(zip(robot.names, goal.tolist())))
+    _place(robot, dict(zip(robot.names, goal.tolist())), lying)
     per_tick = max(1, int(round(CONTROL_PERIOD_S / time_step_s)))
     imu, start = _Imu(robot, latency_ticks, per_tick * time_step_s), _torso_pose(robot)[0]
     reading = imu.read()                                   # the reading at t = 0 (for the first acceleration)
     fall_time, max_tilt, steps = None, 0.0, int(round(seconds / time_step_s))
+    trace: list[tuple[float, float, float, float, float, float]] = []
     for k in range(steps):
         if k and k % per_tick == 0:
             mujoco.mj_forward(m, d)                        # kinematics and velocities of the current state
             reading = imu.read()
             _apply(goal, index, controller.step(k * time_step_s, reading[0].copy(), reading[1].copy(), reading[2]))
-            pos, tilt, _ = _torso_pose(robot)
+            pos, tilt, heading = _torso_pose(robot)
+            trace.append((k * time_step_s, float(pos[2]), tilt, heading, float(pos[0]), float(pos[1])))
             max_tilt = max(max_tilt, tilt)
-            if tilt > FALL_TILT_DEG or pos[2] < FALL_HEIGHT_M:
+            if lying is None and (tilt > FALL_TILT_DEG or pos[2] < FALL_HEIGHT_M):
                 fall_time = k * time_step_s
+                break
+            if until is not None and until(k * time_step_s):
+                steps = k
                 break
         dq = d.qvel[robot.dadr]
         d.qfrc_applied[robot.dadr] = servo.torque(goal, d.qpos[robot.qadr], dq) + servo.damping_nm_s * dq
@@ -277,4 +293,5 @@ def simulate(urdf_text: str, controller: Any, seconds: float, friction: float = 
     return {"fell": fall_time is not None, "fall_time_s": fall_time, "start_xy": (float(start[0]), float(start[1])),
             "end_xy": (float(end[0]), float(end[1])), "end_yaw_deg": yaw, "distance_m": float(end[0] - start[0]),
             "lateral_m": float(end[1] - start[1]), "seconds": elapsed,
-            "end_tilt_deg": tilt, "max_tilt_deg": max_tilt, "last_gyro": reading[0], "last_accel": reading[1]}
+            "end_tilt_deg": tilt, "max_tilt_deg": max_tilt, "last_gyro": reading[0], "last_accel": reading[1],
+            "trace": trace}

@@ -12,7 +12,9 @@ sampled every 8 ms of simulated time) through the spec's IMU mapping (:func:`op2
 voltage. A servo held at its torque limit for :data:`OVERLOAD_S` latches the overload error.
 
 Starts (:data:`STARTS`): ``standing`` (the book's standing pose on both feet, torque on), ``lying_front`` (face
-down) and ``lying_back`` (face up), placed by ``engine.reset`` and settled before the first byte is served.
+down), ``lying_back`` (face up), ``lying_left`` and ``lying_right`` (on that side; the physics check's lying
+placements, :func:`op2motion.physics.body.lying_placement`), placed by ``engine.reset`` and settled before the first
+byte is served.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from op2motion.bus.tables import SPEED_RAD_S_PER_UNIT, TORQUE_LIMIT_FULL, magnit
 from op2motion.robot.imu import encode, imu_of
 from op2motion.robot.spec import Spec
 
-STARTS = ("standing", "lying_front", "lying_back")
+STARTS = ("standing", "lying_front", "lying_back", "lying_left", "lying_right")
 AMBIENT_C = 30.0                   # the air inside the robot [°C]
 START_TEMPERATURE_C = 36.0         # a servo's temperature when the emulator starts [°C]
 RISE_AT_STALL_C = 60.0             # steady rise above ambient at sustained stall torque [°C]
@@ -35,7 +37,6 @@ THERMAL_TAU_S = 300.0              # the servo's thermal time constant [s]
 OVERLOAD_S = 2.0                   # at the torque limit this long: the overload error latches
 OVERLOAD_SHARE = 0.98              # "at the limit"
 SETTLE_S = 1.5                     # simulated before serving, so the robot rests where it starts
-LYING_HEIGHT_M = 0.12              # the torso's origin above the floor when a lying start is dropped into place
 MOVING_RAD = math.radians(0.5)     # a set point this far from the joint counts as moving
 MOVING_RAD_S = 0.05                # ... and so does a joint this fast
 
@@ -67,18 +68,17 @@ class EmulatedBody:
         self.torque = np.zeros(n)
         self.steps = 0
         self.gyro, self.accel = np.zeros(3), np.array([0.0, 0.0, 9.81])
+        self.push_n = 0.0                   # a push forward (+x, world) at the torso's centre of mass [N]
         self._place()
 
     def _place(self) -> None:
         """Put the robot where its start says, servos holding the start pose, and let it settle."""
-        from op2motion.kinematics.leg_ik import rot_y
-        from op2motion.physics.body import Body, placement
+        from op2motion.physics.body import Body, lying_placement, placement
 
         if self.start == "standing":
             pos, rot, _, _ = placement(Body(self.spec), self.pose, "double")
         else:
-            rot = rot_y(math.pi / 2 if self.start == "lying_front" else -math.pi / 2)
-            pos = np.array([0.0, 0.0, LYING_HEIGHT_M])
+            pos, rot = lying_placement(Body(self.spec), self.pose, self.start.removeprefix("lying_"))
         self.engine.reset(pos, rot, self.pose)
         self.engine.set_gravity(1.0)
         kp = self.model.kp_of(np.full(len(self.pose), self.spec.servo.p_gain_default))
@@ -106,7 +106,7 @@ class EmulatedBody:
             self.command = np.where(enabled, self.command, q)             # a limp servo's set point follows it
             torque = self.model.active_torque(self.command, q, kp)
             torque = np.minimum(np.maximum(torque, -limit), limit)
-            self.engine.step(torque)
+            self.engine.step(torque, np.array([self.push_n, 0.0, 0.0]) if self.push_n else None)
             self.torque = torque
             at_limit = enabled & (np.abs(torque) >= OVERLOAD_SHARE * np.maximum(limit, 1e-9)) & (limit > 0)
             self.saturated_s = np.where(at_limit, self.saturated_s + self.dt, 0.0)

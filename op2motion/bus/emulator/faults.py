@@ -7,7 +7,9 @@
 * ``overheat``: (id, seconds, °C) a servo whose temperature jumps to that much that long into the motion (above
   its limit, 80 °C by default, it reports overheating and its alarm shutdown drops its torque);
 * ``supply_v``: the supply voltage [V] (below a servo's lowest voltage limit, 6 V, it reports an input-voltage
-  error).
+  error);
+* ``push``: (newtons, seconds) a push forward (+x of the world, the way the robot first faced) at the torso's centre
+  of mass for :data:`PUSH_S`, that long into the motion.
 
 Times count from the motion's start: the first SYNC_WRITE the emulator receives (what a client sends every 8 ms
 while it drives the robot), so a fault lands at the same point of a motion however long the client took to start.
@@ -21,6 +23,8 @@ from dataclasses import dataclass, field
 from op2motion.errors import InputError
 
 MAX_RATE = 0.5                     # more lost or corrupted replies than this is no bus at all
+PUSH_S = 0.1                       # a push lasts this long [s]
+MAX_PUSH_N = 200                   # a push stronger than this is not a push [N]
 _TIMED = re.compile(r"^(\d+)@(\d+(?:\.\d*)?)(?::(\d+(?:\.\d*)?))?$")
 
 
@@ -35,6 +39,7 @@ class Faults:
     overheat: list[tuple[int, float, float]] = field(default_factory=list)
     supply_v: float | None = None
     seed: int = 0
+    push: list[tuple[float, float]] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         for name in ("lose", "corrupt"):
@@ -44,6 +49,9 @@ class Faults:
         for device in set(self.missing) | {d for d, _ in self.unplug} | {d for d, _, _ in self.overheat}:
             if not 1 <= device <= 20:
                 raise InputError(f"expected a servo ID 1..20, got {device}", "missing")
+        for newtons, _ in self.push:
+            if not 0.0 < newtons <= MAX_PUSH_N:
+                raise InputError(f"expected a push of 1 to {MAX_PUSH_N} N, got {newtons:g}", "push")
         if self.supply_v is not None and not 0.0 <= self.supply_v <= 25.5:
             raise InputError(f"expected a supply of 0 to 25.5 V, got {self.supply_v!r}", "supply")
 
@@ -58,14 +66,21 @@ class Faults:
             out.append(f"{self.corrupt:.1%} of replies corrupted")
         if self.supply_v is not None:
             out.append(f"supply {self.supply_v:g} V")
+        out += [f"pushed forward {n:g} N at {t:g} s" for n, t in self.push]
         return out
 
+    def push_at(self, since_s: float) -> float:
+        """The forward push [N] at ``since_s`` [s] into the motion (0 when none)."""
+        return sum(n for n, t in self.push if t <= since_s < t + PUSH_S)
 
-def parse_timed(text: str, param: str, default_value: float | None = None) -> tuple[int, float, float]:
-    """``ID@SECONDS[:VALUE]`` (e.g. ``13@4:85``) -> (id, seconds, value); bad input names ``param``."""
+
+def parse_timed(text: str, param: str, default_value: float | None = None, first: str = "ID"
+                ) -> tuple[int, float, float]:
+    """``ID@SECONDS[:VALUE]`` (e.g. ``13@4:85``; ``first`` names the leading number in messages) -> (id, seconds,
+    value); bad input names ``param``."""
     m = _TIMED.match(text.strip())
     if not m or (m.group(3) is not None and default_value is None):
-        form = "ID@SECONDS[:CELSIUS]" if default_value is not None else "ID@SECONDS"
+        form = f"{first}@SECONDS[:CELSIUS]" if default_value is not None else f"{first}@SECONDS"
         raise InputError(f"expected {form} (e.g. 13@4{':85' if default_value is not None else ''}), got {text!r}",
                          param)
     value = float(m.group(3)) if m.group(3) is not None else float(default_value or 0.0)

@@ -242,6 +242,7 @@ class Emulator:
         if self.motion_t0 is None:
             return
         since = self._now() - self.motion_t0
+        self.body.push_n = self.faults.push_at(since)
         for device, at in self.faults.unplug:
             if since >= at:
                 self.wire.unplugged.add(device)

@@ -1,0 +1,161 @@
+"""Walking and getting up on the robot, as library functions (``op2motion robot walk|getup``).
+
+* :func:`walk`: a planned walk (a preset's steps, or to a target) through
+  :class:`~op2motion.gait.controller.WalkController`;
+* :func:`steered_walk`: a walk steered while it walks (:class:`~op2motion.gait.steer.SteerableWalk`), by a command
+  timeline (``--commands``), by keys (``--teleop``, :mod:`.teleop`) or both; optionally inside a
+  :class:`~op2motion.motion.fall.Supervisor` (``get_up``): a fall lowers the torque limits, the robot lies still,
+  gets up and walks on (the bus's watch leaves that fall to it); otherwise a fall stops the walk (:mod:`.safety`);
+* :func:`getup`: :class:`~op2motion.motion.getup.GetUp` from where the robot lies, checked first in physics from the
+  same side (:data:`~.plans.CHECK_ENGINE`), until it stands.
+
+Each walk starts standing: a planned move from the present pose to the walk's first, checked in physics, then the
+walk in the 8 ms loop (:func:`~.loop.run_controller`). Ctrl-C stops a steered walk within two steps, on both feet.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from op2motion.bus.loop import LoopReport, run_controller
+from op2motion.bus.plans import CHECK_ENGINE, LYING_TILT_RAD, move
+from op2motion.bus.session import Session
+from op2motion.bus.tasks import MotionResult, Options, checked, run_planned
+from op2motion.errors import CheckFailed
+from op2motion.robot.imu import FALL_TILT_RAD
+from op2motion.robot.pose import Pose
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support
+
+MAX_TELEOP_S = 3600.0          # a walk steered by keys ends after this long at the latest [s]
+
+
+def walk(port: str, spec: Spec, preset: str | None = None, steps: int | None = None,
+         target: tuple[float, float, float] | None = None, options: Options = Options()) -> MotionResult:
+    """A walk on the robot: the preset's gait planned within the servos' speed (``steps`` steps, or to ``target``
+    (x [m], y [m], heading [rad])), a planned move to its first pose, then :class:`~op2motion.gait.controller.
+    WalkController` in the loop with the robot's IMU and joints until it stands at the end."""
+    from op2motion.gait import preset_path, read_preset
+    from op2motion.gait.controller import WalkController
+    from op2motion.gait.speeds import plan_within_speed
+
+    params = read_preset(preset_path(preset)).with_steps(steps)
+    gait = plan_within_speed(params, spec, target)
+    controller = WalkController(gait, spec)
+    result = _on_robot(port, spec, controller, f"walk '{params.name}' ({gait.params.steps} steps)", options)
+    walked = dict(result.runs).get("walk")
+    if walked is not None:
+        result.travel = leg_travel(controller)
+        result.travel["gyro_heading_deg"] = math.degrees(walked.yaw_rad)
+    return result
+
+
+def steered_walk(port: str, spec: Spec, preset: str | None = None, commands: Any = None, teleop: Any = None,
+                 action: Any = None, get_up: bool = False, options: Options = Options()) -> MotionResult:
+    """A steered walk on the robot: ``commands`` (a :class:`~op2motion.gait.commands.CommandTimeline`) feed it on
+    its clock, ``teleop`` (a :class:`~.teleop.Teleop`) from the keys between ticks; the kicks are ``action``'s stock
+    pages when it has them. It ends standing still after its stop (the timeline's end, the ``x`` key, or Ctrl-C),
+    at most :data:`MAX_TELEOP_S` with keys. With ``get_up``, falls are caught (see the module docstring)."""
+    from op2motion.gait.steer import SteerableWalk
+    from op2motion.motion.fall import Supervisor
+
+    walker = SteerableWalk.make(spec, preset, commands=commands, action=action)
+    controller: Any = Supervisor(walker, spec=spec) if get_up else walker   # type: ignore[arg-type]
+    source = " and ".join(n for n, v in (("a command timeline", commands), ("keys", teleop)) if v is not None)
+    what = f"steered walk '{walker.params.name}' ({source or 'standing'}{', getting up after falls' if get_up else ''})"
+    duration = MAX_TELEOP_S if teleop is not None else None
+    on_tick = options.on_tick
+    if teleop is not None:
+        def on_tick(tick: Any) -> None:            # noqa: F811  (the keys, then the caller's progress)
+            teleop.apply(walker)
+            if options.on_tick is not None:
+                options.on_tick(tick)
+    result = _on_robot(port, spec, controller, what, Options(options.force, options.stop, on_tick,
+                                                             options.on_progress), duration)
+    walked = dict(result.runs).get("walk")
+    if walked is not None:
+        result.travel = {"gyro_heading_deg": math.degrees(walked.yaw_rad)}
+        if get_up:
+            result.notes += [f"{t_s:.2f} s: {event}" for t_s, event in controller.events]
+    return result
+
+
+def _on_robot(port: str, spec: Spec, controller: Any, what: str, options: Options,
+              duration_s: float | None = None) -> MotionResult:
+    """A walk controller on the robot: refused lying, the move to its first pose checked and played, then the
+    walk until its plan is over (or ``duration_s``), or it is done."""
+    with Session(port, spec) as session:
+        state = session.status()
+        session.preflight(state)
+        if state.board.tilt_rad > LYING_TILT_RAD:
+            raise CheckFailed(f"refused: the robot lies (tilted {math.degrees(state.board.tilt_rad):.0f}°); a walk "
+                              f"starts standing (op2motion robot getup first)")
+        first = Pose("walk_start", Support.DOUBLE, np.asarray(controller.plan.goals[0], dtype=float))
+        approach = move(state.servo_angles, first, spec)
+        planned = controller.plan.duration_s if duration_s is None else duration_s
+        result = MotionResult(what, approach.duration_s + planned, notes=list(approach.notes))
+        result.checked = checked(approach, spec, state, options.force, "the move to the walk's first pose",
+                                 options.on_progress)
+        if not run_planned(session, state, approach, result, "approach", options):
+            return result
+        report = run_controller(controller, session.robot, duration_s=duration_s, stop=options.stop,
+                                on_tick=options.on_tick, until_done=True)
+        result.runs.append(("walk", report))
+        return result
+
+
+def getup(port: str, spec: Spec, action: Any = None, options: Options = Options()) -> MotionResult:
+    """Get the robot up from where it lies (:class:`~op2motion.motion.getup.GetUp`: the stock pages 10/11 when
+    ``action`` has them, op2motion's own motions otherwise). Checked first in physics from the side it lies on
+    (refused, exit 1, if it does not stand there, unless forced); runs until it stands (or gives up). A robot
+    already up is left as it is."""
+    from op2motion.motion.getup import GetUp
+    from op2motion.motion.lying import lying_side
+    from op2motion.physics import Setup, check
+
+    with Session(port, spec) as session:
+        state = session.status()
+        session.preflight(state)
+        tilt = state.board.tilt_rad
+        if tilt < FALL_TILT_RAD:
+            result = MotionResult("get up", 0.0, notes=[f"the robot is up (tilted {math.degrees(tilt):.0f}°): "
+                                                        f"nothing to do"])
+            result.checked = "nothing to check"
+            return result
+        side = lying_side(state.board.accel_m_s2)
+        controller = GetUp(spec, action)
+        result = MotionResult(f"get up from lying {side}", controller.plan.duration_s)
+        if options.force:
+            result.checked = "not checked (forced)"
+        else:
+            trial = GetUp(spec, action)
+            check(trial, spec, (CHECK_ENGINE,), setup=Setup(lying=side, full_length=True),
+                  on_progress=options.on_progress)
+            if not trial.stood:
+                raise CheckFailed(f"refused: GetUp does not stand up from lying {side} in physics ({CHECK_ENGINE}, "
+                                  f"the servo model); --force plays it anyway")
+            result.checked = f"checked in physics ({CHECK_ENGINE}, the servo model, lying {side}): stands"
+        if options.stopped():
+            result.runs.append(("get up", LoopReport(ended="stopped")))
+            return result
+        session.take_control(state)
+        report = run_controller(controller, session.robot, stop=options.stop, on_tick=options.on_tick,
+                                until_done=True)
+        result.runs.append(("get up", report))
+        result.notes += [f"{t_s:.2f} s: {event}" for t_s, event in controller.events]
+        if report.ended == "done" and not controller.stood:
+            result.notes.append("could not get up")
+        return result
+
+
+def leg_travel(controller: Any) -> dict[str, float]:
+    """Where the feet took the robot, by leg odometry: the plan's travel of the feet's midpoint plus the placement
+    error the controller measured at each landing from the joint angles (plan frame: x forward, y left) [m]."""
+    feet = controller.gait.timeline.feet
+    start = np.mean([feet[side][0, :2] for side in ("left", "right")], axis=0)
+    end = np.mean([feet[side][-1, :2] for side in ("left", "right")], axis=0)
+    travel = end - start + np.asarray(controller.odometry.error, dtype=float)
+    return {"x_m": float(travel[0]), "y_m": float(travel[1]), "distance_m": float(np.hypot(*travel))}

@@ -1,0 +1,97 @@
+"""A kick inside a steered walk: stop, kick, walk on.
+
+:meth:`.steer.SteerableWalk.kick` asks for it; the rolling planner (:mod:`.rolling`) closes the feet as for a stop,
+stands, and then plays a kick phase (:func:`kick_chunk`): a quintic from the walk's standing goals to the kick's
+first pose, the kick, a quintic back (:func:`op2motion.motion.planner.blend`), after which the walk goes on with
+the command in force. The kick is the stock page 12 (right) or 13 (left) of the action file given when it has them,
+played as the robot's framework plays them (:mod:`op2motion.motion.player`) from walk-ready, or op2motion's own
+``kick_right`` / ``kick_left`` (``poses/motions/``, planned like every motion: weight shift, lift, routes around
+the floor). Its rows are played open loop (the walk's feedback assumes soles where its own plan puts them); their
+torso poses, for the judge and the attitude estimate, stand on the foot that does not kick, where the walk left it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from op2motion.formats.action import ActionFile
+from op2motion.gait.phases import WalkState
+from op2motion.kinematics.leg_ik import Leg, leg_fk, rot_z
+from op2motion.model.dynamics import dynamics_for
+from op2motion.robot.spec import Spec
+from op2motion.robot.support import other_side
+
+STOCK_KICKS = {"right": 12, "left": 13}     # the stock action file's kick pages (framework demos)
+OWN_KICKS = {"right": "kick_right", "left": "kick_left"}
+WALK_READY_PAGE = 9                         # the stock kicks start from walk-ready (the stock page 9's pose)
+BLEND_S = 0.8                               # the quintics into and out of the kick take at least this [s]
+_CACHE: dict[tuple[str, str, bytes | None], tuple[np.ndarray, np.ndarray, tuple[str, ...], str]] = {}
+
+
+def kick_motion(spec: Spec, side: str, action: ActionFile | None = None
+                ) -> tuple[np.ndarray, np.ndarray, tuple[str, ...], str]:
+    """The kick with the ``side`` foot: goals (K, 20) [rad], P gains (K, 20), the support of each row, its name
+    (planned once per spec, side and action file)."""
+    key = (spec.sha256, side, None if action is None else bytes(action.data))
+    if key not in _CACHE:
+        page = STOCK_KICKS[side]
+        if action is not None and action.raw(page).playable and action.raw(WALK_READY_PAGE).playable:
+            from op2motion.motion.pipeline import play_page
+
+            played = play_page(action, page, spec, action.pose(WALK_READY_PAGE, spec))
+            trajectory, name = played.trajectory, f"stock page {page}"
+        else:
+            from op2motion.formats.motionfile import read_motion
+            from op2motion.motion.pipeline import plan_motion
+            from op2motion.motion.ways import motion_path
+
+            trajectory = plan_motion(read_motion(motion_path(OWN_KICKS[side]), spec), spec)
+            name = OWN_KICKS[side]
+        _CACHE[key] = (trajectory.goals, trajectory.p_gains, trajectory.supports, name)
+    return _CACHE[key]
+
+
+def kick_chunk(spec: Spec, legs: dict[str, Leg], state: WalkState, stand_goals: np.ndarray, p_gain: float,
+               side: str, action: ActionFile | None = None) -> dict[str, Any]:
+    """The rows of a kick phase from a robot standing at ``stand_goals`` (20,) [rad] on the feet of ``state``: the
+    fields of :class:`.rows.RowBuffer` (planned joints = goals: the rows are played open loop)."""
+    from op2motion.motion.planner import blend
+
+    goals, gains, supports, _ = kick_motion(spec, side, action)
+    into = blend(stand_goals, goals[0], spec, BLEND_S)
+    back = blend(goals[-1], stand_goals, spec, BLEND_S)
+    rows = np.vstack([into, goals, back])
+    p_gains = np.vstack([np.full((len(into), len(stand_goals)), p_gain), gains,
+                         np.full((len(back), len(stand_goals)), p_gain)])
+    contact = ("double",) * len(into) + tuple(supports) + ("double",) * len(back)
+    anchor = other_side(side)
+    foot = state.foot(anchor)
+    world_rot, world_pos = rot_z(foot.yaw), np.array([foot.x, foot.y, 0.0])
+    leg = legs[anchor]
+    sole, sole_rot = leg_fk(leg, rows[:, list(leg.index)])
+    rot = world_rot @ np.swapaxes(sole_rot, 1, 2)                               # torso rotation (K, 3, 3)
+    pos = world_pos - np.einsum("kij,kj->ki", rot, sole)
+    feet = {anchor: np.repeat(np.array([[foot.x, foot.y, 0.0, foot.yaw]]), len(rows), axis=0)}
+    other = legs[side]
+    p_other, r_other = leg_fk(other, rows[:, list(other.index)])
+    world_other = pos + np.einsum("kij,kj->ki", rot, p_other)
+    yaw_other = np.arctan2((rot @ r_other)[:, 1, 0], (rot @ r_other)[:, 0, 0])
+    feet[side] = np.column_stack([world_other, np.unwrap(yaw_other)])
+    com = _coms(spec, rows, pos, rot)
+    return {"joints": rows, "goals": rows, "p_gains": p_gains, "torso_pos": pos, "torso_rot": rot,
+            "feet": feet, "contact": contact, "com": com}
+
+
+def _coms(spec: Spec, rows: np.ndarray, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
+    """The whole-body CoM (K, 3) [m] of joint rows at torso poses (pinocchio)."""
+    dyn = dynamics_for(spec)
+    pin = dyn.pin
+    out = np.empty((len(rows), 3))
+    for i, (q, p, r) in enumerate(zip(rows, pos, rot)):
+        config = dyn.configuration(q)
+        config[:3] = p
+        config[3:7] = pin.Quaternion(r).coeffs()
+        out[i] = pin.centerOfMass(dyn.model, dyn.data, config)
+    return out

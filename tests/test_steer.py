@@ -1,0 +1,272 @@
+"""The steered walk without physics: command timelines (and their bad input), the envelope and its acceleration
+limits, the phase program (standing, starting, stopping within two steps), the rolling planner (rows without seams,
+the dry run equal to the walk), commands taking effect from the next step, and ``done``."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from helpers import run_cli
+
+from op2motion.errors import InputError
+from op2motion.gait import WalkController
+from op2motion.gait.commands import MAX_DURATION_S, MAX_ENTRIES, parse_csv, parse_json, read_commands, timeline_of
+from op2motion.gait.envelope import STEER_ENVELOPE, Envelope, Stride
+from op2motion.gait.phases import Intent, initial_state, next_phase
+from op2motion.gait.presets import load_preset
+from op2motion.gait.steer import LEAD_S, SteerableWalk
+from op2motion.robot.spec import GRAVITY_M_S2
+from op2motion.robot.specfile import default_spec
+
+DT = 0.008
+STEP_S = 0.32
+JOINT_JUMP_RAD = 0.0415     # no planned joint moves more than this between two rows: 90 % of the MX-28's no-load
+                            # speed (5.18 rad/s at 12 V) for 8 ms, what a planned walk's joints keep within
+COM_JUMP_M = 0.003          # ... nor the planned CoM more than this
+
+
+@pytest.fixture(scope="module")
+def spec():
+    return default_spec()
+
+
+@pytest.fixture(scope="module")
+def params():
+    return load_preset("steer")
+
+
+def test_the_readme_import_path_gives_the_walk_controller():
+    from op2motion.gait.controller import WalkController as Direct
+
+    assert WalkController is Direct
+
+
+# -- command timelines ------------------------------------------------------------------------------------------
+
+
+def test_a_csv_timeline_reads_commands_and_events_in_degrees_at_the_edge():
+    timeline = parse_csv("# a walk\nt_s,vx_m_s,vy_m_s,yaw_rate_deg_s,event\n0,0,0,0,\n2,0.1,0,30,\n5,,,,kick_right\n"
+                         "7,,,,stop\n")
+    assert [e.t_s for e in timeline.entries] == [0, 2, 5, 7]
+    assert timeline.entries[1].command == pytest.approx((0.1, 0.0, math.radians(30.0)))
+    assert timeline.command_at(4.0) == pytest.approx((0.1, 0.0, math.radians(30.0)))
+    assert timeline.command_at(8.0) == (0.0, 0.0, 0.0)
+    assert [e.event for e in timeline.due(2.0, 7.0)] == ["kick_right", "stop"]
+
+
+@pytest.mark.parametrize("text, where", [
+    ("t_s,vx_m_s,vy_m_s,yaw_rate_deg_s\n0,0,0,0\n1,0.1,0\n", "line 3"),          # a speed missing
+    ("t_s,vx_m_s,vy_m_s,yaw_rate_deg_s\n0,0,0,0\n1,nan,0,0\n", "line 3: vx_m_s"),
+    ("t_s,vx_m_s,vy_m_s,yaw_rate_deg_s\n0,0,0,0\n1,0,0,999\n", "line 3: yaw_rate_deg_s"),
+    ("t_s,vx_m_s,vy_m_s,yaw_rate_deg_s\n2,0,0,0\n1,0,0,0\n", "line 3: t_s"),      # not increasing
+    ("t_s,vx_m_s,vy_m_s,yaw_rate_deg_s,event\n0,,,,jump\n", "line 2: event"),
+    ("t_s,vx,vy\n0,0,0\n", "line 1"),                                              # unknown columns
+    (f"t_s,event\n{MAX_DURATION_S + 1},stop\n", "line 2: t_s"),                     # beyond the duration cap
+    ("", "expected a header"),
+])
+def test_bad_csv_rows_are_named_by_file_and_line(text, where):
+    with pytest.raises(InputError) as err:
+        parse_csv(text, "walk.csv")
+    assert err.value.param == "commands" and "walk.csv" in str(err.value) and where in str(err.value)
+
+
+def test_json_timelines_and_their_bad_entries(tmp_path):
+    good = {"schema": "op2motion.commands/1",
+            "commands": [{"t_s": 0, "vx_m_s": 0, "vy_m_s": 0, "yaw_rate_deg_s": 0}, {"t_s": 3, "event": "stop"}]}
+    assert [e.event for e in parse_json(good).entries] == [None, "stop"]
+    bad = dict(good, commands=[{"t_s": 0, "vx_m_s": "fast", "vy_m_s": 0, "yaw_rate_deg_s": 0}])
+    with pytest.raises(InputError, match=r"commands\[0\]: vx_m_s"):
+        parse_json(bad, "walk.json")
+    with pytest.raises(InputError, match="schema"):
+        parse_json({"commands": []}, "walk.json")
+    with pytest.raises(InputError, match=r"commands\[0\].*extra"):
+        parse_json(dict(good, commands=[{"t_s": 0, "event": "stop", "extra": 1}]), "walk.json")
+    path = tmp_path / "walk.json"
+    path.write_text('{"schema": "op2motion.commands/1", "commands": [], "commands": []}')
+    with pytest.raises(InputError, match="twice"):
+        read_commands(path)
+    many = {"schema": "op2motion.commands/1", "commands": [{"t_s": i * 0.01, "event": "stop"}
+                                                             for i in range(MAX_ENTRIES + 1)]}
+    with pytest.raises(InputError, match=f"at most {MAX_ENTRIES}"):
+        parse_json(many)
+
+
+def test_the_cli_refuses_a_bad_command_file_in_one_line(capsys, tmp_path):
+    path = tmp_path / "walk.csv"
+    path.write_text("t_s,vx_m_s,vy_m_s,yaw_rate_deg_s\n0,0,0,0\n1,5,0,0\n")
+    code, _, err = run_cli(capsys, "walk", "--commands", str(path))
+    assert code == 2 and err.startswith("op2motion: error: --commands:") and "line 3" in err
+    assert len(err.strip().splitlines()) == 1
+    code, _, err = run_cli(capsys, "walk", "--commands", str(path), "--steps", "4")
+    assert code == 2 and "--steps" in err
+
+
+def test_the_cli_plans_a_commanded_walk(capsys, tmp_path):
+    path = tmp_path / "walk.json"
+    path.write_text(json.dumps({"schema": "op2motion.commands/1", "commands": [
+        {"t_s": 0, "vx_m_s": 0, "vy_m_s": 0, "yaw_rate_deg_s": 0},
+        {"t_s": 1, "vx_m_s": 0.15, "vy_m_s": 0, "yaw_rate_deg_s": 0}, {"t_s": 4, "event": "stop"}]}))
+    code, out, _ = run_cli(capsys, "walk", "--commands", str(path), "--json")
+    result = json.loads(out)
+    assert code == 0 and result["preset"] == "steer" and result["planned"]["steps"] >= 4
+    assert result["planned"]["end_pose"]["x_m"] > 0.2 and result["commands"]["events"] == ["stop"]
+
+
+# -- the envelope and the phase program --------------------------------------------------------------------------
+
+
+def test_the_envelope_clamps_each_axis_and_their_sum_keeping_the_turn():
+    env = Envelope(forward_m_s=0.2, backward_m_s=0.1, sideways_m_s=0.05, turn_rad_s=0.5, combined=1.2)
+    assert env.clamp(1.0, 0.0, 0.0) == pytest.approx((0.2, 0.0, 0.0))
+    assert env.clamp(-1.0, 0.0, 0.0) == pytest.approx((-0.1, 0.0, 0.0))
+    assert env.clamp(0.1, 0.0, 0.25) == pytest.approx((0.1, 0.0, 0.25))       # shares 0.5 + 0.5: inside
+    vx, vy, w = env.clamp(0.2, 0.02, 0.5)                  # too much together: the steps shorten, the turn stays
+    assert w == pytest.approx(0.5) and vx / 0.2 + vy / 0.05 == pytest.approx(0.2) and vx / vy == pytest.approx(10.0)
+    with pytest.raises(InputError):
+        env.clamp(float("nan"), 0.0, 0.0)
+
+
+def test_strides_change_within_the_acceleration_limits(params, spec):
+    state = initial_state(params, spec)
+    intent = Intent(STEER_ENVELOPE.stride(0.25, 0.0, 0.0, params.step_s))
+    strides = []
+    for _ in range(40):
+        phase, state = next_phase(state, intent, params, spec, STEER_ENVELOPE)
+        if phase.kind == "step":
+            strides.append(phase.stride.dx)
+    most = STEER_ENVELOPE.accel_x_m_s2 * params.step_s ** 2
+    assert np.all(np.diff([0.0, *strides]) <= most + 1e-12)
+    assert strides[-1] == pytest.approx(0.25 * params.step_s)
+
+
+def test_the_robot_stands_while_the_command_is_zero_and_stops_within_two_steps(params, spec):
+    state = initial_state(params, spec)
+    for _ in range(20):                                    # zero command: standing phases only
+        phase, state = next_phase(state, Intent(), params, spec, STEER_ENVELOPE)
+        assert phase.kind == "stand"
+    walk = Intent(STEER_ENVELOPE.stride(0.25, 0.0, 0.0, params.step_s))
+    while state.stride.dx < 0.25 * params.step_s - 1e-9:
+        phase, state = next_phase(state, walk, params, spec, STEER_ENVELOPE)
+    kinds = []
+    for _ in range(4):
+        phase, state = next_phase(state, Intent(stop=True), params, spec, STEER_ENVELOPE)
+        kinds.append((phase.kind, phase.closing))
+    assert kinds[:3] == [("step", False), ("step", True), ("end", False)] and kinds[3][0] == "stand"
+    assert abs(state.left.x - state.right.x) < 1e-9 and state.left.yaw == pytest.approx(state.right.yaw)
+
+
+def test_a_side_step_that_would_bring_the_feet_together_takes_less(params, spec):
+    """Stepping right with the left foot swinging narrows the stance: the side step shrinks until the soles keep
+    their gap."""
+    from op2motion.gait.footsteps import swing_clear
+
+    state = initial_state(params, spec)
+    side = Intent(Stride(0.0, -0.05, 0.0))                # far more than the envelope's side step, to the right
+    phase, state = next_phase(state, side, params, spec, STEER_ENVELOPE)   # stand (calibration time)
+    while phase.kind != "step":
+        phase, state = next_phase(state, side, params, spec, STEER_ENVELOPE)
+    for _ in range(6):
+        before = state
+        phase, state = next_phase(state, side, params, spec, STEER_ENVELOPE)
+        swing = phase.swing
+        other = "left" if swing == "right" else "right"
+        assert swing_clear(before.foot(other), before.foot(swing), state.foot(swing), spec)
+
+
+# -- the rolling planner and the controller ----------------------------------------------------------------------
+
+
+def _drive(walk: SteerableWalk, seconds: float, spec, at=None) -> dict[int, np.ndarray]:
+    """Step ``walk`` with still, upright sensors and the planned joints as measured; ``at``: {time: action}. Its
+    planner keeps every phase (for the test to look at)."""
+    walk.start({n: 0.0 for n in spec.joint_names})
+    walk.planner.keep_all = True
+    goals = {}
+    for i in range(1, int(round(seconds / DT))):
+        t = i * DT
+        for when, action in list((at or {}).items()):
+            if t >= when:
+                action(walk)
+                del at[when]
+        k = max(walk._row(t), 0)
+        joints = walk.rows.get("joints", k) if walk.rows.has(k) else walk.planner.standing_goals
+        goals[i] = np.array(list(walk.step(t, np.zeros(3), np.array([0.0, 0.0, GRAVITY_M_S2]),
+                                           dict(zip(spec.joint_names, joints))).values()))
+    return goals
+
+
+def test_the_rolling_rows_have_no_seams_and_the_dry_run_is_the_walk(spec):
+    timeline = timeline_of([(0.0, 0.0, 0.0, 0.0), (1.0, 0.2, 0.0, 0.3), (4.0, 0.0, 0.05, 0.0), (6.0, "stop")])
+    walk = WalkController.steerable(spec, commands=timeline)
+    plan = walk.plan
+    twin = walk.dry
+    assert twin is not None and walk.dry_rows > 700
+    rows = twin.rows
+    joints, com = rows.numeric["joints"][:walk.dry_rows], rows.numeric["com"][:walk.dry_rows]
+    assert np.abs(np.diff(joints, axis=0)).max() < JOINT_JUMP_RAD
+    assert np.abs(np.diff(com, axis=0)).max() < COM_JUMP_M
+    assert len(plan.goals) == walk.lead + walk.dry_rows
+    online = WalkController.steerable(spec, commands=timeline)
+    _drive(online, LEAD_S + 4.0, spec)
+    k = online._row(LEAD_S + 4.0) - 1
+    assert np.allclose(online.rows.get("goals", k), rows.get("goals", k), atol=1e-12)
+
+
+def test_a_command_takes_effect_from_the_next_step_and_stop_ends_in_done(spec):
+    walk = WalkController.steerable(spec)
+    _drive(walk, LEAD_S + 2.0, spec)
+    assert not [p for _, p in walk.planner.phases if p.kind == "step"]        # zero command: it stands
+    issued = walk._row(LEAD_S + 2.0)
+    _drive_more(walk, LEAD_S + 2.0, 4.0, spec, lambda w: w.command(0.15, 0.0, 0.0))
+    steps = [(first, p) for first, p in walk.planner.phases if p.kind == "step"]
+    assert steps and steps[0][1].stride.dx > 0.0
+    assert all(first > issued for first, _ in steps)
+    stop_row = walk._row(LEAD_S + 6.0)
+    _drive_more(walk, LEAD_S + 6.0, 4.0, spec, lambda w: w.stop())
+    after = [p for first, p in walk.planner.phases if p.kind == "step" and first > stop_row]
+    assert len(after) <= 2 and after[-1].closing
+    assert walk.done
+
+
+@pytest.mark.parametrize("late", range(0, 40, 4))
+def test_a_stop_at_any_tick_ends_within_two_steps(spec, late):
+    """Whenever in a step the stop comes (a phase's planning may have begun with the walking command), at most two
+    steps begin after it, the last closing the feet."""
+    walk = WalkController.steerable(spec)
+    _drive(walk, LEAD_S + 1.0, spec)
+    _drive_more(walk, LEAD_S + 1.0, 3.0 + late * DT, spec, lambda w: w.command(0.25, 0.0, 0.0))
+    t = LEAD_S + 4.0 + late * DT
+    stop_row = walk._row(t)
+    _drive_more(walk, t, 2.5, spec, lambda w: w.stop())
+    after = [p for first, p in walk.planner.phases if p.kind == "step" and first > stop_row]
+    assert 1 <= len(after) <= 2 and after[-1].closing
+
+
+def _drive_more(walk: SteerableWalk, t0: float, seconds: float, spec, first) -> None:
+    """Go on stepping ``walk`` from ``t0`` [s] for ``seconds``, calling ``first(walk)`` before the first tick."""
+    first(walk)
+    for i in range(1, int(round(seconds / DT)) + 1):
+        t = t0 + i * DT
+        k = walk._row(t)
+        joints = walk.rows.get("joints", min(k, walk.rows.end - 1))
+        walk.step(t, np.zeros(3), np.array([0.0, 0.0, GRAVITY_M_S2]), dict(zip(spec.joint_names, joints)))
+
+
+def test_a_planned_walk_is_done_once_its_plan_has_run_out_and_the_body_is_still(spec):
+    ctl = WalkController.from_preset("forward", steps=2, spec=spec)
+    ctl.start({n: 0.0 for n in spec.joint_names})
+    still = (np.zeros(3), np.array([0.0, 0.0, GRAVITY_M_S2]))
+    t = 0.0
+    while t < ctl.plan.end_s:
+        t += DT
+        ctl.step(t, *still, dict(zip(spec.joint_names, ctl.gait.joints[0])))
+        assert not ctl.done or t >= ctl.plan.end_s
+    for _ in range(100):
+        t += DT
+        ctl.step(t, *still, dict(zip(spec.joint_names, ctl.gait.joints[-1])))
+    assert ctl.done
+    ctl.step(t + DT, np.array([0.0, 3.0, 0.0]), still[1], dict(zip(spec.joint_names, ctl.gait.joints[-1])))
+    assert not ctl.done                                    # moving again: not still
