@@ -31,6 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
         posture,
         robot,
         studio,
+        tune,
         walk,
     )
 
@@ -39,7 +40,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--spec", metavar="FILE", help="robot spec TOML (default: the shipped specs/op2.toml)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=common.Parser,
                                 title="commands", help="run 'op2motion COMMAND --help' for its options")
-    for module in (kinematics, posture, library, files, physics, motion, walk, robot, studio, bench):
+    for module in (kinematics, posture, library, files, physics, motion, walk, tune, robot, studio, bench):
         module.register(sub)
     return parser
 

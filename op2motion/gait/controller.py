@@ -91,7 +91,7 @@ class WalkController:
     :meth:`steerable` makes the walk you steer while it walks (:mod:`.steer`)."""
 
     def __init__(self, gait: Gait, spec: Spec, feedback: Feedback = Feedback()):
-        self.gait, self.spec, self.feedback = gait, spec, feedback
+        self.gait, self.spec, self.feedback, self.params = gait, spec, feedback, gait.params
         self.plan: Plan = gait_plan(gait)
         self.schedule = Schedule(self.plan, spec.joint_names)
         self.lead = len(self.plan.goals) - len(gait.goals)
@@ -224,7 +224,9 @@ class WalkController:
         if left is not None:
             error += f.cross_track * float(s.offset @ left)
         s.yaw_integral = float(np.clip(s.yaw_integral + error * dt, -MAX_HEADING_RAD, MAX_HEADING_RAD))
-        return float(np.clip(-f.heading * error - f.heading_ki * s.yaw_integral, -MAX_HEADING_RAD, MAX_HEADING_RAD))
+        gain = self.params.heading_gain_scale                                   # the preset's tuning
+        return float(np.clip(-gain * (f.heading * error + f.heading_ki * s.yaw_integral), -MAX_HEADING_RAD,
+                             MAX_HEADING_RAD))
 
     def _joint_trim(self, k: int, measured_all: np.ndarray) -> np.ndarray:
         """The legs' integral trims (20,) [rad]: what the servos' sag keeps them from the planned angles, added to
@@ -267,6 +269,7 @@ class WalkController:
         """The stock-style gyro damping (20,) [rad]: each leg's hip roll, knee, ankle pitch and ankle roll turned so
         that the body turns against its rate (natural angles, both legs)."""
         scale = 1.0 + self.feedback.soft_gyro * self.calibration.softness        # soft servos: more damping
+        scale *= self.params.gyro_gain_scale                                    # the preset's tuning
         hip_roll, knee, ankle_pitch, ankle_roll = np.multiply(self.feedback.gyro, scale)
         natural = np.array([0.0, hip_roll * gyro[0], 0.0, knee * gyro[1], ankle_pitch * gyro[1], ankle_roll * gyro[0]])
         out = np.zeros(len(self.spec.joints))

@@ -29,13 +29,14 @@ RETIME_TRIES = 4           # speed does not scale exactly with time (the preview
 
 @dataclass(frozen=True)
 class SpeedCheck:
-    """The fastest planned joint: its name, its peak speed [rad/s], the limit [rad/s] (``SPEED_SHARE`` of the
-    no-load speed at ``voltage_v`` [V]) and whether the plan is within it."""
+    """The fastest planned joint: its name, its peak speed [rad/s], the limit [rad/s] (``share`` of the no-load speed
+    at ``voltage_v`` [V]: the preset's ``max_speed_share``) and whether the plan is within it."""
 
     joint: str
     peak_rad_s: float
     limit_rad_s: float
     voltage_v: float
+    share: float = SPEED_SHARE
 
     @property
     def ok(self) -> bool:
@@ -49,12 +50,14 @@ class SpeedCheck:
 
 
 def speed_check(gait: Gait, spec: Spec) -> SpeedCheck:
-    """The fastest joint of a gait's planned angles against :data:`SPEED_SHARE` of the no-load speed."""
+    """The fastest joint of a gait's planned angles against its preset's ``max_speed_share`` (by default
+    :data:`SPEED_SHARE`) of the no-load speed."""
     speeds = np.abs(np.gradient(gait.joints, gait.dt, axis=0)) if len(gait.joints) > 1 else np.zeros_like(gait.joints)
     peaks = speeds.max(axis=0)
     worst = int(np.argmax(peaks))
-    return SpeedCheck(spec.joint_names[worst], float(peaks[worst]), SPEED_SHARE * spec.servo.no_load_speed_rad_s,
-                      spec.servo.supply_voltage_v)
+    share = getattr(gait.params, "max_speed_share", SPEED_SHARE)
+    return SpeedCheck(spec.joint_names[worst], float(peaks[worst]), share * spec.servo.no_load_speed_rad_s,
+                      spec.servo.supply_voltage_v, share)
 
 
 def too_fast_message(check: SpeedCheck, step_s: float) -> str:

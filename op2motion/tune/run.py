@@ -1,0 +1,166 @@
+"""A whole tuning run (``op2motion tune walk|stock``): search, verify, choose, write.
+
+1. **Search** (:func:`~.study.run_study`): Optuna asks for points; each trial (:func:`~.trial.evaluate`) walks the
+   search's bodies (the nominal body and the family's four corners) in :data:`~.trial.SEARCH_ENGINE`, stopping at
+   the first run that does not hold; the study is kept in its SQLite file (stop and resume at will).
+2. **Verify**: the Pareto front's points with at least :data:`~.study.MIN_MARGIN` to spare, fastest first, each
+   walked :data:`VERIFY_STEPS` steps on every body of the family in both engines, with :data:`VERIFY_PUSH_N` side
+   pushes for op2motion's walk (one trial per body, on the same executor), until one holds everywhere
+   (at most ``verify`` of them).
+3. **Write**: that point as a preset (or a ``config.ini``), atomically, with what the study found in its header and
+   a JSON beside it (:func:`result_json`): trials, pruned, wall time, workers, the verified table; and the Pareto
+   figure if asked. Nothing is written when no point holds (exit 1).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, fields, replace
+from typing import Any, Callable
+
+from op2motion.tune.study import Outcome, TrialRow, choose, pareto, rows
+from op2motion.tune.trial import Task, evaluate
+
+VERIFY_STEPS = 20           # the verification's walk [steps] (the acceptance's)
+VERIFY_PUSH_N = 2.0         # ... and its side pushes [N] (op2motion's walk; the README's robustness runs)
+VERIFY_ENGINES = ("pybullet", "mujoco")
+
+
+@dataclass
+class TuneResult:
+    """What a tuning run found: the study's trials, the chosen point and its verified runs per member, the settings
+    written (or None), and the cost (wall time [s] of this run, the trials' summed time [s], workers, executor)."""
+
+    kind: str
+    direction: str
+    table: list[TrialRow]
+    chosen: TrialRow | None = None
+    verified: dict[str, Outcome] = field(default_factory=dict)
+    rejected: list[tuple[int, str]] = field(default_factory=list)
+    settings: Any = None
+    wall_s: float = 0.0
+    workers: int = 1
+    executor: str = "process"
+    ran: int = 0
+
+    @property
+    def verified_speed(self) -> float | None:
+        """The nominal body's measure in the verification (the slowest engine's)."""
+        nominal = self.verified.get("nominal")
+        return None if nominal is None else nominal.speed
+
+
+def verify(point: dict[str, float], task: Task, trials: Any, on_run: Callable[[int, int], Any] | None = None,
+           members: tuple[str, ...] | None = None) -> dict[str, Outcome]:
+    """``point`` on every member of the family (or just ``members``), both engines, :data:`VERIFY_STEPS` steps
+    (pushed for a walk), one trial per member on ``trials``; the outcome per member name."""
+    from op2motion.physics.robust import family
+    from op2motion.tune.trial import spec_of
+
+    names = list(members) if members is not None else [m.name for m in family(spec_of(task.spec_path))]
+    push = VERIFY_PUSH_N if task.kind == "walk" else 0.0
+    out: dict[str, Outcome] = {}
+    pending = dict(enumerate(names))
+    for number, name in pending.items():
+        trials.submit(number, evaluate, point, replace(task, members=(name,), engines=VERIFY_ENGINES,
+                                                      steps=VERIFY_STEPS, push_n=push))
+    while len(out) < len(names):
+        for number, outcome in trials.finished():
+            out[pending[number]] = outcome
+            if on_run is not None:
+                on_run(len(out), len(names))
+    return {n: out[n] for n in names}
+
+
+def candidates(table: list[TrialRow], limit: int) -> list[TrialRow]:
+    """The points worth verifying: the Pareto front's with enough margin, fastest first, at most ``limit``."""
+    from op2motion.tune.study import MIN_MARGIN
+
+    first = choose(table)
+    front = [r for r in pareto(table) if r.outcome is not None and r.outcome.margin >= MIN_MARGIN]
+    ordered = sorted(front, key=lambda r: -r.outcome.speed)  # type: ignore[union-attr]
+    if first is not None and first in ordered:
+        ordered.remove(first)
+        ordered.insert(0, first)
+    return ordered[:limit]
+
+
+def search_and_verify(study: Any, space: Any, task: Task, budget: int, trials: Any, verify_count: int,
+                      on_trial: Callable[[int, int], Any] | None = None,
+                      on_run: Callable[[int, int], Any] | None = None,
+                      verify_members: tuple[str, ...] | None = None) -> TuneResult:
+    """Steps 1 and 2 of the module docstring; the result (``settings`` set when a point held everywhere;
+    ``verify_members``: verify on just these bodies, for a quick look, not a tuned result)."""
+    from op2motion.tune.study import run_study
+    from op2motion.tune.trial import settings
+
+    t0 = time.perf_counter()
+    ran = run_study(study, space, evaluate, (task,), budget, trials, on_trial)
+    table = rows(study)
+    result = TuneResult(task.kind, task.direction, table, workers=trials.workers, ran=ran)
+    for row in candidates(table, verify_count):
+        runs = verify(row.params, task, trials, on_run, verify_members)
+        problems = [o.problem for o in runs.values() if not o.passed]
+        if problems:
+            result.rejected.append((row.number, str(problems[0])))
+            continue
+        result.chosen, result.verified = row, runs
+        result.settings = replace(settings(task, row.params), steps=VERIFY_STEPS) if task.kind == "walk" \
+            else settings(task, row.params)
+        break
+    result.wall_s = time.perf_counter() - t0
+    return result
+
+
+def result_json(result: TuneResult) -> dict[str, Any]:
+    """The run's figures for the JSON beside the written settings and ``--json``."""
+    complete = [r for r in result.table if r.state == "COMPLETE"]
+    pruned = [r for r in result.table if r.state == "PRUNED"]
+    trial_s = sum(r.outcome.seconds for r in result.table if r.outcome is not None)
+    chosen = result.chosen
+    return {"kind": result.kind, "direction": result.direction,
+            "trials": {"finished": len(result.table), "complete": len(complete), "pruned": len(pruned),
+                       "this_run": result.ran},
+            "cost": {"wall_s": round(result.wall_s, 1), "trial_s": round(trial_s, 1), "workers": result.workers,
+                     "executor": result.executor},
+            "pareto": [{"number": r.number, "speed": round(r.outcome.speed, 4), "margin": round(r.outcome.margin, 3)}
+                       for r in pareto(result.table) if r.outcome is not None],
+            "chosen": None if chosen is None else {"number": chosen.number, "params": chosen.params,
+                                                   "search": None if chosen.outcome is None else
+                                                   chosen.outcome.as_dict()},
+            "rejected": [{"number": n, "problem": p} for n, p in result.rejected],
+            "verified": {name: o.as_dict() for name, o in result.verified.items()},
+            "verified_speed": result.verified_speed}
+
+
+def preset_text(params: Any, header: list[str]) -> str:
+    """A gait preset TOML: ``header`` as comments, then every key of ``params`` in order."""
+    lines = [f"# {h}" if h else "#" for h in header]
+    for f in fields(params):
+        value = getattr(params, f.name)
+        if isinstance(value, bool):
+            text = "true" if value else "false"
+        elif isinstance(value, str):
+            text = '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        elif isinstance(value, int):
+            text = str(value)
+        else:
+            text = f"{value:.6g}" if "e" not in f"{value:.6g}" else repr(float(value))
+            if "." not in text and "e" not in text:
+                text += ".0"
+        lines.append(f"{f.name} = {text}")
+    return "\n".join(lines) + "\n"
+
+
+def header_lines(result: TuneResult, unit: str) -> list[str]:
+    """What the study found, for the written file's header."""
+    data = result_json(result)
+    speed = result.verified_speed or 0.0
+    worst = min((o.margin for o in result.verified.values()), default=0.0)
+    return [f"Tuned by op2motion tune {result.kind} ({result.direction}): {data['trials']['finished']} trials "
+            f"({data['trials']['pruned']} pruned), {data['cost']['wall_s']:.0f} s wall on {result.workers} "
+            f"{result.executor} worker(s) ({data['cost']['trial_s']:.0f} s of trials).",
+            f"Verified: {VERIFY_STEPS} steps on every body of the robustness family ({len(result.verified)}) in "
+            f"PyBullet and MuJoCo (MX-28 servo model, 1 kHz){', 2 N side pushes' if result.kind == 'walk' else ''}: "
+            f"all hold; nominal {speed:.3f} {unit} (slowest engine), least margin {worst:.2f}.",
+            "Figures: the JSON file beside this one."]

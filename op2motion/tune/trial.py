@@ -1,0 +1,181 @@
+"""One tuning trial: a point of the search space walked in physics on a set of bodies, judged and measured.
+
+A :class:`Task` says what is tuned (``walk``: a gait preset under :class:`~op2motion.gait.controller.WalkController`;
+``stock``: a ``[Walking Config]`` under the stock Walking module's emulation,
+:class:`~op2motion.gait.stock_controller.StockWalkController`), in which direction, on which robot (a spec file, or
+the shipped OP2), on which bodies of its robustness family, in which engines, with which pushes.
+
+:func:`evaluate` is the trial (a module-level function: it runs on worker processes and Ray). Runs go in order, the
+nominal body first (its speed is the one that counts, the slowest engine's), then the hardest members; the first run
+that does not hold ends the trial (pruned: the rest would not change the verdict). A run holds when
+:func:`hold_problem` finds nothing: no fall (nor when pushed), drift and heading within the walk's bounds
+(:mod:`op2motion.gait.robust`), the CoP inside the planned soles for at least :data:`MIN_COP_INSIDE` of the walk,
+and some servo at its available torque for at most :data:`MAX_LIMITED_SHARE` of it. The margin is the worst run's
+smallest share of a bound left (:func:`run_margin`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from functools import lru_cache
+from typing import Any
+
+from op2motion.errors import InputError
+from op2motion.tune.study import Outcome
+
+MIN_COP_INSIDE = 0.9         # the CoP inside the planned soles for at least this share of the walk
+MAX_LIMITED_SHARE = 0.1      # some servo at its available torque for at most this share of the walk
+SEARCH_ENGINE = "mujoco"     # the faster engine searches; both verify
+#: Per direction: the shipped preset tuned from, and the measure that counts (speed along the walk [m/s], or turn
+#: rate [rad/s]).
+DIRECTIONS = {"forward": "forward", "backward": "backward", "sideways": "sideways", "turn": "turn_left"}
+
+
+@dataclass(frozen=True)
+class Task:
+    """What a trial walks (see the module docstring): ``kind`` ``walk`` or ``stock``; the base settings (a gait
+    preset's :class:`~op2motion.gait.params.GaitParams`, or a :class:`~op2motion.gait.stock_config.StockConfig`);
+    the robot's spec file (None: the shipped OP2); the members by name (None: the search's: the nominal body, then the
+    family's four corners, heavy/soft/slippery and light/stiff/grippy with the torso CoM at both ends); engines;
+    steps; the side pushes [N] (0: none)."""
+
+    kind: str
+    direction: str
+    base: Any
+    spec_path: str | None = None
+    members: tuple[str, ...] | None = None
+    engines: tuple[str, ...] = (SEARCH_ENGINE,)
+    steps: int = 12
+    push_n: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("walk", "stock"):
+            raise InputError(f"expected walk or stock, got {self.kind!r}", "kind")
+        if self.direction not in DIRECTIONS:
+            raise InputError(f"expected one of {', '.join(DIRECTIONS)}, got {self.direction!r}", "direction")
+
+
+@lru_cache(maxsize=4)
+def spec_of(path: str | None) -> Any:
+    """The robot's spec (a file, or the shipped OP2), read once per process."""
+    from op2motion.robot.specfile import default_spec, load_spec
+
+    return default_spec() if path is None else load_spec(path)
+
+
+def members_of(task: Task) -> list[Any]:
+    """The family members a task walks, in order (the nominal body first)."""
+    from op2motion.physics.robust import family
+
+    everyone = family(spec_of(task.spec_path))
+    if task.members is None:
+        return [everyone[0], *everyone[-4:]]
+    chosen = [m for m in everyone if m.name in task.members]
+    if len(chosen) != len(task.members):
+        known = ", ".join(m.name for m in everyone)
+        raise InputError(f"expected members among {known}, got {', '.join(task.members)}", "members")
+    return chosen
+
+
+def settings(task: Task, point: dict[str, float]) -> Any:
+    """The base settings with the point's values (whole numbers where the setting is one; others to 6 significant
+    digits, as the written preset or config.ini keeps them, so that what was walked is what is written)."""
+    values = {k: (int(round(v)) if k in ("p_gain",) else float(f"{v:.6g}")) for k, v in point.items()}
+    if task.kind == "walk":
+        return replace(task.base, steps=task.steps, **values)
+    return task.base.with_values(**values)
+
+
+def controller_of(task: Task, chosen: Any, spec: Any) -> Any:
+    """A fresh controller for one run (a walk's plan is made once per trial and shared)."""
+    if task.kind == "walk":
+        from op2motion.gait.controller import WalkController
+
+        return WalkController(chosen, spec)
+    from op2motion.gait.stock_controller import StockWalkController
+
+    return StockWalkController(chosen, spec, task.steps)
+
+
+def measure(task: Task, walk: Any) -> float:
+    """The measure that counts: speed along the walk [m/s], or the turn rate [rad/s]."""
+    return math.radians(abs(walk.turn_rate_deg_s)) if task.direction == "turn" else float(walk.mean_speed_mps)
+
+
+def hold_problem(report: Any) -> str | None:
+    """Why a run does not hold (None: it holds; see the module docstring)."""
+    from op2motion.gait.robust import walk_judge
+
+    problem = walk_judge(report)
+    if problem is not None:
+        return problem
+    walk = report.run.walk
+    if walk.cop_inside_fraction < MIN_COP_INSIDE:
+        return f"CoP inside the soles {walk.cop_inside_fraction:.0%} of the walk"
+    limited = walk.worst_torque.limited_share or 0.0
+    if limited > MAX_LIMITED_SHARE:
+        return f"{walk.worst_torque.joint} at its available torque {limited:.0%} of the walk"
+    return None
+
+
+def run_margin(report: Any) -> float:
+    """The smallest share of a bound a run left (1: none used; 0: on a bound; negative: past it)."""
+    from op2motion.gait.robust import MAX_DRIFT_SHARE, MAX_HEADING_DEG, MIN_DISTANCE_M
+
+    walk = report.run.walk
+    if report.run.fell or walk is None or any(p.fell for p in report.pushes):
+        return -1.0
+    distance = max(walk.distance_m, MIN_DISTANCE_M)
+    return min(1.0 - walk.lateral_drift_m / (MAX_DRIFT_SHARE * distance),
+               1.0 - abs(walk.heading_error_deg) / MAX_HEADING_DEG,
+               (walk.cop_inside_fraction - MIN_COP_INSIDE) / (1.0 - MIN_COP_INSIDE),
+               1.0 - (walk.worst_torque.limited_share or 0.0) / MAX_LIMITED_SHARE)
+
+
+def plan_problem(task: Task, chosen: Any, spec: Any) -> tuple[Any, str | None]:
+    """A walk's plan within its servos' speed and ranges (the trial's gait), or why there is none."""
+    if task.kind == "stock":
+        return chosen, None
+    from op2motion.gait.speeds import plan_within_speed
+
+    try:
+        return plan_within_speed(chosen, spec), None
+    except InputError as exc:
+        return None, f"plan refused: {exc.message}"
+
+
+def evaluate(point: dict[str, float], task: Task) -> Outcome:
+    """One trial (see the module docstring)."""
+    from op2motion.physics import check
+    from op2motion.tune.study import timed
+
+    def run() -> Outcome:
+        spec = spec_of(task.spec_path)
+        members = members_of(task)
+        planned = len(members) * len(task.engines)
+        gait, problem = plan_problem(task, settings(task, point), spec)
+        if problem is not None:
+            return Outcome(0.0, -1.0, False, 0, planned, problem, 0.0)
+        pushes = None
+        if task.push_n:
+            from op2motion.gait import side_pushes
+
+            pushes = side_pushes(task.push_n)
+        speeds, margin, runs = [], math.inf, 0
+        for member in members:
+            body = member.body(spec)
+            for engine in task.engines:
+                report = check(controller_of(task, gait, body), body, (engine,), pushes,
+                               setup=member.setup()).engines[engine]
+                runs += 1
+                problem = hold_problem(report)
+                margin = min(margin, run_margin(report))
+                if member.name == "nominal" and report.run.walk is not None:
+                    speeds.append(measure(task, report.run.walk))
+                if problem is not None:
+                    return Outcome(min(speeds, default=0.0), margin, False, runs, planned,
+                                   f"{member.name}, {engine}: {problem}", 0.0)
+        return Outcome(min(speeds, default=0.0), margin, True, runs, planned, None, 0.0)
+
+    return timed(run)
