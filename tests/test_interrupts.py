@@ -16,7 +16,7 @@ from helpers import pose_path, run_cli
 STAND, INIT = pose_path("standing"), pose_path("init")
 END_S = 10.0                  # a terminated command ends within this [s]
 GRID = ["--hands", "left", "--supports", "left", "--x", "0.06", "0.14", "20", "--y", "-0.05", "0.05", "10", "--z",
-        "0.07", "0.07", "1"]  # 200 targets: minutes of work
+        "0.07", "0.11", "3"]  # 600 targets: many minutes of work (200 could end within 8 s on an idle machine)
 
 
 def _start(cwd, *argv, env=None) -> subprocess.Popen:
