@@ -10,7 +10,7 @@ from op2motion.gait.params import params_from_mapping
 from op2motion.gait.stock_config import StockConfig, parse_stock_config, stock_config_text
 from op2motion.robot.specfile import tomllib
 from op2motion.tune.executor import ProcessTrials
-from op2motion.tune.run import VERIFY_STEPS, preset_text, search_and_verify
+from op2motion.tune.run import VERIFY_STEPS, Effort, preset_text, search_and_verify
 from op2motion.tune.space import Param, SearchSpace
 from op2motion.tune.study import open_study, rows
 from op2motion.tune.trial import Task, evaluate
@@ -45,7 +45,7 @@ def test_a_walk_study_finds_verifies_and_writes_a_preset_that_reads_back(tmp_pat
     study = open_study(tmp_path / "s.db", "walk", space, SEED)
     trials = ProcessTrials(2)
     try:
-        result = search_and_verify(study, space, task, TRIALS, trials, 1, verify_members=NOMINAL)
+        result = search_and_verify(study, space, task, Effort(TRIALS, 1, NOMINAL), trials)
     finally:
         trials.close()
     assert len(rows(study)) == TRIALS and all(r.outcome is not None for r in result.table)

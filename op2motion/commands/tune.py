@@ -65,7 +65,7 @@ def _run(args: argparse.Namespace, task: Any, space: Any, unit: str) -> Any:
     """Open the study, search, verify; the result."""
     from op2motion.fileio import OutputSet
     from op2motion.tune.executor import trials_on
-    from op2motion.tune.run import search_and_verify
+    from op2motion.tune.run import Effort, search_and_verify
     from op2motion.tune.study import check_budget, open_study
 
     if args.address is not None and args.executor != "ray":
@@ -78,8 +78,8 @@ def _run(args: argparse.Namespace, task: Any, space: Any, unit: str) -> Any:
     study = open_study(study_path, args.study_name or f"tune-{task.kind}-{task.direction}", space, args.seed)
     with trials_on(args.executor, workers, args.address) as trials, \
             progress(args, "trials", "trial") as on_trial, progress(args, "verify", "body") as on_run:
-        result = search_and_verify(study, space, task, check_budget(args.trials), trials, args.verify, on_trial,
-                                   on_run)
+        result = search_and_verify(study, space, task, Effort(check_budget(args.trials), args.verify), trials,
+                                   on_trial, on_run)
     result.executor = args.executor
     return result, outputs, study_path
 
@@ -95,11 +95,12 @@ def _finish(args: argparse.Namespace, result: Any, outputs: Any, text: str, unit
 
     from op2motion.figures.tune import render_pareto
     from op2motion.tune.run import result_json
+    from op2motion.tune.study import MIN_MARGIN, pareto
 
     data = result_json(result)
     data["study"] = study_path
     if args.plot:
-        outputs.put("plot", render_pareto(result, unit))
+        outputs.put("plot", render_pareto(result, pareto(result.table), MIN_MARGIN, unit))
     if result.settings is not None:
         outputs.put("out", text)
         outputs.put("out_json", json.dumps(data, indent=2) + "\n")

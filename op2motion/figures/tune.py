@@ -2,17 +2,16 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Sequence
 
 from op2motion.figures.draw import _png, _pyplot
 
 
-def render_pareto(result: Any, unit: str) -> bytes:
-    """PNG bytes: the trials that held on the search's bodies (blue), those that did not run to the end (grey: a
-    fall or a bound ended them, plotted at their margin then), the Pareto front (line) and the point chosen after
-    verification (star); ``result`` is a :class:`~op2motion.tune.run.TuneResult`."""
-    from op2motion.tune.study import MIN_MARGIN, pareto
-
+def render_pareto(result: Any, front_rows: Sequence[Any], min_margin: float, unit: str) -> bytes:
+    """PNG bytes: the trials that held on the search's bodies (blue), those that did not (grey: a fall or a bound
+    ended them, plotted at their margin then), the Pareto front (``front_rows``, a line), the least margin a chosen
+    point needs (dotted) and the point chosen after verification (star); ``result`` is a
+    :class:`~op2motion.tune.run.TuneResult`."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7.5, 5.0))
     held = [r for r in result.table if r.outcome is not None and r.outcome.passed]
@@ -21,18 +20,18 @@ def render_pareto(result: Any, unit: str) -> bytes:
                color="0.7", label=f"did not hold ({len(failed)})")
     ax.scatter([r.outcome.speed for r in held], [r.outcome.margin for r in held], s=16, color="tab:blue",
                label=f"held on the search's bodies ({len(held)})")
-    front = sorted((r.outcome for r in pareto(result.table) if r.outcome is not None), key=lambda o: o.speed)
+    front = sorted((r.outcome for r in front_rows if r.outcome is not None), key=lambda o: o.speed)
     if front:
         ax.plot([o.speed for o in front], [o.margin for o in front], "-", color="tab:blue", lw=1.0,
                 label="Pareto front")
-    ax.axhline(MIN_MARGIN, color="k", lw=0.6, ls=":", label=f"least margin chosen from ({MIN_MARGIN:g})")
+    ax.axhline(min_margin, color="k", lw=0.6, ls=":", label=f"least margin chosen from ({min_margin:g})")
     for number, _ in result.rejected:
         row = next(r for r in result.table if r.number == number)
         ax.scatter([row.outcome.speed], [row.outcome.margin], marker="x", s=60, color="tab:red")
     if result.chosen is not None and result.chosen.outcome is not None:
         ax.scatter([result.chosen.outcome.speed], [result.chosen.outcome.margin], marker="*", s=220,
                    color="tab:orange", zorder=5, label=f"chosen (verified: {result.verified_speed:.3f} {unit})")
-    ax.set_xlabel(f"nominal speed [{unit}] (search: MuJoCo)")
+    ax.set_xlabel(f"nominal speed [{unit}] (the slower engine)")
     ax.set_ylabel("margin: least share of a bound left")
     ax.set_ylim(-1.05, 1.05)
     ax.set_title(f"tune {result.kind} {result.direction}: {len(result.table)} trials"

@@ -62,7 +62,7 @@ def speed_check(gait: Gait, spec: Spec) -> SpeedCheck:
 
 def too_fast_message(check: SpeedCheck, step_s: float) -> str:
     """Why a plan is refused, and the step that would do."""
-    return (f"expected every joint within {SPEED_SHARE:.0%} of the MX-28's no-load speed ({check.limit_rad_s:.2f} "
+    return (f"expected every joint within {check.share:.0%} of the MX-28's no-load speed ({check.limit_rad_s:.2f} "
             f"rad/s at {check.voltage_v:g} V), got {check.joint} at {check.peak_rad_s:.2f} rad/s; a step of about "
             f"{step_s * check.ratio * RETIME_MARGIN:.2f} s (the preset's step_s) would do, or re-time the plan)")
 

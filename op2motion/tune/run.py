@@ -1,8 +1,9 @@
 """A whole tuning run (``op2motion tune walk|stock``): search, verify, choose, write.
 
 1. **Search** (:func:`~.study.run_study`): Optuna asks for points; each trial (:func:`~.trial.evaluate`) walks the
-   search's bodies (the nominal body and the family's four corners) in :data:`~.trial.SEARCH_ENGINE`, stopping at
-   the first run that does not hold; the study is kept in its SQLite file (stop and resume at will).
+   search's bodies (the nominal body, the family's four corners, the torso CoM at both ends) in both engines
+   (:data:`~.trial.SEARCH_ENGINES`), stopping at the first run that does not hold; the study is kept in its SQLite
+   file (stop and resume at will).
 2. **Verify**: the Pareto front's points with at least :data:`~.study.MIN_MARGIN` to spare, fastest first, each
    walked :data:`VERIFY_STEPS` steps on every body of the family in both engines, with :data:`VERIFY_PUSH_N` side
    pushes for op2motion's walk (one trial per body, on the same executor), until one holds everywhere
@@ -54,7 +55,7 @@ def verify(point: dict[str, float], task: Task, trials: Any, on_run: Callable[[i
            members: tuple[str, ...] | None = None) -> dict[str, Outcome]:
     """``point`` on every member of the family (or just ``members``), both engines, :data:`VERIFY_STEPS` steps
     (pushed for a walk), one trial per member on ``trials``; the outcome per member name."""
-    from op2motion.physics.robust import family
+    from op2motion.physics import family
     from op2motion.tune.trial import spec_of
 
     names = list(members) if members is not None else [m.name for m in family(spec_of(task.spec_path))]
@@ -85,21 +86,29 @@ def candidates(table: list[TrialRow], limit: int) -> list[TrialRow]:
     return ordered[:limit]
 
 
-def search_and_verify(study: Any, space: Any, task: Task, budget: int, trials: Any, verify_count: int,
+@dataclass(frozen=True)
+class Effort:
+    """How much a run does: the study's budget of ``trials``, the best points to ``verify`` at most, and the bodies
+    to verify on (``verify_members``; None: the whole family; fewer for a quick look, not a tuned result)."""
+
+    trials: int
+    verify: int = 3
+    verify_members: tuple[str, ...] | None = None
+
+
+def search_and_verify(study: Any, space: Any, task: Task, effort: Effort, trials: Any,
                       on_trial: Callable[[int, int], Any] | None = None,
-                      on_run: Callable[[int, int], Any] | None = None,
-                      verify_members: tuple[str, ...] | None = None) -> TuneResult:
-    """Steps 1 and 2 of the module docstring; the result (``settings`` set when a point held everywhere;
-    ``verify_members``: verify on just these bodies, for a quick look, not a tuned result)."""
+                      on_run: Callable[[int, int], Any] | None = None) -> TuneResult:
+    """Steps 1 and 2 of the module docstring; the result (``settings`` set when a point held everywhere)."""
     from op2motion.tune.study import run_study
     from op2motion.tune.trial import settings
 
     t0 = time.perf_counter()
-    ran = run_study(study, space, evaluate, (task,), budget, trials, on_trial)
+    ran = run_study(study, space, evaluate, (task,), effort.trials, trials, on_trial)
     table = rows(study)
     result = TuneResult(task.kind, task.direction, table, workers=trials.workers, ran=ran)
-    for row in candidates(table, verify_count):
-        runs = verify(row.params, task, trials, on_run, verify_members)
+    for row in candidates(table, effort.verify):
+        runs = verify(row.params, task, trials, on_run, effort.verify_members)
         problems = [o.problem for o in runs.values() if not o.passed]
         if problems:
             result.rejected.append((row.number, str(problems[0])))

@@ -20,15 +20,15 @@ def _gait(name: str, low: float, high: float, unit: str = "") -> Param:
 
 def _shared() -> tuple[Param, ...]:
     """What every direction's walk searches: timing, lift, hips, servo gain, the speed share and feedback gains."""
-    return (_gait("step_s", 0.26, 0.40, "s"), _gait("double_support_ratio", 0.03, 0.25),
+    return (_gait("step_s", 0.28, 0.38, "s"), _gait("double_support_ratio", 0.03, 0.25),
             _gait("step_height_m", 0.008, 0.025, "m"), _gait("hip_lower_m", 0.025, 0.055, "m"),
-            _gait("swing_ramp", 0.05, 0.25), _gait("p_gain", 28, 48), _gait("max_speed_share", 0.85, 1.0),
+            _gait("swing_ramp", 0.05, 0.15), _gait("p_gain", 28, 48), _gait("max_speed_share", 0.9, 1.2),
             _gait("gyro_gain_scale", 0.5, 2.0), _gait("heading_gain_scale", 0.5, 2.0))
 
 
 def walk_space(direction: str) -> SearchSpace:
     """The default space of op2motion's walk in ``direction`` (forward, backward, sideways, turn)."""
-    stride = {"forward": (_gait("step_length_m", 0.07, 0.11, "m"), _gait("zmp_offset_x_m", -0.01, 0.01, "m"),
+    stride = {"forward": (_gait("step_length_m", 0.08, 0.105, "m"), _gait("zmp_offset_x_m", -0.01, 0.01, "m"),
                           _gait("torso_pitch_deg", 0.0, 6.0, "deg")),
               "backward": (_gait("step_length_m", -0.08, -0.04, "m"), _gait("zmp_offset_x_m", -0.01, 0.01, "m")),
               "sideways": (_gait("step_side_m", 0.015, 0.035, "m"), _gait("zmp_offset_y_m", -0.01, 0.005, "m")),

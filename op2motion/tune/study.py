@@ -6,8 +6,10 @@ and resumed without losing a trial.
   answer if it barely holds. The chosen point (:func:`choose`) is the fastest trial that held everywhere with at
   least :data:`MIN_MARGIN` to spare; the Pareto front is drawn beside it.
 * **Pruning**: Optuna's ``report``/``should_prune`` do not work in multi-objective studies, so a trial stops itself
-  at its first failure (a fall on one body, say: the rest would not change the verdict) and is told back as
-  ``PRUNED``, with where it stopped in its attributes.
+  at its first failure (a fall on one body, say: the rest would not change the verdict): it is listed as pruned
+  (:attr:`TrialRow.state`, where it stopped in its attributes). It is told to Optuna as complete with what it
+  measured and a constraint violation (:func:`violation`, ``Trial.set_constraint``), so the sampler learns
+  where walks fail: a pruned trial without values would count for TPE as a good one while few trials complete.
 * **Resuming**: the study's name and SQLite file identify it; running the same command again continues it up to its
   budget of trials (completed and pruned ones count). Trials that were running when a study was killed are marked
   failed and asked again. Ctrl-C or SIGTERM: the running trials are marked failed, every finished one is kept, and
@@ -60,7 +62,8 @@ class Outcome:
 
 @dataclass(frozen=True)
 class TrialRow:
-    """One finished trial: its number, point and outcome (None for one that failed to run)."""
+    """One finished trial: its number, point, outcome (None for one that failed to run) and state (``COMPLETE``, or
+    ``PRUNED`` for one that stopped at its first failure)."""
 
     number: int
     params: dict[str, float]
@@ -101,15 +104,22 @@ def open_study(path: str | Path, name: str, space: SearchSpace, seed: int) -> An
     return study
 
 
-def _tell(study: Any, trial: Any, outcome: Outcome) -> None:
-    from optuna.trial import TrialState
+def violation(outcome: Outcome) -> float:
+    """How far a trial is from holding (0: it held everywhere): the margin it lacked (at least 0.01) plus the share
+    of its runs never made (a plan refused before any run: 1)."""
+    if outcome.passed:
+        return 0.0
+    lacked = max(0.01, -outcome.margin) if math.isfinite(outcome.margin) else 1.0
+    return lacked + (outcome.planned - outcome.runs) / max(outcome.planned, 1)
 
+
+def _tell(study: Any, trial: Any, outcome: Outcome) -> None:
     for key, value in outcome.as_dict().items():
         trial.set_user_attr(key, value)
-    if outcome.pruned:
-        study.tell(trial, state=TrialState.PRUNED)
-    else:
-        study.tell(trial, [outcome.speed, outcome.margin if math.isfinite(outcome.margin) else -1.0])
+    trial.set_user_attr("violation", violation(outcome))
+    trial.set_constraint("violation", violation(outcome))     # Optuna 5: the samplers weigh feasibility by it
+    margin = outcome.margin if math.isfinite(outcome.margin) else -1.0
+    study.tell(trial, [outcome.speed, max(margin, -1.0)])
 
 
 def run_study(study: Any, space: SearchSpace, evaluate: Callable[..., Outcome], args: tuple[Any, ...],
@@ -150,7 +160,8 @@ def rows(study: Any) -> list[TrialRow]:
             continue
         attrs = t.user_attrs
         outcome = Outcome(**{k: attrs[k] for k in Outcome.__dataclass_fields__}) if "speed" in attrs else None
-        out.append(TrialRow(t.number, dict(t.params), outcome, t.state.name))
+        state = "PRUNED" if outcome is not None and outcome.pruned else t.state.name
+        out.append(TrialRow(t.number, dict(t.params), outcome, state))
     return out
 
 
