@@ -108,7 +108,7 @@ def _finish(args: argparse.Namespace, result: Any, outputs: Any, text: str, unit
     data["files"] = {k: str(v) for k, v in written.items()}
     speed = result.verified_speed
     lines = [f"tune {result.kind} {result.direction}: {data['trials']['finished']} trials "
-             f"({data['trials']['pruned']} pruned, {result.ran} this run), {data['cost']['wall_s']:.0f} s on "
+             f"({data['trials']['pruned']} pruned, {result.ran} this run), {data['cost']['study_wall_s']:.0f} s on "
              f"{result.workers} {result.executor} worker(s)"]
     lines += [f"  rejected in verification: trial {n}: {p}" for n, p in result.rejected]
     if result.settings is None:

@@ -4,10 +4,10 @@
    search's bodies (the nominal body, the family's four corners, the torso CoM at both ends) in both engines
    (:data:`~.trial.SEARCH_ENGINES`), stopping at the first run that does not hold; the study is kept in its SQLite
    file (stop and resume at will).
-2. **Verify**: the Pareto front's points with at least :data:`~.study.MIN_MARGIN` to spare, fastest first, each
-   walked :data:`VERIFY_STEPS` steps on every body of the family in both engines, with :data:`VERIFY_PUSH_N` side
-   pushes for op2motion's walk (one trial per body, on the same executor), until one holds everywhere
-   (at most ``verify`` of them).
+2. **Verify**: the Pareto front's points (those with at least :data:`~.study.MIN_MARGIN` to spare first), fastest
+   first, each walked :data:`VERIFY_STEPS` steps on every body of the family in both engines, with
+   :data:`VERIFY_PUSH_N` side pushes for op2motion's walk (one trial per body, on the same executor), until one holds
+   everywhere (at most ``verify`` of them).
 3. **Write**: that point as a preset (or a ``config.ini``), atomically, with what the study found in its header and
    a JSON beside it (:func:`result_json`): trials, pruned, wall time, workers, the verified table; and the Pareto
    figure if asked. Nothing is written when no point holds (exit 1).
@@ -19,7 +19,7 @@ import time
 from dataclasses import dataclass, field, fields, replace
 from typing import Any, Callable
 
-from op2motion.tune.study import Outcome, TrialRow, choose, pareto, rows
+from op2motion.tune.study import Outcome, TrialRow, pareto, rows
 from op2motion.tune.trial import Task, evaluate
 
 VERIFY_STEPS = 20           # the verification's walk [steps] (the acceptance's)
@@ -40,6 +40,7 @@ class TuneResult:
     rejected: list[tuple[int, str]] = field(default_factory=list)
     settings: Any = None
     wall_s: float = 0.0
+    study_wall_s: float = 0.0
     workers: int = 1
     executor: str = "process"
     ran: int = 0
@@ -74,15 +75,13 @@ def verify(point: dict[str, float], task: Task, trials: Any, on_run: Callable[[i
 
 
 def candidates(table: list[TrialRow], limit: int) -> list[TrialRow]:
-    """The points worth verifying: the Pareto front's with enough margin, fastest first, at most ``limit``."""
+    """The points worth verifying, at most ``limit``: the Pareto front's with at least :data:`~.study.MIN_MARGIN` to
+    spare, fastest first, then the rest of the front (every bound kept on the search's bodies), fastest first: the
+    whole family decides."""
     from op2motion.tune.study import MIN_MARGIN
 
-    first = choose(table)
-    front = [r for r in pareto(table) if r.outcome is not None and r.outcome.margin >= MIN_MARGIN]
-    ordered = sorted(front, key=lambda r: -r.outcome.speed)  # type: ignore[union-attr]
-    if first is not None and first in ordered:
-        ordered.remove(first)
-        ordered.insert(0, first)
+    front = [r for r in pareto(table) if r.outcome is not None and r.outcome.margin > 0.0]
+    ordered = sorted(front, key=lambda r: (r.outcome.margin < MIN_MARGIN, -r.outcome.speed))  # type: ignore
     return ordered[:limit]
 
 
@@ -118,6 +117,8 @@ def search_and_verify(study: Any, space: Any, task: Task, effort: Effort, trials
             else settings(task, row.params)
         break
     result.wall_s = time.perf_counter() - t0
+    result.study_wall_s = float(study.user_attrs.get("wall_s", 0.0)) + result.wall_s
+    study.set_user_attr("wall_s", result.study_wall_s)          # the study's wall time over every run that resumed it
     return result
 
 
@@ -130,8 +131,8 @@ def result_json(result: TuneResult) -> dict[str, Any]:
     return {"kind": result.kind, "direction": result.direction,
             "trials": {"finished": len(result.table), "complete": len(complete), "pruned": len(pruned),
                        "this_run": result.ran},
-            "cost": {"wall_s": round(result.wall_s, 1), "trial_s": round(trial_s, 1), "workers": result.workers,
-                     "executor": result.executor},
+            "cost": {"wall_s": round(result.wall_s, 1), "study_wall_s": round(result.study_wall_s, 1),
+                     "trial_s": round(trial_s, 1), "workers": result.workers, "executor": result.executor},
             "pareto": [{"number": r.number, "speed": round(r.outcome.speed, 4), "margin": round(r.outcome.margin, 3)}
                        for r in pareto(result.table) if r.outcome is not None],
             "chosen": None if chosen is None else {"number": chosen.number, "params": chosen.params,
@@ -167,8 +168,9 @@ def header_lines(result: TuneResult, unit: str) -> list[str]:
     speed = result.verified_speed or 0.0
     worst = min((o.margin for o in result.verified.values()), default=0.0)
     return [f"Tuned by op2motion tune {result.kind} ({result.direction}): {data['trials']['finished']} trials "
-            f"({data['trials']['pruned']} pruned), {data['cost']['wall_s']:.0f} s wall on {result.workers} "
-            f"{result.executor} worker(s) ({data['cost']['trial_s']:.0f} s of trials).",
+            f"({data['trials']['pruned']} pruned), {data['cost']['study_wall_s']:.0f} s wall on {result.workers} "
+            f"{result.executor} worker(s) ({data['cost']['trial_s']:.0f} s of trials; this run "
+            f"{data['cost']['wall_s']:.0f} s).",
             f"Verified: {VERIFY_STEPS} steps on every body of the robustness family ({len(result.verified)}) in "
             f"PyBullet and MuJoCo (MX-28 servo model, 1 kHz){', 2 N side pushes' if result.kind == 'walk' else ''}: "
             f"all hold; nominal {speed:.3f} {unit} (slowest engine), least margin {worst:.2f}.",

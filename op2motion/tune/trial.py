@@ -6,12 +6,14 @@ A :class:`Task` says what is tuned (``walk``: a gait preset under :class:`~op2mo
 the shipped OP2), on which bodies of its robustness family, in which engines, with which pushes.
 
 :func:`evaluate` is the trial (a module-level function: it runs on worker processes and Ray). Runs go in order, the
-nominal body first (its speed is the one that counts, the slowest engine's), then the hardest members; the first run
-that does not hold ends the trial (pruned: the rest would not change the verdict). A run holds when
-:func:`hold_problem` finds nothing: no fall (nor when pushed), drift and heading within the walk's bounds
-(:mod:`op2motion.gait.robust`), the CoP inside the planned soles for at least :data:`MIN_COP_INSIDE` of the walk,
-and some servo at its available torque for at most :data:`MAX_LIMITED_SHARE` of it. The margin is the worst run's
-smallest share of a bound left (:func:`run_margin`).
+nominal body first (its speed is the one that counts, the slowest engine's; a task of one body counts that body's),
+then the hardest members; the first run that does not hold ends the trial (pruned: the rest would not change the
+verdict). A run holds when :func:`hold_problem` finds nothing: no fall (nor when pushed), drift and heading within
+the walk's bounds (:mod:`op2motion.gait.robust`), the CoP inside the planned soles for at least
+:data:`MIN_COP_INSIDE` of the walk, and some servo at its available torque for at most :data:`MAX_LIMITED_SHARE` of
+it. The margin is the worst run's smallest share of a bound left (:func:`run_margin`). The stock module, which has
+no heading or line feedback, is judged as the acceptance of its config states it: no fall on any body, the heading
+within 5° on the nominal one (:func:`stock_problem`; within :data:`STOCK_OTHER_HEADING_DEG` on the others).
 """
 
 from __future__ import annotations
@@ -24,9 +26,11 @@ from typing import Any
 from op2motion.errors import InputError
 from op2motion.tune.study import Outcome
 
-MIN_COP_INSIDE = 0.9         # the CoP inside the planned soles for at least this share of the walk
+MIN_COP_INSIDE = 0.8         # the CoP inside the planned soles for at least this share of the walk (the shipped
+                             # forward walk: 88 % at worst, light, stiff, grippy corner with the CoM forward, PyBullet)
 MAX_LIMITED_SHARE = 0.25     # some servo at its available torque for at most this share of the walk (the shipped
                              # forward walk, which holds on the whole family: 18 % on its heavy, soft corner)
+STOCK_OTHER_HEADING_DEG = 15.0   # the stock module's heading on the family's other bodies: at most this [deg]
 SEARCH_ENGINES = ("mujoco", "pybullet")     # the search walks each body in both, the faster first
 #: Per direction: the shipped preset tuned from, and the measure that counts (speed along the walk [m/s], or turn
 #: rate [rad/s]).
@@ -49,7 +53,7 @@ class Task:
     spec_path: str | None = None
     members: tuple[str, ...] | None = None
     engines: tuple[str, ...] = SEARCH_ENGINES
-    steps: int = 12
+    steps: int = 20
     push_n: float = 0.0
 
     def __post_init__(self) -> None:
@@ -104,6 +108,31 @@ def controller_of(task: Task, chosen: Any, spec: Any) -> Any:
 def measure(task: Task, walk: Any) -> float:
     """The measure that counts: speed along the walk [m/s], or the turn rate [rad/s]."""
     return math.radians(abs(walk.turn_rate_deg_s)) if task.direction == "turn" else float(walk.mean_speed_mps)
+
+
+def stock_heading_bound(member: str) -> float:
+    """The stock module's heading bound [deg] on a body: :data:`~op2motion.gait.robust.MAX_HEADING_DEG` on the
+    nominal one, :data:`STOCK_OTHER_HEADING_DEG` on the others (it has no heading feedback: a body it was not tuned
+    on turns it)."""
+    from op2motion.gait.robust import MAX_HEADING_DEG
+
+    return MAX_HEADING_DEG if member == "nominal" else STOCK_OTHER_HEADING_DEG
+
+
+def stock_problem(report: Any, member: str) -> str | None:
+    """Why a run of the stock module does not hold: a fall, or its heading past :func:`stock_heading_bound`."""
+    if report.run.fell or report.run.walk is None:
+        return report.run.reason if report.run.fell else "no walk measured"
+    heading = report.run.walk.heading_error_deg
+    bound = stock_heading_bound(member)
+    return f"heading off by {heading:+.1f}° (at most {bound:g}°)" if abs(heading) > bound else None
+
+
+def stock_margin(report: Any, member: str) -> float:
+    """The stock run's share of its heading bound left (-1 for a fall)."""
+    if report.run.fell or report.run.walk is None:
+        return -1.0
+    return 1.0 - abs(report.run.walk.heading_error_deg) / stock_heading_bound(member)
 
 
 def hold_problem(report: Any) -> str | None:
@@ -172,9 +201,12 @@ def evaluate(point: dict[str, float], task: Task) -> Outcome:
                 report = check(controller_of(task, gait, body), body, (engine,), pushes,
                                setup=member.setup()).engines[engine]
                 runs += 1
-                problem = hold_problem(report)
-                margin = min(margin, run_margin(report))
-                if member.name == "nominal" and report.run.walk is not None:
+                if task.kind == "stock":
+                    problem, run_slack = stock_problem(report, member.name), stock_margin(report, member.name)
+                else:
+                    problem, run_slack = hold_problem(report), run_margin(report)
+                margin = min(margin, run_slack)
+                if report.run.walk is not None and (member.name == "nominal" or len(members) == 1):
                     speeds.append(measure(task, report.run.walk))
                 if problem is not None:
                     return Outcome(min(speeds, default=0.0), margin, False, runs, planned,
