@@ -181,3 +181,25 @@ def test_get_up_in_the_foreign_simulator(foreign_urdf: str, lying: str) -> None:
     assert getup.stood and upright, getup.events
     end = result["trace"][-1]
     assert end[2] < UPRIGHT_TILT_DEG and end[1] > UPRIGHT_HEIGHT_M
+
+
+FAST_STEPS = 20                 # the acceptance's 20 steps
+FAST_MIN_SPEED_M_S = 0.28       # walking/fast.toml on the foreign body, nominal: at least this steady speed (0.292)
+FAST_MAX_DRIFT_SHARE = 0.05     # ... sideways drift at most this share of the way
+FAST_MAX_YAW_DEG = 5.0          # ... heading within this of the start's
+
+
+def test_the_tuned_fast_walk_in_the_foreign_simulator(foreign_urdf: str) -> None:
+    """``walking/fast.toml`` (tuned in op2motion's engines) on the foreign body, nominal world: no fall, faster than
+    the forward preset can go, straight (its family there: README, 4 of 15 bodies fall)."""
+    ctl = WalkController.from_preset("fast", steps=FAST_STEPS, spec=default_spec())
+    result = simulate(foreign_urdf, ctl, seconds=ctl.plan.duration_s, latency_ticks=2)
+    clock = ctl.plan.walk
+    times = np.array([row[0] for row in result["trace"]])
+    x = np.array([row[4] for row in result["trace"]])
+    t0, t1 = clock.start_s + clock.steady_from_s, clock.start_s + clock.steady_to_s
+    speed = (np.interp(t1, times, x) - np.interp(t0, times, x)) / (t1 - t0)
+    assert not result["fell"], result["fall_time_s"]
+    assert speed >= FAST_MIN_SPEED_M_S, speed
+    assert abs(result["lateral_m"]) <= FAST_MAX_DRIFT_SHARE * result["distance_m"], result["lateral_m"]
+    assert abs(result["end_yaw_deg"]) <= FAST_MAX_YAW_DEG, result["end_yaw_deg"]
