@@ -40,7 +40,8 @@ def walk_space(direction: str) -> SearchSpace:
 
 def stock_space() -> SearchSpace:
     """The default space of the stock Walking module: the forward amplitude it is tuned for and the config keys that
-    shape its step (``[op2motion] x_move_amplitude_mm`` and ``[Walking Config]`` keys by their attribute names)."""
+    shape its step and hold it (``[op2motion] x_move_amplitude_mm`` and ``[Walking Config]`` keys by their attribute
+    names, the legs' P gain among them: stiffer servos carry a heavy torso)."""
     from op2motion.gait.stock_config import KEYS, OWN_KEYS
 
     allowed = {name: (low, high) for name, low, high, _ in (*KEYS.values(), *OWN_KEYS.values())}
@@ -55,4 +56,5 @@ def stock_space() -> SearchSpace:
                         key("x_offset_mm", -20.0, 5.0, "mm"), key("z_offset_mm", 15.0, 35.0, "mm"),
                         key("hip_pitch_offset_deg", 8.0, 18.0, "deg"), key("yaw_offset_deg", -3.0, 3.0, "deg"),
                         key("balance_knee_gain", 0.0, 0.6), key("balance_ankle_pitch_gain", 0.3, 1.5),
-                        key("balance_hip_roll_gain", 0.2, 1.0), key("balance_ankle_roll_gain", 0.4, 1.6)))
+                        key("balance_hip_roll_gain", 0.2, 1.0), key("balance_ankle_roll_gain", 0.4, 1.6),
+                        key("p_gain", 24.0, 64.0, "MX-28 P")))
