@@ -136,7 +136,9 @@ class _Stop:
 def _init(ray: Any, address: str | None, workers: int, stop: _Stop) -> None:
     """``ray.init`` in the main thread (Ray ties the processes it starts to the thread that starts them), bounded by
     :data:`INIT_TIMEOUT_S` where a timer can interrupt it (a head that greets as gRPC but is not Ray would keep it
-    retrying); a SIGTERM meanwhile (Ray's handler: ``sys.exit(15)``) becomes a stop like any other."""
+    retrying); a SIGTERM meanwhile (Ray's handler: ``sys.exit(15)``) becomes a stop like any other. Without an
+    ``address`` a new Ray starts here (``"local"``): never a cluster someone else started on this machine (plain
+    ``ray.init()`` joins the one ``ray start`` left, and dies with it)."""
     import logging
 
     env = {"env_vars": {name: "1" for name in THREAD_VARIABLES}}     # one maths thread per task
@@ -149,7 +151,7 @@ def _init(ray: Any, address: str | None, workers: int, stop: _Stop) -> None:
         if stop.main and address is not None:
             signal.signal(signal.SIGALRM, too_long)
             signal.setitimer(signal.ITIMER_REAL, INIT_TIMEOUT_S)
-        ray.init(address=address, num_cpus=None if address else workers, include_dashboard=False,
+        ray.init(address=address or "local", num_cpus=None if address else workers, include_dashboard=False,
                  log_to_driver=False, configure_logging=False, logging_level=logging.ERROR, runtime_env=env)
     except SystemExit as exc:
         if exc.code != signal.SIGTERM:
