@@ -23,6 +23,7 @@ import numpy as np
 from op2motion.bus.loop import LoopReport, Tick, run_controller
 from op2motion.bus.safety import clip_goals, mechanical_bounds
 from op2motion.bus.session import Session
+from op2motion.errors import InputError
 from op2motion.physics import Plan
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
@@ -94,7 +95,8 @@ class Follower:
         self.thread.start()
 
     def _run(self) -> None:
-        assert self.session is not None and self.controller is not None
+        if self.session is None or self.controller is None:
+            raise InputError("expected start() before the follower runs", "follower")
         try:
             self.report = run_controller(self.controller, self.session.robot, duration_s=FOREVER_S, stop=self.stop,
                                          on_tick=self._seen)

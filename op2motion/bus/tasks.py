@@ -208,7 +208,8 @@ def play(port: str, spec: Spec, path: str, page: int | None = None, options: Opt
             trajectory = then(move(current, first, spec), motion)
             what = f"motion {loaded.name}"
         else:
-            assert page is not None
+            if page is None:
+                raise InputError(f"{path} is an action file: expected --page N (the page to play)", "page")
             start = page_start(loaded, page, spec, current)
             trajectory = then(move(current, start, spec), page_trajectory(loaded, page, spec, start))
             what = f"page {page} ({loaded.page(page, spec).name})"

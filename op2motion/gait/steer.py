@@ -28,6 +28,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from op2motion.errors import Op2MotionError
 from op2motion.formats.action import ActionFile
 from op2motion.gait.commands import CommandTimeline
 from op2motion.gait.controller import LANDING_ROWS, WalkController
@@ -262,7 +263,8 @@ def planned_summary(walk: SteerableWalk) -> dict[str, Any]:
 
     walk.plan                                                     # the dry run, once
     twin, n = walk.dry, walk.dry_rows
-    assert twin is not None
+    if twin is None:
+        raise Op2MotionError("the steered walk's dry run left no plan")
     rows = twin.rows
     kinds = [phase.kind for first, phase in twin.planner.phases if first < n]
     pos = rows.numeric["torso_pos"][:n:25, :2]

@@ -35,13 +35,7 @@ import numpy as np
 
 from op2motion.gait.stock_config import StockConfig
 from op2motion.kinematics.leg_ik import Leg, leg_ik, leg_of, rot_x, rot_y, rot_z
-from op2motion.robot.framework import (
-    CONTROL_PERIOD_S,
-    FRAMEWORK_ANKLE_M,
-    FRAMEWORK_CALF_M,
-    FRAMEWORK_THIGH_M,
-    FRAMEWORK_TICKS_PER_DEG,
-)
+from op2motion.robot.framework import CONTROL_PERIOD_S, FRAMEWORK_TICKS_PER_DEG
 from op2motion.robot.spec import Spec
 
 TIME_UNIT_MS = CONTROL_PERIOD_S * 1000.0
@@ -110,9 +104,18 @@ class StockTick:
 
 def framework_leg(spec: Spec, side: str) -> Leg:
     """The ``side`` leg as the framework's IK sees it: the spec's joint order and directions, the framework's
-    lengths, the hip at the origin."""
-    return replace(leg_of(spec, side), hip=np.zeros(3), thigh=FRAMEWORK_THIGH_M, calf=FRAMEWORK_CALF_M,
-                   ankle_to_sole=FRAMEWORK_ANKLE_M)
+    lengths (the spec's ``[framework]`` table; the shipped spec's when a spec states none), the hip at the origin."""
+    lengths = spec.framework_leg_m
+    if lengths is None:
+        from op2motion.robot.specfile import default_spec
+
+        lengths = default_spec().framework_leg_m
+    if lengths is None:
+        from op2motion.errors import SpecError
+
+        raise SpecError("expected a [framework] table (the firmware's leg lengths) in the spec", spec.path)
+    thigh, calf, ankle = lengths
+    return replace(leg_of(spec, side), hip=np.zeros(3), thigh=thigh, calf=calf, ankle_to_sole=ankle)
 
 
 class StockWalking:

@@ -29,6 +29,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from op2motion.errors import Op2MotionError
 from op2motion.motion.getup import GetUp
 from op2motion.motion.lying import FALL_TILT_DEG
 from op2motion.motion.stillness import Stillness
@@ -171,7 +172,8 @@ class Supervisor:
                 self._got_up(t_s, joint_positions, joints)
             return goals
         if self.phase == "blend":
-            assert self.rows is not None
+            if self.rows is None:
+                raise Op2MotionError("the supervisor blends to rows it has not planned")
             self.hold = self.rows[self.row]
             self.row += 1
             if self.row >= len(self.rows):

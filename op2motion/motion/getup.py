@@ -24,6 +24,7 @@ from typing import Mapping
 
 import numpy as np
 
+from op2motion.errors import Op2MotionError
 from op2motion.formats.action import ActionFile
 from op2motion.motion.lying import UPRIGHT_TILT_DEG, lying_side, tilt_deg
 from op2motion.motion.stillness import Stillness
@@ -97,7 +98,8 @@ class GetUp:
             if (waited >= SETTLE_S and self.stillness.still) or waited >= SETTLE_MAX_S:
                 self._decide(t_s, joints)
         elif self.phase == "play":
-            assert self.rows is not None and self.gains is not None
+            if self.rows is None or self.gains is None:
+                raise Op2MotionError("GetUp plays a way it has not planned")
             self.hold = self.rows[self.row]
             self.p_gains = dict(zip(self.spec.joint_names, self.gains[self.row].tolist()))
             self.row += 1
@@ -111,7 +113,8 @@ class GetUp:
 
     def _decide(self, t_s: float, joints: np.ndarray) -> None:
         """Lying how? Play the way up from there (or check the standing robot)."""
-        assert self.accel is not None
+        if self.accel is None:
+            raise Op2MotionError("GetUp decides before any accelerometer reading")
         side = lying_side(self.accel)
         self.events.append((t_s, f"lying {side}" if side != "upright" else "upright"))
         if side in ("upright", "head") or self.tries >= MAX_TRIES:
@@ -124,7 +127,8 @@ class GetUp:
 
     def _checked(self, t_s: float) -> None:
         """After a way: standing, or try again (or give up)."""
-        assert self.accel is not None
+        if self.accel is None:
+            raise Op2MotionError("GetUp decides before any accelerometer reading")
         if tilt_deg(self.accel) < UPRIGHT_TILT_DEG:
             self.phase = "standing"
             self.events.append((t_s, "standing"))

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from op2motion.errors import InputError
+from op2motion.errors import InputError, Op2MotionError
 from op2motion.formats.action import ActionFile
 from op2motion.motion.player import IDS, play, start_ticks
 from op2motion.robot.joints import ticks_to_servo
@@ -89,7 +89,8 @@ class Ways:
             raise InputError(f"expected one of {', '.join(OWN)}, got {side!r}", "side")
         page = self.stock(side)
         if page is not None:
-            assert self.action is not None
+            if self.action is None:
+                raise Op2MotionError("a stock page without its action file")
             playback = play(self.action, page, start_ticks(joints, self.spec))
             order = [IDS.index(j.id) for j in self.spec.joints]
             goals = np.array([ticks_to_servo(row[order], self.spec) for row in playback.goals[1:]])

@@ -41,10 +41,7 @@ def slope_of_p_gain(p_gain: int) -> int:
                      "p_gain")
 
 
-# The framework's own geometry and servo constants, which its Walking module uses whatever robot it runs on
-# (Kinematics.h, MX28.cpp, v1.6.0; ../shared/reference/op2_facts.md sections 1 and 3).
-FRAMEWORK_THIGH_M = 0.093           # THIGH_LENGTH
-FRAMEWORK_CALF_M = 0.093            # CALF_LENGTH
-FRAMEWORK_ANKLE_M = 0.0335          # ANKLE_LENGTH (ankle axes to the sole)
+# The framework's own servo constants (MX28.cpp, Kinematics.h, v1.6.0; ../shared/reference/op2_facts.md sections 1
+# and 3); its leg lengths are the spec's ``[framework]`` table.
 FRAMEWORK_TICKS_PER_DEG = 11.378    # MX28::RATIO_ANGLE2VALUE (4096/360, rounded): angle -> ticks, truncated
 EYE_TILT_OFFSET_DEG = 40.0          # the head tilt at which the camera looks level (Kinematics.h)

@@ -292,6 +292,7 @@ class Spec:
     sha256: str
     sources: Mapping[str, str] = field(default_factory=dict)
     imu: ImuSpec | None = None
+    framework_leg_m: tuple[float, float, float] | None = None   # the firmware's own thigh, calf, ankle-to-sole [m]
 
     @property
     def joint_names(self) -> tuple[str, ...]:

@@ -356,6 +356,14 @@ def _imu_channel(r: TableReader) -> ImuChannel:
     return channel
 
 
+def _framework_leg(r: TableReader) -> tuple[float, float, float]:
+    """The ``[framework]`` table: the leg lengths the ROBOTIS firmware's own kinematics uses [m]."""
+    leg = (r.number("thigh_m", positive=True), r.number("calf_m", positive=True),
+           r.number("ankle_m", positive=True))
+    r.done()
+    return leg
+
+
 def _imu(r: TableReader) -> ImuSpec:
     """The ``[imu]`` table: one gyro and one accelerometer channel per torso axis, registers all different."""
     channels = [_imu_channel(c) for c in r.array("channel")]
@@ -416,6 +424,7 @@ def parse_spec(text: str, path: str = "<spec>") -> Spec:
     sources = _sources(top)
     masses, inertials, collisions = _masses(top, sources)
     imu = _imu(top.sub("imu")) if "imu" in top.table else None
+    framework_leg = _framework_leg(top.sub("framework")) if "framework" in top.table else None
     top.done()
     links = {root} | {j.child for j in joints}
     named = [(p.link, f"points.{k}") for k, p in points.items()] + [(i.link, "inertial") for i in inertials] + \
@@ -431,7 +440,7 @@ def parse_spec(text: str, path: str = "<spec>") -> Spec:
                 raise SpecError(f"({m.name}): body point {end!r} does not exist", f"{path}: lumped_mass")
     geometry = _geometry(path, {j.name: j for j in joints}, points, foot)
     return Spec(name, root, servo, foot, points, tuple(joints), tuple(masses), tuple(inertials), tuple(collisions),
-                geometry, path, hashlib.sha256(encoded).hexdigest(), sources, imu)
+                geometry, path, hashlib.sha256(encoded).hexdigest(), sources, imu, framework_leg)
 
 
 def load_spec(path: str | Path | None = None) -> Spec:

@@ -187,17 +187,23 @@ class Emulator:
         """Answer packets and step the body in real time until ``stop`` (or :meth:`stop`) is set (at real-time
         priority where the system allows it: :mod:`..realtime`)."""
         if self.master is None:
-            raise RuntimeError("open() the emulator before serving")
+            raise InputError("expected open() before serve(): the emulator has no pseudo-terminal yet", "emulator")
         with steady(), realtime(EMULATOR_PRIORITY):
             self._serve(stop or self._stop)
 
+    def _master_fd(self) -> int:
+        """The pseudo-terminal's master side (after :meth:`open`)."""
+        if self.master is None:
+            raise InputError("expected open() before serve(): the emulator has no pseudo-terminal yet", "emulator")
+        return self.master
+
     def _serve(self, stop: threading.Event) -> None:
-        assert self.master is not None
+        master = self._master_fd()
         dt = self.body.dt
         t0 = time.monotonic()
         done = 0
         poller = select.poll()
-        poller.register(self.master, select.POLLIN)
+        poller.register(master, select.POLLIN)
         next_trace = next_publish = 0.0
         while not stop.is_set() and not self._stop.is_set():
             now = time.monotonic()
@@ -251,9 +257,9 @@ class Emulator:
                 self.temperature_overrides[device] = celsius
 
     def _receive(self) -> None:
-        assert self.master is not None
+        master = self._master_fd()
         try:
-            data = os.read(self.master, 4096)
+            data = os.read(master, 4096)
         except BlockingIOError:
             return
         except OSError as exc:
@@ -263,4 +269,4 @@ class Emulator:
             raise
         for chunk in self.wire.feed(data):
             with contextlib.suppress(BlockingIOError, OSError):
-                os.write(self.master, chunk)
+                os.write(master, chunk)
