@@ -81,7 +81,7 @@ def parse_timed(text: str, param: str, default_value: float | None = None, first
     m = _TIMED.match(text.strip())
     if not m or (m.group(3) is not None and default_value is None):
         form = f"{first}@SECONDS[:CELSIUS]" if default_value is not None else f"{first}@SECONDS"
-        raise InputError(f"expected {form} (e.g. 13@4{':85' if default_value is not None else ''}), got {text!r}",
-                         param)
+        example = f"{30 if first == 'N' else 13}@4{':85' if default_value is not None else ''}"
+        raise InputError(f"expected {form} (e.g. {example}), got {text!r}", param)
     value = float(m.group(3)) if m.group(3) is not None else float(default_value or 0.0)
     return int(m.group(1)), float(m.group(2)), value
