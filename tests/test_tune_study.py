@@ -85,3 +85,14 @@ def test_bad_ranges_are_refused_naming_the_parameter(override, words):
     with pytest.raises(InputError, match=words):
         SPACE.narrowed([override])
     assert SPACE.narrowed([["step_s", "0.25", "0.3"]]).params[0].low == 0.25
+
+
+def test_the_p_gain_is_searched_only_when_asked_for():
+    from op2motion.tune.spaces import stock_space, walk_space
+
+    for space in (walk_space("forward"), stock_space()):
+        assert "p_gain" not in space.names
+        added = space.narrowed([["p_gain", "32", "40"]])
+        assert added.names[-1] == "p_gain" and (added.params[-1].low, added.params[-1].high) == (32, 40)
+        with pytest.raises(InputError, match="within"):
+            space.narrowed([["p_gain", "0", "40"]])

@@ -1,7 +1,8 @@
 """What a tuning study searches: named parameters, each over a range, sampled by Optuna.
 
 A :class:`Param` is one setting with its range (``low`` to ``high``, optionally on a log scale or in steps); a
-:class:`SearchSpace` is an ordered set of them. :meth:`SearchSpace.narrowed` takes the user's overrides
+:class:`SearchSpace` is an ordered set of them, plus the settings it may search but does not by default
+(``optional``: ``--param`` adds one). :meth:`SearchSpace.narrowed` takes the user's overrides
 (``--param NAME LOW HIGH``): an unknown name, an empty or inverted range, a range outside what the setting allows,
 or a non-finite bound is bad input naming the parameter.
 """
@@ -45,9 +46,10 @@ class Param:
 
 @dataclass(frozen=True)
 class SearchSpace:
-    """The parameters of a study, in order."""
+    """The parameters of a study, in order; ``optional``: those a ``--param`` may add (not searched by default)."""
 
     params: tuple[Param, ...]
+    optional: tuple[Param, ...] = ()
 
     def __post_init__(self) -> None:
         names = [p.name for p in self.params]
@@ -67,6 +69,7 @@ class SearchSpace:
         """The space with ranges from ``overrides`` (NAME LOW HIGH, as typed) and, with ``only``, just those
         parameters (the others stay at the base setting)."""
         by_name = {p.name: p for p in self.params}
+        extra = {p.name: p for p in self.optional}
         if only is not None:
             unknown = [n for n in only if n not in by_name]
             if unknown:
@@ -76,8 +79,11 @@ class SearchSpace:
             if len(words) != 3:
                 raise InputError(f"expected NAME LOW HIGH, got {' '.join(words)}", "param")
             name, low, high = words
+            if name not in by_name and name in extra:
+                by_name[name] = extra[name]
             if name not in by_name:
-                raise InputError(f"expected a parameter among {', '.join(by_name)}, got {name!r}", "param")
+                known = ", ".join([*by_name, *(n for n in extra if n not in by_name)])
+                raise InputError(f"expected a parameter among {known}, got {name!r}", "param")
             try:
                 lo, hi = float(low), float(high)
             except ValueError:

@@ -4,6 +4,11 @@ stock Walking module's ``[Walking Config]`` for the stock firmware.
 Each range is within what the setting allows (the preset's :data:`~op2motion.gait.params.RANGES`, the config's
 keys) and around what walks today; ``--param NAME LOW HIGH`` narrows or moves one (:meth:`~.space.SearchSpace.
 narrowed`), ``--only NAME ...`` searches just those (the others keep the base preset's values).
+
+The servos' P gain is not searched unless asked for (``--param p_gain 32 48``): a walk tuned on stiffer servos leans
+on a setting that a simulator driving the servos by their own model, or a robot whose firmware resets it, does not
+apply, and then walks on servos softer than it was tuned for (the first shipped ``fast`` walk, P 40, fell on the soft
+bodies of an independent simulator that way).
 """
 
 from __future__ import annotations
@@ -22,7 +27,7 @@ def _shared() -> tuple[Param, ...]:
     """What every direction's walk searches: timing, lift, hips, servo gain, the speed share and feedback gains."""
     return (_gait("step_s", 0.28, 0.38, "s"), _gait("double_support_ratio", 0.03, 0.25),
             _gait("step_height_m", 0.008, 0.025, "m"), _gait("hip_lower_m", 0.025, 0.055, "m"),
-            _gait("swing_ramp", 0.05, 0.15), _gait("p_gain", 28, 48), _gait("max_speed_share", 0.9, 1.2),
+            _gait("swing_ramp", 0.05, 0.15), _gait("max_speed_share", 0.9, 1.2),
             _gait("gyro_gain_scale", 0.5, 2.0), _gait("heading_gain_scale", 0.5, 2.0))
 
 
@@ -35,13 +40,13 @@ def walk_space(direction: str) -> SearchSpace:
               "turn": (_gait("turn_deg", 8.0, 22.0, "deg"), _gait("zmp_offset_y_m", -0.01, 0.005, "m"))}
     if direction not in stride:
         raise InputError(f"expected one of {', '.join(stride)}, got {direction!r}", "direction")
-    return SearchSpace(stride[direction] + _shared())
+    return SearchSpace(stride[direction] + _shared(), optional=(_gait("p_gain", 28, 48),))
 
 
 def stock_space() -> SearchSpace:
     """The default space of the stock Walking module: the forward amplitude it is tuned for and the config keys that
     shape its step and hold it (``[op2motion] x_move_amplitude_mm`` and ``[Walking Config]`` keys by their attribute
-    names, the legs' P gain among them: stiffer servos carry a heavy torso)."""
+    names; the P gain only when asked for, see the module docstring)."""
     from op2motion.gait.stock_config import KEYS, OWN_KEYS
 
     allowed = {name: (low, high) for name, low, high, _ in (*KEYS.values(), *OWN_KEYS.values())}
@@ -57,4 +62,5 @@ def stock_space() -> SearchSpace:
                         key("hip_pitch_offset_deg", 8.0, 18.0, "deg"), key("yaw_offset_deg", -3.0, 3.0, "deg"),
                         key("balance_knee_gain", 0.0, 0.6), key("balance_ankle_pitch_gain", 0.3, 1.5),
                         key("balance_hip_roll_gain", 0.2, 1.0), key("balance_ankle_roll_gain", 0.4, 1.6),
-                        key("p_gain", 24.0, 64.0, "MX-28 P")))
+                        key("arm_swing_gain", 0.0, 2.5, "deg/mm")),
+                       optional=(key("p_gain", 24.0, 64.0, "MX-28 P"),))
