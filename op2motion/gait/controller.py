@@ -8,7 +8,8 @@ Inside, per tick (gains in :class:`Feedback`):
 1. **the plan** (:func:`.schedule.gait_plan`): the goals of this row (servo feed-forward included), the planned
    torso pose and soles;
 2. **gyro damping** as in the stock gait: hip roll and ankle roll against the roll rate, knee and ankle pitch
-   against the pitch rate (0.6 of the stock gains, up to all of them as the servos' measured softness grows);
+   against the pitch rate (0.6 of the stock gains, up to all of them as the servos' measured softness grows; a
+   preset's ``gyro_stiff_share`` lowers them on servos measured stiffer than the model);
 3. **attitude**: a complementary filter of the gyro and the gravity in the accelerometer (low-passed as a vector
    first: the tilt of each raw sample, with the impacts of the steps in it, averaged 3–6° off while walking) estimates
    pitch and roll; against the plan's, the error (P, and optionally its integral) turns the whole body about the
@@ -270,6 +271,8 @@ class WalkController:
         that the body turns against its rate (natural angles, both legs)."""
         scale = 1.0 + self.feedback.soft_gyro * self.calibration.softness        # soft servos: more damping
         scale *= self.params.gyro_gain_scale                                    # the preset's tuning
+        if self.params.gyro_stiff_share:                                        # stiff servos: less of it
+            scale *= max(self.calibration.estimate, 1.0) ** -self.params.gyro_stiff_share
         hip_roll, knee, ankle_pitch, ankle_roll = np.multiply(self.feedback.gyro, scale)
         natural = np.array([0.0, hip_roll * gyro[0], 0.0, knee * gyro[1], ankle_pitch * gyro[1], ankle_roll * gyro[0]])
         out = np.zeros(len(self.spec.joints))

@@ -41,6 +41,10 @@ left), so the mean speed is about ``step_length_m / step_s``. Keys (defaults in 
                             torque-speed line: the joint then lags its plan through the swing's peak, and the walk
                             holds anyway)
 ``gyro_gain_scale``         the walk controller's gyro damping gains times this (1: its own)
+``gyro_stiff_share``        how much the gyro damping gains fall on servos measured stiffer than the model: the
+                            gains over (measured stiffness) to this power (0: not at all; 1: the damping torque,
+                            gain times stiffness, stays the model's), since the damping that holds soft servos
+                            makes stiff ones oscillate
 ``heading_gain_scale``      the walk controller's heading loop gains times this (1: its own)
 ==========================  ====================================================================================
 """
@@ -90,6 +94,7 @@ class GaitParams:
     servo_feedforward: bool = True
     max_speed_share: float = 0.9
     gyro_gain_scale: float = 1.0
+    gyro_stiff_share: float = 0.0
     heading_gain_scale: float = 1.0
 
     def __post_init__(self) -> None:
@@ -145,7 +150,8 @@ RANGES: dict[str, tuple[float, float]] = {
     "torso_pitch_deg": (-10.0, 30.0), "zmp_offset_x_m": (-0.03, 0.03), "zmp_offset_y_m": (-0.02, 0.02),
     "preview_s": (0.4, 3.0), "zmp_weight": (1e-6, 1e6), "jerk_weight": (1e-12, 1.0), "zmp_passes": (0, 5),
     "arm_swing_deg": (0.0, 40.0), "start_s": (0.2, 5.0), "end_s": (0.2, 5.0), "p_gain": (1, 254),
-    "max_speed_share": (0.5, 1.25), "gyro_gain_scale": (0.0, 3.0), "heading_gain_scale": (0.0, 3.0),
+    "max_speed_share": (0.5, 1.25), "gyro_gain_scale": (0.0, 3.0), "gyro_stiff_share": (0.0, 3.0),
+    "heading_gain_scale": (0.0, 3.0),
 }
 DEFAULTS = GaitParams()
 

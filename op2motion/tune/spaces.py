@@ -28,7 +28,8 @@ def _shared() -> tuple[Param, ...]:
     return (_gait("step_s", 0.28, 0.38, "s"), _gait("double_support_ratio", 0.03, 0.25),
             _gait("step_height_m", 0.008, 0.025, "m"), _gait("hip_lower_m", 0.025, 0.055, "m"),
             _gait("swing_ramp", 0.05, 0.15), _gait("max_speed_share", 0.9, 1.2),
-            _gait("gyro_gain_scale", 0.5, 2.0), _gait("heading_gain_scale", 0.5, 2.0))
+            _gait("gyro_gain_scale", 0.5, 2.5), _gait("gyro_stiff_share", 0.0, 2.0),
+            _gait("heading_gain_scale", 0.5, 2.0))
 
 
 def walk_space(direction: str) -> SearchSpace:
