@@ -338,3 +338,19 @@ def test_soft_servos_get_the_stock_gyro_gains(spec, controller):
     assert ctl.calibration.softness == pytest.approx(1.0)
     assert np.allclose(ctl._damping(rate), (1.0 + SOFT_GYRO) * nominal)
     assert np.allclose((1.0 + SOFT_GYRO) * np.array(Feedback().gyro), STOCK_GYRO_GAINS_S, atol=1e-3)
+
+
+def test_stiff_servos_lose_gyro_damping_by_the_presets_share(spec, controller):
+    """gyro_stiff_share 1: servos measured 1.5 times as stiff get 1/1.5 of the gains (the damping torque stays the
+    model's); 0 (the default) leaves them alone; servos softer than the model are not touched by it."""
+    from dataclasses import replace
+
+    rate = np.array([RATE_RAD_S, RATE_RAD_S, 0.0])
+    plain = WalkController(controller.gait, spec)
+    shared = WalkController(replace(controller.gait, params=replace(controller.gait.params, gyro_stiff_share=1.0)),
+                            spec)
+    assert np.allclose(shared._damping(rate), plain._damping(rate))      # nothing measured yet: stiffness 1
+    for ctl in (plain, shared):
+        ctl.calibration.sums = np.array([1.0 / 1.5, 1.0])                 # sag = feed-forward / 1.5
+    assert plain.calibration.estimate == pytest.approx(1.5)
+    assert np.allclose(shared._damping(rate), plain._damping(rate) / 1.5)
