@@ -1,4 +1,4 @@
-"""The error contract, round two (walk, motion, export, file reads): hostile input is exit 2 with one line naming
+"""The error contract for walk, motion, export and file reads: hostile input is exit 2 with one line naming
 the flag or file, nothing written and no input changed; a check that ran and failed is exit 1 with nothing
 written. Inputs must be regular files (a device such as /dev/zero is refused before reading) and reads are
 capped (op2motion.fileio.MAX_INPUT_BYTES)."""

@@ -1,4 +1,4 @@
-"""A first hour without surprises: what a new user meets (round two): a double-support pose measured on both feet,
+"""What a new user meets in a first hour, without surprises: a double-support pose measured on both feet,
 progress in a log, a walk in place that does not claim a speed."""
 
 from __future__ import annotations
