@@ -17,9 +17,49 @@ The public API (imported on first use, so ``import op2motion`` does no work)::
 from __future__ import annotations
 
 import importlib
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from op2motion.version import __version__
+
+if TYPE_CHECKING:                     # what editors and type checkers see; at run time, __getattr__ imports on use
+    from op2motion.errors import Op2MotionError as Op2MotionError
+    from op2motion.formats.action import ActionFile as ActionFile
+    from op2motion.formats.motionfile import read_motion as read_motion
+    from op2motion.formats.posefile import read_pose as read_pose
+    from op2motion.formats.posefile import write_pose as write_pose
+    from op2motion.gait import gait_schedule as gait_schedule
+    from op2motion.gait import load_preset as load_preset
+    from op2motion.gait import plan_gait as plan_gait
+    from op2motion.kinematics import forward as forward
+    from op2motion.kinematics.arm_ik import solve_arm_ik as solve_arm_ik
+    from op2motion.library.build import build_library as build_library
+    from op2motion.model.urdf import build_urdf as build_urdf
+    from op2motion.motion.cartesian import LineRequest as LineRequest
+    from op2motion.motion.cartesian import line_move as line_move
+    from op2motion.motion.pipeline import plan_motion as plan_motion
+    from op2motion.motion.pipeline import play_page as play_page
+    from op2motion.motion.planner import plan as plan_waypoints
+    from op2motion.motion.route import route as route
+    from op2motion.motion.waypoint import Waypoint as Waypoint
+    from op2motion.physics import Controller as Controller
+    from op2motion.physics import Plan as Plan
+    from op2motion.physics import Pushes as Pushes
+    from op2motion.physics import Schedule as Schedule
+    from op2motion.physics import Setup as Setup
+    from op2motion.physics import Trials as Trials
+    from op2motion.physics import check as check
+    from op2motion.posture.cost import PostureProblem as PostureProblem
+    from op2motion.posture.pso import PSOSettings as PSOSettings
+    from op2motion.posture.solve import optimize_posture as optimize_posture
+    from op2motion.robot.balance import stability_margin as stability_margin
+    from op2motion.robot.joints import BookAngles as BookAngles
+    from op2motion.robot.joints import book_to_servo as book_to_servo
+    from op2motion.robot.joints import servo_to_book as servo_to_book
+    from op2motion.robot.pose import Pose as Pose
+    from op2motion.robot.specfile import load_spec as load_spec
+    from op2motion.robot.support import Support as Support
+    from op2motion.workflow import Validate as Validate
+    from op2motion.workflow import solve as solve
 
 #: Public name -> (module, attribute).
 _API = {
@@ -62,7 +102,47 @@ _API = {
     "build_library": ("library.build", "build_library"),
     "build_urdf": ("model.urdf", "build_urdf"),
 }
-__all__ = sorted(_API) + ["__version__"]
+__all__ = [
+    "ActionFile",
+    "BookAngles",
+    "Controller",
+    "LineRequest",
+    "Op2MotionError",
+    "PSOSettings",
+    "Plan",
+    "Pose",
+    "PostureProblem",
+    "Pushes",
+    "Schedule",
+    "Setup",
+    "Support",
+    "Trials",
+    "Validate",
+    "Waypoint",
+    "book_to_servo",
+    "build_library",
+    "build_urdf",
+    "check",
+    "forward",
+    "gait_schedule",
+    "line_move",
+    "load_preset",
+    "load_spec",
+    "optimize_posture",
+    "plan_gait",
+    "plan_motion",
+    "plan_waypoints",
+    "play_page",
+    "read_motion",
+    "read_pose",
+    "route",
+    "servo_to_book",
+    "solve",
+    "solve_arm_ik",
+    "stability_margin",
+    "write_pose",
+    "__version__",
+]
 
 
 def __getattr__(name: str) -> Any:

@@ -1,0 +1,62 @@
+"""The public API as tools see it: every name in ``op2motion.__all__`` is imported explicitly for type checkers (while
+``import op2motion`` stays free of work, ``tests/test_startup.py``), resolves at run time to the same object, and
+mypy --strict sees real types through it; the package says it is typed (``py.typed``)."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+
+import pytest
+from helpers import ROOT
+
+import op2motion
+
+INIT = ROOT / "op2motion" / "__init__.py"
+
+
+def _typed_names() -> dict[str, tuple[str, str]]:
+    """Name -> (module, attribute) of the ``if TYPE_CHECKING:`` imports of ``op2motion/__init__.py``."""
+    tree = ast.parse(INIT.read_text(encoding="utf-8"))
+    block = next(n for n in tree.body if isinstance(n, ast.If) and getattr(n.test, "id", "") == "TYPE_CHECKING")
+    out = {}
+    for node in block.body:
+        assert isinstance(node, ast.ImportFrom) and node.module, ast.dump(node)
+        for alias in node.names:
+            out[alias.asname or alias.name] = (node.module.removeprefix("op2motion."), alias.name)
+    return out
+
+
+def test_the_typed_imports_are_the_run_time_api():
+    api = op2motion._API
+    assert _typed_names() == api
+    assert sorted(op2motion.__all__) == sorted([*api, "__version__"])
+
+
+@pytest.mark.parametrize("name", sorted(op2motion._API))
+def test_each_public_name_resolves(name):
+    module, attr = op2motion._API[name]
+    import importlib
+
+    assert getattr(op2motion, name) is getattr(importlib.import_module(f"op2motion.{module}"), attr)
+
+
+def test_the_package_is_marked_typed():
+    assert (ROOT / "op2motion" / "py.typed").is_file()
+    assert '"op2motion" = ["py.typed"]' in (ROOT / "pyproject.toml").read_text(encoding="utf-8")
+
+
+@pytest.mark.slow
+def test_mypy_sees_the_public_api_strictly(tmp_path):
+    """``reveal_type(op2motion.solve)`` is a function type, not Any, and the API module is clean under --strict
+    (errors inside the modules it imports are the package-wide mypy run's, test_lint)."""
+    probe = tmp_path / "probe.py"
+    probe.write_text("import op2motion\nreveal_type(op2motion.solve)\nreveal_type(op2motion.check)\n", encoding="utf-8")
+    done = subprocess.run([sys.executable, "-m", "mypy", "--strict", "--follow-imports=silent", "--no-incremental",
+                           str(INIT), str(probe)], cwd=ROOT, capture_output=True, text=True)
+    revealed = [line for line in done.stdout.splitlines() if "Revealed type" in line]
+    assert len(revealed) == 2 and not any('"Any"' in line for line in revealed), done.stdout
+    assert "def (" in revealed[0], revealed[0]
+    errors = [line for line in done.stdout.splitlines() if ": error:" in line]
+    assert errors == [], done.stdout
