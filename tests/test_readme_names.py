@@ -1,5 +1,6 @@
-"""Every name the README's Python examples use can be imported as they show it: each ``from X import A, B``, each
-``import X as Y`` and every attribute they take of such a module (``op2.check``, ``op2.Setup``, ...)."""
+"""Every name the Python examples of the README and docs/ use can be imported as they show it: each
+``from X import A, B``, each ``import X as Y`` and every attribute they take of such a module (``op2.check``,
+``op2.Setup``, ...)."""
 
 from __future__ import annotations
 
@@ -9,8 +10,8 @@ import re
 import pytest
 from helpers import ROOT
 
-README = (ROOT / "README.md").read_text(encoding="utf-8")
-BLOCKS = re.findall(r"```python\n(.*?)```", README, re.S)
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+BLOCKS = [b for p in PAGES for b in re.findall(r"```python\n(.*?)```", p.read_text(encoding="utf-8"), re.S)]
 
 
 def _names() -> list[tuple[str, str]]:

@@ -9,7 +9,7 @@ of its right twin; head pan 0). Where they come from:
   half the MX-28's no-load speed the planner stretches the fast steps of the pages), and one change found in physics:
   the front get-up's push keeps the shoulders at 20° instead of the page's 32°: with 32° the bodies of the robustness
   family whose torso CoM is 20 mm forward rocked onto their toes after the push and fell on their faces again, in
-  PyBullet and MuJoCo alike (README *Falls and getting up*);
+  PyBullet and MuJoCo alike (docs/motions.md, Falls, getting up and kicks);
 * ``roll_left``, ``roll_right``: op2motion's own: lying on a side, the upper arm swings behind the back (shoulder pitch
   130° back, rolled 35° out) and the hips bend 20°, which rolls the body onto its back; then the arms come down by the
   sides. It rolls every member of the family onto its back in both engines;

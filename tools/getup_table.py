@@ -1,8 +1,9 @@
-"""Regenerate the README's getting-up tables and figure: ``GetUp()`` from lying face down, face up and on either side,
-on every member of the robustness family in PyBullet and MuJoCo (MX-28 model, 1 kHz, 16 ms IMU latency, 20 s each),
-with op2motion's own motions, and on the nominal body with the stock pages 10/11 (``tests/data/motion_4096.bin``);
-op2motion's rolls alone from each side on the family; the supervisor catching a 30 N push mid-walk from each
-direction; and ``docs/getup.png`` (the torso's height and tilt while getting up, nominal body, both engines).
+"""Regenerate the getting-up tables (docs/motions.md) and figure: ``GetUp()`` from lying face down, face up and on
+either side, on every member of the robustness family in PyBullet and MuJoCo (MX-28 model, 1 kHz, 16 ms IMU latency,
+20 s each), with op2motion's own motions, and on the nominal body with the stock pages 10/11
+(``tests/data/motion_4096.bin``); op2motion's rolls alone from each side on the family; the supervisor catching a 30
+N push mid-walk from each direction; and ``docs/getup.png`` (the torso's height and tilt while getting up, nominal
+body, both engines).
 
 Run from the repository root: ``python tools/getup_table.py [own|stock|rolls|falls|figure ...]`` (default all; about an
 hour on 2 cores).

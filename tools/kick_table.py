@@ -1,4 +1,4 @@
-"""Regenerate the README's kick table: the stock kick pages (12 right, 13 left, ``tests/data/motion_4096.bin``,
+"""Regenerate the kick table (docs/motions.md): the stock kick pages (12 right, 13 left, ``tests/data/motion_4096.bin``,
 played from walk-ready as the robot's framework plays them) and op2motion's own kicks (``poses/motions/kick_*.json``,
 planned), each from standing and as an event inside a commanded walk (walk, stop, kick, walk on), in PyBullet and
 MuJoCo (MX-28 model, 1 kHz). Ball-less: the kicking sole's peak speed (the recorded track, every 10 ms).

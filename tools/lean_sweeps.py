@@ -2,7 +2,7 @@
 
 For each sweep and engine: the last standing lean, the settled full-inertia CoM's margin there and the switch
 margin (the margin halfway to the next step, where the verdict turns to "falls"), and the first falling lean's
-reasons. The README's lean-sweep table comes from here.
+reasons. The lean-sweep table of docs/model.md comes from here.
 """
 
 from __future__ import annotations

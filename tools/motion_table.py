@@ -1,4 +1,4 @@
-"""Regenerate the README's motion tables: stock action pages played from the init pose and the example motions,
+"""Regenerate the motion tables (docs/motions.md): stock action pages played from the init pose and the example motions,
 each in PyBullet and MuJoCo with the calibrated servo model (1 kHz, goals every 8 ms, 1.5 s settle + 1.5 s hold).
 
 Run from the repository root: ``python tools/motion_table.py``.

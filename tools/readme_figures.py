@@ -1,8 +1,8 @@
-"""Regenerate the README's physics and torque figures from the code: ``python tools/readme_figures.py``.
+"""Regenerate the physics and torque figures of docs/model.md from the code: ``python tools/readme_figures.py``.
 
 Prints Markdown: the static joint torques of the stock ROBOTIS poses (pinocchio), their verdicts in both engines at
 0.5x, 1x and 2x the servo stiffness with the 2 N pushes, the full-inertia vs lumped CoM offsets, and the committed
-book poses' margins. ``tests/test_readme.py`` checks that the torque and margin figures in the README match.
+book poses' margins. ``tests/test_readme.py`` checks that the torque and margin figures in docs/ match.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 STOCK = ("init", "walkready", "sit_down", "stand_up")
-#: The README's static torque rows: the stock poses on both feet as recorded, and on the left foot alone.
+#: The static torque rows (docs/model.md): the stock poses on both feet as recorded, and on the left foot alone.
 STATIC_TORQUE_CASES = (("init", "double"), ("walkready", "double"), ("sit_down", "double"), ("stand_up", "double"),
                        ("walkready", "left"), ("sit_down", "left"))
 STIFFNESS = (0.5, 1.0, 2.0)

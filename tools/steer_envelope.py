@@ -1,5 +1,5 @@
 """Measure the steered walk's envelope: the fastest forward, backward, sideways and turning commands that pass the
-robustness family (every member, PyBullet and MuJoCo, 16 ms IMU latency), and the table for the README.
+robustness family (every member, PyBullet and MuJoCo, 16 ms IMU latency), and the table for docs/steering.md.
 
 Each run: the ``steer`` preset, standing 2 s, the command for :data:`COMMAND_S`, then stop; judged twice: by the
 commanded walk's judge (:func:`op2motion.gait.robust.commanded_judge`: no fall, heading within 15° of the plan, the end

@@ -1,4 +1,4 @@
-"""Print the README's walking table from ``op2motion walk --validate --engine both --json`` results.
+"""Print the walking table (docs/walking.md) from ``op2motion walk --validate --engine both --json`` results.
 
 Usage: for p in forward backward sideways turn_left turn_right; do
            op2motion walk --preset $p --validate --engine both [--push 2 --trials 10] --json > $p.json; done

@@ -36,7 +36,7 @@ def register(sub: Any) -> None:
                         "machines that have the printed address edit and save files in the folder)")
     p.add_argument("--robot", metavar="PORT",
                    help="an OP2 on this serial port (or an emulated one, op2motion robot emulate) follows the pose at "
-                        "a capped speed; the page can read the pose from it (README On your robot)")
+                        "a capped speed; the page can read the pose from it (docs/robot.md)")
     p.add_argument("--workdir", metavar="DIR",
                    help="the one folder the page may open and save files in (default: the folder of POSE, or the "
                         "current folder)")

@@ -39,7 +39,8 @@ def register(sub: Any) -> None:
 
 def _common(p: argparse.ArgumentParser, kind: str, out_help: str) -> None:
     p.add_argument("--spec", default=argparse.SUPPRESS, metavar="FILE",
-                   help="your robot's spec (a variant of specs/op2.toml with what you measured; README 'Your robot')")
+                   help="your robot's spec (a variant of specs/op2.toml with what you measured; "
+                        "docs/tuning.md, 'Your robot')")
     p.add_argument("--param", nargs=3, action="append", default=[], metavar=("NAME", "LOW", "HIGH"),
                    help="search NAME over LOW..HIGH instead of its default range (repeatable)")
     p.add_argument("--only", nargs="+", metavar="NAME", help="search just these parameters (the others keep the "

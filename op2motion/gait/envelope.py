@@ -11,7 +11,7 @@ arrives later. :meth:`Envelope.towards`
 moves one step's stride towards the commanded one within the acceleration limits.
 
 The default limits (:data:`STEER_ENVELOPE`) are the measured ones: ``tools/steer_envelope.py`` walks each direction
-at rising speeds across the robustness family in PyBullet and MuJoCo (README *Steering a walk*).
+at rising speeds across the robustness family in PyBullet and MuJoCo (docs/steering.md).
 """
 
 from __future__ import annotations
@@ -97,7 +97,7 @@ class Envelope:
                       move(now.dyaw, target.dyaw, self.accel_yaw_rad_s2))
 
 
-#: The measured envelope of the ``steer`` preset (README *Steering a walk*; ``tools/steer_envelope.py``): the fastest
+#: The measured envelope of the ``steer`` preset (docs/steering.md; ``tools/steer_envelope.py``): the fastest
 #: commands that every member of the robustness family walks in both engines (the commanded walk's judge): 0.25 m/s
 #: forward, 0.15 m/s backward, 0.07 m/s sideways, 0.4 rad/s (23°/s) turning in place (0.5 rad/s: the heavy, soft
 #: body with its CoM back caught its swing foot and fell, both engines), and 0.1 m/s forward while turning 0.3 rad/s

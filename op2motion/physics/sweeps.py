@@ -1,5 +1,5 @@
 """Lean sweeps: a stance leaned step by step at its support ankle(s) until it falls, to see where physics says
-the support runs out (README *Lean sweeps*; ``tests/test_lean_sweeps.py``, ``tools/lean_sweeps.py``).
+the support runs out (docs/model.md, Lean sweeps; ``tests/test_lean_sweeps.py``, ``tools/lean_sweeps.py``).
 
 The stances: on the left foot, the swing leg folded and the arms forward, balanced so the full-inertia CoM stands
 11 mm inward of the sole centre (:data:`ARMS_FORWARD`, :data:`FOLDED_SWING`); or on both feet, the standing pose

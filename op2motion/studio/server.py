@@ -9,7 +9,7 @@ choice; "check in physics" runs the check on a worker thread (the page stays liv
 grey ghost; "save pose" writes the pose file atomically. Every edit the page makes is recorded in
 :attr:`Studio.events` (what the Python side saw), and refused edits show their message in the page.
 
-Security (README *Pose studio*): the page and its WebSocket only behind the per-run secret and from the studio's
+Security (docs/studio.md): the page and its WebSocket only behind the per-run secret and from the studio's
 own origin (:mod:`.guard`); files only inside one folder, overwriting only files the studio opened or created,
 after confirmation (:mod:`.folder`); one editing tab, all-or-nothing edits, one check and one optimisation at a
 time (:mod:`.edits`, :mod:`.work`).

@@ -23,7 +23,7 @@ from op2motion.tune.study import Outcome, TrialRow, pareto, rows
 from op2motion.tune.trial import Task, evaluate
 
 VERIFY_STEPS = 20           # the verification's walk [steps] (the acceptance's)
-VERIFY_PUSH_N = 2.0         # ... and its side pushes [N] (op2motion's walk; the README's robustness runs)
+VERIFY_PUSH_N = 2.0         # ... and its side pushes [N] (op2motion's walk; docs/walking.md's robustness runs)
 VERIFY_ENGINES = ("pybullet", "mujoco")
 
 
