@@ -160,6 +160,6 @@ def test_a_saved_motion_planned_into_another_folder_keeps_its_poses(capsys, tmp_
 
 
 def test_a_page_repeated_255_times_is_named_once_with_its_count():
-    from op2motion.commands.motion import _chain
+    from op2motion.tasks.motion import _chain
 
     assert _chain([4] * 255) == "4 x255" and _chain([4, 4, 5, 9, 9]) == "4 x2 -> 5 -> 9 x2"

@@ -27,6 +27,7 @@ LAYERS = [
     {"studio"},
     {"figures", "library", "bench"},
     {"tune"},
+    {"tasks"},
     {"commands"},
     {"cli"},
     {"__main__", "__init__"},

@@ -6,7 +6,7 @@ import argparse
 from typing import Any, Sequence, TypeVar
 
 from op2motion.commands.common import add_command, emit, number, output_path, warn, whole
-from op2motion.commands.motion_run import finish, motion_physics_args
+from op2motion.commands.motion_run import deliver, motion_check, motion_physics_args, physics_progress
 from op2motion.errors import InputError
 from op2motion.formats.actionlayout import NUM_PAGES
 from op2motion.formats.motionfile import PLANNERS, PROFILES
@@ -65,33 +65,16 @@ def register(sub: Any) -> None:
     register_line(inner)
 
 
-def _chain(pages: Sequence[int]) -> str:
-    """The pages played, a run of one page written once with its count (``4 x255 -> 5``)."""
-    runs: list[list[int]] = []
-    for p in pages:
-        if runs and runs[-1][0] == p:
-            runs[-1][1] += 1
-        else:
-            runs.append([p, 1])
-    return " -> ".join(f"{p} x{n}" if n > 1 else str(p) for p, n in runs)
-
-
 def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion motion play``."""
     from op2motion.formats.action import ActionFile
     from op2motion.formats.posefile import read_pose
-    from op2motion.motion.pipeline import play_page
-    from op2motion.motion.player import IDS
+    from op2motion.tasks.motion import play_page
 
     action = ActionFile.read(args.file)
-    played = play_page(action, args.page, spec, read_pose(args.start, spec) if args.start else None)
-    playback, name, duration = played.playback, played.page.name, played.trajectory.duration_s
-    result: dict[str, Any] = {"page": args.page, "name": name, "start": played.start.name, "ticks": playback.calls,
-                              "duration_s": round(duration, 3), "pages_played": list(playback.pages), "ids": list(IDS),
-                              "goals": playback.goals.astype(int).tolist()}
-    lines = [f"page {args.page} ({name}) from {played.start.name}: {playback.calls} ticks, {duration:.3f} s, pages "
-             f"{_chain(playback.pages)}"]
-    return finish(args, spec, played.trajectory, f"page {args.page} ({name})", result, lines)
+    start = read_pose(args.start, spec) if args.start else None
+    with physics_progress(args) as on_progress:
+        return deliver(args, play_page(action, args.page, spec, motion_check(args), start, on_progress))
 
 
 def _broadcast(values: Sequence[T] | None, n: int, default: T | None, flag: str) -> list[T]:
@@ -137,18 +120,11 @@ def _motion_from_args(args: argparse.Namespace, spec: Spec) -> Any:
 
 def cmd_plan(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion motion plan``."""
-    from op2motion.formats.motionfile import motion_to_json
-    from op2motion.motion.pipeline import plan_motion
+    from op2motion.tasks.motion import plan_motion
 
     motion = _motion_from_args(args, spec)
-    trajectory = plan_motion(motion, spec, args.planner, args.seed)
-    result: dict[str, Any] = {"name": motion.name, "profile": motion.profile, "ticks": len(trajectory.goals) - 1,
-                              "duration_s": round(trajectory.duration_s, 3), "segments": list(trajectory.segment_names),
-                              "notes": list(trajectory.notes), "motion_file": args.out}
-    warn(args, result, list(trajectory.notes))
-    lines = [f"{motion.name}: {len(motion.steps)} poses, {trajectory.duration_s:.3f} s ({motion.profile})"]
-    return finish(args, spec, trajectory, motion.name, result, lines,
-                  motion_file=(args.out, motion_to_json(motion, spec, args.out)) if args.out else None)
+    with physics_progress(args) as on_progress:
+        return deliver(args, plan_motion(motion, spec, motion_check(args), args.planner, args.seed, on_progress))
 
 
 def cmd_export(args: argparse.Namespace, spec: Spec) -> int:

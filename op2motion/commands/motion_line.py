@@ -6,7 +6,7 @@ import argparse
 from typing import Any
 
 from op2motion.commands.common import add_command, number, output_path
-from op2motion.commands.motion_run import finish, motion_physics_args
+from op2motion.commands.motion_run import deliver, motion_check, motion_physics_args, physics_progress
 from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
 
@@ -57,28 +57,13 @@ def cmd_line(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion motion line``."""
     from pathlib import Path
 
-    from op2motion.figures.paths import render_line
-    from op2motion.formats.motionfile import motion_to_json
     from op2motion.formats.posefile import read_pose
-    from op2motion.motion.cartesian import LineRequest, line_move
+    from op2motion.motion.cartesian import LineRequest
+    from op2motion.tasks.motion import line_move
 
     pose = read_pose(args.pose, spec)
     request = LineRequest(args.hand, args.duration, tuple(args.to) if args.to else None,
                           tuple(args.by) if args.by else None, _orientation(args.orientation), args.back)
-    move = line_move(pose, request, spec)
     name = args.name or (Path(args.out).stem if args.out else "line")
-    motion = move.motion(name)
-    trajectory = move.trajectory(motion.p_gain)
-    summary = move.summary(spec)
-    result: dict[str, Any] = {"name": name, "pose": pose.name, "support": str(pose.support), **summary,
-                              "duration_s": round(trajectory.duration_s, 3), "ticks": len(trajectory.goals) - 1,
-                              "motion_file": args.out}
-    lines = [f"{name}: the {args.hand} hand from {pose.name}, {summary['length_m'] * 1000:.1f} mm in "
-             f"{trajectory.duration_s:.3f} s{' and back' if args.back else ''}: off the line <= "
-             f"{summary['line_deviation_max_m'] * 1000:.2f} mm, CoM margin >= {summary['com_margin_min_m'] * 1000:.1f} "
-             f"mm, fastest joint {summary['joint_speed_joint']} at {summary['joint_speed_max_rad_s']:.2f} rad/s; "
-             f"solved {summary['solved']}" + (f" (the arm changes branch first, {summary['reconfigure_s']:.2f} s)"
-                                              if summary["reconfigure_s"] else "")]
-    title = f"{name}: {args.hand} hand line from {pose.name}"
-    return finish(args, spec, trajectory, title, result, lines, lambda verdict: render_line(move, title, verdict),
-                  (args.out, motion_to_json(motion, spec, args.out)) if args.out else None)
+    with physics_progress(args) as on_progress:
+        return deliver(args, line_move(pose, request, spec, motion_check(args), name, on_progress))

@@ -1,0 +1,6 @@
+"""User tasks, one function each, every one returning a :class:`~.result.TaskResult` (``ok``, ``problem``,
+``warnings``, the outputs to write, ``as_dict()``): the command line parses, calls one task, prints and writes.
+
+* :mod:`.motion`: ``play_page``, ``plan_motion``, ``line_move`` (an action page, a motion through poses, a hand in a
+  straight line), each checked along its trajectory and optionally in physics (``check_motion``).
+"""
