@@ -14,7 +14,7 @@ from op2motion.tasks.result import Output, TaskResult
 
 #: Command modules that only parse, call a task and deliver its result (the rest still build their reports and are
 #: listed in STILL_BUILDING until they move to op2motion.tasks).
-DELIVERING = ("motion_line.py", "motion_run.py")
+DELIVERING = ("deliver.py", "motion_line.py", "motion_run.py")
 STILL_BUILDING = {"bench.py", "files.py", "kinematics.py", "library.py", "motion.py", "physics.py", "posture.py",
                   "robot.py", "studio.py", "tune.py", "walk.py", "walk_commands.py"}
 

@@ -6,7 +6,8 @@ import argparse
 from typing import Any, Sequence, TypeVar
 
 from op2motion.commands.common import add_command, emit, number, output_path, warn, whole
-from op2motion.commands.motion_run import deliver, motion_check, motion_physics_args, physics_progress
+from op2motion.commands.deliver import deliver
+from op2motion.commands.motion_run import motion_check, motion_physics_args, physics_progress
 from op2motion.errors import InputError
 from op2motion.formats.actionlayout import NUM_PAGES
 from op2motion.formats.motionfile import PLANNERS, PROFILES

@@ -6,7 +6,8 @@ import argparse
 from typing import Any
 
 from op2motion.commands.common import add_command, number, output_path
-from op2motion.commands.motion_run import deliver, motion_check, motion_physics_args, physics_progress
+from op2motion.commands.deliver import deliver
+from op2motion.commands.motion_run import motion_check, motion_physics_args, physics_progress
 from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
 

@@ -16,6 +16,7 @@ from op2motion.commands.common import (
     png_path,
     progress,
 )
+from op2motion.commands.deliver import deliver
 from op2motion.model.servo import MAX_STIFFNESS_SCALE
 from op2motion.physics import DEFAULT_SECONDS, MAX_SECONDS, MIN_SECONDS
 from op2motion.robot.spec import Spec
@@ -68,68 +69,14 @@ def cmd_urdf(args: argparse.Namespace, spec: Spec) -> int:
 
 
 def cmd_validate(args: argparse.Namespace, spec: Spec) -> int:
-    """``op2motion validate``: one engine, or both compared."""
-    from op2motion.errors import CheckFailed
-    from op2motion.fileio import OutputSet
+    """``op2motion validate``: one engine, or both compared, or the robustness family."""
     from op2motion.formats.posefile import read_pose
-    from op2motion.model.dynamics import dynamics_for
-    from op2motion.physics import Pushes, Schedule, Setup, check
+    from op2motion.tasks.validate import Validation, validate_pose, validate_pose_robust
 
-    outputs = OutputSet({"gui_png": args.gui_png} if args.gui_png else {})
     pose = read_pose(args.pose, spec)
+    how = Validation(args.seconds, engines_of(args), args.push, args.stiffness, args.voltage, args.gui_png)
     if args.robust:
-        return _validate_robust(args, pose, spec)
-    schedule = Schedule.hold(pose.servo, pose.support, spec, args.seconds)
+        with progress(args, "robust", "run") as on_progress:
+            return deliver(args, validate_pose_robust(pose, spec, how, on_progress), say_written=False)
     with progress(args, "physics", "s") as on_progress:
-        report = check(schedule, spec, engines_of(args), Pushes(args.push) if args.push else None,
-                       setup=Setup(args.stiffness, args.voltage, snapshot=bool(args.gui_png)), on_progress=on_progress)
-    static = dynamics_for(spec).static_torques(pose.servo, pose.support)
-    head = {"pose": pose.name, "support": pose.support}
-    if len(report.engines) > 1:
-        result: dict[str, Any] = {**head, "engine": "both", "agree": report.agree, "stable": report.stable,
-                                  "engines": {e: r.as_dict() for e, r in report.engines.items()}}
-    else:
-        result = {**report.first.as_dict(), **head,
-                  "static_torque_nm": {n: float(x) for n, x in zip(spec.joint_names, static.torques)},
-                  "static_worst_joint": static.worst_joint, "static_worst_ratio": round(static.worst_ratio, 4)}
-    problem = report.problem()
-    if args.gui_png and report.run.snapshot_png is not None and not problem:     # a failed check writes nothing
-        outputs.put("gui_png", report.run.snapshot_png)
-        result["png"] = str(outputs.commit()["gui_png"])
-    lines = [f"{pose.name} ({pose.support} support): {e.run.summary()}" + _pushes_line(e.pushes)
-             for e in report.engines.values()]
-    lines.append(f"  static model (pinocchio): {abs(static.worst_torque_nm):.2f} N·m at {static.worst_joint}")
-    if len(report.engines) > 1:
-        lines.append("  the engines agree" if report.agree else "  THE ENGINES DISAGREE")
-    emit(args, result, "\n".join(lines))
-    if problem:
-        raise CheckFailed(f"{pose.name}: {problem}")
-    return 0
-
-
-def _validate_robust(args: argparse.Namespace, pose: Any, spec: Spec) -> int:
-    """``validate --robust``: the pose held on every member of the family."""
-    from op2motion.errors import CheckFailed, InputError
-    from op2motion.physics import Pushes, Schedule, pose_robust_table, robust_check, robust_summary
-
-    if args.stiffness != 1.0 or args.gui_png:
-        raise InputError("expected --robust without --stiffness or --gui-png (the family sets the stiffness)",
-                         "robust")
-    with progress(args, "robust", "run") as on_progress:
-        report = robust_check(lambda: Schedule.hold(pose.servo, pose.support, spec, args.seconds), spec,
-                              engines_of(args), pushes=Pushes(args.push) if args.push else None,
-                              on_progress=on_progress)
-    result = {"pose": pose.name, "support": pose.support, "robust": robust_summary(report)}
-    emit(args, result, f"{pose.name} ({pose.support} support) across the robustness family:\n"
-                       + pose_robust_table(report))
-    if not report.passed:
-        failed = sum(not r.passed for r in report.runs)
-        raise CheckFailed(f"{pose.name}: fails in {failed} of {len(report.runs)} runs of the robustness family")
-    return 0
-
-
-def _pushes_line(pushes: Any) -> str:
-    if not pushes:
-        return ""
-    return "\n  pushes: " + "; ".join(f"{p.force_n:g} N {p.direction}: {'ok' if p.stable else ', '.join(p.reasons)}"
-                                     for p in pushes)
+        return deliver(args, validate_pose(pose, spec, how, on_progress), say_written=False)

@@ -2,5 +2,7 @@
 ``warnings``, the outputs to write, ``as_dict()``): the command line parses, calls one task, prints and writes.
 
 * :mod:`.motion`: ``play_page``, ``plan_motion``, ``line_move`` (an action page, a motion through poses, a hand in a
-  straight line), each checked along its trajectory and optionally in physics (``check_motion``).
+  straight line), each checked along its trajectory and optionally in physics (``check_motion``);
+* :mod:`.validate`: ``validate_pose``, ``validate_pose_robust`` (does a pose stand, in one engine or both, pushed, on
+  the robustness family).
 """

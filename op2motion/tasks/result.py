@@ -36,6 +36,8 @@ class TaskResult:
         lines: The result for a person, one line each.
         checked: False when the task was refused before its checks ran (then there is nothing to report but
             ``problem``).
+        file_keys: Where :meth:`as_dict` puts the paths written: None, a ``files`` object {role: path}; else
+            {role: JSON key} (a command whose report names its one file by its own key, ``validate``'s ``png``).
     """
 
     ok: bool
@@ -45,6 +47,7 @@ class TaskResult:
     data: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
     lines: tuple[str, ...] = ()
     checked: bool = True
+    file_keys: Mapping[str, str] | None = None
 
     def __post_init__(self) -> None:
         if self.ok == (self.problem is not None):
@@ -67,5 +70,9 @@ class TaskResult:
         out = dict(self.data)
         if self.warnings is not None:
             out["warnings"] = list(self.warnings)
-        out["files"] = dict(files or {})
+        written = dict(files or {})
+        if self.file_keys is None:
+            out["files"] = written
+        else:
+            out.update({key: written[role] for role, key in self.file_keys.items() if role in written})
         return out

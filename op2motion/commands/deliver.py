@@ -1,0 +1,37 @@
+"""The delivery of a task's result on the command line (:func:`deliver`): the files written when it is a yes, the
+report printed (``--json``: the result's ``as_dict()``), warnings on stderr, exit 1 with the phrase when it is a no.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import TYPE_CHECKING
+
+from op2motion.commands.common import emit, warn
+from op2motion.errors import CheckFailed
+
+if TYPE_CHECKING:
+    from op2motion.tasks.result import TaskResult
+
+
+def deliver(args: argparse.Namespace, result: TaskResult, say_written: bool = True) -> int:
+    """Write a yes's files (atomically, together), print the report (``--json``: :meth:`~.TaskResult.as_dict`;
+    ``say_written``: a line per file written), and turn a no into exit 1 with its phrase (nothing written); a task
+    refused before its checks prints nothing."""
+    from op2motion.fileio import OutputSet
+
+    if not result.checked:
+        raise CheckFailed(str(result.problem))
+    outputs = OutputSet({role: out.path for role, out in result.outputs.items()})
+    for role, out in result.outputs.items():
+        outputs.put(role, out.content)
+    written = outputs.commit() if result.ok else {}
+    files = {k: str(v) for k, v in written.items()}
+    report = result.as_dict(files)
+    if result.warnings is not None:
+        warn(args, report, list(result.warnings))
+    said = [f"  wrote {p}" for p in written.values()] if say_written else []
+    emit(args, report, "\n".join([*result.lines, *said]))
+    if not result.ok:
+        raise CheckFailed(str(result.problem))
+    return 0
