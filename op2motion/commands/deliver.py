@@ -5,24 +5,28 @@ report printed (``--json``: the result's ``as_dict()``), warnings on stderr, exi
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 from op2motion.commands.common import emit, warn
 from op2motion.errors import CheckFailed
 
 if TYPE_CHECKING:
+    from op2motion.fileio import OutputSet
     from op2motion.tasks.result import TaskResult
 
 
-def deliver(args: argparse.Namespace, result: TaskResult, say_written: bool = True) -> int:
-    """Write a yes's files (atomically, together), print the report (``--json``: :meth:`~.TaskResult.as_dict`;
-    ``say_written``: a line per file written), and turn a no into exit 1 with its phrase (nothing written); a task
-    refused before its checks prints nothing."""
+def deliver(args: argparse.Namespace, result: TaskResult, outputs: OutputSet | None = None,
+            written_as: Literal["each", "one", "none"] = "each") -> int:
+    """Write a yes's files (atomically, together, into ``outputs``: the command's output paths, checked before the
+    task ran; None: the result's own), print the report (``--json``: :meth:`~.TaskResult.as_dict`; the files written
+    named ``written_as`` a line each, in one line, or not at all), and turn a no into exit 1 with its phrase
+    (nothing written); a task refused before its checks prints nothing."""
     from op2motion.fileio import OutputSet
 
     if not result.checked:
         raise CheckFailed(str(result.problem))
-    outputs = OutputSet({role: out.path for role, out in result.outputs.items()})
+    if outputs is None:
+        outputs = OutputSet({role: out.path for role, out in result.outputs.items()})
     for role, out in result.outputs.items():
         outputs.put(role, out.content)
     written = outputs.commit() if result.ok else {}
@@ -30,7 +34,9 @@ def deliver(args: argparse.Namespace, result: TaskResult, say_written: bool = Tr
     report = result.as_dict(files)
     if result.warnings is not None:
         warn(args, report, list(result.warnings))
-    said = [f"  wrote {p}" for p in written.values()] if say_written else []
+    said = {"each": [f"  wrote {p}" for p in written.values()],
+            "one": [f"  wrote {', '.join(str(p) for p in written.values())}"] if written else [],
+            "none": []}[written_as]
     emit(args, report, "\n".join([*result.lines, *said]))
     if not result.ok:
         raise CheckFailed(str(result.problem))

@@ -7,7 +7,7 @@ from typing import Any, Sequence, TypeVar
 
 from op2motion.commands.common import add_command, emit, number, output_path, warn, whole
 from op2motion.commands.deliver import deliver
-from op2motion.commands.motion_run import motion_check, motion_physics_args, physics_progress
+from op2motion.commands.motion_run import motion_check, motion_outputs, motion_physics_args, physics_progress
 from op2motion.errors import InputError
 from op2motion.formats.actionlayout import NUM_PAGES
 from op2motion.formats.motionfile import PLANNERS, PROFILES
@@ -74,8 +74,9 @@ def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
 
     action = ActionFile.read(args.file)
     start = read_pose(args.start, spec) if args.start else None
+    outputs = motion_outputs(args)
     with physics_progress(args) as on_progress:
-        return deliver(args, play_page(action, args.page, spec, motion_check(args), start, on_progress))
+        return deliver(args, play_page(action, args.page, spec, motion_check(args), start, on_progress), outputs)
 
 
 def _broadcast(values: Sequence[T] | None, n: int, default: T | None, flag: str) -> list[T]:
@@ -124,8 +125,10 @@ def cmd_plan(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.tasks.motion import plan_motion
 
     motion = _motion_from_args(args, spec)
+    outputs = motion_outputs(args)
     with physics_progress(args) as on_progress:
-        return deliver(args, plan_motion(motion, spec, motion_check(args), args.planner, args.seed, on_progress))
+        result = plan_motion(motion, spec, motion_check(args), args.planner, args.seed, on_progress)
+    return deliver(args, result, outputs)
 
 
 def cmd_export(args: argparse.Namespace, spec: Spec) -> int:

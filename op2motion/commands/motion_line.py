@@ -7,7 +7,7 @@ from typing import Any
 
 from op2motion.commands.common import add_command, number, output_path
 from op2motion.commands.deliver import deliver
-from op2motion.commands.motion_run import motion_check, motion_physics_args, physics_progress
+from op2motion.commands.motion_run import motion_check, motion_outputs, motion_physics_args, physics_progress
 from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
 
@@ -66,5 +66,7 @@ def cmd_line(args: argparse.Namespace, spec: Spec) -> int:
     request = LineRequest(args.hand, args.duration, tuple(args.to) if args.to else None,
                           tuple(args.by) if args.by else None, _orientation(args.orientation), args.back)
     name = args.name or (Path(args.out).stem if args.out else "line")
+    outputs = motion_outputs(args)
     with physics_progress(args) as on_progress:
-        return deliver(args, line_move(pose, request, spec, motion_check(args), name, on_progress))
+        result = line_move(pose, request, spec, motion_check(args), name, on_progress)
+    return deliver(args, result, outputs)

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any, ContextManager
 from op2motion.commands.common import engines_of, output_path, physics_args, png_path, progress
 
 if TYPE_CHECKING:
+    from op2motion.fileio import OutputSet
     from op2motion.tasks.motion import MotionCheck
 
 
@@ -25,6 +26,13 @@ def motion_check(args: argparse.Namespace) -> MotionCheck:
     from op2motion.tasks.motion import MotionCheck
 
     return MotionCheck(args.validate, engines_of(args), args.push, args.plot, args.csv, getattr(args, "out", None))
+
+
+def motion_outputs(args: argparse.Namespace) -> OutputSet:
+    """The output paths the flags name (``--plot``, ``--csv``, ``--out``), checked before any work."""
+    from op2motion.fileio import OutputSet
+
+    return OutputSet({k: getattr(args, k) for k in ("plot", "csv", "out") if getattr(args, k, None)})
 
 
 def physics_progress(args: argparse.Namespace) -> ContextManager[Any]:

@@ -70,13 +70,17 @@ def cmd_urdf(args: argparse.Namespace, spec: Spec) -> int:
 
 def cmd_validate(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion validate``: one engine, or both compared, or the robustness family."""
+    from op2motion.fileio import OutputSet
     from op2motion.formats.posefile import read_pose
     from op2motion.tasks.validate import Validation, validate_pose, validate_pose_robust
 
+    outputs = OutputSet({"gui_png": args.gui_png} if args.gui_png else {})
     pose = read_pose(args.pose, spec)
     how = Validation(args.seconds, engines_of(args), args.push, args.stiffness, args.voltage, args.gui_png)
     if args.robust:
         with progress(args, "robust", "run") as on_progress:
-            return deliver(args, validate_pose_robust(pose, spec, how, on_progress), say_written=False)
+            result = validate_pose_robust(pose, spec, how, on_progress)
+        return deliver(args, result, outputs, "none")
     with progress(args, "physics", "s") as on_progress:
-        return deliver(args, validate_pose(pose, spec, how, on_progress), say_written=False)
+        result = validate_pose(pose, spec, how, on_progress)
+    return deliver(args, result, outputs, "none")

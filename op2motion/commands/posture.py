@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -13,14 +12,12 @@ from op2motion.commands.common import (
     BOUNDARY_RATIO,
     TARGET_M,
     add_command,
-    emit,
     number,
     output_path,
     png_path,
     pose_name,
     ticker,
     vec3,
-    warn,
     whole,
 )
 from op2motion.physics import DEFAULT_SECONDS, ENGINES, MAX_SECONDS, MIN_SECONDS
@@ -30,9 +27,7 @@ from op2motion.robot.spec import Spec
 from op2motion.workflow import DEFAULT_RESTARTS, MAX_RESTARTS
 
 if TYPE_CHECKING:
-    from op2motion.figures.background import Renderers
-    from op2motion.fileio import OutputSet
-    from op2motion.posture.cost import PostureProblem
+    pass
 
 SECONDS = number(MIN_SECONDS, MAX_SECONDS, "s")
 
@@ -86,9 +81,12 @@ def register(sub: Any) -> None:
 
 def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion optimize``: solve, optionally validate, then write pose, figure and cost curve together."""
+    from op2motion.commands.deliver import deliver
     from op2motion.figures.background import Renderers
     from op2motion.fileio import OutputSet
     from op2motion.posture.cost import PostureProblem
+    from op2motion.tasks.posture import Reach, reach
+    from op2motion.workflow import Validate
 
     target = vec3(args.target, "target") or book.DEFAULT_PROBLEM.target
     problem = PostureProblem(args.support, args.hand, target, args.br, args.model, args.com_model).validated()
@@ -96,53 +94,13 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     name = args.name or problem.name
     out = Path(args.out) if args.out else Path("poses") / f"{name}.json"
     png = Path(args.plot) if args.plot else out.with_suffix(".png")
-    outputs = OutputSet({"out": out, "plot": png, "cost curve": out.with_name(out.stem + "_cost.png")})
-    with Renderers(2) as renderers:          # they load matplotlib while the swarm searches
-        return _optimize(args, spec, problem, settings, name, outputs, renderers)
-
-
-def _optimize(args: argparse.Namespace, spec: Spec, problem: PostureProblem, settings: PSOSettings, name: str,
-              outputs: OutputSet, renderers: Renderers) -> int:
-    """The work of :func:`cmd_optimize`, its figures drawn by ``renderers``."""
-    from op2motion.errors import CheckFailed
-    from op2motion.figures.pose import outcome_cost_curve, outcome_pose_figure
-    from op2motion.formats.posefile import pose_to_json
-    from op2motion.workflow import Validate, solve
-
-    target = problem.target
-    with ticker(args, "PSO", "it", settings.iterations * (1 + args.restarts)) as bar:
-        outcome = solve(problem, spec, settings, restarts=args.restarts, refine=not args.no_refine,
-                        validate=Validate(args.seconds, args.engine) if args.validate else None,
-                        on_iteration=lambda best: (bar.update(), bar.set_postfix(cost=f"{best:.4f}")))
+    cost = out.with_name(out.stem + "_cost.png")
+    outputs = OutputSet({"out": out, "plot": png, "cost curve": cost})
     command = "op2motion " + " ".join(sys.argv[1:]) if len(sys.argv) > 1 else "op2motion optimize"
-    pose = outcome.pose(name, spec, {"command": command})
-    r = outcome.result
-    result: dict[str, Any] = {"pose": json.loads(pose_to_json(pose, spec)), **outcome.as_dict()}
-    lines = [f"{args.hand} hand to ({', '.join(f'{v:.3f}' for v in target)}) m on the {args.support} foot, "
-             f"br {args.br}: {r.message}",
-             f"  CoM full inertia ({r.com_full[0]:+.3f}, {r.com_full[1]:+.3f}, {r.com_full[2]:.3f}) m, margin "
-             f"{r.margin_full_m * 1000:.1f} mm to the sole shrunk by br; lumped (book) margin "
-             f"{r.margin_lumped_m * 1000:.1f} mm [balanced: {args.com_model}]; "
-             f"swing foot {r.swing_foot_min_z * 1000:.1f} mm above the floor, torso "
-             f"tilt {result['torso_tilt_deg']:.0f}°",
-             f"  PSO {settings.particles} particles x {settings.iterations} iterations (seed {r.settings.seed}, "
-             f"attempt {r.attempts}), refinement: {r.method}, {r.seconds:.2f} s"]
-    v = outcome.validation
-    if v is not None:
-        lines.append(f"  physics: {v.summary()}")
-    warn(args, result, outcome.warnings())
-    if not outcome.ok:
-        emit(args, result, "\n".join(lines))
-        raise CheckFailed(f"{r.message}; nothing written")
-    jobs = renderers.submit(outcome_pose_figure, outcome, name, spec), renderers.submit(outcome_cost_curve, outcome,
-                                                                                          name)
-    (figure, drawn), cost_curve = renderers.result(jobs[0]), renderers.result(jobs[1])
-    outputs.put("out", pose_to_json(pose, spec))
-    outputs.put("plot", figure)
-    outputs.put("cost curve", cost_curve)
-    files = outputs.commit()
-    result["files"] = {"pose": str(files["out"]), "png": str(files["plot"]), "cost_png": str(files["cost curve"])}
-    result["figure"] = drawn
-    lines.append(f"  wrote {files['out']}, {files['plot']}, {files['cost curve']}")
-    emit(args, result, "\n".join(lines))
-    return 0
+    request = Reach(problem, settings, name, str(out), str(png), str(cost), args.restarts, not args.no_refine,
+                    Validate(args.seconds, args.engine) if args.validate else None, command)
+    with Renderers(2) as renderers:          # they load matplotlib while the swarm searches
+        with ticker(args, "PSO", "it", settings.iterations * (1 + args.restarts)) as bar:
+            result = reach(request, spec, renderers,
+                           lambda best: (bar.update(), bar.set_postfix(cost=f"{best:.4f}")))
+    return deliver(args, result, outputs, "one")

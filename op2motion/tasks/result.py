@@ -16,10 +16,12 @@ from typing import Any, Mapping
 
 @dataclass(frozen=True)
 class Output:
-    """A file a task would write: where (``path``, as the user named it) and what (text or bytes)."""
+    """A file a task would write: where (``path``, as the user named it), what (text or bytes), and the name its path
+    has in the report's ``files`` (``label``; None: its role)."""
 
     path: str
     content: str | bytes
+    label: str | None = None
 
 
 @dataclass(frozen=True)
@@ -38,6 +40,8 @@ class TaskResult:
             ``problem``).
         file_keys: Where :meth:`as_dict` puts the paths written: None, a ``files`` object {role: path}; else
             {role: JSON key} (a command whose report names its one file by its own key, ``validate``'s ``png``).
+        files_on_no: Whether a "no" reports its (empty) ``files`` too (``optimize``'s report of an unreached target
+            has none).
     """
 
     ok: bool
@@ -48,6 +52,7 @@ class TaskResult:
     lines: tuple[str, ...] = ()
     checked: bool = True
     file_keys: Mapping[str, str] | None = None
+    files_on_no: bool = True
 
     def __post_init__(self) -> None:
         if self.ok == (self.problem is not None):
@@ -71,8 +76,9 @@ class TaskResult:
         if self.warnings is not None:
             out["warnings"] = list(self.warnings)
         written = dict(files or {})
-        if self.file_keys is None:
-            out["files"] = written
-        else:
+        if self.file_keys is None and (self.ok or self.files_on_no):
+            out["files"] = {(self.outputs[role].label if role in self.outputs else None) or role: path
+                            for role, path in written.items()}
+        elif self.file_keys is not None:
             out.update({key: written[role] for role, key in self.file_keys.items() if role in written})
         return out
