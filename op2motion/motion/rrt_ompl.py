@@ -29,16 +29,14 @@ from op2motion.motion.rrt import Box, RrtSettings, Validity, edge_valid
 _SEED_SPAN = 2 ** 31 - 1          # OMPL seeds are positive 32-bit numbers
 
 
-def _ompl() -> Any:
-    """The ``ompl`` modules (base, geometric, util), or an :class:`InputError` saying how to install them."""
+def _ompl_util() -> Any:
+    """OMPL's ``util`` module, or an :class:`InputError` saying how to install OMPL."""
     try:
-        import ompl.base as ob
-        import ompl.geometric as og
         import ompl.util as ou
     except ImportError as exc:
         raise InputError(f"expected the OMPL Python bindings (pip install 'op2motion[ompl]'), got {exc}",
                          "planner") from exc
-    return ob, og, ou
+    return ou
 
 
 def ompl_rrt_connect(start: np.ndarray, goal: np.ndarray, valid: Validity, box: Box, rng: np.random.Generator,
@@ -48,19 +46,22 @@ def ompl_rrt_connect(start: np.ndarray, goal: np.ndarray, valid: Validity, box: 
     ``rng`` seeds OMPL."""
     if edge_valid(start, goal, valid, box, settings.resolution):
         return [start.copy(), goal.copy()]
-    ob, og, ou = _ompl()
+    ou = _ompl_util()
     seed = int(rng.integers(1, _SEED_SPAN))
     level = ou.getLogLevel()
     ou.setLogLevel(ou.LogLevel.LOG_NONE)
     try:
-        return _search(ob, og, ou, start, goal, valid, box, seed, settings)
+        return _search(start, goal, valid, box, seed, settings)
     finally:
         ou.setLogLevel(level)
 
 
-def _search(ob: Any, og: Any, ou: Any, start: np.ndarray, goal: np.ndarray, valid: Validity, box: Box, seed: int,
+def _search(start: np.ndarray, goal: np.ndarray, valid: Validity, box: Box, seed: int,
             settings: RrtSettings) -> list[np.ndarray] | None:
-    """One OMPL RRT-Connect search (its log already silenced)."""
+    """One OMPL RRT-Connect search (OMPL importable, its log already silenced)."""
+    import ompl.base as ob
+    import ompl.geometric as og
+    import ompl.util as ou
     dim, weight = len(start), np.asarray(box.weight, dtype=float)
     ou.RNG.setSeed(seed)                           # before the space, sampler and neighbour structures exist
     space = ob.RealVectorStateSpace(dim)
@@ -74,12 +75,12 @@ def _search(ob: Any, og: Any, ou: Any, start: np.ndarray, goal: np.ndarray, vali
     def state_of(s: Any) -> np.ndarray:            # an OMPL state (scaled) -> ours
         return np.array([s[i] for i in range(dim)]) / weight
 
-    class Valid(ob.StateValidityChecker):        
-        def isValid(self, s: Any) -> bool:         # noqa: N802 (OMPL's name)
+    class Valid(ob.StateValidityChecker):
+        def isValid(self, s: Any) -> bool:   # OMPL's name
             return bool(valid(state_of(s)[None])[0])
 
-    class Edge(ob.MotionValidator):              
-        def checkMotion(self, a: Any, b: Any) -> bool:   # noqa: N802 (OMPL's name)
+    class Edge(ob.MotionValidator):
+        def checkMotion(self, a: Any, b: Any) -> bool:   # OMPL's name
             return edge_valid(state_of(a), state_of(b), valid, box, settings.resolution)
 
     checker, motions = Valid(si), Edge(si)         # kept referenced while OMPL holds them
