@@ -1,7 +1,8 @@
 """Compare the route planners (docs/motions.md, "Route planners: RRT-Connect (ours) against OMPL"): our RRT-Connect
-(``planner="rrt"``) and OMPL's (``"ompl"``) on the colliding pose pairs of tests/test_route.py and the segments of the
-example motions whose straight line collides, each planned by :func:`op2motion.motion.route.route_segment` (the
-same narrow-then-wide search, checks, caps and shortcuts for both) over several seeds.
+(``planner="rrt"``) and OMPL's (``"ompl"``) on the colliding pose pairs of tests/test_route.py (its data file,
+tests/data/route_pairs.json) and the segments of the example motions whose straight line collides, each planned by
+:func:`op2motion.motion.route.route_segment` (the same narrow-then-wide search, checks, caps and shortcuts for
+both) over several seeds.
 
 Per planner and case: how many seeds found a path, the median wall time of ``route_segment`` [s] (the straight
 line's check included, the first call's compilation excluded by a warm-up), the least clearance between links along
@@ -16,6 +17,7 @@ Run from the repository root: ``python tools/route_compare.py [--seeds N] [--sam
 from __future__ import annotations
 
 import argparse
+import json
 import statistics
 import sys
 import time
@@ -26,6 +28,7 @@ from tqdm import tqdm
 
 from op2motion.errors import CheckFailed
 from op2motion.formats.motionfile import read_motion
+from op2motion.formats.posefile import read_pose
 from op2motion.motion.body_checks import BodyChecks
 from op2motion.motion.pipeline import waypoints_of
 from op2motion.motion.route import SEARCH_NAMES, route_segment
@@ -36,16 +39,27 @@ from op2motion.robot.spec import Spec
 from op2motion.robot.specfile import default_spec
 
 ROOT = Path(__file__).resolve().parents[1]
+PAIRS = ROOT / "tests" / "data" / "route_pairs.json"
 DENSE_RAD = 0.005            # each edge is measured this finely [rad of the fastest joint]
 MOTIONS = ("stand_book_2_44", "stand_book_2_45", "stand_book_2_46", "stand_book_2_47")
 
 
-def cases(spec: Spec) -> dict[str, tuple[Waypoint, Waypoint]]:
-    """The test pairs (tests/test_route.py) and every colliding segment of the example motions."""
-    sys.path.insert(0, str(ROOT / "tests"))
-    from test_route import PAIRS, _pair
+def pair(entry: dict, spec: Spec) -> tuple[Waypoint, Waypoint]:
+    """Two waypoints (2 s apart) of a ``tests/data/route_pairs.json`` entry: its base pose, each named joint at its
+    first and second angle [deg]."""
+    a = read_pose(ROOT / "poses" / f"{entry['base']}.json", spec).servo.copy()
+    b = a.copy()
+    for joint, (x, y) in entry["joints_deg"].items():
+        a[spec.joint_names.index(joint)], b[spec.joint_names.index(joint)] = np.radians(x), np.radians(y)
+    support = entry["support"]
+    return Waypoint("a", a, 0.0, 0.0, support), Waypoint("b", b, 2.0, 0.0, support)
 
-    out = {name: _pair(spec, change) for name, change in sorted(PAIRS.items())}
+
+def cases(spec: Spec) -> dict[str, tuple[Waypoint, Waypoint]]:
+    """The test pairs (tests/data/route_pairs.json, as tests/test_route.py uses them) and every colliding segment
+    of the example motions."""
+    pairs = json.loads(PAIRS.read_text(encoding="utf-8"))["pairs"]
+    out = {name: pair(entry, spec) for name, entry in sorted(pairs.items())}
     for motion in MOTIONS:
         path = ROOT / "poses" / "motions" / f"{motion}.json"
         if not path.is_file():
