@@ -8,7 +8,7 @@ import json
 
 import numpy as np
 import pytest
-from helpers import POSES, pybullet_pair_distances, run_cli
+from helpers import DATA, POSES, pybullet_pair_distances, run_cli
 
 from op2motion.errors import CheckFailed
 from op2motion.formats.posefile import read_pose, write_pose
@@ -35,23 +35,11 @@ NEAR_M = 0.025               # pairs compared with PyBullet where our clearance 
 SAMPLING_M = 0.0015
 ROWS_COMPARED = 40
 END_TOL_RAD = 1e-3           # the planned rows start and end on the poses (the balance lean moves them < 0.06°)
-# Pairs found by seeded searches: ends at least 7 mm clear, the straight line overlapping by 6-35 mm.
-ARM_THROUGH_TORSO = {"r_sho_pitch": (69.0, -178.0), "r_sho_roll": (-63.0, -51.0), "r_el": (-29.0, -24.0)}
-ARM_THROUGH_HIP = {"r_sho_pitch": (117.0, -170.0), "r_sho_roll": (-51.0, -76.0), "r_el": (-44.0, -41.0)}
-LEFT_ARM_THROUGH_HIP = {"r_sho_pitch": (-22.0, -8.0), "r_sho_roll": (7.0, 36.0), "r_el": (55.0, 18.0),
-                 "l_sho_pitch": (-24.0, 104.0), "l_sho_roll": (59.0, 62.0), "l_el": (28.0, 39.0)}
-# The left forearm across the chest, the right arm swung from low in front to high at its side: the straight line
-# drives the right elbow through the left forearm (ends 7.4 and 9.8 mm clear, 6.2 mm overlap).
-ARM_THROUGH_ARM = {"r_sho_pitch": (-48.0, 115.0), "r_sho_roll": (-18.0, -72.0), "r_el": (29.0, -72.0),
-                   "l_sho_pitch": (-111.0, -111.0), "l_sho_roll": (73.0, 73.0), "l_el": (85.0, 85.0)}
-# On the left foot (book_2_44), the right leg from behind the left foot (crossed over) to behind its own side: the
-# straight line brings the swing foot down onto the floor (9.2 mm lifted at both ends).
-LEG_BEHIND = {"r_hip_yaw": (2.0, 54.0), "r_hip_roll": (-42.0, -27.0), "r_hip_pitch": (-33.0, -20.0),
-              "r_knee": (53.0, 22.0), "r_ank_pitch": (-40.0, 6.0), "r_ank_roll": (-23.0, -48.0)}
-PAIRS = {"arm through torso": ARM_THROUGH_TORSO, "arm through hip": ARM_THROUGH_HIP,
-         "left elbow through hip": LEFT_ARM_THROUGH_HIP, "arm through the other arm": ARM_THROUGH_ARM,
-         "crossed leg through the floor": LEG_BEHIND}
-ONE_FOOT = {"crossed leg through the floor": ("book_2_44", "left")}
+# The colliding pairs (tests/data/route_pairs.json, which tools/route_compare.py reads too): joint -> (from, to) [deg].
+ROUTE_PAIRS = json.loads((DATA / "route_pairs.json").read_text(encoding="utf-8"))["pairs"]
+PAIRS = {name: {joint: tuple(v) for joint, v in p["joints_deg"].items()} for name, p in ROUTE_PAIRS.items()}
+ONE_FOOT = {name: (p["base"], p["support"]) for name, p in ROUTE_PAIRS.items() if p["support"] != "double"}
+ARM_THROUGH_TORSO, ARM_THROUGH_ARM = PAIRS["arm through torso"], PAIRS["arm through the other arm"]
 
 
 def _pair(spec, change: dict, duration_s: float = 2.0) -> tuple[Waypoint, Waypoint]:

@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-HEAVY = ("pybullet", "mujoco", "pinocchio", "matplotlib", "numba", "pyswarms", "scipy", "ray")
+HEAVY = ("pybullet", "mujoco", "pinocchio", "matplotlib", "numba", "pyswarms", "scipy", "ray", "ompl")
 PROBE = """
 import json, runpy, sys
 sys.argv = {argv!r}

@@ -22,7 +22,7 @@ SECONDS = number(0.0, 60.0, "s")
 def _planner_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--planner", choices=PLANNERS, default="rrt",
                    help="where the straight line between two poses collides: plan around it in joint space "
-                        "(rrt, default) or refuse (none)")
+                        "with our RRT-Connect (rrt, default) or OMPL's (ompl: the ompl extra), or refuse (none)")
     p.add_argument("--seed", type=whole(0, 2 ** 31 - 1), default=0, help="seed of the path planner (default 0)")
 
 

@@ -33,7 +33,8 @@ from op2motion.version import __version__
 
 SCHEMA = "op2motion.motion/1"
 PROFILES = ("quintic", "robot")
-PLANNERS = ("rrt", "none")   # a colliding straight segment: planned around in joint space, or refused
+PLANNERS = ("rrt", "ompl", "none")   # a colliding straight segment: planned around in joint space (our
+                                     # RRT-Connect or OMPL's), or refused
 _STEP_KEYS = {"pose", "name", "servo_deg", "support", "duration_s", "pause_s"}
 _TOP_KEYS = {"schema", "name", "profile", "p_gain", "steps", "provenance"}
 

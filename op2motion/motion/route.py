@@ -5,7 +5,8 @@ fastest joint), links pass through each other by more than the shapes' error
 (:data:`~op2motion.motion.checks.OVERLAP_TOL_M`, the limit below which :func:`~.checks.require_clear` refuses), a
 hand, elbow, knee, the head or the pelvis goes below the floor, or on one foot the swing foot comes down to the
 floor (its lowest corner within :data:`~op2motion.robot.support.LIFTED_M`, the sag counted) while neither end has it
-there. Such a segment is planned again in joint space (:func:`.rrt.rrt_connect`, then :func:`.rrt.shortcut`):
+there. Such a segment is planned again in joint space (:func:`.rrt.rrt_connect`, our RRT-Connect, or with
+``planner`` "ompl" OMPL's, :func:`.rrt_ompl.ompl_rrt_connect`; then :func:`.rrt.shortcut`):
 
 * what may move: first only those of the joints below whose ends differ, then (if that finds nothing in
   :data:`NARROW_SHARE` of the budget) both arms and the head, and on one foot the swing leg; the rest (the standing
@@ -26,7 +27,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, replace
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -34,7 +35,7 @@ from op2motion.errors import CheckFailed, InputError
 from op2motion.formats.motionfile import PLANNERS
 from op2motion.motion.body_checks import BodyChecks, Limits, Measures
 from op2motion.motion.checks import OVERLAP_TOL_M, clearance
-from op2motion.motion.rrt import Box, RrtSettings, rrt_connect, shortcut
+from op2motion.motion.rrt import Box, RrtSettings, Validity, rrt_connect, shortcut
 from op2motion.motion.shift import segment_side
 from op2motion.motion.waypoint import MIN_SEGMENT_S, Waypoint
 from op2motion.robot.joints import LEG_JOINTS, joint_range
@@ -47,6 +48,17 @@ MIN_PROGRESS_WEIGHT = 0.05          # the progress coordinate's weight when the 
 MOVING_RAD = 1e-3                   # a joint whose ends differ by more than this moves in the segment
 MAX_ROUTE_S = 60.0                  # a motion's segments are planned around for at most this long in all [s]
 NARROW_SHARE = 0.4                  # the share of the budget tried with only the moving joints free
+SEARCH_NAMES = {"rrt": "RRT-Connect", "ompl": "OMPL's RRT-Connect"}
+
+Search = Callable[[np.ndarray, np.ndarray, Validity, Box, np.random.Generator, RrtSettings], "list[np.ndarray] | None"]
+
+
+def _search(planner: str) -> Search:
+    """The search function of ``planner`` ("rrt" or "ompl"; OMPL imported only when it is asked for)."""
+    if planner == "ompl":
+        from op2motion.motion.rrt_ompl import ompl_rrt_connect
+        return ompl_rrt_connect
+    return rrt_connect
 
 
 @dataclass(frozen=True)
@@ -120,21 +132,25 @@ def _durations(points: list[np.ndarray], total_s: float, box: Box) -> list[float
 
 
 def _plan(seg: _Segment, limits: Limits, rng: np.random.Generator, search: RrtSettings,
-          settings: RrtSettings) -> list[np.ndarray] | None:
-    """RRT-Connect then shortcuts in ``seg``'s space with every state within ``limits``; None if none found."""
+          settings: RrtSettings, planner: str = "rrt") -> list[np.ndarray] | None:
+    """``planner``'s RRT-Connect then shortcuts in ``seg``'s space with every state within ``limits``; None if none
+    found."""
 
     def valid(states: np.ndarray) -> np.ndarray:
         poses = seg.servo(states)
         return seg.checks.within_joint_limits(poses) & limits.allows(seg.checks.measure(poses))
 
-    path = rrt_connect(seg.start, seg.goal, valid, seg.box, rng, search)
+    path = _search(planner)(seg.start, seg.goal, valid, seg.box, rng, search)
     return None if path is None else shortcut(path, valid, seg.box, rng, settings)
 
 
-def route_segment(a: Waypoint, b: Waypoint, spec: Spec, seed: int, settings: RrtSettings = RrtSettings()
-                  ) -> tuple[list[Waypoint], str | None]:
+def route_segment(a: Waypoint, b: Waypoint, spec: Spec, seed: int, settings: RrtSettings = RrtSettings(),
+                  planner: str = "rrt") -> tuple[list[Waypoint], str | None]:
     """The waypoints that replace ``b`` (via poses, then ``b``) and why the straight line needed them (None and
-    ``[b]`` when it did not). Raises :class:`CheckFailed` when no path is found."""
+    ``[b]`` when it did not), searched by ``planner`` ("rrt" or "ompl"). Raises :class:`CheckFailed` when no path
+    is found."""
+    if planner not in SEARCH_NAMES:
+        raise InputError(f"expected one of {', '.join(SEARCH_NAMES)}, got {planner!r}", "planner")
     seg = _Segment(a, b, spec)
     ends_measured = seg.measure(np.array([seg.start, seg.goal]))
     ends = ends_measured.least()
@@ -151,13 +167,14 @@ def route_segment(a: Waypoint, b: Waypoint, spec: Spec, seed: int, settings: Rrt
     path = None
     if len(narrow.free) < len(seg.free):          # first with only the joints that move anyway, then with all
         path = _plan(narrow, limits, rng, replace(settings, budget_s=settings.budget_s * NARROW_SHARE,
-                                                  max_samples=int(settings.max_samples * NARROW_SHARE)), settings)
+                                                  max_samples=int(settings.max_samples * NARROW_SHARE)), settings,
+                     planner)
         seg = narrow if path is not None else seg
     if path is None:                              # the rest of the budget with every free joint
         rest = settings if len(narrow.free) == len(seg.free) else replace(
             settings, budget_s=settings.budget_s * (1.0 - NARROW_SHARE),
             max_samples=settings.max_samples - int(settings.max_samples * NARROW_SHARE))
-        path = _plan(seg, limits, rng, rest, settings)
+        path = _plan(seg, limits, rng, rest, settings, planner)
     if path is None:
         tight = [(w, c) for w, c in zip((a, b), ends_measured.clearance) if c < Limits().clearance]
         if tight:                                 # no seed helps: the pose itself is where the search must end
@@ -178,7 +195,8 @@ def route_segment(a: Waypoint, b: Waypoint, spec: Spec, seed: int, settings: Rrt
 
 def route(waypoints: Sequence[Waypoint], spec: Spec, planner: str = "rrt", seed: int = 0,
           settings: RrtSettings = RrtSettings()) -> Routed:
-    """``waypoints`` with every colliding segment planned around (``planner`` "rrt"), or as they are ("none")."""
+    """``waypoints`` with every colliding segment planned around (``planner`` "rrt": ours, "ompl": OMPL's
+    RRT-Connect), or as they are ("none")."""
     if planner not in PLANNERS:
         raise InputError(f"expected one of {', '.join(PLANNERS)}, got {planner!r}", "planner")
     out, notes = [waypoints[0]], list[str]()
@@ -191,13 +209,13 @@ def route(waypoints: Sequence[Waypoint], spec: Spec, planner: str = "rrt", seed:
         if time.monotonic() - started > MAX_ROUTE_S:
             raise CheckFailed(f"planning around collisions took over {MAX_ROUTE_S:g} s in all (at segment {i + 1} of "
                               f"{len(waypoints) - 1}): add poses that keep the links apart, or split the motion")
-        pieces, why = route_segment(a, b, spec, seed * 1000 + i, settings)
+        pieces, why = route_segment(a, b, spec, seed * 1000 + i, settings, planner)
         if why is not None:
             first = len(out) - 1
             segments += list(range(first, first + len(pieces)))
             vias += list(range(first + 1, first + len(pieces)))
             notes.append(f"{a.name} -> {b.name}: {why}; planned around it through {len(pieces) - 1} via pose"
-                         f"{'s' if len(pieces) != 2 else ''} (RRT-Connect in joint space, seed {seed})")
+                         f"{'s' if len(pieces) != 2 else ''} ({SEARCH_NAMES[planner]} in joint space, seed {seed})")
         out += pieces
     return Routed(out, notes, segments, vias)
 
