@@ -12,8 +12,10 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, Literal
 
+#: A joint range: the ``mechanical`` (hard) stops or the ``cable-safe`` (advice) range.
+LimitKind = Literal["mechanical", "cable-safe"]
 _REF = re.compile(r"\{param:(\w+)\}")
 
 
@@ -99,7 +101,7 @@ class LimitViolation:
     value_deg: float
     lower_deg: float
     upper_deg: float
-    kind: str = "mechanical"
+    kind: LimitKind = "mechanical"
 
     def describe(self) -> str:
         """``l_knee = -135.0° is outside its mechanical range [-130°, 6°]``."""

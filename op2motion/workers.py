@@ -15,8 +15,11 @@ import os
 import signal
 import threading
 import time
-from typing import Iterator
+from typing import Iterator, Literal, get_args
 
+#: Where a pool's work runs: local worker processes, or a Ray cluster.
+ExecutorName = Literal["process", "ray"]
+EXECUTORS: tuple[ExecutorName, ...] = get_args(ExecutorName)
 WATCHDOG_PERIOD_S = 0.5
 THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")
 _PR_SET_PDEATHSIG = 1   # linux/prctl.h

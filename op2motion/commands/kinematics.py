@@ -22,6 +22,7 @@ from op2motion.commands.common import (
     vec3,
 )
 from op2motion.errors import InputError
+from op2motion.kinematics import MODELS
 from op2motion.physics import DEFAULT_SECONDS, MAX_SECONDS, MIN_SECONDS
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support
@@ -141,7 +142,7 @@ def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
     outputs = OutputSet({"output": args.output})
     angles, name, pose = angles_from(args, spec, args.pose_positional, default_standing=True)
     target = vec3(args.target, "target")
-    models = ("dh", "pb") if args.model == "both" else (args.model,)
+    models = MODELS if args.model == "both" else (args.model,)
     support = pose.support if pose is not None else angles.support
     validation = None
     if args.validate:

@@ -14,7 +14,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from op2motion.figures.draw import PoseFigure, TitleBlock, render_cost_curve, render_poses
-from op2motion.kinematics import forward
+from op2motion.kinematics import ModelName, forward
 from op2motion.kinematics.report import PoseReport, evaluate
 from op2motion.physics import RunReport
 from op2motion.robot.joints import BookAngles
@@ -57,7 +57,7 @@ class Drawing:
     IK move), and ``double``: the pose measured as standing on both feet (the support polygon is the hull of both
     soles; the kinematic chain still starts at the book angles' support sole)."""
 
-    models: Sequence[str] = ("dh",)
+    models: Sequence[ModelName] = ("dh",)
     br: float = 1.0
     target: Sequence[float] | None = None
     lines: Sequence[str] = ()

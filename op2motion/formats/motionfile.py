@@ -19,7 +19,7 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Literal, Sequence, get_args
 
 from op2motion.errors import InputError, Op2MotionError, PoseFileError
 from op2motion.fileio import read_bytes, write_atomic
@@ -32,9 +32,13 @@ from op2motion.robot.support import Support
 from op2motion.version import __version__
 
 SCHEMA = "op2motion.motion/1"
-PROFILES = ("quintic", "robot")
-PLANNERS = ("rrt", "ompl", "none")   # a colliding straight segment: planned around in joint space (our
-                                     # RRT-Connect or OMPL's), or refused
+#: How a motion moves between poses: a quintic in time, or as the robot's firmware plays a page.
+Profile = Literal["quintic", "robot"]
+#: A colliding straight segment: planned around in joint space (our RRT-Connect, ``rrt``, or OMPL's, ``ompl``), or
+#: refused (``none``).
+PlannerName = Literal["rrt", "ompl", "none"]
+PROFILES: tuple[Profile, ...] = get_args(Profile)
+PLANNERS: tuple[PlannerName, ...] = get_args(PlannerName)
 _STEP_KEYS = {"pose", "name", "servo_deg", "support", "duration_s", "pause_s"}
 _TOP_KEYS = {"schema", "name", "profile", "p_gain", "steps", "provenance"}
 
@@ -56,7 +60,7 @@ class Motion:
 
     name: str
     steps: tuple[MotionStep, ...]
-    profile: str = "quintic"
+    profile: Profile = "quintic"
     p_gain: int = DEFAULT_P_GAIN
 
 
@@ -202,7 +206,7 @@ def write_motion(motion: Motion, path: str | Path, spec: Spec) -> Path:
 
 
 def motion_of(poses: Sequence[Pose], sources: Sequence[str | None], durations: Sequence[float],
-              pauses: Sequence[float], name: str, profile: str = "quintic",
+              pauses: Sequence[float], name: str, profile: Profile = "quintic",
               p_gain: int = DEFAULT_P_GAIN) -> Motion:
     """A motion from poses with their sources, the durations of the steps after the first and the pauses."""
     check_motion_name(name)

@@ -73,7 +73,7 @@ def kick_chunk(spec: Spec, legs: dict[str, Leg], state: WalkState, stand_goals: 
     sole, sole_rot = leg_fk(leg, rows[:, list(leg.index)])
     rot = world_rot @ np.swapaxes(sole_rot, 1, 2)                               # torso rotation (K, 3, 3)
     pos = world_pos - np.einsum("kij,kj->ki", rot, sole)
-    feet = {anchor: np.repeat(np.array([[foot.x, foot.y, 0.0, foot.yaw]]), len(rows), axis=0)}
+    feet: dict[str, np.ndarray] = {anchor: np.repeat(np.array([[foot.x, foot.y, 0.0, foot.yaw]]), len(rows), axis=0)}
     other = legs[side]
     p_other, r_other = leg_fk(other, rows[:, list(other.index)])
     world_other = pos + np.einsum("kij,kj->ki", rot, p_other)

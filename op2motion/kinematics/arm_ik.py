@@ -24,7 +24,7 @@ from typing import Callable
 import numpy as np
 
 from op2motion.errors import InputError, LimitViolation, ModelError
-from op2motion.kinematics import forward
+from op2motion.kinematics import ModelName, forward
 from op2motion.robot.joints import BookAngles, book_bounds, book_to_servo, limit_violations
 from op2motion.robot.spec import Spec
 
@@ -134,7 +134,7 @@ def _with_arm(angles: BookAngles, arm: Arm, q: np.ndarray) -> BookAngles:
     return BookAngles(th, phi, psi, angles.support)
 
 
-def _hands(angles: BookAngles, arm: Arm, q: np.ndarray, spec: Spec, model: str) -> np.ndarray:
+def _hands(angles: BookAngles, arm: Arm, q: np.ndarray, spec: Spec, model: ModelName) -> np.ndarray:
     return forward(_with_arm(angles, arm, q), spec, model).point(arm.hand)
 
 
@@ -143,7 +143,7 @@ class ArmIKResult:
     """Outcome of one arm IK solve; angles in rad, lengths in m."""
 
     hand: str
-    model: str
+    model: ModelName
     mode: str
     initial: BookAngles
     angles: BookAngles
@@ -159,7 +159,7 @@ class ArmIKResult:
         return float(np.linalg.norm(self.achieved - self.requested))
 
 
-def solve_arm_ik(angles: BookAngles, hand: str, delta: object, spec: Spec, model: str = "pb", *,
+def solve_arm_ik(angles: BookAngles, hand: str, delta: object, spec: Spec, model: ModelName = "pb", *,
                  single_step: bool = False, tol: float = TOL_M, enforce_limits: bool = True) -> ArmIKResult:
     """Move one hand by ``delta`` [m] (world frame) with that arm's three joints.
 
@@ -203,7 +203,7 @@ class _ArmSolve:
     angles: BookAngles
     arm: Arm
     spec: Spec
-    model: str
+    model: ModelName
     tol: float
     bounds: tuple[np.ndarray, np.ndarray] | None
 
@@ -280,7 +280,7 @@ class _ArmSolve:
         return q, MAX_ITER
 
 
-def _jacobian(angles: BookAngles, arm: Arm, q: np.ndarray, spec: Spec, model: str) -> np.ndarray:
+def _jacobian(angles: BookAngles, arm: Arm, q: np.ndarray, spec: Spec, model: ModelName) -> np.ndarray:
     if model == "pb":
         return pb_hand_jacobian(_with_arm(angles, arm, q), arm.hand.split("_")[0], spec)
     h = FD_STEP_RAD

@@ -9,7 +9,7 @@ foot, for N poses, in the world frame (support-foot sole centre, X forward, Y le
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable
+from typing import Iterable, Literal
 
 import numpy as np
 
@@ -18,6 +18,8 @@ from op2motion.robot.spec import Foot
 from op2motion.robot.support import other_side
 
 #: Unique point rows, in storage order.
+#: The full-body kinematic model: the book's D-H chain (``dh``) or its projection formulas (``pb``).
+ModelName = Literal["dh", "pb"]
 ROWS: tuple[str, ...] = (
     "l_ankle", "l_knee", "l_hip", "l_hip_yaw", "r_ankle", "r_knee", "r_hip", "r_hip_yaw",
     "pelvis", "neck", "head_pan", "head_tilt", "head_top",
@@ -59,7 +61,7 @@ class BodyPoints:
     data: np.ndarray
     com: np.ndarray
     support: str
-    model: str
+    model: ModelName
     com_full: np.ndarray | None = None
 
     @property

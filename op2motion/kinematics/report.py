@@ -8,7 +8,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from op2motion.errors import InputError, LimitViolation
-from op2motion.kinematics import BodyPoints, forward
+from op2motion.kinematics import BodyPoints, ModelName, forward
 from op2motion.robot.balance import COM_MODEL_FULL, check_br, polygon_margin, stability_margin
 from op2motion.robot.joints import (
     BookAngles,
@@ -30,7 +30,7 @@ class PoseReport:
     """Forward kinematics and balance of one pose on one model; lengths [m] in the world frame (support sole
     centre, X forward, Y left, Z up; moved to ``sp`` and turned by ``gamma`` when given)."""
 
-    model: str
+    model: ModelName
     support: str
     points: BodyPoints
     com: np.ndarray
@@ -93,7 +93,7 @@ class PoseReport:
         return "\n".join(lines)
 
 
-def evaluate(angles: BookAngles, spec: Spec, model: str = "dh", br: float = 1.0,
+def evaluate(angles: BookAngles, spec: Spec, model: ModelName = "dh", br: float = 1.0,
              sp: Sequence[float] = (0.0, 0.0, 0.0), gamma: float = 0.0, double: bool = False) -> PoseReport:
     """Forward kinematics and balance of the first pose of ``angles`` (``double``: standing on both feet, measured
     in the support sole's frame, its margin to the hull of both soles)."""

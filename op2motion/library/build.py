@@ -27,7 +27,7 @@ from op2motion.library.index import INDEX_JSON, IndexRow, load_index, reconcile,
 from op2motion.library.jobs import BuildSettings, Recorder, solve_job
 from op2motion.robot.spec import Spec
 from op2motion.robot.specfile import spec_text
-from op2motion.workers import one_thread_each, worker_init
+from op2motion.workers import EXECUTORS, ExecutorName, one_thread_each, worker_init
 
 __all__ = ["BuildSettings", "BuildSummary", "Executor", "build_library", "check_workers"]
 
@@ -39,11 +39,11 @@ class Executor:
     """Where the targets are solved: ``process`` (a pool on this machine) or ``ray`` (tasks on Ray: ``address`` of
     a running cluster, or None to start Ray here)."""
 
-    kind: str = "process"
+    kind: ExecutorName = "process"
     address: str | None = None
 
     def __post_init__(self) -> None:
-        if self.kind not in ("process", "ray"):
+        if self.kind not in EXECUTORS:
             raise InputError(f"expected process or ray, got {self.kind!r}", "executor")
         if self.address is not None and self.kind != "ray":
             raise InputError("expected --executor ray with --address", "address")

@@ -16,7 +16,8 @@ import numpy as np
 
 from op2motion.errors import InputError, ref
 from op2motion.posture.cost import PostureProblem
-from op2motion.robot.balance import COM_MODEL_FULL
+from op2motion.robot.balance import COM_MODEL_FULL, ComModel
+from op2motion.robot.support import Side
 
 MAX_AXIS = 1000          # values per grid axis
 MAX_TARGETS = 10_000     # targets per build (about 1 s each on one core)
@@ -26,11 +27,11 @@ MAX_TARGETS = 10_000     # targets per build (about 1 s each on one core)
 class Job:
     """One grid point."""
 
-    hand: str
-    support: str
+    hand: Side
+    support: Side
     br: float
     target: tuple[float, float, float]
-    com_model: str = COM_MODEL_FULL
+    com_model: ComModel = COM_MODEL_FULL
 
     @property
     def problem(self) -> PostureProblem:
@@ -56,8 +57,8 @@ def _axes() -> str:
     return ", ".join(ref(p) for p in ("hands", "supports", "br", "x", "y", "z"))
 
 
-def grid_jobs(hands: Sequence[str], supports: Sequence[str], brs: Sequence[float], xs: Sequence[float],
-              ys: Sequence[float], zs: Sequence[float], com_model: str = COM_MODEL_FULL) -> list[Job]:
+def grid_jobs(hands: Sequence[Side], supports: Sequence[Side], brs: Sequence[float], xs: Sequence[float],
+              ys: Sequence[float], zs: Sequence[float], com_model: ComModel = COM_MODEL_FULL) -> list[Job]:
     """All combinations, each checked; raises :class:`InputError` for too many targets or colliding names."""
     total = len(hands) * len(supports) * len(brs) * len(xs) * len(ys) * len(zs)
     if total > MAX_TARGETS:

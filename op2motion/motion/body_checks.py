@@ -29,7 +29,7 @@ from op2motion.posture.cost import SAG_TILT_LIMIT_RAD, SELF_CLEARANCE_M, CostMod
 from op2motion.robot.balance import polygon_margin
 from op2motion.robot.joints import joint_range, servo_to_book
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import Support
+from op2motion.robot.support import Support, as_side
 
 ROUTE_SLACK_M = 0.002      # planned paths keep this much more than SELF_CLEARANCE_M: smoothing and balance leans
 PLAN_CLEARANCE_M = SELF_CLEARANCE_M + ROUTE_SLACK_M
@@ -80,7 +80,7 @@ class Limits:
 def body_cost(spec: Spec, stance: str) -> CostModel:
     """The posture cost standing on ``stance`` (full sole, full-inertia CoM), used for what it measures beside the
     hand: clearance between links, the settled CoM's margin, the swing foot's lift, the sag tilt."""
-    return CostModel(PostureProblem(stance, "left", _ANY_HAND_TARGET, 1.0), spec)
+    return CostModel(PostureProblem(as_side(stance, "support"), "left", _ANY_HAND_TARGET, 1.0), spec)
 
 
 class BodyChecks:

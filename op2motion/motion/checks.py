@@ -170,7 +170,7 @@ def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | Non
     pin, model, data = dyn.pin, dyn.model, dyn.data
     servo = servo or ServoModel.of(spec)
     dt, goals = trajectory.dt, trajectory.goals
-    side = fixed_foot(trajectory.supports)
+    side: str = fixed_foot(trajectory.supports)
     smooth = smoothed(goals, SMOOTH_ROWS)
     configs = np.array([dyn.level_configuration(g, side) for g in smooth])
     k = len(goals)

@@ -8,12 +8,15 @@ steps at :data:`TIME_STEP_S` (1 kHz) in torque control.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal, get_args
 
 import numpy as np
 
 FLOOR_FRICTION = 0.8
 TIME_STEP_S = 0.001
-ENGINES = ("pybullet", "mujoco")
+#: A physics engine that judges a run.
+EngineName = Literal["pybullet", "mujoco"]
+ENGINES: tuple[EngineName, ...] = get_args(EngineName)
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ import numpy as np
 
 from op2motion import book
 from op2motion.errors import InputError, ref
-from op2motion.kinematics import MODELS, BodyPoints, forward
+from op2motion.kinematics import MODELS, BodyPoints, ModelName, forward
 from op2motion.kinematics.dh import MATRIX_BELOW, forward_dh_frames
 from op2motion.kinematics.dh_chain import matrix_frames
 from op2motion.kinematics.points import ROW, row_of
@@ -35,13 +35,14 @@ from op2motion.robot.balance import (
     COM_MODELS,
     FLOOR_TOLERANCE_M,
     PENALTY,
+    ComModel,
     check_br,
     rectangle_margin,
     support_extents,
 )
 from op2motion.robot.joints import BookAngles
 from op2motion.robot.spec import GRAVITY_M_S2, Spec
-from op2motion.robot.support import LIFTED_M, Support, other_side
+from op2motion.robot.support import LIFTED_M, Side, as_side, other_side
 
 if TYPE_CHECKING:
     from op2motion.posture.kernel_plan import KernelPlan
@@ -61,24 +62,24 @@ class PostureProblem:
     """What to reach: ``hand`` (left/right) to ``target`` [m] in the support-foot frame, standing on ``support``,
     CoM inside the support rectangle shrunk by ``br``, evaluated on kinematic ``model`` (dh or pb)."""
 
-    support: str
-    hand: str
+    support: Side
+    hand: Side
     target: tuple[float, float, float]
     br: float = book.DEFAULT_PROBLEM.br
-    model: str = "dh"
-    com_model: str = COM_MODEL_FULL
+    model: ModelName = "dh"
+    com_model: ComModel = COM_MODEL_FULL
 
     @classmethod
-    def from_scenario(cls, scenario: book.Scenario, model: str = "dh",
-                      com_model: str = COM_MODEL_FULL) -> "PostureProblem":
+    def from_scenario(cls, scenario: book.Scenario, model: ModelName = "dh",
+                      com_model: ComModel = COM_MODEL_FULL) -> "PostureProblem":
         """The problem of one of the book's scenarios (or the default problem)."""
-        return cls(scenario.support, scenario.hand, scenario.target, scenario.br, model, com_model)
+        return cls(as_side(scenario.support, "support"), as_side(scenario.hand, "hand"), scenario.target, scenario.br,
+                   model, com_model)
 
     def validated(self) -> "PostureProblem":
         """Check the fields; raise :class:`InputError` on bad values."""
-        Support.single(self.support)
-        if self.hand not in ("left", "right"):
-            raise InputError(f"expected 'left' or 'right', got {self.hand!r}", "hand")
+        as_side(self.support, "support")
+        as_side(self.hand, "hand")
         if len(self.target) != 3 or not all(np.isfinite(self.target)):
             raise InputError(f"expected 3 finite numbers [m], got {list(self.target)}", "target")
         if max(abs(v) for v in self.target) > TARGET_LIMIT_M:

@@ -10,6 +10,8 @@ caller's to state (:data:`COM_MODEL_LUMPED`, :data:`COM_MODEL_FULL`).
 
 from __future__ import annotations
 
+from typing import Final, Literal, get_args
+
 import numpy as np
 
 from op2motion.errors import InputError
@@ -17,9 +19,11 @@ from op2motion.robot.spec import Spec
 
 PENALTY = 100.0  # the book's penalty value (code 2.8, 2.9)
 FLOOR_TOLERANCE_M = 1e-9  # a swing foot this close to the floor counts as on it (rounding of a flat foot)
-COM_MODEL_LUMPED = "book"   # the book's lumped link masses (table 2.8) at link midpoints
-COM_MODEL_FULL = "full"     # the spec's per-link inertials (Webots masses, CoMs and tensors)
-COM_MODELS = (COM_MODEL_FULL, COM_MODEL_LUMPED)
+#: Which centre of mass: the spec's per-link inertials (``full``) or the book's lumped masses (``book``).
+ComModel = Literal["full", "book"]
+COM_MODEL_LUMPED: Final = "book"   # the book's lumped link masses (table 2.8) at link midpoints
+COM_MODEL_FULL: Final = "full"     # the spec's per-link inertials (Webots masses, CoMs and tensors)
+COM_MODELS: tuple[ComModel, ...] = get_args(ComModel)
 COM_MODEL_TEXT = {COM_MODEL_LUMPED: "lumped: the book's table 2.8 masses at link midpoints",
                   COM_MODEL_FULL: "full inertia: the spec's per-link masses and centres of mass"}
 
@@ -32,7 +36,7 @@ def check_br(br: float) -> float:
 
 
 def support_extents(spec: Spec, support: str, br: float = 1.0,
-                    com_model: str = COM_MODEL_LUMPED) -> tuple[float, float, float, float]:
+                    com_model: ComModel = COM_MODEL_LUMPED) -> tuple[float, float, float, float]:
     """The support rectangle (front, back, left, right) [m] about the sole centre, shrunk by ``br``, that goes with
     a CoM model: the book's foot (table 2.7) for the book's lumped CoM, the real sole (the foot box) for the
     full-inertia CoM."""
@@ -53,7 +57,7 @@ def rectangle_margin(dx: np.ndarray, dy: np.ndarray, extents: tuple[float, float
 
 
 def support_polygon(spec: Spec, support: str, br: float = 1.0, sp: tuple[float, float] = (0.0, 0.0),
-                    gamma: float = 0.0, com_model: str = COM_MODEL_LUMPED) -> np.ndarray:
+                    gamma: float = 0.0, com_model: ComModel = COM_MODEL_LUMPED) -> np.ndarray:
     """Corners (4, 2) [m] of the br-shrunk support rectangle of ``com_model`` in the world XY plane."""
     front, back, left, right = support_extents(spec, support, br, com_model)
     local = np.array([[front, left], [front, -right], [-back, -right], [-back, left]])
@@ -70,7 +74,7 @@ def _local(xy: np.ndarray, sp: tuple[float, float], gamma: float) -> tuple[np.nd
 
 def stability_margin(com_xy: np.ndarray, spec: Spec, support: str, br: float = 1.0,
                      sp: tuple[float, float] = (0.0, 0.0), gamma: float = 0.0,
-                     com_model: str = COM_MODEL_LUMPED) -> np.ndarray:
+                     com_model: ComModel = COM_MODEL_LUMPED) -> np.ndarray:
     """Signed distance (N,) [m] from the CoM ground projection to the edge of the rectangle that goes with
     ``com_model`` (:func:`support_extents`), shrunk by ``br``; positive inside."""
     dx, dy = _local(com_xy, sp, gamma)

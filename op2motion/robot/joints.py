@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Mapping, Sequence
+from typing import Mapping, Sequence, get_args
 
 import numpy as np
 
 from op2motion import book
-from op2motion.errors import InputError, LimitViolation
+from op2motion.errors import InputError, LimitKind, LimitViolation
 from op2motion.robot.spec import BOOK_VARS, Joint, Spec
 from op2motion.robot.support import Support
 
@@ -175,10 +175,10 @@ def ticks_to_servo(ticks: np.ndarray, spec: Spec) -> np.ndarray:
     return (np.asarray(ticks, dtype=float) - spec.servo.center_tick) * spec.servo.rad_per_tick
 
 
-LIMIT_KINDS = ("mechanical", "cable-safe")
+LIMIT_KINDS: tuple[LimitKind, ...] = get_args(LimitKind)
 
 
-def joint_range(joint: Joint, kind: str) -> tuple[float, float]:
+def joint_range(joint: Joint, kind: LimitKind) -> tuple[float, float]:
     """The ``mechanical`` (hard) or ``cable-safe`` (advice) range of a joint [rad]."""
     return joint.mechanical if kind == "mechanical" else joint.safe
 
@@ -191,7 +191,8 @@ def hip_roll_sign(spec: Spec, side: str) -> float:
     return -spec.joint(f"{s}_ank_roll").axis[0] / spec.joint(f"{s}_hip_roll").axis[0]
 
 
-def limit_violations(servo: np.ndarray | Sequence[float], spec: Spec, kind: str = "mechanical") -> list[LimitViolation]:
+def limit_violations(servo: np.ndarray | Sequence[float], spec: Spec,
+                     kind: LimitKind = "mechanical") -> list[LimitViolation]:
     """Joints of one pose (servo angles (20,) [rad]) outside their ``kind`` range (see :data:`LIMIT_KINDS`)."""
     out: list[LimitViolation] = []
     for joint, q in zip(spec.joints, np.asarray(servo, dtype=float).reshape(-1)):
@@ -203,7 +204,7 @@ def limit_violations(servo: np.ndarray | Sequence[float], spec: Spec, kind: str 
 
 
 def book_bounds(spec: Spec, support: str, variables: Sequence[str] = BOOK_VARS,
-                kind: str = "cable-safe") -> tuple[np.ndarray, np.ndarray]:
+                kind: LimitKind = "cable-safe") -> tuple[np.ndarray, np.ndarray]:
     """Bounds [rad] (lower, upper) of book ``variables`` that keep every servo inside its ``kind`` range, seen
     from ``support`` (each book variable drives exactly one servo: ``servo = sign * var + offset``)."""
     lo, hi = np.empty(len(variables)), np.empty(len(variables))

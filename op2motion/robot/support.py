@@ -19,12 +19,15 @@ import numpy as np
 
 from op2motion.errors import InputError
 from op2motion.robot.balance import convex_hull
+from op2motion.robot.sides import SIDES as SIDES
+from op2motion.robot.sides import Side as Side
+from op2motion.robot.sides import SupportName as SupportName
+from op2motion.robot.sides import as_side as as_side
 
-SIDES = ("left", "right")
 LIFTED_M = 0.005     # a foot whose lowest corner is this far above the floor is lifted: it does not support
 
 
-def other_side(side: str) -> str:
+def other_side(side: str) -> Side:
     """``left`` -> ``right`` and back."""
     return "right" if side == "left" else "left"
 
@@ -35,6 +38,8 @@ class Support(str, Enum):
     LEFT = "left"
     RIGHT = "right"
     DOUBLE = "double"
+
+    _value_: SupportName
 
     def __str__(self) -> str:
         return self.value
@@ -53,10 +58,7 @@ class Support(str, Enum):
     @classmethod
     def single(cls, value: object, param: str = "support") -> "Support":
         """``value`` as a one-foot support (``left`` or ``right``)."""
-        support = cls.of(value, param) if value != "double" else None
-        if support is None:
-            raise InputError(f"expected 'left' or 'right', got {value!r}", param)
-        return support
+        return cls(as_side(value, param))
 
     @property
     def is_double(self) -> bool:
@@ -64,27 +66,27 @@ class Support(str, Enum):
         return self is Support.DOUBLE
 
     @property
-    def feet(self) -> tuple[str, ...]:
+    def feet(self) -> tuple[Side, ...]:
         """The feet on the floor: both for double support."""
-        return SIDES if self.is_double else (self.value,)
+        return SIDES if self.is_double else (self.stance,)
 
     @property
-    def stance(self) -> str:
+    def stance(self) -> Side:
         """The foot the world frame is rooted on: the support foot, the left one for double support."""
-        return "left" if self.is_double else self.value
+        return "right" if self is Support.RIGHT else "left"
 
     @property
-    def swing(self) -> str | None:
+    def swing(self) -> Side | None:
         """The lifted foot of a one-foot support (None on two feet)."""
-        return None if self.is_double else other_side(self.value)
+        return None if self.is_double else other_side(self.stance)
 
-    def polygon(self, corners: Mapping[str, np.ndarray]) -> np.ndarray:
+    def polygon(self, corners: Mapping[Side, np.ndarray] | Mapping[str, np.ndarray]) -> np.ndarray:
         """The support polygon (m, 2) [m], counter-clockwise: the convex hull of the supporting feet's sole corners,
         given per side as (k, 2) or (k, 3) points (only x and y are used)."""
         return convex_hull(np.vstack([np.asarray(corners[side])[:, :2] for side in self.feet]))
 
 
-def fixed_foot(supports: Iterable[Support | str]) -> str:
+def fixed_foot(supports: Iterable[Support | str]) -> Side:
     """The foot that stays on the floor in every one of ``supports`` (the left one when both do, or none does)."""
     common = set.intersection(*(set(Support.of(s).feet) for s in supports))
     return "left" if "left" in common or not common else "right"

@@ -37,7 +37,7 @@ from op2motion.robot.balance import (
 from op2motion.robot.joints import book_to_servo, joint_range, servo_to_book, servo_to_ticks
 from op2motion.robot.pose import Pose
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import SIDES, Support
+from op2motion.robot.support import SIDES, Support, as_side
 
 CLEARANCE_WARN_M = 0.004      # links closer than this are highlighted (the optimiser's self-clearance floor)
 
@@ -243,7 +243,7 @@ class Session:
         support = self.support.value
         start = servo_to_book(self.servo[None], support, self.spec).vector()[0]
         target = self.readout().hands[f"{hand}_hand"]
-        problem = PostureProblem(support, hand, target, 1.0)
+        problem = PostureProblem(as_side(support, "support"), as_side(hand, "hand"), target, 1.0)
         lo, hi = variable_bounds(problem, self.spec)
         lo, hi = np.minimum(lo, start), np.maximum(hi, start)         # the pose as it is lies in the box
         for name in pinned:

@@ -13,6 +13,7 @@ import numpy as np
 
 from op2motion.errors import Op2MotionError
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import as_side
 from op2motion.studio.place import root_in_sole, wxyz
 from op2motion.studio.session import Readout, Session
 
@@ -107,7 +108,8 @@ class LongWork:
 
         settings = PSOSettings()
         try:
-            problem = PostureProblem(self.session.support.value, hand, target, 1.0)
+            problem = PostureProblem(as_side(self.session.support.value, "support"), as_side(hand, "hand"), target,
+                                     1.0)
             outcome = solve(problem, self.spec, settings, restarts=0, on_iteration=self._ticker(settings.iterations))
             result = outcome.result
             self._verdict.content = f"optimiser: {result.message}"

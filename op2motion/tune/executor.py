@@ -15,6 +15,8 @@ import multiprocessing
 import os
 from typing import Any, Callable, Iterator, Protocol
 
+from op2motion.workers import ExecutorName
+
 WAIT_S = 0.25                 # the driver waits this long at a time, so signals are handled between waits [s]
 
 
@@ -100,7 +102,7 @@ class RayTrials:
 
 
 @contextlib.contextmanager
-def trials_on(kind: str, workers: int, address: str | None = None) -> Iterator[ProcessTrials | RayTrials]:
+def trials_on(kind: ExecutorName, workers: int, address: str | None = None) -> Iterator[ProcessTrials | RayTrials]:
     """Trials on ``kind`` ``process`` (a pool of ``workers``) or ``ray`` (``address``: a cluster; None: Ray on this
     machine with ``workers`` CPUs), closed however the study ends."""
     if kind == "ray":

@@ -21,6 +21,7 @@ from typing import Any, Callable
 
 from op2motion.tune.study import Outcome, TrialRow, pareto, rows
 from op2motion.tune.trial import Task, evaluate
+from op2motion.workers import ExecutorName
 
 VERIFY_STEPS = 20           # the verification's walk [steps] (the acceptance's)
 VERIFY_PUSH_N = 2.0         # ... and its side pushes [N] (op2motion's walk; docs/walking.md's robustness runs)
@@ -42,7 +43,7 @@ class TuneResult:
     wall_s: float = 0.0
     study_wall_s: float = 0.0
     workers: int = 1
-    executor: str = "process"
+    executor: ExecutorName = "process"
     ran: int = 0
 
     @property

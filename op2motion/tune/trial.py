@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
-from typing import Any
+from typing import Any, Literal
 
 from op2motion.errors import InputError
 from op2motion.tune.study import Outcome
@@ -35,6 +35,8 @@ SEARCH_ENGINES = ("mujoco", "pybullet")     # the search walks each body in both
 #: Per direction: the shipped preset tuned from, and the measure that counts (speed along the walk [m/s], or turn
 #: rate [rad/s]).
 DIRECTIONS = {"forward": "forward", "backward": "backward", "sideways": "sideways", "turn": "turn_left"}
+#: The way a tuned walk goes (a key of :data:`DIRECTIONS`).
+Direction = Literal["forward", "backward", "sideways", "turn"]
 
 
 @dataclass(frozen=True)
