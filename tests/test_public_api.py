@@ -49,12 +49,13 @@ def test_the_package_is_marked_typed():
 
 @pytest.mark.slow
 def test_mypy_sees_the_public_api_strictly(tmp_path):
-    """``reveal_type(op2motion.solve)`` is a function type, not Any, and the API module is clean under --strict
-    (errors inside the modules it imports are the package-wide mypy run's, test_lint)."""
+    """``reveal_type(op2motion.solve)`` is a function type, not Any, and the API module and the tasks are clean under
+    --strict (errors inside the modules they import are the package-wide mypy run's, test_lint)."""
     probe = tmp_path / "probe.py"
     probe.write_text("import op2motion\nreveal_type(op2motion.solve)\nreveal_type(op2motion.check)\n", encoding="utf-8")
     done = subprocess.run([sys.executable, "-m", "mypy", "--strict", "--follow-imports=silent", "--no-incremental",
-                           str(INIT), str(probe)], cwd=ROOT, capture_output=True, text=True)
+                           str(INIT), str(ROOT / "op2motion" / "tasks"), str(probe)], cwd=ROOT, capture_output=True,
+                          text=True)
     revealed = [line for line in done.stdout.splitlines() if "Revealed type" in line]
     assert len(revealed) == 2 and not any('"Any"' in line for line in revealed), done.stdout
     assert "def (" in revealed[0], revealed[0]
