@@ -4,6 +4,7 @@
 * :mod:`.motion`: ``play_page``, ``plan_motion``, ``line_move`` (an action page, a motion through poses, a hand in a
   straight line), each checked along its trajectory and optionally in physics (``check_motion``);
 * :mod:`.posture`: ``reach`` (``optimize``: a balanced pose that reaches a hand target);
+* :mod:`.walk`: ``walk`` (a walk planned from a preset, checked in physics, pushed, on the family);
 * :mod:`.validate`: ``validate_pose``, ``validate_pose_robust`` (does a pose stand, in one engine or both, pushed, on
   the robustness family).
 """
