@@ -67,12 +67,35 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         return 0
+    except ImportError as exc:
+        if _interrupted_within(exc):        # Ctrl-C or SIGTERM while a compiled module initialised
+            print("op2motion: interrupted", file=sys.stderr)
+            return 130
+        return _internal_error(exc)
     except Exception as exc:  # a bug, not bad input: still one line (OP2MOTION_DEBUG=1 shows the traceback)
-        if os.environ.get("OP2MOTION_DEBUG"):
-            raise
-        print(f"op2motion: internal error: {type(exc).__name__}: {exc} (set OP2MOTION_DEBUG=1 for details)",
-              file=sys.stderr)
-        return 1
+        return _internal_error(exc)
+
+
+def _interrupted_within(exc: BaseException) -> bool:
+    """Was ``exc`` caused by an interrupt (a compiled module's import turns the KeyboardInterrupt raised inside its
+    initialisation into ``ImportError: initialization failed``, the interrupt as its cause or context)?"""
+    seen: set[int] = set()
+    current: BaseException | None = exc
+    while current is not None and id(current) not in seen:
+        if isinstance(current, (KeyboardInterrupt, Interrupted)):
+            return True
+        seen.add(id(current))
+        current = current.__cause__ or current.__context__
+    return False
+
+
+def _internal_error(exc: Exception) -> int:
+    """A bug, not bad input: one line (``OP2MOTION_DEBUG=1`` re-raises it for the traceback); exit 1."""
+    if os.environ.get("OP2MOTION_DEBUG"):
+        raise exc
+    print(f"op2motion: internal error: {type(exc).__name__}: {exc} (set OP2MOTION_DEBUG=1 for details)",
+          file=sys.stderr)
+    return 1
 
 
 def entry() -> None:

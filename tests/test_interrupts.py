@@ -96,3 +96,21 @@ def test_a_motion_name_that_would_not_read_back_is_refused_before_writing(capsys
                                "m.json")
         assert code == 2 and "--name" in err and len(err.strip().splitlines()) == 1, err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_an_interrupt_inside_a_compiled_modules_import_is_an_interrupt(monkeypatch, capsys):
+    """A SIGTERM landing while a compiled module initialises surfaces as ``ImportError: initialization failed`` with
+    the interrupt as its context: the command still ends as interrupted (130), not as an internal error."""
+    from op2motion import cli
+    from op2motion.commands import physics
+
+    def failing_import(args, spec):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt:
+            raise ImportError("initialization failed")
+
+    monkeypatch.setattr(physics, "cmd_urdf", failing_import)
+    assert cli.main(["urdf"]) == 130
+    assert capsys.readouterr().err.strip() == "op2motion: interrupted"
+    assert not cli._interrupted_within(ImportError("no module named x"))
