@@ -84,7 +84,7 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.fileio import OutputSet
     from op2motion.gait import preset_path, read_preset
     from op2motion.physics import Trials
-    from op2motion.tasks.walk import WalkRequest, walk, walk_line
+    from op2motion.tasks.walk import WalkRequest, walk
 
     if not args.validate and (args.push or args.trials or args.robust or args.open_loop):
         raise InputError("expected --validate with --push, --trials, --robust or --open-loop", "validate")
@@ -100,7 +100,7 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
     if args.commands is not None or args.action is not None:
         from op2motion.commands.walk_commands import commanded_walk
 
-        return commanded_walk(args, spec, walk_line)
+        return commanded_walk(args, spec)
     tables = _tables(args)
     outputs = OutputSet({**dict(tables), **({"plot": args.plot} if args.plot else {})})
     params = read_preset(preset_path(args.preset)).with_steps(args.steps)

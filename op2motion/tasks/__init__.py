@@ -5,6 +5,7 @@
   straight line), each checked along its trajectory and optionally in physics (``check_motion``);
 * :mod:`.posture`: ``reach`` (``optimize``: a balanced pose that reaches a hand target);
 * :mod:`.walk`: ``walk`` (a walk planned from a preset, checked in physics, pushed, on the family);
+* :mod:`.steered`: ``steered_walk`` (a walk steered by a command timeline, checked and drawn);
 * :mod:`.validate`: ``validate_pose``, ``validate_pose_robust`` (does a pose stand, in one engine or both, pushed, on
   the robustness family).
 """

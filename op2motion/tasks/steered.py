@@ -1,0 +1,130 @@
+"""The steered-walk task (``walk --commands``): a walk steered by a command timeline, planned as it would be while
+walking (:class:`~op2motion.gait.steer.SteerableWalk`), optionally walked in physics (or over the robustness family,
+judged as a commanded walk), drawn against the commanded path; a fall is a "no" with its phrase.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Iterator
+
+from op2motion.robot.spec import Spec
+from op2motion.tasks.result import Output, TaskResult
+from op2motion.tasks.walk import ProgressFor, walk_line
+
+if TYPE_CHECKING:
+    from op2motion.formats.action import ActionFile
+    from op2motion.gait.commands import CommandTimeline
+
+
+@dataclass(frozen=True)
+class SteeredRequest:
+    """A commanded walk: the ``commands`` (a timeline), the kick pages of ``action`` (None: op2motion's own kicks),
+    the step's ``preset`` (None: ``steer``); physics: ``validate``, ``robust`` (the family), in ``engines``, side
+    pushes of ``push_n`` [N]; the ``plot`` PNG (the commanded, planned and walked paths)."""
+
+    commands: CommandTimeline
+    action: ActionFile | None = None
+    preset: str | None = None
+    validate: bool = False
+    robust: bool = False
+    engines: tuple[str, ...] = ("pybullet",)
+    push_n: float = 0.0
+    plot: str | None = None
+
+
+@contextlib.contextmanager
+def _no_progress(what: str, unit: str) -> Iterator[None]:
+    yield None
+
+
+def _commanded(walk: Any) -> dict[str, Any]:
+    """The timeline in figures: its source, entries, length, events and where it ends (x, y [m], heading [deg])."""
+    from op2motion.gait.commands import commanded_path
+
+    timeline = walk.commands
+    _, poses = commanded_path(timeline)
+    events = [e.event for e in timeline.entries if e.event]
+    return {"source": timeline.source, "entries": len(timeline.entries), "duration_s": timeline.duration_s,
+            "events": events, "end_pose": {"x_m": round(float(poses[-1, 0]), 4), "y_m": round(float(poses[-1, 1]), 4),
+                                           "yaw_deg": round(math.degrees(float(poses[-1, 2])), 2)}}
+
+
+def _physics(request: SteeredRequest, walk: Any, spec: Spec, data: dict[str, Any], progress: ProgressFor
+             ) -> tuple[Any, str | None]:
+    """The walk in physics (``robust``: over the family); the report and, for the family, its table."""
+    from op2motion.gait import side_pushes, walk_summary
+    from op2motion.gait.robust import commanded_judge, robust_table, walk_badness
+    from op2motion.gait.steer import SteerableWalk
+    from op2motion.physics import Setup, check, robust_check, robust_summary
+
+    plan = walk.plan
+    pushes = side_pushes(request.push_n) if request.push_n else None
+    if request.robust:
+        def fresh() -> Any:
+            twin = SteerableWalk(walk.params, spec, walk.feedback, walk.envelope, walk.commands, walk.action)
+            twin._plan = plan
+            return twin
+
+        with progress("robust", "run") as on_progress:
+            family = robust_check(fresh, spec, request.engines, commanded_judge, pushes, on_progress=on_progress)
+        data["robust"] = robust_summary(family)
+        data["robust"]["worst"] = family.worst(walk_badness).member.name
+        return family, robust_table(family)
+    with progress("physics", "s") as on_progress:
+        report = check(walk, spec, request.engines, pushes, setup=Setup(keep_track=bool(request.plot)),
+                       on_progress=on_progress)
+    data["physics"] = walk_summary(report, plan.walk.start_s if plan.walk else 0.0)
+    data["fell"] = report.fell
+    return report, None
+
+
+def _figure(walk: Any, report: Any) -> bytes:
+    """The commanded, planned and walked paths and headings."""
+    import numpy as np
+
+    from op2motion.figures.steer import render_steered
+    from op2motion.gait.commands import commanded_path
+    from op2motion.gait.steer import LEAD_S
+
+    times, commanded = commanded_path(walk.commands)
+    rows, n = walk.dry.rows, walk.dry_rows
+    planned_t = LEAD_S + np.arange(n) * 0.008
+    planned = np.column_stack([rows.numeric["torso_pos"][:n, :2], rows.numeric["plan_yaw"][:n]])
+    walked = {}
+    if report is not None and hasattr(report, "engines"):
+        for engine, r in report.engines.items():
+            track = r.run.track
+            if track is not None and track.base_pos is not None:
+                yaw = np.unwrap(np.arctan2(track.rot[:, 1, 0], track.rot[:, 0, 0]))
+                walked[engine] = (track.times, np.column_stack([track.base_pos[:, :2], yaw]))
+    return render_steered(commanded, times, planned, planned_t, walked, f"walk --commands {walk.commands.source}")
+
+
+def steered_walk(request: SteeredRequest, spec: Spec, progress: ProgressFor | None = None) -> TaskResult:
+    """``walk --commands``: see the module docstring; ``progress`` gives each stage's progress."""
+    from op2motion.gait.steer import SteerableWalk, planned_summary
+
+    progress = progress or _no_progress
+    walk = SteerableWalk.make(spec, request.preset, commands=request.commands, action=request.action)
+    with progress("plan", "row"):
+        summary = planned_summary(walk)
+    data: dict[str, Any] = {"preset": walk.params.name, "commands": _commanded(walk), "planned": summary}
+    end = summary["end_pose"]
+    timeline = request.commands
+    lines = [f"walk --commands {timeline.source}: {len(timeline.entries)} entries over "
+             f"{timeline.duration_s:g} s; planned {summary['steps']} steps, {summary['kicks']} kicks, "
+             f"{summary['duration_s']:.1f} s, ending at x {end['x_m']:.3f} m, y {end['y_m']:.3f} m, heading "
+             f"{end['yaw_deg']:+.1f}° (ZMP margin >= {summary['zmp_margin_min_m'] * 1000:.1f} mm)"]
+    report, table = _physics(request, walk, spec, data, progress) if request.validate else (None, None)
+    if table is not None:
+        lines.append(table)
+    elif report is not None:
+        lines += [walk_line(e, s) for e, s in data["physics"]["engines"].items()]
+    failed = report is not None and (not report.passed if table is not None else report.fell)
+    outputs = {"plot": Output(request.plot, _figure(walk, report))} if request.plot else {}
+    problem = f"the commanded walk {'failed in the robustness family' if table else 'fell in physics'}" if failed \
+        else None
+    return TaskResult(problem is None, problem, None, outputs, data, tuple(lines))
