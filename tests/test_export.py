@@ -78,7 +78,8 @@ def test_reexport_is_byte_identical_and_pages_round_trip(capsys, spec, stock_act
 def test_invalid_pages_of_the_base_are_kept(spec, stock_action_bytes, tmp_path):
     base = bytearray(stock_action_bytes)
     base[30 * PAGE_SIZE + 5] ^= 0xFF                      # break page 30's checksum
-    written, _ = ActionFile(bytes(base)).with_poses([read_pose(os.path.join(POSES, "standing.json"), spec)], spec, 100)
+    written = ActionFile(bytes(base)).with_poses([read_pose(os.path.join(POSES, "standing.json"), spec)], spec,
+                                                 100).action
     out = written.data
     assert out[30 * PAGE_SIZE:31 * PAGE_SIZE] == bytes(base[30 * PAGE_SIZE:31 * PAGE_SIZE])
     with pytest.raises(InputError, match="checksum"):

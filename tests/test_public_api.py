@@ -61,3 +61,25 @@ def test_mypy_sees_the_public_api_strictly(tmp_path):
     assert "def (" in revealed[0], revealed[0]
     errors = [line for line in done.stdout.splitlines() if ": error:" in line]
     assert errors == [], done.stdout
+
+
+#: Public methods whose tuple is a value, not a bundle of results: a support rectangle (front, back, left, right) [m].
+VALUE_TUPLES = {"PostureProblem.extents"}
+
+
+def test_the_public_api_returns_types_not_dicts_or_bare_tuples():
+    """Every public function, and every public method of a public class, returns a named type: no ``dict[str, Any]``
+    (``as_dict`` aside: that is the JSON of a result) and no bare tuple of results."""
+    import inspect
+
+    found = []
+    for name in op2motion._API:
+        obj = getattr(op2motion, name)
+        members = [(name, obj)] if inspect.isfunction(obj) else [
+            (f"{name}.{m}", f) for m, f in inspect.getmembers(obj, inspect.isfunction)
+            if not m.startswith("_") and m != "as_dict"] if inspect.isclass(obj) else []
+        for label, fn in members:
+            returned = str(inspect.signature(fn).return_annotation).replace("typing.", "")
+            if (returned.startswith(("tuple", "Tuple")) or "dict[str, Any]" in returned) and label not in VALUE_TUPLES:
+                found.append((label, returned))
+    assert found == []

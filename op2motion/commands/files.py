@@ -47,7 +47,8 @@ def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
     poses = [read_pose(p, spec) for p in args.poses]
     if args.format == "action":
         base = ActionFile.read(args.base) if args.base else ActionFile.blank()
-        written, first = base.with_poses(poses, spec, args.page, args.time, args.force)
+        done = base.with_poses(poses, spec, args.page, args.time, args.force)
+        written, first = done.action, done.first
         outputs.put("output", written.data)
         text = (f"{len(poses)} pose(s) in pages {first}..{first + len(poses) - 1}" if poses
                 else "the base, unchanged")

@@ -155,27 +155,35 @@ class ActionFile:
             raise InputError(f"page(s) {', '.join(map(str, taken))} of the base hold actions; choose empty pages or "
                              f"give {ref('force')} to overwrite them", "page")
 
-    def with_pages(self, pages: Sequence[bytes], first: int | None = None, force: bool = False
-                   ) -> tuple["ActionFile", int]:
+    def with_pages(self, pages: Sequence[bytes], first: int | None = None, force: bool = False) -> "PagesWritten":
         """A new file with ``pages`` (512 bytes each) written from ``first`` on (default: the first run of empty
         pages; occupied pages refused unless ``force``), every other page kept byte for byte; and that first page."""
         if not pages:
-            return self, 0
+            return PagesWritten(self, 0)
         first = self.first_empty_run(len(pages)) if first is None else first
         self.check_free(first, len(pages), force)
         data = bytearray(self.data)
         for k, page in enumerate(pages):
             data[(first + k) * PAGE_SIZE:(first + k + 1) * PAGE_SIZE] = page
-        return ActionFile(bytes(data), self.where), first
+        return PagesWritten(ActionFile(bytes(data), self.where), first)
 
     def with_poses(self, poses: Sequence[Pose], spec: Spec, first: int | None = None, seconds: float = 1.0,
-                   force: bool = False) -> tuple["ActionFile", int]:
+                   force: bool = False) -> "PagesWritten":
         """A new file with each pose in its own one-step page of ``seconds`` (see :meth:`with_pages`)."""
         if not poses:
-            return self, 0
+            return PagesWritten(self, 0)
         units = step_units(seconds)
         pages = [encode_page(pose.name, [StepBytes(pose_words(pose, spec), 0, units)]) for pose in poses]
         return self.with_pages(pages, first, force)
+
+
+@dataclass(frozen=True)
+class PagesWritten:
+    """An action file with pages written into it: the new ``action`` file and the ``first`` page written (0 when
+    none was)."""
+
+    action: ActionFile
+    first: int
 
 
 def step_units(seconds: float, what: str = "time") -> int:

@@ -84,5 +84,6 @@ def motion_to_action(motion: Motion, spec: Spec, base: ActionFile, first: int | 
     count = len(action_pages(waypoints, spec, motion.name, 1, motion.p_gain, planner=planner, seed=seed)[0])
     first = base.first_empty_run(count) if first is None else first
     pages, notes = action_pages(waypoints, spec, motion.name, first, motion.p_gain, planner=planner, seed=seed)
-    written, first = base.with_pages(pages, first, force)
+    done = base.with_pages(pages, first, force)
+    written, first = done.action, done.first
     return written, list(range(first, first + len(pages))), notes

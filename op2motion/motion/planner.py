@@ -186,7 +186,7 @@ def robot_pages(name: str, steps: Sequence[StepBytes], first_page: int = _FIRST_
 def _robot_rows(waypoints: Sequence[Waypoint], spec: Spec, v_max: float) -> tuple[np.ndarray, np.ndarray,
                                                                                    list[str], np.ndarray]:
     steps, notes, owner = robot_steps(waypoints, spec, v_max)
-    action, _ = ActionFile.blank().with_pages(robot_pages("motion", steps), _FIRST_PAGE)
+    action = ActionFile.blank().with_pages(robot_pages("motion", steps), _FIRST_PAGE).action
     played = from_playback(play(action, _FIRST_PAGE, start_ticks(waypoints[0].servo, spec)), spec)
     # the segment of each row, from the calls each step takes (the first call prepares the first step)
     bounds = 1 + np.cumsum([step_calls(s.time, s.pause) for s in steps])

@@ -214,7 +214,8 @@ class Session:
     def add_to_page(self, page: int, seconds: float, overwrite: bool = False) -> int:
         """Put the pose as a one-step page of ``seconds`` (at least 24 ms) at ``page`` of the open file (in memory);
         an occupied page only with ``overwrite``. Returns the page."""
-        action, first = self._opened().with_poses([self.pose()], self.spec, int(page), float(seconds), overwrite)
+        done = self._opened().with_poses([self.pose()], self.spec, int(page), float(seconds), overwrite)
+        action, first = done.action, done.first
         self.action = action
         return first
 
