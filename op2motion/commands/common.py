@@ -67,14 +67,6 @@ def warn(args: argparse.Namespace, result: dict[str, Any], warnings: Sequence[st
         print(f"op2motion: warning: {w}", file=sys.stderr)
 
 
-def cable_warnings(poses: Sequence[Any], spec: Spec) -> list[str]:
-    """Advice for poses with joints outside their cable-safe range (inside the mechanical range: still valid)."""
-    from op2motion.robot.joints import limit_violations
-
-    return [f"{pose.name}: {v.describe()} (the robot can do it, but the cable may be strained)"
-            for pose in poses for v in limit_violations(pose.servo, spec, "cable-safe")]
-
-
 PLAIN_EVERY_S = 10.0      # where stderr is not a terminal (a log, CI), progress is a plain line this often at most
 
 

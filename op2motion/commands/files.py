@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 from typing import Any
 
-from op2motion.commands.common import add_command, cable_warnings, emit, number, output_path, pose_name, warn, whole
+from op2motion.commands.common import add_command, number, output_path, pose_name, whole
+from op2motion.commands.deliver import deliver
 from op2motion.errors import InputError
 from op2motion.formats.actionlayout import NUM_PAGES
 from op2motion.formats.tables import MAX_TIME_S
@@ -41,57 +41,27 @@ def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.fileio import OutputSet
     from op2motion.formats.action import ActionFile
     from op2motion.formats.posefile import read_pose
-    from op2motion.formats.tables import csv_table, webots_motion, webots_warnings
+    from op2motion.tasks.files import PageWrite, export_poses
 
     outputs = OutputSet({"output": args.output})
     poses = [read_pose(p, spec) for p in args.poses]
-    if args.format == "action":
-        base = ActionFile.read(args.base) if args.base else ActionFile.blank()
-        done = base.with_poses(poses, spec, args.page, args.time, args.force)
-        written, first = done.action, done.first
-        outputs.put("output", written.data)
-        text = (f"{len(poses)} pose(s) in pages {first}..{first + len(poses) - 1}" if poses
-                else "the base, unchanged")
-    else:
-        if not poses:
-            raise InputError(f"expected at least one pose file for the {args.format} format", "poses")
-        render = webots_motion if args.format == "webots" else csv_table
-        outputs.put("output", render(poses, spec, args.time))
-        text = f"{len(poses)} pose(s)"
-    out = outputs.commit()["output"]
-    result = {"path": str(out), "format": args.format, "poses": [p.name for p in poses]}
-    if args.format == "action" and poses:
-        result["pages"] = list(range(first, first + len(poses)))
-    warn(args, result, cable_warnings(poses, spec) + (webots_warnings(poses, spec) if args.format == "webots" else []))
-    emit(args, result, f"wrote {out}: {text}")
-    return 0
+    pages = PageWrite(ActionFile.read(args.base) if args.base and args.format == "action" else None, args.page,
+                      args.force)
+    return deliver(args, export_poses(poses, spec, args.format, outputs.paths["output"], args.time, pages), outputs,
+                   "none")
 
 
 def cmd_import_action(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion import-action``."""
     from op2motion.fileio import OutputSet
     from op2motion.formats.action import ActionFile
-    from op2motion.formats.posefile import pose_to_json
+    from op2motion.tasks.files import import_page, list_pages
 
     if args.out and args.page is None:
         raise InputError("expected --page N with --out")
     outputs = OutputSet({"out": args.out} if args.out else {})
     action = ActionFile.read(args.file)
-    if args.page is not None:
-        pose = action.pose(args.page, spec, args.name).checked(spec, "page")
-        text = pose_to_json(pose, spec)
-        if args.out:
-            outputs.put("out", text)
-            outputs.commit()
-        result = {"page": args.page, "pose": json.loads(text), "path": args.out}
-        warn(args, result, cable_warnings([pose], spec))
-        emit(args, result, f"page {args.page} -> pose {pose.name!r}" + (f", wrote {args.out}" if args.out else ""))
-        return 0
-    pages = action.pages(spec)
-    result = {"pages": [{"index": p.index, "name": p.name, "repeat": p.repeat, "next": p.next,
-                         "steps": [{"ticks": {str(k): v for k, v in s.ticks.items()}, "pause": s.pause, "time": s.time}
-                                   for s in p.steps]} for p in pages]}
-    text = "\n".join(f"{p.index:3d} {p.name:<14} {len(p.steps)} step(s)" + (f" -> page {p.next}" if p.next else "")
-                     for p in pages)
-    emit(args, result, text)
-    return 0
+    if args.page is None:
+        return deliver(args, list_pages(action, spec), outputs, "none")
+    result = import_page(action, args.page, spec, args.name, outputs.paths.get("out"), args.out)
+    return deliver(args, result, outputs, "none")

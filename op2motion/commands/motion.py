@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any, Sequence, TypeVar
 
-from op2motion.commands.common import add_command, emit, number, output_path, warn, whole
+from op2motion.commands.common import add_command, number, output_path, whole
 from op2motion.commands.deliver import deliver
 from op2motion.commands.motion_run import motion_check, motion_outputs, motion_physics_args, physics_progress
 from op2motion.errors import InputError
@@ -136,30 +136,11 @@ def cmd_export(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.fileio import OutputSet
     from op2motion.formats.action import ActionFile
     from op2motion.formats.motionfile import read_motion
-    from op2motion.formats.tables import goals_csv, webots_rows, webots_warnings
-    from op2motion.motion.pipeline import motion_to_action, plan_motion
+    from op2motion.tasks.files import PageWrite, export_motion
 
     motion = read_motion(args.motion, spec)
     outputs = OutputSet({"output": args.output})
-    result: dict[str, Any] = {"name": motion.name, "format": args.format}
-    if args.format == "action":
-        base = ActionFile.read(args.base) if args.base else ActionFile.blank()
-        written, pages, notes = motion_to_action(motion, spec, base, args.page, args.force, args.planner, args.seed)
-        outputs.put("output", written.data)
-        result["pages"] = pages
-        text = f"pages {pages[0]}..{pages[-1]} (play page {pages[0]})"
-    else:
-        trajectory = plan_motion(motion, spec, args.planner, args.seed)
-        notes = list(trajectory.notes)
-        if args.format == "csv":
-            outputs.put("output", goals_csv(trajectory.times, trajectory.goals, trajectory.supports, spec))
-        else:
-            names = [f"t{k}" for k in range(len(trajectory.goals))]
-            outputs.put("output", webots_rows(list(trajectory.times), trajectory.goals, spec, names))
-            notes += webots_warnings([s.pose for s in motion.steps], spec)
-        text = f"{len(trajectory.goals)} rows every {trajectory.dt * 1000:.0f} ms"
-    out = outputs.commit()["output"]
-    result["path"] = str(out)
-    warn(args, result, notes)
-    emit(args, result, f"wrote {out}: {motion.name}, {text}")
-    return 0
+    pages = PageWrite(ActionFile.read(args.base) if args.base and args.format == "action" else None, args.page,
+                      args.force)
+    result = export_motion(motion, spec, args.format, outputs.paths["output"], pages, args.planner, args.seed)
+    return deliver(args, result, outputs, "none")
