@@ -16,11 +16,11 @@ from op2motion.commands.common import (
     add_command,
     angles_from,
     book_args,
-    emit,
     number,
     png_path,
     vec3,
 )
+from op2motion.commands.deliver import deliver
 from op2motion.errors import InputError
 from op2motion.kinematics import MODELS
 from op2motion.physics import DEFAULT_SECONDS, MAX_SECONDS, MIN_SECONDS
@@ -74,14 +74,12 @@ def register(sub: Any) -> None:
 
 def cmd_fk(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion fk``."""
-    from op2motion.kinematics.report import evaluate
+    from op2motion.tasks.kinematics import fk
 
     angles, _, pose = angles_from(args, spec)
     sp = vec3(args.sp, "sp") or (0.0, 0.0, 0.0)
     double = pose is not None and Support.of(pose.support).is_double
-    report = evaluate(angles, spec, args.model, args.br, sp, math.radians(args.gamma), double)
-    emit(args, report.as_dict(spec), report.human())
-    return 0
+    return deliver(args, fk(angles, spec, args.model, args.br, sp, math.radians(args.gamma), double))
 
 
 def _servo_mapping(text: str) -> dict:
@@ -101,12 +99,8 @@ def _servo_mapping(text: str) -> dict:
 
 def cmd_convert(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion convert``."""
-    from op2motion.robot.joints import (
-        book_to_servo,
-        servo_from_mapping,
-        servo_to_book,
-        servo_to_ticks,
-    )
+    from op2motion.robot.joints import book_to_servo, servo_from_mapping, servo_to_book
+    from op2motion.tasks.kinematics import convert
 
     if args.servo_deg is not None:
         if args.th is not None or args.phi is not None or args.pose:
@@ -116,102 +110,33 @@ def cmd_convert(args: argparse.Namespace, spec: Spec) -> int:
     else:
         angles, _, _ = angles_from(args, spec)
         servo = book_to_servo(angles, spec)[0]
-    ticks = servo_to_ticks(servo, spec)
-    names = spec.joint_names
-    result = {
-        "support": angles.support,
-        "servo_deg": {n: float(math.degrees(q)) for n, q in zip(names, servo)},
-        "servo_rad": {n: float(q) for n, q in zip(names, servo)},
-        "ticks": {str(j.id): int(t) for j, t in zip(spec.joints, ticks)},
-        **angles.degrees(),
-    }
-    lines = [f"{'id':>3} {'joint':<12} {'servo deg':>10} {'tick':>5}"]
-    lines += [f"{j.id:>3} {j.name:<12} {math.degrees(q):>10.3f} {t:>5}" for j, q, t in zip(spec.joints, servo, ticks)]
-    b = angles.degrees()
-    lines.append(f"book ({angles.support} support): th {b['th']}, phi {b['phi']}, psi {b['psi']} [deg]")
-    emit(args, result, "\n".join(lines))
-    return 0
+    return deliver(args, convert(angles, servo, spec))
 
 
 def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion plot``: the figure, with the physics verdict when asked (or recorded in the pose file)."""
-    from op2motion.figures.pose import PB_PSI_NOTE, Drawing, pose_figure
     from op2motion.fileio import OutputSet
-    from op2motion.robot.joints import book_to_servo
+    from op2motion.tasks.kinematics import PlotRequest, plot
 
     outputs = OutputSet({"output": args.output})
     angles, name, pose = angles_from(args, spec, args.pose_positional, default_standing=True)
     target = vec3(args.target, "target")
     models = MODELS if args.model == "both" else (args.model,)
-    support = pose.support if pose is not None else angles.support
-    validation = None
-    if args.validate:
-        from op2motion.physics import Schedule, check
-
-        servo = pose.servo if pose is not None else book_to_servo(angles, spec)[0]
-        validation = check(Schedule.hold(servo, support, spec, args.seconds), spec).run
-    drawing = Drawing(models, args.br, target, double=Support.of(support).is_double)
-    png, drawn, reports = pose_figure(name, angles, spec, drawing, validation, None if pose is None else pose.metrics)
-    outputs.put("output", png)
-    out = outputs.commit()["output"]
-    summary = {"png": str(out), "support": support, "drawn": drawn,
-               "models": {r.model: {k: r.as_dict(spec)[k] for k in (
-                   "com", "stability_margin_m", "com_full", "stability_margin_full_m", "left_hand", "right_hand",
-                   "swing_foot_min_z")} for r in reports}}
-    notes = [f"note: {PB_PSI_NOTE}"] if any(row["note"] for row in drawn["rows"]) else []
-    emit(args, summary, "\n\n".join(r.human() for r in reports) + "\n" + "\n".join(notes)
-         + f"\n{drawn['verdict']}\nwrote {out}")
-    return 0
+    request = PlotRequest(name, angles, outputs.paths["output"], pose, models, args.br, target,
+                          args.seconds if args.validate else None)
+    return deliver(args, plot(request, spec), outputs, "none")
 
 
 def cmd_arm_ik(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion arm-ik``."""
-    from op2motion.errors import CheckFailed, Unreachable
-    from op2motion.figures.pose import Drawing, pose_figure
     from op2motion.fileio import OutputSet
-    from op2motion.kinematics.arm_ik import ARMS, solve_arm_ik
-    from op2motion.kinematics.report import evaluate
-    from op2motion.robot.joints import book_to_servo, servo_dict
+    from op2motion.tasks.kinematics import ArmMove, arm_ik
 
     outputs = OutputSet({"plot": args.plot} if args.plot else {})
     angles, name, _ = angles_from(args, spec)
     delta = vec3(args.delta, "delta")
-    tol = args.tol_mm / 1000.0
-    res = solve_arm_ik(angles, args.hand, delta, spec, args.model, single_step=args.single_step, tol=tol,
-                       enforce_limits=not args.allow_limits)
-    arm = ARMS[args.hand]
-    converged = res.mode == "single-step" or res.error_m <= tol
-    result = {
-        "hand": args.hand, "model": res.model, "mode": res.mode, "iterations": res.iterations,
-        "joint_deltas_deg": {n: float(math.degrees(v)) for n, v in zip(arm.names, res.deltas)},
-        **res.angles.degrees(),
-        "requested_delta": [float(v) for v in res.requested],
-        "achieved_delta": [float(v) for v in res.achieved],
-        "error_m": res.error_m, "converged": converged,
-        "servo_deg": servo_dict(book_to_servo(res.angles, spec)[0], spec),
-        "limit_violations": [v.as_dict() for v in res.limit_violations],
-    }
-    deltas = ", ".join(f"d{n} = {math.degrees(v):+.2f}°" for n, v in zip(arm.names, res.deltas))
-    text = (f"{res.mode} on the {res.model.upper()} model, {res.iterations} iteration(s): {deltas}\n"
-            f"hand moved {', '.join(f'{v * 1000:+.2f}' for v in res.achieved)} mm "
-            f"(asked {', '.join(f'{v * 1000:+.2f}' for v in res.requested)} mm), error {res.error_m * 1000:.3f} mm")
-    failure: CheckFailed | None = None
-    if res.limit_violations and not args.allow_limits:
-        failure = CheckFailed(f"refused: {res.limit_violations[0].describe()}; pass --allow-limits to accept")
-    elif not converged:
-        failure = Unreachable(f"target not reached: best residual {res.error_m * 1000:.3f} mm (tolerance "
-                              f"{args.tol_mm} mm); it lies outside what this arm can reach on the "
-                              f"{res.model.upper()} model", res.error_m, tol)
-    if args.plot and failure is None:
-        start = evaluate(res.initial, spec, res.model)
-        target = start.points.point(arm.hand)[0] + res.requested
-        lines = [f"{args.hand} hand moved by ({', '.join(f'{v * 1000:+.1f}' for v in res.requested)}) mm with "
-                 f"{res.mode} arm IK: {deltas}; error {res.error_m * 1000:.3f} mm"]
-        drawing = Drawing((res.model,), target=target, lines=lines, ghost=res.initial)
-        png, _, _ = pose_figure(f"{name} + arm IK", res.angles, spec, drawing)
-        outputs.put("plot", png)
-        result["png"] = str(outputs.commit()["plot"])
-    emit(args, result, text)
-    if failure is not None:
-        raise failure
-    return 0
+    if delta is None:                        # a required flag: argparse has it
+        raise InputError("expected --delta DX DY DZ", "delta")
+    request = ArmMove(name, angles, args.hand, delta, args.model, args.single_step, args.tol_mm, args.allow_limits,
+                      args.plot)
+    return deliver(args, arm_ik(request, spec), outputs, "none")
