@@ -14,8 +14,8 @@ from op2motion.tasks.result import Output, TaskResult
 
 #: Command modules that only parse, call a task and deliver its result (the rest still build their reports and are
 #: listed in STILL_BUILDING until they move to op2motion.tasks).
-DELIVERING = ("deliver.py", "files.py", "kinematics.py", "motion.py", "motion_line.py", "motion_run.py", "posture.py", "walk.py",
-              "walk_commands.py")
+DELIVERING = ("deliver.py", "files.py", "kinematics.py", "motion.py", "motion_line.py", "motion_run.py",
+              "posture.py", "walk.py", "walk_commands.py")
 STILL_BUILDING = {"bench.py", "library.py", "physics.py", "robot.py", "studio.py", "tune.py"}
 
 
