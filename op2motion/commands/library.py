@@ -10,7 +10,6 @@ from op2motion.commands.common import (
     BOUNDARY_RATIO,
     Parser,
     add_command,
-    emit,
     number,
     output_path,
     ticker,
@@ -65,9 +64,11 @@ def register(sub: Any) -> None:
 
 def cmd_library_build(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion library build``."""
-    from op2motion.library.build import BuildSettings, Executor, build_library, check_workers
+    from op2motion.commands.deliver import deliver
+    from op2motion.library.build import BuildSettings, Executor, check_workers
     from op2motion.library.grid import axis, grid_jobs
     from op2motion.posture.pso import PSOSettings
+    from op2motion.tasks.library import LibraryBuild, build
     from op2motion.workflow import Validate
 
     check_workers(args.workers)
@@ -79,13 +80,7 @@ def cmd_library_build(args: argparse.Namespace, spec: Spec) -> int:
     jobs = grid_jobs(args.hands, args.supports, args.br, x, y, z, args.com_model)
     settings = BuildSettings(PSOSettings(args.particles, args.iters, seed=args.seed).validated(), args.restarts,
                              Validate(args.seconds, args.engine) if args.validate else None, args.robust)
+    request = LibraryBuild(jobs, settings, args.out, executor, args.workers, args.spec)
     with ticker(args, "library", "pose", len(jobs), leave=True) as bar:
-        summary = build_library(jobs, spec, args.out, settings, args.workers, args.spec,
-                                on_done=lambda row: bar.update(), executor=executor)
-    text = (f"{summary.targets} targets: {summary.solved} reached, {summary.failed} not, {summary.skipped} already "
-            f"done; {summary.seconds:.1f} s; index {summary.index}")
-    if summary.robust_checked:
-        text += (f"; on the robustness family {summary.robust_checked - summary.robust_failed} of "
-                 f"{summary.robust_checked} poses stood in every run")
-    emit(args, summary.as_dict(), text)
-    return 0
+        result = build(request, spec, on_done=lambda row: bar.update())
+    return deliver(args, result)

@@ -3,12 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from typing import Any
 
 from op2motion.commands.common import (
     add_command,
-    emit,
     engines_of,
     number,
     output_path,
@@ -52,20 +50,10 @@ def register(sub: Any) -> None:
 def cmd_urdf(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion urdf``."""
     from op2motion.fileio import OutputSet
-    from op2motion.model.urdf import build_urdf, total_mass
+    from op2motion.tasks.files import urdf
 
-    text = build_urdf(spec)
-    facts = {"joints": len(spec.joints), "mass_kg": round(total_mass(spec), 6)}
-    if args.output:
-        outputs = OutputSet({"output": args.output})
-        outputs.put("output", text)
-        out = outputs.commit()["output"]
-        emit(args, {"path": str(out), **facts}, f"wrote {out}: {len(spec.joints)} joints, {total_mass(spec):.3f} kg")
-    elif args.json:
-        emit(args, {"urdf": text, **facts}, "")
-    else:
-        sys.stdout.write(text)
-    return 0
+    outputs = OutputSet({"output": args.output} if args.output else {})
+    return deliver(args, urdf(spec, outputs.paths.get("output"), args.json), outputs, "none")
 
 
 def cmd_validate(args: argparse.Namespace, spec: Spec) -> int:

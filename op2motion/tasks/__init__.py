@@ -7,7 +7,9 @@
 * :mod:`.walk`: ``walk`` (a walk planned from a preset, checked in physics, pushed, on the family);
 * :mod:`.steered`: ``steered_walk`` (a walk steered by a command timeline, checked and drawn);
 * :mod:`.kinematics`: ``fk``, ``convert``, ``plot``, ``arm_ik`` (the kinematic models, the figure, the arm IK);
-* :mod:`.files`: ``export_poses``, ``import_page``, ``list_pages``, ``export_motion`` (action files, Webots, CSV);
+* :mod:`.files`: ``export_poses``, ``import_page``, ``list_pages``, ``export_motion``, ``urdf`` (action files,
+  Webots, CSV, the URDF);
+* :mod:`.library`: ``build`` (a grid of reach targets solved on workers);
 * :mod:`.validate`: ``validate_pose``, ``validate_pose_robust`` (does a pose stand, in one engine or both, pushed, on
   the robustness family).
 """

@@ -121,3 +121,17 @@ def export_motion(motion: Motion, spec: Spec, fmt: str, output: Path, pages: Pag
     data["path"] = str(output)
     return TaskResult(True, None, tuple(notes), {"output": Output(str(output), content)}, data,
                       (f"wrote {output}: {motion.name}, {text}",), file_keys={})
+
+
+def urdf(spec: Spec, output: Path | None = None, as_json: bool = False) -> TaskResult:
+    """``urdf``: the URDF generated from ``spec``, to ``output`` (the report: where, joints, mass), or shown (its
+    text; ``as_json``: in the report)."""
+    from op2motion.model.urdf import build_urdf, total_mass
+
+    text = build_urdf(spec)
+    facts = {"joints": len(spec.joints), "mass_kg": round(total_mass(spec), 6)}
+    if output is not None:
+        return TaskResult(True, None, None, {"output": Output(str(output), text)}, {"path": str(output), **facts},
+                          (f"wrote {output}: {len(spec.joints)} joints, {total_mass(spec):.3f} kg",), file_keys={})
+    shown = (text[:-1] if text.endswith("\n") else text,) if not as_json else ()
+    return TaskResult(True, None, None, {}, {"urdf": text, **facts}, shown, file_keys={})
