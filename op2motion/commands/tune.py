@@ -8,8 +8,8 @@ import os
 from pathlib import Path
 from typing import Any
 
-from op2motion.commands.common import add_command, emit, output_path, png_path, progress, whole
-from op2motion.errors import CheckFailed, InputError
+from op2motion.commands.common import add_command, output_path, png_path, progress, whole
+from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
 
 MAX_WORKERS = 64
@@ -62,12 +62,11 @@ def _common(p: argparse.ArgumentParser, kind: str, out_help: str) -> None:
     p.add_argument("--plot", type=png_path, metavar="PNG", help="the study's Pareto figure")
 
 
-def _run(args: argparse.Namespace, task: Any, space: Any, unit: str) -> Any:
-    """Open the study, search, verify; the result."""
+def _tune(args: argparse.Namespace, task: Any, space: Any) -> int:
+    """Check the flags and the outputs, run the tuning task, deliver it."""
+    from op2motion.commands.deliver import deliver
     from op2motion.fileio import OutputSet
-    from op2motion.tune.executor import trials_on
-    from op2motion.tune.run import Effort, search_and_verify
-    from op2motion.tune.study import check_budget, open_study
+    from op2motion.tasks.tune import TuneRequest, tune
 
     if args.address is not None and args.executor != "ray":
         raise InputError("expected --address only with --executor ray", "address")
@@ -76,13 +75,11 @@ def _run(args: argparse.Namespace, task: Any, space: Any, unit: str) -> Any:
     outputs = OutputSet({"out": args.out, "out_json": _beside(args.out, ".json"),
                          **({"plot": args.plot} if args.plot else {})})
     study_path = args.study or str(_beside(args.out, ".study.db"))
-    study = open_study(study_path, args.study_name or f"tune-{task.kind}-{task.direction}", space, args.seed)
-    with trials_on(args.executor, workers, args.address) as trials, \
-            progress(args, "trials", "trial") as on_trial, progress(args, "verify", "body") as on_run:
-        result = search_and_verify(study, space, task, Effort(check_budget(args.trials), args.verify), trials,
-                                   on_trial, on_run)
-    result.executor = args.executor
-    return result, outputs, study_path
+    paths = {k: str(v) for k, v in outputs.paths.items()}
+    request = TuneRequest(task, space, args.trials, args.verify, study_path,
+                          args.study_name or f"tune-{task.kind}-{task.direction}", paths["out"], paths["out_json"],
+                          args.seed, args.executor, workers, args.address, paths.get("plot"))
+    return deliver(args, tune(request, lambda what, unit: progress(args, what, unit)), outputs, "none")
 
 
 def _beside(out: str, suffix: str) -> Path:
@@ -90,68 +87,21 @@ def _beside(out: str, suffix: str) -> Path:
     return path.with_name(path.name + suffix) if suffix == ".study.db" else path.with_suffix(suffix)
 
 
-def _finish(args: argparse.Namespace, result: Any, outputs: Any, text: str, unit: str, study_path: str) -> int:
-    """Write (when a point held everywhere) and report."""
-    import json
-
-    from op2motion.figures.tune import render_pareto
-    from op2motion.tune.run import result_json
-    from op2motion.tune.study import MIN_MARGIN, pareto
-
-    data = result_json(result)
-    data["study"] = study_path
-    if args.plot:
-        outputs.put("plot", render_pareto(result, pareto(result.table), MIN_MARGIN, unit))
-    if result.settings is not None:
-        outputs.put("out", text)
-        outputs.put("out_json", json.dumps(data, indent=2) + "\n")
-    written = outputs.commit()
-    data["files"] = {k: str(v) for k, v in written.items()}
-    speed = result.verified_speed
-    lines = [f"tune {result.kind} {result.direction}: {data['trials']['finished']} trials "
-             f"({data['trials']['pruned']} pruned, {result.ran} this run), {data['cost']['study_wall_s']:.0f} s on "
-             f"{result.workers} {result.executor} worker(s)"]
-    lines += [f"  rejected in verification: trial {n}: {p}" for n, p in result.rejected]
-    if result.settings is None:
-        emit(args, data, "\n".join(lines))
-        raise CheckFailed(f"no point held on every body of the family in both engines (verified "
-                          f"{len(result.rejected)}); nothing written: more --trials resume the study")
-    lines.append(f"  chosen trial {result.chosen.number}: nominal {speed:.3f} {unit} in both engines, every body "
-                 f"held; wrote {', '.join(str(p) for p in written.values())}")
-    emit(args, data, "\n".join(lines))
-    return 0
-
-
 def cmd_tune_walk(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion tune walk``."""
     from op2motion.gait import preset_path, read_preset
-    from op2motion.tune.run import header_lines, preset_text
     from op2motion.tune.spaces import walk_space
     from op2motion.tune.trial import DIRECTIONS, Task
 
     base = read_preset(preset_path(args.preset or DIRECTIONS[args.direction]))
-    task = Task("walk", args.direction, base, getattr(args, "spec", None))
-    unit = "rad/s" if args.direction == "turn" else "m/s"
-    result, outputs, study_path = _run(args, task, walk_space(args.direction), unit)
-    text = ""
-    if result.settings is not None:
-        name = Path(args.out).stem
-        params = result.settings.__class__(**{**result.settings.__dict__, "name": name})
-        text = preset_text(params, header_lines(result, unit))
-    return _finish(args, result, outputs, text, unit, study_path)
+    return _tune(args, Task("walk", args.direction, base, getattr(args, "spec", None)), walk_space(args.direction))
 
 
 def cmd_tune_stock(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion tune stock``."""
-    from op2motion.gait.stock_config import StockConfig, read_stock_config, stock_config_text
-    from op2motion.tune.run import header_lines
+    from op2motion.gait.stock_config import StockConfig, read_stock_config
     from op2motion.tune.spaces import stock_space
     from op2motion.tune.trial import Task
 
     base = read_stock_config(args.config) if args.config else StockConfig()
-    task = Task("stock", "forward", base, getattr(args, "spec", None))
-    result, outputs, study_path = _run(args, task, stock_space(), "m/s")
-    text = ""
-    if result.settings is not None:
-        text = stock_config_text(result.settings, "\n".join(header_lines(result, "m/s")))
-    return _finish(args, result, outputs, text, "m/s", study_path)
+    return _tune(args, Task("stock", "forward", base, getattr(args, "spec", None)), stock_space())

@@ -1,0 +1,104 @@
+"""The tuning tasks (``tune walk``, ``tune stock``): an Optuna study searched, its best points verified on the whole
+family, the first that holds everywhere written as a preset (or a ``config.ini``) with the study's figures beside it
+and, when asked, the Pareto figure. No point that holds is a "no" with its phrase (nothing written; more trials
+resume the study).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Iterator
+
+from op2motion.tasks.result import Output, TaskResult
+from op2motion.tasks.walk import ProgressFor
+
+if TYPE_CHECKING:
+    from op2motion.tune.run import TuneResult
+    from op2motion.tune.space import SearchSpace
+    from op2motion.tune.trial import Task
+    from op2motion.workers import ExecutorName
+
+
+@dataclass(frozen=True)
+class TuneRequest:
+    """A tuning run: the ``task`` (what is tuned, on which robot), its search ``space``, the study's budget of
+    ``trials`` and the best points to ``verify`` at most; the study in ``study_path`` under ``study_name``, sampled
+    with ``seed``; trials on ``executor`` (``process`` or ``ray``, at ``address``) with ``workers``; the outputs:
+    the settings at ``out``, the figures at ``out_json``, the Pareto figure at ``plot`` (None: none)."""
+
+    task: Task
+    space: SearchSpace
+    trials: int
+    verify: int
+    study_path: str
+    study_name: str
+    out: str
+    out_json: str
+    seed: int = 0
+    executor: ExecutorName = "process"
+    workers: int = 1
+    address: str | None = None
+    plot: str | None = None
+
+
+@contextlib.contextmanager
+def _no_progress(what: str, unit: str) -> Iterator[None]:
+    yield None
+
+
+def _search(request: TuneRequest, progress: ProgressFor) -> TuneResult:
+    """Open (or resume) the study, search, verify."""
+    from op2motion.tune.executor import trials_on
+    from op2motion.tune.run import Effort, search_and_verify
+    from op2motion.tune.study import check_budget, open_study
+
+    study = open_study(request.study_path, request.study_name, request.space, request.seed)
+    with trials_on(request.executor, request.workers, request.address) as trials, \
+            progress("trials", "trial") as on_trial, progress("verify", "body") as on_run:
+        result = search_and_verify(study, request.space, request.task,
+                                   Effort(check_budget(request.trials), request.verify), trials, on_trial, on_run)
+    result.executor = request.executor
+    return result
+
+
+def _settings_text(request: TuneRequest, result: TuneResult, unit: str) -> str:
+    """The chosen point as a preset (``walk``, named after its file) or a ``config.ini`` (``stock``)."""
+    from op2motion.tune.run import header_lines, preset_text
+
+    if request.task.kind == "walk":
+        params = result.settings.__class__(**{**result.settings.__dict__, "name": Path(request.out).stem})
+        return preset_text(params, header_lines(result, unit))
+    from op2motion.gait.stock_config import stock_config_text
+
+    return stock_config_text(result.settings, "\n".join(header_lines(result, unit)))
+
+
+def tune(request: TuneRequest, progress: ProgressFor | None = None) -> TaskResult:
+    """``tune walk|stock``: see the module docstring; ``progress`` gives the trials' and the verification's."""
+    from op2motion.figures.tune import render_pareto
+    from op2motion.tune.run import result_json
+    from op2motion.tune.study import MIN_MARGIN, pareto
+
+    unit = "rad/s" if request.task.direction == "turn" else "m/s"
+    result = _search(request, progress or _no_progress)
+    data: dict[str, Any] = {**result_json(result), "study": request.study_path}
+    outputs = {}
+    if request.plot:
+        outputs["plot"] = Output(request.plot, render_pareto(result, pareto(result.table), MIN_MARGIN, unit))
+    lines = [f"tune {result.kind} {result.direction}: {data['trials']['finished']} trials "
+             f"({data['trials']['pruned']} pruned, {result.ran} this run), {data['cost']['study_wall_s']:.0f} s on "
+             f"{result.workers} {result.executor} worker(s)"]
+    lines += [f"  rejected in verification: trial {n}: {p}" for n, p in result.rejected]
+    if result.settings is None or result.chosen is None:
+        return TaskResult(False, f"no point held on every body of the family in both engines (verified "
+                                 f"{len(result.rejected)}); nothing written: more --trials resume the study",
+                          None, outputs, data, tuple(lines))
+    outputs["out"] = Output(request.out, _settings_text(request, result, unit))
+    outputs["out_json"] = Output(request.out_json, json.dumps(data, indent=2) + "\n")
+    paths = ", ".join(o.path for o in outputs.values())
+    lines.append(f"  chosen trial {result.chosen.number}: nominal {result.verified_speed:.3f} {unit} in both "
+                 f"engines, every body held; wrote {paths}")
+    return TaskResult(True, None, None, outputs, data, tuple(lines))
