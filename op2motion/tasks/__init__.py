@@ -10,6 +10,7 @@
 * :mod:`.files`: ``export_poses``, ``import_page``, ``list_pages``, ``export_motion``, ``urdf`` (action files,
   Webots, CSV, the URDF);
 * :mod:`.library`: ``build`` (a grid of reach targets solved on workers);
+* :mod:`.bench`: ``bench`` (the speed figures, each with a check of the timed work);
 * :mod:`.tune`: ``tune`` (an Optuna study of a walk or the stock module's config, verified, written);
 * :mod:`.validate`: ``validate_pose``, ``validate_pose_robust`` (does a pose stand, in one engine or both, pushed, on
   the robustness family).
