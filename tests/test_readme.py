@@ -118,6 +118,10 @@ def test_the_python_api_examples_run(clone):
     done = subprocess.run([sys.executable, "-c", page], cwd=clone, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert "True [] " in done.stdout and "\nTrue\n" in done.stdout and "True reached" in done.stdout
+    tasks = next(b for b in _python_blocks((DOCS / "python.md").read_text(encoding="utf-8")) if "op2motion.tasks" in b)
+    done = subprocess.run([sys.executable, "-c", tasks], cwd=clone, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("True None ") and "['plot']" in done.stdout and "STABLE" in done.stdout
 
 
 def test_the_static_torque_table_is_the_codes():
