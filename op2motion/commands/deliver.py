@@ -1,5 +1,6 @@
 """The delivery of a task's result on the command line (:func:`deliver`): the files written when it is a yes, the
-report printed (``--json``: the result's ``as_dict()``), warnings on stderr, exit 1 with the phrase when it is a no.
+report printed (``--json``: the result's ``as_dict()``), warnings on stderr, exit 1 with the phrase when it is a no
+(130 when the no is a stop the user asked for).
 """
 
 from __future__ import annotations
@@ -8,7 +9,7 @@ import argparse
 from typing import TYPE_CHECKING, Literal
 
 from op2motion.commands.common import emit, warn
-from op2motion.errors import CheckFailed
+from op2motion.errors import CheckFailed, Interrupted
 
 if TYPE_CHECKING:
     from op2motion.fileio import OutputSet
@@ -39,5 +40,5 @@ def deliver(args: argparse.Namespace, result: TaskResult, outputs: OutputSet | N
             "none": []}[written_as]
     emit(args, report, "\n".join([*result.lines, *said]))
     if not result.ok:
-        raise CheckFailed(str(result.problem))
+        raise (Interrupted if result.interrupted else CheckFailed)(str(result.problem))
     return 0

@@ -12,8 +12,9 @@ import threading
 import time
 from typing import Any, Iterator
 
-from op2motion.commands.common import add_command, emit, number, output_path, pose_name, ticker, whole
-from op2motion.errors import CheckFailed, InputError, Interrupted
+from op2motion.commands.common import add_command, number, output_path, pose_name, ticker, whole
+from op2motion.commands.deliver import deliver
+from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
 
 MAX_WAIT_S = 600.0
@@ -133,23 +134,17 @@ def stop_on_signals() -> Iterator[threading.Event]:
 
 def cmd_status(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot status``."""
-    from op2motion.bus.tasks import status
+    from op2motion.tasks.robot import robot_status
 
-    state = status(args.port, spec)
-    emit(args, state.as_dict(), "\n".join(state.lines()))
-    if not state.ok:
-        raise CheckFailed(state.problems[0].describe() + (f" (and {len(state.problems) - 1} more)"
-                                                           if len(state.problems) > 1 else ""))
-    return 0
+    return deliver(args, robot_status(args.port, spec))
 
 
 def cmd_read(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot read``."""
     from pathlib import Path
 
-    from op2motion.bus.tasks import teach
     from op2motion.fileio import OutputSet
-    from op2motion.formats.posefile import pose_to_json
+    from op2motion.tasks.robot import robot_read
 
     if args.wait is not None and not args.limp:
         raise InputError("expected --limp with --wait (it is the time to move the limbs)", "wait")
@@ -164,14 +159,8 @@ def cmd_read(args: argparse.Namespace, spec: Spec) -> int:
             print("op2motion: the robot is limp: move its limbs, then press Enter", file=sys.stderr)
             sys.stdin.readline()
 
-    pose, notes = teach(args.port, spec, name, args.support, args.limp, wait)
-    outputs.put("out", pose_to_json(pose, spec))
-    written = outputs.commit()
-    result = {"pose": name, "support": args.support, "servo_deg": {n: round(math.degrees(q), 3) for n, q in
-                                                                   zip(spec.joint_names, pose.servo)},
-              "notes": notes, "path": str(written["out"]), "limp": args.limp}
-    emit(args, result, "\n".join([f"wrote {written['out']}: pose {name} ({args.support})"] + [f"  {n}" for n in notes]))
-    return 0
+    result = robot_read(args.port, spec, name, outputs.paths["out"], args.support, args.limp, wait)
+    return deliver(args, result, outputs, "none")
 
 
 def pose_name_of(stem: str) -> str:
@@ -185,19 +174,15 @@ def _motion(args: argparse.Namespace, spec: Spec, run: Any) -> int:
     """Run a motion task with Ctrl-C handling and progress; print; the exit code."""
     from op2motion.bus.tasks import Options
     from op2motion.commands.common import progress
+    from op2motion.tasks.robot import robot_motion
 
     with stop_on_signals() as stop, ticker(args, "robot", "s") as bar:
         def on_tick(tick: Any) -> None:
             bar.update(0.008)
 
         with progress(args, "check", "s") as on_progress:
-            result = run(Options(args.force, stop, on_tick, on_progress))
-    emit(args, result.as_dict(), "\n".join(result.lines()))
-    if result.fault is not None:
-        raise CheckFailed(f"{result.what} stopped: {result.fault.describe()}")
-    if result.ended == "stopped" or stop.is_set():
-        raise Interrupted(f"{result.what} stopped on request; the robot holds its pose")
-    return 0
+            result = robot_motion(run, Options(args.force, stop, on_tick, on_progress))
+    return deliver(args, result)
 
 
 def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
@@ -263,6 +248,7 @@ def cmd_emulate(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot emulate``."""
     from op2motion.bus.emulator.faults import Faults, parse_timed
     from op2motion.bus.emulator.server import Emulator
+    from op2motion.tasks.robot import emulated
 
     faults = Faults(set(args.missing), [parse_timed(u, "unplug")[:2] for u in args.unplug], args.lose, args.corrupt,
                     [parse_timed(o, "overheat", 85.0) for o in args.overheat], args.supply, args.seed,
@@ -283,12 +269,4 @@ def cmd_emulate(args: argparse.Namespace, spec: Spec) -> int:
             interrupted = args.seconds is None
     finally:
         emulator.close()
-    result = {"link": args.link, "pty": emulator.pty_name, "engine": args.engine, "start": args.start,
-              "faults": faults.describe(), "stats": dict(emulator.stats), "slipped_s": round(emulator.slipped_s, 3),
-              "simulated_s": round(emulator.truth()["t_s"], 3), "truth": emulator.truth()}
-    emit(args, result, f"emulated OP2 stopped after {result['simulated_s']:.1f} s simulated "
-                       f"({emulator.slipped_s:.2f} s behind the wall clock), {emulator.stats['packets']} packets, "
-                       f"link removed")
-    if interrupted:
-        raise Interrupted("the emulated OP2 stopped; its link is removed")
-    return 0
+    return deliver(args, emulated(emulator, args.link, args.engine, args.start, faults, interrupted))

@@ -42,6 +42,7 @@ class TaskResult:
             {role: JSON key} (a command whose report names its one file by its own key, ``validate``'s ``png``).
         files_on_no: Whether a "no" reports its (empty) ``files`` too (``optimize``'s report of an unreached target
             has none).
+        interrupted: The "no" is a stop the user asked for (Ctrl-C, SIGTERM: exit 130), not a failed check.
     """
 
     ok: bool
@@ -53,6 +54,7 @@ class TaskResult:
     checked: bool = True
     file_keys: Mapping[str, str] | None = None
     files_on_no: bool = True
+    interrupted: bool = False
 
     def __post_init__(self) -> None:
         if self.ok == (self.problem is not None):

@@ -1,0 +1,73 @@
+"""The robot tasks: the real OP2 on its bus (``robot status``, ``read``, and the motions ``play``, ``walk``,
+``getup`` run by :mod:`op2motion.bus`), and the emulated OP2's report (``robot emulate``), each as a
+:class:`~.result.TaskResult`: a missing or faulty servo, a fault that stopped a motion, is a "no" with its phrase; a
+stop the user asked for is an interrupted one (exit 130 on the command line, the robot holding its pose).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable
+
+from op2motion.robot.spec import Spec
+from op2motion.tasks.result import Output, TaskResult
+
+if TYPE_CHECKING:
+    from op2motion.bus.tasks import MotionResult, Options
+
+
+def robot_status(port: str, spec: Spec) -> TaskResult:
+    """``robot status``: the board, the IMU and every servo; a "no" when a servo is missing, reports an error, is hot
+    or the supply is low (the first problem named, and how many more)."""
+    from op2motion.bus.tasks import status
+
+    state = status(port, spec)
+    problem = None if state.ok else state.problems[0].describe() + (
+        f" (and {len(state.problems) - 1} more)" if len(state.problems) > 1 else "")
+    return TaskResult(problem is None, problem, None, {}, state.as_dict(), ("\n".join(state.lines()),), file_keys={})
+
+
+def robot_read(port: str, spec: Spec, name: str, output: Path, support: str = "double", limp: bool = False,
+               wait: Callable[[], None] | None = None) -> TaskResult:
+    """``robot read``: the present joint angles as pose ``name`` on ``support``, for ``output`` (``limp``: the
+    torque off while ``wait`` lets the user move the limbs, then on again holding them)."""
+    from op2motion.bus.tasks import teach
+    from op2motion.formats.posefile import pose_to_json
+
+    pose, notes = teach(port, spec, name, support, limp, wait)
+    data = {"pose": name, "support": support, "servo_deg": {n: round(math.degrees(q), 3) for n, q in
+                                                            zip(spec.joint_names, pose.servo)},
+            "notes": notes, "path": str(output), "limp": limp}
+    lines = "\n".join([f"wrote {output}: pose {name} ({support})"] + [f"  {n}" for n in notes])
+    return TaskResult(True, None, None, {"out": Output(str(output), pose_to_json(pose, spec))}, data, (lines,),
+                      file_keys={})
+
+
+def robot_motion(run: Callable[[Options], MotionResult], options: Options) -> TaskResult:
+    """A motion on the robot (``run``: a :mod:`op2motion.bus` motion, e.g. ``lambda o: play(port, spec, file,
+    page, o)``) with ``options``: a fault that stopped it is a "no"; a stop asked for (``options.stop``) an
+    interrupted one."""
+    result = run(options)
+    data, lines = result.as_dict(), ("\n".join(result.lines()),)
+    if result.fault is not None:
+        return TaskResult(False, f"{result.what} stopped: {result.fault.describe()}", None, {}, data, lines,
+                          file_keys={})
+    if result.ended == "stopped" or options.stopped():
+        return TaskResult(False, f"{result.what} stopped on request; the robot holds its pose", None, {}, data,
+                          lines, file_keys={}, interrupted=True)
+    return TaskResult(True, None, None, {}, data, lines, file_keys={})
+
+
+def emulated(emulator: Any, link: str, engine: str, start: str, faults: Any, interrupted: bool) -> TaskResult:
+    """``robot emulate``'s report once the emulated OP2 stopped: its link, engine, start, faults, traffic and how
+    far it fell behind the wall clock; ``interrupted``: it was stopped by Ctrl-C (not by ``--seconds``)."""
+    data = {"link": link, "pty": emulator.pty_name, "engine": engine, "start": start, "faults": faults.describe(),
+            "stats": dict(emulator.stats), "slipped_s": round(emulator.slipped_s, 3),
+            "simulated_s": round(emulator.truth()["t_s"], 3), "truth": emulator.truth()}
+    line = (f"emulated OP2 stopped after {data['simulated_s']:.1f} s simulated ({emulator.slipped_s:.2f} s behind "
+            f"the wall clock), {emulator.stats['packets']} packets, link removed")
+    if interrupted:
+        return TaskResult(False, "the emulated OP2 stopped; its link is removed", None, {}, data, (line,),
+                          file_keys={}, interrupted=True)
+    return TaskResult(True, None, None, {}, data, (line,), file_keys={})
