@@ -51,8 +51,9 @@ def _pair(spec, change: dict, duration_s: float = 2.0) -> tuple[Waypoint, Waypoi
     return Waypoint("a", a, 0.0, 0.0, support), Waypoint("b", b, duration_s, 0.0, support)
 
 
-def _disc_world():
-    box = Box(np.zeros(2), np.ones(2), np.ones(2))
+def _disc_world(weights: tuple[float, float] = (1.0, 1.0)):
+    """A unit square with a disc of :data:`OBSTACLE_RADIUS` in its middle, its metric weighted by ``weights``."""
+    box = Box(np.zeros(2), np.ones(2), np.array(weights))
 
     def valid(p: np.ndarray) -> np.ndarray:
         return np.hypot(p[:, 0] - 0.5, p[:, 1] - 0.5) > OBSTACLE_RADIUS

@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 from helpers import run_cli
 from test_route import ARM_THROUGH_ARM, _pair, _write_pair
+from test_route import _disc_world as disc_world
 
 from op2motion.errors import InputError
 from op2motion.motion.body_checks import PLAN_CLEARANCE_M, BodyChecks
 from op2motion.motion.route import route, route_segment
-from op2motion.motion.rrt import Box, RrtSettings, edge_points, edge_valid
+from op2motion.motion.rrt import RrtSettings, edge_points, edge_valid
 
 pytest.importorskip("ompl")
 
@@ -26,12 +27,7 @@ FINE = 0.001                 # the disc world's edges are re-checked this finely
 
 
 def _disc_world():
-    box = Box(np.zeros(2), np.ones(2), np.array([1.0, 2.0]))      # a weighted metric, as a route's progress has
-
-    def valid(p: np.ndarray) -> np.ndarray:
-        return np.hypot(p[:, 0] - 0.5, p[:, 1] - 0.5) > OBSTACLE_RADIUS
-
-    return box, valid
+    return disc_world((1.0, 2.0))                               # a weighted metric, as a route's progress has
 
 
 def test_ompl_goes_around_an_obstacle_every_edge_checked_by_ours_and_repeats_with_its_seed():
