@@ -15,8 +15,9 @@ from op2motion.tasks.result import Output, TaskResult
 #: Command modules that only parse, call a task and deliver its result (the rest still build their reports and are
 #: listed in STILL_BUILDING until they move to op2motion.tasks).
 DELIVERING = ("bench.py", "deliver.py", "files.py", "kinematics.py", "library.py", "motion.py", "motion_line.py",
-              "motion_run.py", "physics.py", "posture.py", "robot.py", "tune.py", "walk.py", "walk_commands.py")
-STILL_BUILDING = {"studio.py"}
+              "motion_run.py", "physics.py", "posture.py", "robot.py", "studio.py", "tune.py", "walk.py",
+              "walk_commands.py")
+STILL_BUILDING: set[str] = set()
 
 
 def test_a_result_has_a_problem_exactly_when_it_is_a_no():
@@ -89,6 +90,21 @@ def test_delivering_commands_hold_no_verdict_logic(name):
         if isinstance(node, ast.Attribute) and node.attr in ("problem", "stable", "agree") and isinstance(
                 node.ctx, ast.Load) and not (isinstance(node.value, ast.Name) and node.value.id == "result"):
             raise AssertionError(f"{name}:{node.lineno}: a verdict computed ({node.attr})")
+
+
+def test_only_the_delivery_prints_a_report_or_says_no():
+    """Every command's report goes through ``commands/deliver.py`` (the one place that prints a result and turns a no
+    into exit 1): no other command module calls ``emit``, writes JSON, or raises a failed check."""
+    for path in sorted((ROOT / "op2motion" / "commands").glob("*.py")):
+        if path.name in ("deliver.py", "common.py"):
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", "")) in (
+                    "emit", "dump", "dumps"):
+                raise AssertionError(f"{path.name}:{node.lineno}: prints a report itself")
+            if isinstance(node, ast.Name) and node.id in ("CheckFailed", "Unreachable"):
+                raise AssertionError(f"{path.name}:{node.lineno}: says no itself")
 
 
 def test_the_list_of_commands_still_building_reports_is_the_truth():
