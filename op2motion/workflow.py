@@ -13,7 +13,7 @@ from functools import partial
 from typing import Any, Callable
 
 from op2motion.errors import ref
-from op2motion.physics import DEFAULT_SECONDS, RunReport, Schedule, check
+from op2motion.physics import DEFAULT_SECONDS, EngineName, RunReport, Schedule, check
 from op2motion.posture.cost import PostureProblem
 from op2motion.posture.pso import PSOSettings
 from op2motion.posture.solve import PostureResult, optimize_posture
@@ -74,7 +74,7 @@ class Validate:
     """The physics check of each reached pose: held ``seconds`` [s] in ``engine``."""
 
     seconds: float = DEFAULT_SECONDS
-    engine: str = "pybullet"
+    engine: EngineName = "pybullet"
 
 
 def solve(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSettings(), *,

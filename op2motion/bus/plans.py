@@ -15,7 +15,7 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -25,11 +25,14 @@ from op2motion.robot.pose import Pose
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support
 
+if TYPE_CHECKING:
+    from op2motion.physics import EngineName
+
 MIN_MOVE_S = 0.6                   # a move to the first pose takes at least this long (longer if the speed says so)
 HOLD_AFTER_S = 0.3                 # the last goal is sent this long after a motion's last row
 LYING_TILT_RAD = math.radians(60.0)   # tilted this far the robot lies: physics cannot check a motion from there yet
 READY_HIP_LOWER_M = 0.02           # the via pose's hips below straight legs (the stock gait's walk-ready height)
-CHECK_ENGINE = "mujoco"            # the faster engine checks what the robot is about to play
+CHECK_ENGINE: EngineName = "mujoco"    # the faster engine checks what the robot is about to play
 
 
 def ready_pose(spec: Spec) -> Pose:

@@ -13,10 +13,13 @@ import math
 import os
 import re
 import sys
-from typing import Any, Callable, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
 
 from op2motion.errors import InputError, OutputError, ref, render_refs
 from op2motion.robot.spec import Spec
+
+if TYPE_CHECKING:
+    from op2motion.physics import EngineName
 
 Handler = Callable[[argparse.Namespace, Spec], int]
 #: Library parameter names whose flag is spelled differently.
@@ -141,11 +144,11 @@ def physics_args(p: argparse.ArgumentParser, flag: bool, push_help: str) -> None
     p.add_argument("--push", type=number(0.0, MAX_PUSH_N, "N"), default=0.0, metavar="N", help=push_help)
 
 
-def engines_of(args: argparse.Namespace) -> tuple[str, ...]:
-    """The engines ``--engine`` names."""
+def engines_of(args: argparse.Namespace) -> tuple[EngineName, ...]:
+    """The engines ``--engine`` names (argparse has checked it is one of them, or ``both``)."""
     from op2motion.physics import ENGINES
 
-    return tuple(ENGINES) if args.engine == "both" else (args.engine,)
+    return tuple(ENGINES) if args.engine == "both" else tuple(e for e in ENGINES if e == args.engine)
 
 
 def book_args(p: argparse.ArgumentParser, pose_flag: bool = True) -> None:

@@ -22,6 +22,7 @@ from typing import Any, Callable, Iterable
 from op2motion.physics.controller import Controller
 from op2motion.physics.report import EngineReport
 from op2motion.physics.runner import Pushes, Setup, check, check_work, runs_per_engine
+from op2motion.physics.scene import EngineName
 from op2motion.physics.sensors import Sensors
 from op2motion.robot.spec import Spec, Uncertainty
 from op2motion.robot.variant import spec_variant
@@ -148,7 +149,7 @@ class RobustReport:
         return max(self.runs, key=score)
 
 
-def robust_check(make_controller: Callable[[], Controller], spec: Spec, engines: Iterable[str],
+def robust_check(make_controller: Callable[[], Controller], spec: Spec, engines: Iterable[EngineName],
                  judge: Judge = stands, pushes: Pushes | None = None, members: Iterable[Member] | None = None,
                  on_progress: Callable[[float, float], Any] | None = None) -> RobustReport:
     """Run a fresh controller from ``make_controller()`` on every member (default :func:`family`) in every engine;

@@ -25,7 +25,7 @@ from op2motion.physics.loop import Push, RunSetup, simulate
 from op2motion.physics.measure import RunSetupFacts, run_report
 from op2motion.physics.plan import Plan
 from op2motion.physics.report import PUSH_DIRECTIONS, CheckReport, EngineReport, PushResult, RunReport, TrialsResult
-from op2motion.physics.scene import FLOOR_FRICTION
+from op2motion.physics.scene import FLOOR_FRICTION, EngineName
 from op2motion.physics.sensors import Sensors
 from op2motion.physics.walk import walk_measures
 from op2motion.robot.spec import Spec
@@ -192,8 +192,9 @@ def check_work(runs: int, seconds_each: float, counted: str | None = None) -> No
                          f"pushes, bodies or engines")
 
 
-def check(controller: Controller, spec: Spec, engines: Sequence[str] = ("pybullet",), pushes: Pushes | None = None,
-          trials: Trials | None = None, setup: Setup = Setup(), on_progress: Progress | None = None) -> CheckReport:
+def check(controller: Controller, spec: Spec, engines: Sequence[EngineName] = ("pybullet",),
+          pushes: Pushes | None = None, trials: Trials | None = None, setup: Setup = Setup(),
+          on_progress: Progress | None = None) -> CheckReport:
     """Run ``controller`` (a :class:`.controller.Controller`, e.g. a :class:`.controller.Schedule`) in each of
     ``engines`` (see the module docstring); ``on_progress(done, total)`` gets the simulated seconds [s]."""
     if not engines or any(e not in ENGINES for e in engines):
@@ -205,7 +206,7 @@ def check(controller: Controller, spec: Spec, engines: Sequence[str] = ("pybulle
     per_engine = runs_per_engine(pushes, trials)
     check_work(per_engine * len(engines), controller.plan.duration_s)
     runner = _Runner(controller, spec, setup, per_engine * len(engines), on_progress)
-    reports = {}
+    reports: dict[str, EngineReport] = {}
     for k, name in enumerate(engines):
         main = runner.run(name, snapshot=setup.snapshot and k == 0, keep_track=setup.keep_track)
         pushed = runner.pushed(name, pushes) if pushes is not None and pushing else ()

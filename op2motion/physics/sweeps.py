@@ -9,7 +9,7 @@ roll (outward for the left foot; on two feet the legs lean as a parallelogram, t
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
@@ -18,6 +18,9 @@ from op2motion.physics.controller import Schedule
 from op2motion.physics.runner import check
 from op2motion.robot.joints import BookAngles, book_to_servo, hip_roll_sign
 from op2motion.robot.spec import Spec
+
+if TYPE_CHECKING:
+    from op2motion.physics.scene import EngineName
 
 ARMS_FORWARD = {"r_sho_pitch": -90.0, "l_sho_pitch": 90.0}
 FOLDED_SWING = {"r_hip_roll": 25.0, "r_ank_roll": 25.0, "r_hip_pitch": -90.0, "r_knee": 140.0, "r_ank_pitch": 50.0}
@@ -112,7 +115,7 @@ def leaned(spec: Spec, base: np.ndarray, support: str, kind: str, degrees: float
     return out
 
 
-def sweep_verdict(task: tuple[str, str, float, str, float]) -> tuple[bool, float, list[str], float]:
+def sweep_verdict(task: tuple[str, str, float, EngineName, float]) -> tuple[bool, float, list[str], float]:
     """One pose of a sweep, (support, kind, degrees, engine, seconds) -> (stable, margin [m], reasons, foot margin
     [m]); the margin is the settled one for a standing pose, the one when gravity reached full strength for a
     falling one; the foot margin is the least margin of a foot's own CoP to its sole among the feet carrying at

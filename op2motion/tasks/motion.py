@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from op2motion.formats.action import ActionFile
     from op2motion.motion.cartesian import LineMove, LineRequest
     from op2motion.motion.trajectory import Trajectory
-    from op2motion.physics import CheckReport
+    from op2motion.physics import CheckReport, EngineName
     from op2motion.robot.pose import Pose
 
 Progress = Callable[[float, float], None]
@@ -33,7 +33,7 @@ class MotionCheck:
     path for the motion file; None: not asked)."""
 
     validate: bool = False
-    engines: tuple[str, ...] = ("pybullet",)
+    engines: tuple[EngineName, ...] = ("pybullet",)
     push_n: float = 0.0
     plot: str | None = None
     csv: str | None = None

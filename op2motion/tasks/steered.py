@@ -17,6 +17,7 @@ from op2motion.tasks.walk import ProgressFor, walk_line
 if TYPE_CHECKING:
     from op2motion.formats.action import ActionFile
     from op2motion.gait.commands import CommandTimeline
+    from op2motion.physics import EngineName
 
 
 @dataclass(frozen=True)
@@ -30,7 +31,7 @@ class SteeredRequest:
     preset: str | None = None
     validate: bool = False
     robust: bool = False
-    engines: tuple[str, ...] = ("pybullet",)
+    engines: tuple[EngineName, ...] = ("pybullet",)
     push_n: float = 0.0
     plot: str | None = None
 

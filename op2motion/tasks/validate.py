@@ -13,6 +13,7 @@ from op2motion.robot.spec import Spec
 from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
+    from op2motion.physics import EngineName
     from op2motion.robot.pose import Pose
 
 Progress = Callable[[float, float], None]
@@ -25,7 +26,7 @@ class Validation:
     (None: the spec's), and a snapshot of the final state written to ``snapshot_png`` when it names a file."""
 
     seconds: float = DEFAULT_SECONDS
-    engines: tuple[str, ...] = ("pybullet",)
+    engines: tuple[EngineName, ...] = ("pybullet",)
     push_n: float = 0.0
     stiffness: float = 1.0
     voltage: float | None = None

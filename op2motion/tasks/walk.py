@@ -15,7 +15,7 @@ from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
     from op2motion.gait.params import GaitParams
-    from op2motion.physics import CheckReport, Trials
+    from op2motion.physics import CheckReport, EngineName, Trials
 
 #: Progress of a stage: called with (what, unit), gives a context whose value takes (done, total) or is None.
 ProgressFor = Callable[[str, str], ContextManager[Any]]
@@ -37,7 +37,7 @@ class WalkRequest:
     validate: bool = False
     open_loop: bool = False
     robust: bool = False
-    engines: tuple[str, ...] = ("pybullet",)
+    engines: tuple[EngineName, ...] = ("pybullet",)
     push_n: float = 0.0
     trials: Trials | None = None
     plot: str | None = None

@@ -17,15 +17,18 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field, fields, replace
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 from op2motion.tune.study import Outcome, TrialRow, pareto, rows
 from op2motion.tune.trial import Task, evaluate
 from op2motion.workers import ExecutorName
 
+if TYPE_CHECKING:
+    from op2motion.physics import EngineName
+
 VERIFY_STEPS = 20           # the verification's walk [steps] (the acceptance's)
 VERIFY_PUSH_N = 2.0         # ... and its side pushes [N] (op2motion's walk; docs/walking.md's robustness runs)
-VERIFY_ENGINES = ("pybullet", "mujoco")
+VERIFY_ENGINES: tuple[EngineName, ...] = ("pybullet", "mujoco")
 
 
 @dataclass

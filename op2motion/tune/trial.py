@@ -21,17 +21,21 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from op2motion.errors import InputError
 from op2motion.tune.study import Outcome
+
+if TYPE_CHECKING:
+    from op2motion.physics import EngineName
 
 MIN_COP_INSIDE = 0.8         # the CoP inside the planned soles for at least this share of the walk (the shipped
                              # forward walk: 88 % at worst, light, stiff, grippy corner with the CoM forward, PyBullet)
 MAX_LIMITED_SHARE = 0.25     # some servo at its available torque for at most this share of the walk (the shipped
                              # forward walk, which holds on the whole family: 18 % on its heavy, soft corner)
 STOCK_OTHER_HEADING_DEG = 15.0   # the stock module's heading on the family's other bodies: at most this [deg]
-SEARCH_ENGINES = ("mujoco", "pybullet")     # the search walks each body in both, the faster first
+SEARCH_ENGINES: tuple[EngineName, ...] = ("mujoco", "pybullet")   # the search walks each body in both, the
+                                                                    # faster first
 #: Per direction: the shipped preset tuned from, and the measure that counts (speed along the walk [m/s], or turn
 #: rate [rad/s]).
 DIRECTIONS = {"forward": "forward", "backward": "backward", "sideways": "sideways", "turn": "turn_left"}
@@ -54,7 +58,7 @@ class Task:
     base: Any
     spec_path: str | None = None
     members: tuple[str, ...] | None = None
-    engines: tuple[str, ...] = SEARCH_ENGINES
+    engines: tuple[EngineName, ...] = SEARCH_ENGINES
     steps: int = 20
     push_n: float = 0.0
 
