@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from op2motion import book
 from op2motion.commands.common import (
@@ -25,9 +25,6 @@ from op2motion.posture.pso import MAX_ITERATIONS, MAX_PARTICLES, MAX_SEED, PSOSe
 from op2motion.robot.balance import COM_MODEL_FULL, COM_MODELS
 from op2motion.robot.spec import Spec
 from op2motion.workflow import DEFAULT_RESTARTS, MAX_RESTARTS
-
-if TYPE_CHECKING:
-    pass
 
 SECONDS = number(MIN_SECONDS, MAX_SECONDS, "s")
 

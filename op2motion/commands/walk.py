@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from op2motion.commands.common import (
     add_command,
@@ -19,10 +19,6 @@ from op2motion.commands.common import (
 from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
 from op2motion.tasks.walk import OUT_FORMATS
-
-if TYPE_CHECKING:
-    pass
-
 
 
 def register(sub: Any) -> None:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable
 
 from op2motion.robot.spec import Spec
+from op2motion.tasks.progress import Progress
 from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
@@ -23,7 +24,6 @@ if TYPE_CHECKING:
     from op2motion.physics import CheckReport, EngineName
     from op2motion.robot.pose import Pose
 
-Progress = Callable[[float, float], None]
 
 
 @dataclass(frozen=True)

@@ -5,14 +5,14 @@ judged as a commanded walk), drawn against the commanded path; a fall is a "no" 
 
 from __future__ import annotations
 
-import contextlib
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Iterator
+from typing import TYPE_CHECKING, Any
 
 from op2motion.robot.spec import Spec
+from op2motion.tasks.progress import ProgressFor, no_progress
 from op2motion.tasks.result import Output, TaskResult
-from op2motion.tasks.walk import ProgressFor, walk_line
+from op2motion.tasks.walk import walk_line
 
 if TYPE_CHECKING:
     from op2motion.formats.action import ActionFile
@@ -34,11 +34,6 @@ class SteeredRequest:
     engines: tuple[EngineName, ...] = ("pybullet",)
     push_n: float = 0.0
     plot: str | None = None
-
-
-@contextlib.contextmanager
-def _no_progress(what: str, unit: str) -> Iterator[None]:
-    yield None
 
 
 def _commanded(walk: Any) -> dict[str, Any]:
@@ -108,7 +103,7 @@ def steered_walk(request: SteeredRequest, spec: Spec, progress: ProgressFor | No
     """``walk --commands``: see the module docstring; ``progress`` gives each stage's progress."""
     from op2motion.gait.steer import SteerableWalk, planned_summary
 
-    progress = progress or _no_progress
+    progress = progress or no_progress
     walk = SteerableWalk.make(spec, request.preset, commands=request.commands, action=request.action)
     with progress("plan", "row"):
         summary = planned_summary(walk)

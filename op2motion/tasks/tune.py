@@ -6,14 +6,13 @@ resume the study).
 
 from __future__ import annotations
 
-import contextlib
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterator
+from typing import TYPE_CHECKING, Any
 
+from op2motion.tasks.progress import ProgressFor, no_progress
 from op2motion.tasks.result import Output, TaskResult
-from op2motion.tasks.walk import ProgressFor
 
 if TYPE_CHECKING:
     from op2motion.tune.run import TuneResult
@@ -42,11 +41,6 @@ class TuneRequest:
     workers: int = 1
     address: str | None = None
     plot: str | None = None
-
-
-@contextlib.contextmanager
-def _no_progress(what: str, unit: str) -> Iterator[None]:
-    yield None
 
 
 def _search(request: TuneRequest, progress: ProgressFor) -> TuneResult:
@@ -83,7 +77,7 @@ def tune(request: TuneRequest, progress: ProgressFor | None = None) -> TaskResul
     from op2motion.tune.study import MIN_MARGIN, pareto
 
     unit = "rad/s" if request.task.direction == "turn" else "m/s"
-    result = _search(request, progress or _no_progress)
+    result = _search(request, progress or no_progress)
     data: dict[str, Any] = {**result_json(result), "study": request.study_path}
     outputs = {}
     if request.plot:

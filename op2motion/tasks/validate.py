@@ -6,17 +6,17 @@ Each returns a :class:`~.result.TaskResult` (a pose that falls is a "no" with it
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any
 
 from op2motion.physics import DEFAULT_SECONDS
 from op2motion.robot.spec import Spec
+from op2motion.tasks.progress import Progress
 from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
     from op2motion.physics import EngineName
     from op2motion.robot.pose import Pose
 
-Progress = Callable[[float, float], None]
 
 
 @dataclass(frozen=True)

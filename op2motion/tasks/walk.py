@@ -6,19 +6,17 @@ pushed, or fails a member of the family is a "no" with its phrase (nothing to wr
 
 from __future__ import annotations
 
-import contextlib
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, ContextManager, Iterator
+from typing import TYPE_CHECKING, Any
 
 from op2motion.robot.spec import Spec
+from op2motion.tasks.progress import ProgressFor, no_progress
 from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
     from op2motion.gait.params import GaitParams
     from op2motion.physics import CheckReport, EngineName, Trials
 
-#: Progress of a stage: called with (what, unit), gives a context whose value takes (done, total) or is None.
-ProgressFor = Callable[[str, str], ContextManager[Any]]
 #: The goal tables a walk writes, by file ending.
 OUT_FORMATS = {".csv": "csv", ".motion": "webots"}
 
@@ -42,11 +40,6 @@ class WalkRequest:
     trials: Trials | None = None
     plot: str | None = None
     tables: tuple[tuple[str, str], ...] = ()
-
-
-@contextlib.contextmanager
-def _no_progress(what: str, unit: str) -> Iterator[None]:
-    yield None
 
 
 def walk_line(engine: str, s: dict[str, Any]) -> str:
@@ -150,7 +143,7 @@ def walk(request: WalkRequest, spec: Spec, progress: ProgressFor | None = None) 
     from op2motion.gait import gait_summary
     from op2motion.gait.speeds import plan_within_speed
 
-    progress = progress or _no_progress
+    progress = progress or no_progress
     params = request.params
     with progress("plan", "pass") as on_progress:
         gait = plan_within_speed(params, spec, request.target, request.retime, on_progress)
