@@ -23,8 +23,8 @@ front, back = init.copy(), init.copy()
 for joint, (a, b) in {"r_sho_pitch": (69.0, -178.0), "r_sho_roll": (-63.0, -51.0), "r_el": (-29.0, -24.0)}.items():
     front[spec.joint_names.index(joint)], back[spec.joint_names.index(joint)] = np.radians(a), np.radians(b)
 poses = [op2.Waypoint("front", front, 0.0, 0.0, "double"), op2.Waypoint("back", back, 2.0, 0.0, "double")]
-straight = op2.plan_waypoints(poses, spec, planner="none")
-planned = op2.plan_waypoints(poses, spec, seed=0)
+straight = op2.trajectory_through(poses, spec, planner="none")
+planned = op2.trajectory_through(poses, spec, seed=0)
 print("\n".join(planned.notes))
 (out / "route.png").write_bytes(render_route(straight.goals, planned.goals, spec, "front -> back: around the hip"))
 

@@ -11,8 +11,8 @@ from op2motion.gait import gait_csv, walk_summary
 
 spec = op2.load_spec()
 params = op2.load_preset("forward").with_steps(6)
-gait = op2.plan_gait(params, spec)
-print(f"planned {len(gait.plan.steps)} steps in {gait.walking_s:.2f} s, ZMP margin >= "
+gait = op2.generate_gait(params, spec)
+print(f"planned {len(gait.footsteps.steps)} steps in {gait.walking_s:.2f} s, ZMP margin >= "
       f"{gait.zmp_margin.min() * 1000:.1f} mm")
 schedule = op2.gait_schedule(gait, spec)
 report = op2.check(schedule, spec)

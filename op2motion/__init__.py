@@ -9,9 +9,9 @@ The public API (imported on first use, so ``import op2motion`` does no work)::
     report = op2.check(op2.Schedule.hold(pose.servo, pose.support, spec), spec)    # physics
     outcome = op2.solve(op2.PostureProblem("left", "left", (0.10, 0.05, 0.07)), spec)
     played = op2.play_page(op2.ActionFile.read("motion_4096.bin"), 9, spec)        # an action page
-    traj = op2.plan_waypoints([op2.Waypoint("a", qa, 0, 0, "double"), op2.Waypoint("b", qb, 2, 0, "double")], spec)
+    traj = op2.trajectory_through([op2.Waypoint("a", qa, 0, 0, "double"), op2.Waypoint("b", qb, 2, 0, "double")], spec)
     line = op2.line_move(pose, op2.LineRequest("right", 1.0, delta_m=(0.05, 0, 0)), spec)    # a hand in a line
-    gait = op2.plan_gait(op2.load_preset("forward"), spec)        # a walk; op2.gait_schedule(gait, spec) plays it
+    gait = op2.generate_gait(op2.load_preset("forward"), spec)        # a walk; op2.gait_schedule(gait, spec) plays it
 """
 
 from __future__ import annotations
@@ -28,8 +28,8 @@ if TYPE_CHECKING:                     # what editors and type checkers see; at r
     from op2motion.formats.posefile import read_pose as read_pose
     from op2motion.formats.posefile import write_pose as write_pose
     from op2motion.gait import gait_schedule as gait_schedule
+    from op2motion.gait import generate_gait as generate_gait
     from op2motion.gait import load_preset as load_preset
-    from op2motion.gait import plan_gait as plan_gait
     from op2motion.kinematics import forward as forward
     from op2motion.kinematics.arm_ik import solve_arm_ik as solve_arm_ik
     from op2motion.library.build import build_library as build_library
@@ -38,7 +38,7 @@ if TYPE_CHECKING:                     # what editors and type checkers see; at r
     from op2motion.motion.cartesian import line_move as line_move
     from op2motion.motion.pipeline import plan_motion as plan_motion
     from op2motion.motion.pipeline import play_page as play_page
-    from op2motion.motion.planner import plan as plan_waypoints
+    from op2motion.motion.planner import trajectory_through as trajectory_through
     from op2motion.motion.route import route as route
     from op2motion.motion.waypoint import Waypoint as Waypoint
     from op2motion.physics import Controller as Controller
@@ -92,12 +92,12 @@ _API = {
     "play_page": ("motion.pipeline", "play_page"),
     "plan_motion": ("motion.pipeline", "plan_motion"),
     "Waypoint": ("motion.waypoint", "Waypoint"),
-    "plan_waypoints": ("motion.planner", "plan"),
+    "trajectory_through": ("motion.planner", "trajectory_through"),
     "route": ("motion.route", "route"),
     "LineRequest": ("motion.cartesian", "LineRequest"),
     "line_move": ("motion.cartesian", "line_move"),
     "load_preset": ("gait", "load_preset"),
-    "plan_gait": ("gait", "plan_gait"),
+    "generate_gait": ("gait", "generate_gait"),
     "gait_schedule": ("gait", "gait_schedule"),
     "build_library": ("library.build", "build_library"),
     "build_urdf": ("model.urdf", "build_urdf"),
@@ -129,9 +129,9 @@ __all__ = [
     "load_preset",
     "load_spec",
     "optimize_posture",
-    "plan_gait",
+    "generate_gait",
     "plan_motion",
-    "plan_waypoints",
+    "trajectory_through",
     "play_page",
     "read_motion",
     "read_pose",

@@ -137,7 +137,7 @@ def _planning_figures(spec: Spec, action: ActionFile | None, repeat: int) -> dic
                 "check_line_deviation_m": None}
     from op2motion.motion.cartesian import LineRequest, line_move
     from op2motion.motion.checks import clearance
-    from op2motion.motion.planner import plan
+    from op2motion.motion.planner import trajectory_through
     from op2motion.motion.waypoint import Waypoint
     from op2motion.robot.pose import Pose
 
@@ -147,7 +147,7 @@ def _planning_figures(spec: Spec, action: ActionFile | None, repeat: int) -> dic
         a[spec.joint_names.index(joint)], b[spec.joint_names.index(joint)] = np.radians(x), np.radians(y)
     ends = [Waypoint("front", a, 0.0, 0.0, Support.DOUBLE), Waypoint("back", b, 2.0, 0.0, Support.DOUBLE)]
     out: dict[str, Any] = {}
-    route_ms = _best_ms(lambda: out.update(t=plan(ends, spec, seed=0)), min(repeat, 3))
+    route_ms = _best_ms(lambda: out.update(t=trajectory_through(ends, spec, seed=0)), min(repeat, 3))
     ready = Pose("walkready", Support.DOUBLE, action.pose(READY_PAGE, spec).servo)
     line_ms = _best_ms(lambda: out.update(m=line_move(ready, LineRequest("right", 1.0, delta_m=(0.05, 0.0, 0.0)),
                                                         spec)), min(repeat, 3))
@@ -159,11 +159,11 @@ def _planning_figures(spec: Spec, action: ActionFile | None, repeat: int) -> dic
 def _walk_figures(spec: Spec, repeat: int) -> dict[str, Any]:
     """``walk_plan_ms``: planning the shipped ``forward`` gait (20 steps: footsteps, preview control, multibody
     correction passes, IK); ``walk_validate_ms``: playing it into the servo model in PyBullet."""
-    from op2motion.gait import gait_schedule, plan_gait, preset_path, read_preset
+    from op2motion.gait import gait_schedule, generate_gait, preset_path, read_preset
 
     params = read_preset(preset_path("forward")).with_steps(20)
     out: dict[str, Any] = {}
-    plan_ms = _best_ms(lambda: out.update(g=plan_gait(params, spec)), min(repeat, 3))
+    plan_ms = _best_ms(lambda: out.update(g=generate_gait(params, spec)), min(repeat, 3))
     schedule = gait_schedule(out["g"], spec)
     walk_ms = _best_ms(lambda: out.update(w=check(schedule, spec).run), 1, warm=False)
     walk_mujoco_ms = _best_ms(lambda: out.update(m=check(schedule, spec, ("mujoco",)).run), 1, warm=False)

@@ -11,8 +11,8 @@ import pytest
 from helpers import run_cli
 
 from op2motion.errors import InputError
-from op2motion.gait import PRESETS, GaitParams, gait_schedule, plan_gait, preset_path, read_preset, walk_summary
-from op2motion.gait.footsteps import plan_footsteps
+from op2motion.gait import PRESETS, GaitParams, gait_schedule, generate_gait, preset_path, read_preset, walk_summary
+from op2motion.gait.footsteps import place_footsteps
 from op2motion.gait.preview import preview_gains, track_reference
 from op2motion.gait.timeline import build_timeline
 from op2motion.kinematics.dh import forward_dh_frames
@@ -97,23 +97,23 @@ def test_leg_ik_refuses_a_foot_beyond_reach(spec):
 
 def test_footsteps_alternate_and_close_the_feet(spec):
     params = GaitParams(steps=6, step_length_m=0.05)
-    plan = plan_footsteps(params, spec)
+    plan = place_footsteps(params, spec)
     assert [s.side for s in plan.steps] == ["left", "right"] * 3
     assert [round(s.x, 6) for s in plan.steps] == [0.05, 0.1, 0.15, 0.2, 0.25, 0.25]
     assert all(abs(abs(s.y) - spec.geometry.hip_half_width) < 1e-12 for s in plan.steps)   # width 0: the hips'
-    right = plan_footsteps(GaitParams(steps=4, turn_deg=-10.0, step_width_m=0.08), spec)
+    right = place_footsteps(GaitParams(steps=4, turn_deg=-10.0, step_width_m=0.08), spec)
     assert right.steps[0].side == "right" and right.steps[-1].yaw == pytest.approx(math.radians(-30.0))
 
 
 def test_footsteps_that_would_touch_are_refused(spec):
     with pytest.raises(InputError, match="apart") as info:
-        plan_footsteps(GaitParams(steps=4, step_side_m=0.04, step_width_m=0.06), spec)
+        place_footsteps(GaitParams(steps=4, step_side_m=0.04, step_width_m=0.06), spec)
     assert info.value.param == "footsteps"
 
 
 def test_walk_to_a_target_ends_there(spec):
     params = read_preset(preset_path("forward"))
-    gait = plan_gait(params, spec, target=(0.3, 0.05, math.radians(20.0)))
+    gait = generate_gait(params, spec, target=(0.3, 0.05, math.radians(20.0)))
     end = gait.end_pose()
     assert end == pytest.approx([0.3, 0.05, math.radians(20.0)], abs=1e-9)
 
@@ -134,7 +134,7 @@ def test_shipped_presets_load_and_bad_ones_are_refused(tmp_path):
 
 def test_planned_walk_keeps_the_zmp_inside_and_the_soles_flat_where_planned(spec):
     params = read_preset(preset_path("forward")).with_steps(6)
-    gait = plan_gait(params, spec)
+    gait = generate_gait(params, spec)
     assert gait.zmp_margin.min() >= PLAN_MARGIN_M
     body = Body(spec)
     for i in range(0, len(gait.times), 7):
@@ -154,7 +154,7 @@ def test_planned_walk_keeps_the_zmp_inside_and_the_soles_flat_where_planned(spec
 
 def test_timeline_marks_single_support_while_the_foot_is_up(spec):
     params = GaitParams(steps=2, step_length_m=0.04)
-    timeline = build_timeline(params, plan_footsteps(params, spec))
+    timeline = build_timeline(params, place_footsteps(params, spec))
     for i, support in enumerate(timeline.supports):
         if support != "double":
             swing = "left" if support == "right" else "right"
@@ -166,7 +166,7 @@ def test_a_settling_swing_is_over_its_place_before_it_lands(spec):
     for settle in (0.0, 0.15):
         params = GaitParams(steps=2, step_length_m=0.08, step_s=0.32, double_support_ratio=0.05,
                             swing_settle=settle)
-        timeline = build_timeline(params, plan_footsteps(params, spec))
+        timeline = build_timeline(params, place_footsteps(params, spec))
         swing = timeline.feet["left"] if timeline.contact[timeline.step.tolist().index(0)] == "right" \
             else timeline.feet["right"]
         rows = np.flatnonzero((timeline.step == 0) & (np.array(timeline.contact) != "double"))
@@ -182,7 +182,7 @@ def test_a_settling_swing_is_over_its_place_before_it_lands(spec):
 
 @pytest.mark.physics
 def test_a_short_walk_walks_in_pybullet(spec):
-    gait = plan_gait(read_preset(preset_path("forward")).with_steps(4), spec)
+    gait = generate_gait(read_preset(preset_path("forward")).with_steps(4), spec)
     schedule = gait_schedule(gait, spec)
     report = check(schedule, spec)
     physics = walk_summary(report, schedule.plan.walk.start_s)
@@ -199,7 +199,7 @@ def test_a_short_walk_walks_in_pybullet(spec):
 def test_turning_in_place_keeps_the_servos_below_their_limit_in_mujoco(spec):
     """The turn preset (8 steps) in MuJoCo, the engine with the rotor inertia the feed-forward is computed for:
     it turns at >= 30 deg/s with no servo at its available torque and the CoP inside the planned soles."""
-    gait = plan_gait(read_preset(preset_path("turn_left")).with_steps(8), spec)
+    gait = generate_gait(read_preset(preset_path("turn_left")).with_steps(8), spec)
     schedule = gait_schedule(gait, spec)
     run = walk_summary(check(schedule, spec, ("mujoco",)), schedule.plan.walk.start_s)["engines"]["mujoco"]
     assert run["fell"] is False and run["reasons"] == []

@@ -1,10 +1,12 @@
 """Nothing hangs: a named pipe, a socket or a device given as an input file is refused before anything is read (a
 FIFO without a writer would block the command forever); a TCP port that is not Ray is refused within 15 s, with
 nothing written; a studio host that does not resolve, is not this machine's, or is empty is refused at once and told
-from a port in use. Each case runs the real CLI in a subprocess with a hard timeout."""
+from a port in use. The cases run the real CLI in a subprocess with a hard timeout (those of one kind one after another
+in one process: a command that blocked would stop the process, and the timeout names the case it was on)."""
 
 from __future__ import annotations
 
+import json
 import os
 import socket
 import subprocess
@@ -28,6 +30,33 @@ def _op2motion(cwd, *argv, timeout=60.0, env=None):
     return done, time.monotonic() - t0
 
 
+#: A Python process running ``op2motion.cli.main`` on each argv of a JSON list, one after another, printing one JSON
+#: line per case (exit code, stderr, seconds) as it ends it, so that a case that blocks is the one after the last line.
+_BATCH = """
+import contextlib, io, json, sys, time
+from op2motion.cli import main
+for argv in json.loads(sys.argv[1]):
+    err, t0 = io.StringIO(), time.monotonic()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        code = main(argv)
+    print(json.dumps([code, err.getvalue(), time.monotonic() - t0]), flush=True)
+"""
+
+
+def _op2motion_each(cwd, argvs: list[list[str]], timeout: float) -> list[tuple[int, str, float]]:
+    """Exit code, stderr and seconds of ``op2motion ARGV`` for each of ``argvs``, run in one subprocess that must end
+    within ``timeout`` [s] (if not: the case it was on is named)."""
+    argvs = [[str(a) for a in argv] for argv in argvs]
+    try:
+        done = subprocess.run([sys.executable, "-c", _BATCH, json.dumps(argvs)], cwd=cwd, capture_output=True,
+                              text=True, timeout=timeout)
+    except subprocess.TimeoutExpired as exc:
+        ended = len((exc.stdout or b"").splitlines())
+        raise AssertionError(f"op2motion {' '.join(argvs[ended])} did not end within {timeout} s") from None
+    assert done.returncode == 0, done.stderr
+    return [tuple(json.loads(line)) for line in done.stdout.splitlines()]
+
+
 def _one_line(err: str) -> str:
     lines = [line for line in err.strip().splitlines() if line]
     assert len(lines) == 1 and "Traceback" not in err, err
@@ -48,21 +77,26 @@ def specials(tmp_path):
         sock.close()
 
 
-@pytest.mark.parametrize("argv", [
+#: Commands given a special file where they read one (``{f}``).
+READERS = [
     ["fk", "--pose", "{f}"], ["validate", "{f}"], ["plot", "{f}", "-o", "p.png"],
     ["export", "--format", "webots", "{f}", "-o", "x.motion"], ["motion", "plan", STAND, "{f}", "--durations", "1"],
     ["motion", "play", "{f}", "--page", "4"], ["walk", "--preset", "{f}"], ["--spec", "{f}", "urdf"],
     ["convert", "--servo-deg", "{f}", "--support", "left"], ["studio", "{f}", "--port", "0"],
     ["import-action", "{f}"], ["motion", "line", "{f}", "--hand", "left", "--by", "0.01", "0", "0", "--duration", "1"],
-])
-def test_special_files_are_refused_before_reading(tmp_path, specials, argv):
-    for kind, path in specials.items():
-        done, took = _op2motion(tmp_path, *[a.replace("{f}", str(path)) for a in argv], timeout=FIFO_BOUND_S)
-        line = _one_line(done.stderr)
-        assert done.returncode == 2 and took < FIFO_BOUND_S, (kind, line)
+]
+
+
+def test_special_files_are_refused_before_reading(tmp_path, specials):
+    cases = [(argv, kind, [a.replace("{f}", str(path)) for a in argv]) for argv in READERS
+             for kind, path in specials.items()]
+    results = _op2motion_each(tmp_path, [run for _, _, run in cases], timeout=FIFO_BOUND_S * len(cases))
+    for (argv, kind, run), (code, err, took) in zip(cases, results, strict=True):
+        line = _one_line(err)
+        assert code == 2 and took < FIFO_BOUND_S, (run, kind, line)
         if kind != "character device" or "preset" not in argv:      # a preset's name is its flag's business
-            assert kind in line or "--preset" in line, (kind, line)
-        assert not (tmp_path / "p.png").exists() and not (tmp_path / "x.motion").exists()
+            assert kind in line or "--preset" in line, (run, kind, line)
+        assert not (tmp_path / "p.png").exists() and not (tmp_path / "x.motion").exists(), run
 
 
 def _silent_server() -> tuple[socket.socket, int]:
@@ -119,40 +153,52 @@ def test_a_port_that_is_not_ray_is_refused_in_time_and_nothing_is_written(tmp_pa
     assert list(tmp_path.iterdir()) == []                               # no folder, no index
 
 
-@pytest.mark.parametrize("host, flag", [
+#: Studio hosts refused before anything listens, each with the flag it is told against.
+HOSTS = [
     ("no-such-host.invalid", "--host"),     # does not resolve (RFC 6761: never does)
     ("192.0.2.1", "--host"),                # resolves, but no interface of this machine has it (TEST-NET-1)
     ("", "--host"),                         # empty: would listen everywhere
     (" 127.0.0.1", "--host"),
-])
-def test_studio_hosts_are_refused_at_once_and_told_from_ports(tmp_path, host, flag):
-    done, took = _op2motion(tmp_path, "studio", STAND, "--host", host, "--port", "0", timeout=60)
-    line = _one_line(done.stderr)
-    assert done.returncode == 2 and took < HOST_BOUND_S and line.startswith(f"op2motion: error: {flag}:"), line
-    assert "in use" not in line
+]
 
 
-def test_a_studio_port_in_use_is_the_port(tmp_path):
+def test_studio_hosts_are_refused_at_once_and_told_from_ports(tmp_path):
     with socket.socket() as busy:
         busy.bind(("127.0.0.1", 0))
         busy.listen()
-        done, _ = _op2motion(tmp_path, "studio", STAND, "--port", busy.getsockname()[1])
-    assert done.returncode == 2 and _one_line(done.stderr).startswith("op2motion: error: --port:")
+        cases = [(["studio", STAND, "--host", host, "--port", "0"], flag) for host, flag in HOSTS]
+        cases.append((["studio", STAND, "--port", str(busy.getsockname()[1])], "--port"))   # a port in use: the port
+        results = _op2motion_each(tmp_path, [argv for argv, _ in cases], timeout=HOST_BOUND_S * len(cases))
+    for (argv, flag), (code, err, took) in zip(cases, results, strict=True):
+        line = _one_line(err)
+        assert code == 2 and took < HOST_BOUND_S and line.startswith(f"op2motion: error: {flag}:"), (argv, line)
+        assert flag == "--port" or "in use" not in line, (argv, line)
 
 
-@pytest.mark.parametrize("argv, suffix", [(["urdf", "-o", "{f}"], ".urdf"), (["plot", STAND, "-o", "{f}"], ".png"),
-                                          (["export", "--format", "webots", STAND, "-o", "{f}"], ".motion")])
-def test_special_files_are_refused_as_outputs(tmp_path, argv, suffix):
+#: Commands given a special file where they write one (``{f}``), and the suffix the output must have.
+WRITERS = [(["urdf", "-o", "{f}"], ".urdf"), (["plot", STAND, "-o", "{f}"], ".png"),
+           (["export", "--format", "webots", STAND, "-o", "{f}"], ".motion")]
+
+
+def test_special_files_are_refused_as_outputs(tmp_path):
     """Outputs are written by renaming a temp file over them: a device (/dev/null), a FIFO or a socket would be
     replaced, so each is refused."""
-    fifo, sock_path = tmp_path / f"fifo{suffix}", tmp_path / f"sock{suffix}"
-    os.mkfifo(fifo)
-    with socket.socket(socket.AF_UNIX) as sock:
-        sock.bind(str(sock_path))
+    cases, socks = [], []
+    for argv, suffix in WRITERS:
+        fifo, sock_path = tmp_path / f"fifo{suffix}", tmp_path / f"sock{suffix}"
+        os.mkfifo(fifo)
+        socks.append(socket.socket(socket.AF_UNIX))
+        socks[-1].bind(str(sock_path))
         for kind, path in (("named pipe", fifo), ("socket", sock_path), ("character device", "/dev/null")):
-            if kind == "character device" and suffix == ".png":
-                continue                                    # (a PNG output must end in .png)
-            done, _ = _op2motion(tmp_path, *[a.replace("{f}", str(path)) for a in argv], timeout=FIFO_BOUND_S)
-            line = _one_line(done.stderr)
-            assert done.returncode == 2 and kind in line, (kind, line)
-    assert os.path.exists("/dev/null") and not os.path.isfile("/dev/null") and fifo.is_fifo()
+            if kind != "character device" or suffix != ".png":      # (a PNG output must end in .png)
+                cases.append((kind, [a.replace("{f}", str(path)) for a in argv]))
+    try:
+        results = _op2motion_each(tmp_path, [argv for _, argv in cases], timeout=FIFO_BOUND_S * len(cases))
+    finally:
+        for sock in socks:
+            sock.close()
+    for (kind, argv), (code, err, _) in zip(cases, results, strict=True):
+        line = _one_line(err)
+        assert code == 2 and kind in line, (argv, kind, line)
+    assert os.path.exists("/dev/null") and not os.path.isfile("/dev/null")
+    assert all((tmp_path / f"fifo{suffix}").is_fifo() for _, suffix in WRITERS)

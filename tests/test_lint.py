@@ -1,4 +1,5 @@
-"""The lint step: ruff on everything, mypy on the package (both configured in pyproject.toml)."""
+"""The lint step: ruff on everything, mypy on the package (both configured in pyproject.toml; the public API module
+and the tasks under --strict's flags), in one run that also shows what an editor sees through the public API."""
 
 from __future__ import annotations
 
@@ -16,6 +17,32 @@ def test_ruff_is_clean():
 
 
 @pytest.mark.slow
-def test_mypy_is_clean():
-    done = subprocess.run([sys.executable, "-m", "mypy"], cwd=ROOT, capture_output=True, text=True)
+def test_mypy_is_clean_and_sees_the_public_api(tmp_path):
+    """The package is clean (the API module and ``op2motion/tasks/`` under --strict's flags: pyproject.toml), and
+    ``reveal_type(op2motion.solve)`` is a function type, not Any. One run, sharing mypy's cache with a developer's
+    (a second run with other options would throw it away)."""
+    probe = tmp_path / "probe.py"
+    probe.write_text("import op2motion\nreveal_type(op2motion.solve)\nreveal_type(op2motion.check)\n",
+                     encoding="utf-8")
+    done = subprocess.run([sys.executable, "-m", "mypy", "op2motion", str(probe)], cwd=ROOT, capture_output=True,
+                          text=True)
     assert done.returncode == 0, done.stdout + done.stderr
+    revealed = [line for line in done.stdout.splitlines() if "Revealed type" in line]
+    assert len(revealed) == 2 and not any('"Any"' in line for line in revealed), done.stdout
+    assert "def (" in revealed[0], revealed[0]
+
+
+def test_the_api_module_and_the_tasks_are_held_to_strict():
+    """The overrides name --strict's per-module flags for the API module and every task module."""
+    import tomllib
+
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["tool"]["mypy"]
+    strict = next(o for o in config["overrides"] if "op2motion.tasks.*" in o["module"])
+    assert {"op2motion", "op2motion.tasks"} <= set(strict["module"])
+    assert all(strict[flag] for flag in STRICT_FLAGS), strict
+
+
+#: --strict's per-module flags (mypy 2.x; warn_unused_ignores and warn_redundant_casts are set for the package).
+STRICT_FLAGS = ("disallow_any_generics", "disallow_subclassing_any", "disallow_untyped_calls", "disallow_untyped_defs",
+                "disallow_incomplete_defs", "check_untyped_defs", "disallow_untyped_decorators", "warn_return_any",
+                "no_implicit_reexport", "strict_equality", "extra_checks")

@@ -15,7 +15,7 @@ from op2motion.formats.actionlayout import PAGE_SIZE, is_empty, reset_file
 from op2motion.formats.motionfile import read_motion
 from op2motion.formats.posefile import read_pose
 from op2motion.motion.checks import check_trajectory, require_clear
-from op2motion.motion.planner import SPEED_FRACTION, action_pages, plan, robot_steps
+from op2motion.motion.planner import SPEED_FRACTION, action_pages, robot_steps, trajectory_through
 from op2motion.motion.player import play, start_ticks
 from op2motion.motion.shift import settled_coms, with_weight_shifts
 from op2motion.motion.trajectory import from_playback
@@ -38,7 +38,7 @@ def _waypoints(spec, names, duration=1.5, pauses=None):
 
 
 def test_quintic_starts_and_ends_at_rest_on_the_poses(spec):
-    traj = plan(_waypoints(spec, ["standing", "walkready"]), spec)
+    traj = trajectory_through(_waypoints(spec, ["standing", "walkready"]), spec)
     assert np.allclose(traj.goals[0], _pose(spec, "standing").servo)
     assert np.allclose(traj.goals[-1], _pose(spec, "walkready").servo)
     assert traj.duration_s == pytest.approx(np.ceil(1.5 / CONTROL_PERIOD_S) * CONTROL_PERIOD_S)   # whole 8 ms units
@@ -47,7 +47,7 @@ def test_quintic_starts_and_ends_at_rest_on_the_poses(spec):
 
 
 def test_a_segment_too_fast_for_the_servos_is_stretched_with_a_note(spec):
-    traj = plan(_waypoints(spec, ["standing", "sit_down"], duration=0.1), spec)
+    traj = trajectory_through(_waypoints(spec, ["standing", "sit_down"], duration=0.1), spec)
     peak = np.abs(np.diff(traj.goals, axis=0) / traj.dt).max()
     assert peak <= SPEED_FRACTION * spec.servo.no_load_speed_rad_s * (1 + SPEED_TOL)
     assert traj.duration_s > 0.1 and any("stretched" in n for n in traj.notes)
@@ -55,7 +55,7 @@ def test_a_segment_too_fast_for_the_servos_is_stretched_with_a_note(spec):
 
 def test_one_foot_segments_keep_the_settled_com_on_its_line(spec):
     waypoints = _waypoints(spec, ["init", "book_2_44", "init"], pauses=[0.0, 0.5, 0.0])
-    traj = plan(waypoints, spec)
+    traj = trajectory_through(waypoints, spec)
     assert sum(s == "left" for s in traj.supports) > 100     # the lift and the pose stand on the left foot alone
     k = traj.segment_names.index("init@left+lift -> book_2_44")
     rows = traj.goals[traj.segment == k]
@@ -73,8 +73,8 @@ def test_an_arm_driven_into_the_torso_is_refused_naming_segment_and_links(spec):
     inside = init.copy()
     for joint, deg in (("r_sho_pitch", -45.0), ("r_sho_roll", -90.0), ("r_el", 0.0)):
         inside[spec.joint_names.index(joint)] = np.radians(deg)
-    traj = plan([Waypoint("init", init, 0.0, 0.0, "double"), Waypoint("arm_in", inside, 1.0, 0.0, "double")], spec,
-                planner="none")
+    traj = trajectory_through([Waypoint("init", init, 0.0, 0.0, "double"),
+                               Waypoint("arm_in", inside, 1.0, 0.0, "double")], spec, planner="none")
     with pytest.raises(CheckFailed, match=r"init -> arm_in.*(body_link|r_el_link)"):
         require_clear(traj, spec)
 
@@ -83,7 +83,7 @@ def test_example_motions_pass_the_checks_along_the_way(spec):
     for name in ("stand_sit_stand", "stand_book_2_44"):
         motion = read_motion(POSES / "motions" / f"{name}.json", spec)
         waypoints = [Waypoint(s.pose.name, s.pose.servo, s.duration_s, s.pause_s, s.pose.support) for s in motion.steps]
-        traj = plan(waypoints, spec)
+        traj = trajectory_through(waypoints, spec)
         require_clear(traj, spec)
         checks = check_trajectory(traj, spec).summary()
         assert checks["zmp_margin_min_m"] > ZMP_INSIDE_M and checks["torque_ratio_max"] < 1.0
@@ -119,7 +119,7 @@ def test_a_motion_exported_as_pages_imports_and_plays_back_the_same(spec):
     assert [(s.time, s.pause) for s in imported] == [(s.time, s.pause) for s in steps]
     assert [s.ticks for s in imported] == [s.words for s in steps]
     played = from_playback(play(ActionFile(bytes(data)), 30, start_ticks(waypoints[0].servo, spec)), spec)
-    planned = plan(waypoints, spec, "robot", shift_weight=False)
+    planned = trajectory_through(waypoints, spec, "robot", shift_weight=False)
     assert np.array_equal(np.round(played.goals, 9), np.round(planned.goals, 9))
 
 
@@ -162,7 +162,7 @@ def test_stand_sit_stand_gets_through_in_physics(spec, engine):
 def test_stand_to_a_one_leg_pose_and_back_in_physics(spec):
     from op2motion.physics import check
 
-    traj = plan(_waypoints(spec, ["init", "book_2_47", "init"], pauses=[0.0, 0.5, 0.0]), spec)
+    traj = trajectory_through(_waypoints(spec, ["init", "book_2_47", "init"], pauses=[0.0, 0.5, 0.0]), spec)
     assert "right" in traj.supports
     verdict = check(traj.schedule(spec), spec).run
     assert verdict.stable, verdict.reasons

@@ -1,12 +1,11 @@
 """The public API as tools see it: every name in ``op2motion.__all__`` is imported explicitly for type checkers (while
 ``import op2motion`` stays free of work, ``tests/test_startup.py``), resolves at run time to the same object, and
-mypy --strict sees real types through it; the package says it is typed (``py.typed``)."""
+mypy --strict sees real types through it (tests/test_lint.py, one mypy run); the package says it is typed
+(``py.typed``)."""
 
 from __future__ import annotations
 
 import ast
-import subprocess
-import sys
 
 import pytest
 from helpers import ROOT
@@ -45,22 +44,6 @@ def test_each_public_name_resolves(name):
 def test_the_package_is_marked_typed():
     assert (ROOT / "op2motion" / "py.typed").is_file()
     assert '"op2motion" = ["py.typed"]' in (ROOT / "pyproject.toml").read_text(encoding="utf-8")
-
-
-@pytest.mark.slow
-def test_mypy_sees_the_public_api_strictly(tmp_path):
-    """``reveal_type(op2motion.solve)`` is a function type, not Any, and the API module and the tasks are clean under
-    --strict (errors inside the modules they import are the package-wide mypy run's, test_lint)."""
-    probe = tmp_path / "probe.py"
-    probe.write_text("import op2motion\nreveal_type(op2motion.solve)\nreveal_type(op2motion.check)\n", encoding="utf-8")
-    done = subprocess.run([sys.executable, "-m", "mypy", "--strict", "--follow-imports=silent", "--no-incremental",
-                           str(INIT), str(ROOT / "op2motion" / "tasks"), str(probe)], cwd=ROOT, capture_output=True,
-                          text=True)
-    revealed = [line for line in done.stdout.splitlines() if "Revealed type" in line]
-    assert len(revealed) == 2 and not any('"Any"' in line for line in revealed), done.stdout
-    assert "def (" in revealed[0], revealed[0]
-    errors = [line for line in done.stdout.splitlines() if ": error:" in line]
-    assert errors == [], done.stdout
 
 
 #: Public methods whose tuple is a value, not a bundle of results: a support rectangle (front, back, left, right) [m].

@@ -16,7 +16,7 @@ from op2motion.kinematics.dh import forward_dh_frames
 from op2motion.kinematics.shapes import clearances, shape_set
 from op2motion.motion.body_checks import PLAN_CLEARANCE_M, BodyChecks
 from op2motion.motion.checks import check_trajectory, clearance, require_clear
-from op2motion.motion.planner import plan
+from op2motion.motion.planner import trajectory_through
 from op2motion.motion.route import route_segment
 from op2motion.motion.rrt import Box, RrtSettings, edge_points, rrt_connect, shortcut
 from op2motion.motion.waypoint import Waypoint
@@ -95,7 +95,7 @@ def test_colliding_pairs_are_planned_around_with_clearance_at_every_row(spec, na
     one_foot = name in ONE_FOOT
     if not one_foot:
         with pytest.raises(CheckFailed, match="passes"):
-            require_clear(plan([a, b], spec, planner="none"), spec)
+            require_clear(trajectory_through([a, b], spec, planner="none"), spec)
     pieces, why = route_segment(a, b, spec, seed=0)
     assert why is not None and ("swing foot comes down" if one_foot else "overlap") in why and len(pieces) >= 2
     checks = BodyChecks(spec, "left" if one_foot else None)
@@ -106,11 +106,11 @@ def test_colliding_pairs_are_planned_around_with_clearance_at_every_row(spec, na
         m = checks.measure(x + np.linspace(0.0, 1.0, n)[:, None] * (y - x))
         assert m.clearance.min() >= least - 1e-9 and m.margin.min() > MIN_MARGIN_M
         assert m.swing.min() >= 0.0                                  # on one foot, the other stays lifted
-    traj = plan([a, b], spec, seed=0)
+    traj = trajectory_through([a, b], spec, seed=0)
     assert clearance(traj.goals, spec)[0].min() >= SELF_CLEARANCE_M
     assert check_trajectory(traj, spec).summary()["min_clearance_m"] >= SELF_CLEARANCE_M - 5e-6
     assert any("planned around" in n for n in traj.notes)
-    again = plan([a, b], spec, seed=0)
+    again = trajectory_through([a, b], spec, seed=0)
     assert np.array_equal(traj.goals, again.goals)
     ends = np.array([traj.goals[0] - a.servo, traj.goals[-1] - b.servo])
     assert np.abs(ends).max() < END_TOL_RAD               # on one foot the balance lean leaves the ends as they were
@@ -122,7 +122,8 @@ def test_a_goal_inside_the_body_has_no_path(spec):
     for joint, deg in (("r_sho_pitch", -45.0), ("r_sho_roll", -90.0), ("r_el", 0.0)):
         inside[spec.joint_names.index(joint)] = np.radians(deg)
     with pytest.raises(CheckFailed, match="no path from init to arm_in: arm_in itself has links"):
-        plan([Waypoint("init", init, 0.0, 0.0, "double"), Waypoint("arm_in", inside, 1.0, 0.0, "double")], spec)
+        trajectory_through([Waypoint("init", init, 0.0, 0.0, "double"), Waypoint("arm_in", inside, 1.0, 0.0, "double")],
+                           spec)
 
 
 def _write_pair(tmp_path, spec, change: dict) -> list[str]:
@@ -163,7 +164,7 @@ def test_cli_refuses_a_pair_with_no_path_writing_nothing(tmp_path, spec, capsys)
 @pytest.mark.parametrize("name", sorted(PAIRS))
 def test_planned_rows_clearance_agrees_with_pybullets_closest_points(spec, pybullet_robot, name):
     client, robot = pybullet_robot
-    traj = plan(list(_pair(spec, PAIRS[name])), spec, seed=0)
+    traj = trajectory_through(list(_pair(spec, PAIRS[name])), spec, seed=0)
     rows = traj.goals[np.linspace(0, len(traj.goals) - 1, ROWS_COMPARED).astype(int)]
     shapes = shape_set(spec, "left")
     _, frames = forward_dh_frames(servo_to_book(rows, "left", spec), spec)
@@ -180,6 +181,6 @@ def test_planned_rows_clearance_agrees_with_pybullets_closest_points(spec, pybul
 @pytest.mark.physics
 @pytest.mark.parametrize("name", sorted(PAIRS))
 def test_planned_motions_stand_in_both_engines(spec, name):
-    traj = plan(list(_pair(spec, PAIRS[name])), spec, seed=0)
+    traj = trajectory_through(list(_pair(spec, PAIRS[name])), spec, seed=0)
     report = check(traj.schedule(spec), spec, ("pybullet", "mujoco"))
     assert report.agree and report.stable, [e.run.reasons for e in report.engines.values()]

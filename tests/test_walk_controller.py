@@ -12,7 +12,7 @@ from helpers import run_cli
 from op2motion.errors import InputError
 from op2motion.gait import load_preset
 from op2motion.gait.controller import OPEN_LOOP, STOCK_GYRO_GAINS_S, Feedback, WalkController, _swing_phase
-from op2motion.gait.speeds import SPEED_SHARE, plan_within_speed, speed_check
+from op2motion.gait.speeds import SPEED_SHARE, gait_within_speed, speed_check
 from op2motion.kinematics.leg_ik import leg_fk
 from op2motion.physics import family
 from op2motion.physics.robust import FRICTION_RANGE, LATENCY_S, STIFFNESS_RANGE, UNSTATED_TORSO
@@ -109,16 +109,16 @@ def test_bad_feedback_gains_are_refused_by_name(field, value):
 
 
 def test_the_forward_preset_is_within_the_servos_speed(spec):
-    check = speed_check(plan_within_speed(load_preset("forward").with_steps(SHORT_STEPS), spec), spec)
+    check = speed_check(gait_within_speed(load_preset("forward").with_steps(SHORT_STEPS), spec), spec)
     assert check.ok and check.limit_rad_s == pytest.approx(SPEED_SHARE * spec.servo.no_load_speed_rad_s)
 
 
 def test_a_plan_too_fast_is_refused_naming_the_joint_or_re_timed(spec):
     fast = replace(load_preset("forward").with_steps(SHORT_STEPS), step_s=0.24, step_height_m=0.03)
     with pytest.raises(InputError) as err:
-        plan_within_speed(fast, spec)
+        gait_within_speed(fast, spec)
     assert err.value.param == "preset" and "knee" in str(err.value) and "step_s" in str(err.value)
-    gait = plan_within_speed(fast, spec, retime=True)
+    gait = gait_within_speed(fast, spec, retime=True)
     assert gait.params.step_s > fast.step_s and speed_check(gait, spec).ok
     assert gait.params.step_length_m == fast.step_length_m
 
@@ -289,7 +289,7 @@ def test_leg_odometry_measures_a_landing_miss_and_moves_the_next_swing_across_th
 
     gait = controller.gait
     rows = landing_rows(gait.timeline.contact, 4)
-    assert len(rows) == len(gait.plan.steps)
+    assert len(rows) == len(gait.footsteps.steps)
     for k, (stance, landed) in rows.items():
         assert gait.timeline.contact[k] == "double" and stance != landed
     odo = FootOdometry.of(gait, controller.legs, 4)

@@ -8,7 +8,7 @@ import pytest
 from op2motion.gait import load_preset
 from op2motion.gait.controller import WalkController
 from op2motion.gait.robust import MAX_DRIFT_SHARE, MAX_HEADING_DEG, walk_judge
-from op2motion.gait.speeds import plan_within_speed
+from op2motion.gait.speeds import gait_within_speed
 from op2motion.physics import family, robust_check
 from op2motion.robot.specfile import default_spec
 
@@ -36,7 +36,7 @@ SIDEWAYS_SUBSET = ("torso CoM x +20 mm", "stiffness ×1.6")
 @pytest.fixture(scope="module")
 def report():
     spec = default_spec()
-    gait = plan_within_speed(load_preset("forward"), spec)
+    gait = gait_within_speed(load_preset("forward"), spec)
     members = [m for m in family(spec) if m.name in SUBSET]
     assert len(members) == len(SUBSET)
     return robust_check(lambda: WalkController(gait, spec), spec, ("pybullet", "mujoco"), walk_judge,
@@ -56,7 +56,7 @@ def test_the_forward_walk_passes_the_subset_in_both_engines(report):
 
 def test_side_steps_keep_their_line_by_leg_odometry():
     spec = default_spec()
-    gait = plan_within_speed(load_preset("sideways"), spec)
+    gait = gait_within_speed(load_preset("sideways"), spec)
     members = [m for m in family(spec) if m.name in SIDEWAYS_SUBSET]
     assert len(members) == len(SIDEWAYS_SUBSET)
     report = robust_check(lambda: WalkController(gait, spec), spec, ("pybullet", "mujoco"), walk_judge,

@@ -1,8 +1,8 @@
 """What the robot plays, made from op2motion's own motions and checked before it moves.
 
-* :func:`move`: from where the robot is to a pose, planned within the servos' speed (:func:`op2motion.motion.
-  planner.plan`: quintic, every joint under half the MX-28's no-load speed, weight shifts where the support changes,
-  collisions planned around);
+* :func:`move`: from where the robot is to a pose, planned within the servos' speed
+  (:func:`op2motion.motion.planner.trajectory_through`: quintic, every joint under half the MX-28's no-load speed,
+  weight shifts where the support changes, collisions planned around);
 * :func:`then`: two trajectories one after the other (the second starting where the first ends);
 * :func:`page_start` and :func:`page_trajectory`: an action page's first pose, and the page played from it tick for
   tick as the framework plays it (:func:`op2motion.motion.pipeline.play_page`);
@@ -40,28 +40,28 @@ def ready_pose(spec: Spec) -> Pose:
     make directly (from straight legs onto one foot, the weight shift it inserts has the arms through the torso)."""
     from dataclasses import replace
 
-    from op2motion.gait import load_preset, plan_gait
+    from op2motion.gait import generate_gait, load_preset
 
     params = replace(load_preset(None).with_steps(1), hip_lower_m=READY_HIP_LOWER_M)
-    return Pose("ready", Support.DOUBLE, plan_gait(params, spec).joints[0])
+    return Pose("ready", Support.DOUBLE, generate_gait(params, spec).joints[0])
 
 
 def move(current: np.ndarray, target: Pose, spec: Spec, support: Support | str = Support.DOUBLE) -> Trajectory:
     """From ``current`` servo angles (20,) [rad] (the robot on ``support``) to ``target``, within the servos'
     speed; through :func:`ready_pose` where no direct way is found."""
     from op2motion.errors import CheckFailed
-    from op2motion.motion.planner import plan
+    from op2motion.motion.planner import trajectory_through
     from op2motion.motion.waypoint import Waypoint
 
     here = Waypoint("present", np.asarray(current, dtype=float), 0.0, 0.0, Support.of(support))
     there = Waypoint(target.name, target.servo, MIN_MOVE_S, 0.0, target.support)
     try:
-        return plan([here, there], spec)
+        return trajectory_through([here, there], spec)
     except CheckFailed as direct:
         ready = ready_pose(spec)
         try:
-            return plan([here, Waypoint(ready.name, ready.servo, MIN_MOVE_S, 0.0, ready.support, stop=True), there],
-                        spec)
+            via = Waypoint(ready.name, ready.servo, MIN_MOVE_S, 0.0, ready.support, stop=True)
+            return trajectory_through([here, via, there], spec)
         except CheckFailed:
             raise direct from None
 

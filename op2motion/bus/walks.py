@@ -40,10 +40,10 @@ def walk(port: str, spec: Spec, preset: str | None = None, steps: int | None = N
     WalkController` in the loop with the robot's IMU and joints until it stands at the end."""
     from op2motion.gait import preset_path, read_preset
     from op2motion.gait.controller import WalkController
-    from op2motion.gait.speeds import plan_within_speed
+    from op2motion.gait.speeds import gait_within_speed
 
     params = read_preset(preset_path(preset)).with_steps(steps)
-    gait = plan_within_speed(params, spec, target)
+    gait = gait_within_speed(params, spec, target)
     controller = WalkController(gait, spec)
     result = _on_robot(port, spec, controller, f"walk '{params.name}' ({gait.params.steps} steps)", options)
     walked = dict(result.runs).get("walk")

@@ -25,7 +25,7 @@ TIME_PANELS_IN = 7.5       # the three time panels' height [in]
 def _top_height_in(gait: Gait, spec: Spec) -> float:
     """Height [in] of the top view that shows the footprints at equal scale across :data:`PLOT_WIDTH_IN`, plus
     room for its legend and labels, within 2-7 in."""
-    corners = np.vstack([sole_rectangle(spec, f) for f in (*gait.plan.start.values(), *gait.plan.steps)])
+    corners = np.vstack([sole_rectangle(spec, f) for f in (*gait.footsteps.start.values(), *gait.footsteps.steps)])
     span = np.ptp(corners, axis=0) + 0.02
     return float(np.clip(PLOT_WIDTH_IN * span[1] / max(span[0], 1e-3) + 1.2, 2.0, 7.0))
 
@@ -39,10 +39,10 @@ def render_gait(gait: Gait, spec: Spec, title: str, cop: Sequence[Sequence[float
     fig = plt.figure(figsize=(10, top_in + TIME_PANELS_IN))
     grid = fig.add_gridspec(4, 1, height_ratios=[top_in, 2.4, 2.4, 1.7])
     top = fig.add_subplot(grid[0])
-    for side, foot in gait.plan.start.items():
+    for side, foot in gait.footsteps.start.items():
         box = sole_rectangle(spec, foot)
         top.fill(box[:, 0], box[:, 1], fill=False, ls=":", color=SIDE_COLOUR[side], lw=1.0)
-    for k, foot in enumerate(gait.plan.steps):
+    for k, foot in enumerate(gait.footsteps.steps):
         box = sole_rectangle(spec, foot)
         top.fill(box[:, 0], box[:, 1], alpha=0.15, color=SIDE_COLOUR[foot.side])
         top.plot(*np.vstack([box, box[:1]]).T, color=SIDE_COLOUR[foot.side], lw=0.8)

@@ -5,7 +5,7 @@ robot bridge or another simulator, with the torso's gyro [rad/s] and acceleromet
 y left, z up; the accelerometer reads +9.81 m/s² on z when upright and still) and the joint positions every 8 ms.
 Inside, per tick (gains in :class:`Feedback`):
 
-1. **the plan** (:func:`.schedule.gait_plan`): the goals of this row (servo feed-forward included), the planned
+1. **the plan** (:func:`.schedule.plan_of_gait`): the goals of this row (servo feed-forward included), the planned
    torso pose and soles;
 2. **gyro damping** as in the stock gait: hip roll and ankle roll against the roll rate, knee and ankle pitch
    against the pitch rate (0.6 of the stock gains, up to all of them as the servos' measured softness grows; a
@@ -41,7 +41,7 @@ from op2motion.gait.learning import StepLearner
 from op2motion.gait.odometry import FootOdometry, left_of
 from op2motion.gait.presets import load_preset
 from op2motion.gait.rows import REACH_SHARE, RowBuffer, rows_of_gait, swing_phase
-from op2motion.gait.schedule import gait_plan
+from op2motion.gait.schedule import plan_of_gait
 from op2motion.kinematics.leg_ik import leg_ik, leg_of, rot_x, rot_y, rot_z, within_reach
 from op2motion.motion.stillness import Stillness
 from op2motion.physics import Plan, Schedule
@@ -93,7 +93,7 @@ class WalkController:
 
     def __init__(self, gait: Gait, spec: Spec, feedback: Feedback = Feedback()):
         self.gait, self.spec, self.feedback, self.params = gait, spec, feedback, gait.params
-        self.plan: Plan = gait_plan(gait)
+        self.plan: Plan = plan_of_gait(gait)
         self.schedule = Schedule(self.plan, spec.joint_names)
         self.lead = len(self.plan.goals) - len(gait.goals)
         self._setup_legs(spec, feedback)
@@ -124,9 +124,9 @@ class WalkController:
         from op2motion.robot.specfile import default_spec
 
         spec = spec or default_spec()
-        from op2motion.gait.speeds import plan_within_speed
+        from op2motion.gait.speeds import gait_within_speed
 
-        return cls(plan_within_speed(load_preset(preset).with_steps(steps), spec), spec, feedback)
+        return cls(gait_within_speed(load_preset(preset).with_steps(steps), spec), spec, feedback)
 
     #: Makes the steerable walk (set by :mod:`.steer` when the package loads: the steered walk is a walk controller,
     #: so this module cannot import it).

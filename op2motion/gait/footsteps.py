@@ -45,7 +45,7 @@ class Footstep:
 
 
 @dataclass(frozen=True)
-class FootPlan:
+class Footsteps:
     """The start placements of both feet and the steps, in order: step k moves ``steps[k].side`` from where that
     foot stood to ``steps[k]``."""
 
@@ -86,7 +86,7 @@ def first_side(params: GaitParams) -> str:
     return "left"
 
 
-def plan_footsteps(params: GaitParams, spec: Spec, target: tuple[float, float, float] | None = None) -> FootPlan:
+def place_footsteps(params: GaitParams, spec: Spec, target: tuple[float, float, float] | None = None) -> Footsteps:
     """The footsteps of ``params.steps`` steps; with ``target`` (x [m], y [m], yaw [rad]) the body walks there
     instead, in as few steps as the per-step advance allows (the step length, side and turn of ``params`` are the
     largest per step), the last step closing the feet."""
@@ -101,9 +101,9 @@ def plan_footsteps(params: GaitParams, spec: Spec, target: tuple[float, float, f
         centre = moved(centre, dx, dy, dyaw)
         steps.append(foot_at(side, centre, width))
         side = "right" if side == "left" else "left"
-    plan = FootPlan(start, tuple(steps))
-    check_clear(plan, spec)
-    return plan
+    footsteps = Footsteps(start, tuple(steps))
+    check_clear(footsteps, spec)
+    return footsteps
 
 
 def _target_moves(params: GaitParams, target: tuple[float, float, float]) -> list[tuple[float, float, float]]:
@@ -169,10 +169,10 @@ def swing_clear(stand: Footstep, before: Footstep, step: Footstep, spec: Spec) -
     return True
 
 
-def check_clear(plan: FootPlan, spec: Spec) -> None:
+def check_clear(footsteps: Footsteps, spec: Spec) -> None:
     """Raise :class:`InputError` if a swing foot comes within :data:`FOOT_GAP_M` of the standing foot."""
-    for k, step in enumerate(plan.steps):
-        stand, before = plan.stance_before(k)
+    for k, step in enumerate(footsteps.steps):
+        stand, before = footsteps.stance_before(k)
         if not swing_clear(stand, before, step, spec):
             raise InputError(f"expected the feet to stay {FOOT_GAP_M * 1000:.0f} mm apart, got step {k + 1} "
                              f"({step.side} foot to x {step.x:.3f} m, y {step.y:.3f} m, yaw "

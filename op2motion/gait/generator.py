@@ -1,6 +1,6 @@
 """The gait generator: footsteps -> ZMP reference -> preview-controlled CoM -> torso -> leg IK -> joint goals.
 
-1. :func:`.footsteps.plan_footsteps` places the feet, :func:`.timeline.build_timeline` clocks them (8 ms rows):
+1. :func:`.footsteps.place_footsteps` places the feet, :func:`.timeline.build_timeline` clocks them (8 ms rows):
    ZMP reference and both soles' trajectories.
 2. The cart-table preview controller (:mod:`.preview`) turns the ZMP reference into a CoM path at the pendulum
    height ``z_c``: the CoM height of the gait's standing pose (hips :attr:`~.GaitParams.hip_lower_m` below their
@@ -24,7 +24,7 @@ from typing import Any, Callable
 import numpy as np
 
 from op2motion.errors import InputError
-from op2motion.gait.footsteps import FootPlan, Footstep, plan_footsteps, sole_rectangle
+from op2motion.gait.footsteps import Footstep, Footsteps, place_footsteps, sole_rectangle
 from op2motion.gait.params import GaitParams
 from op2motion.gait.preview import preview_gains, track_reference
 from op2motion.gait.timeline import Timeline, build_timeline
@@ -55,7 +55,7 @@ class Gait:
     of the start (X forward, Y left, floor at Z = 0)."""
 
     params: GaitParams
-    plan: FootPlan
+    footsteps: Footsteps
     timeline: Timeline
     com_height: float
     torso_pos: np.ndarray
@@ -91,14 +91,14 @@ class Gait:
     @property
     def walking_s(self) -> float:
         """Time spent stepping: from the first lift-off to the last touchdown and its double support [s]."""
-        return len(self.plan.steps) * self.params.step_s
+        return len(self.footsteps.steps) * self.params.step_s
 
     @property
     def steady_window(self) -> tuple[float, float]:
         """(start, end) [s] of steady walking: from the second step's touchdown to the last advancing step's
         (the whole stepping time for walks of three steps or fewer)."""
         step, t = self.timeline.step, self.times
-        n = len(self.plan.steps)
+        n = len(self.footsteps.steps)
         if n <= 3:
             rows = np.flatnonzero((step >= 0) & (step < n))
             return float(t[rows[0]]), float(t[rows[-1]])
@@ -217,12 +217,12 @@ def standing_height(params: GaitParams, spec: Spec) -> float:
     return straight - params.hip_lower_m - float(hip[2])
 
 
-def plan_gait(params: GaitParams, spec: Spec, target: tuple[float, float, float] | None = None,
+def generate_gait(params: GaitParams, spec: Spec, target: tuple[float, float, float] | None = None,
               on_progress: Callable[[float, float], Any] | None = None) -> Gait:
     """Plan a walk (see the module docstring); ``target`` (x [m], y [m], yaw [rad]) walks there instead of
     ``params.steps`` steps; ``on_progress(done, total)`` gets the planning passes done."""
-    plan = plan_footsteps(params, spec, target)
-    timeline = build_timeline(params, plan)
+    footsteps = place_footsteps(params, spec, target)
+    timeline = build_timeline(params, footsteps)
     body = _Body(spec, timeline)
     feet = timeline.feet
     rot = torso_rotations(feet, params)
@@ -248,14 +248,14 @@ def plan_gait(params: GaitParams, spec: Spec, target: tuple[float, float, float]
         if p < params.zmp_passes:
             fix = track_reference(gains, timeline.zmp_ref - zmp, start=np.zeros(2))
             target_com = target_com + fix.com
-    margin = zmp_margins(zmp, timeline, plan, spec)
+    margin = zmp_margins(zmp, timeline, footsteps, spec)
     p_gains = np.full_like(goals, float(params.p_gain))
     servo_goals = goals + body.feedforward(p_gains) if params.servo_feedforward else goals
-    return Gait(params, plan, timeline, com_height, pos, rot, goals, servo_goals, p_gains, com, cart.com, zmp,
+    return Gait(params, footsteps, timeline, com_height, pos, rot, goals, servo_goals, p_gains, com, cart.com, zmp,
                 margin)
 
 
-def zmp_margins(zmp: np.ndarray, timeline: Timeline, plan: FootPlan, spec: Spec) -> np.ndarray:
+def zmp_margins(zmp: np.ndarray, timeline: Timeline, footsteps: Footsteps, spec: Spec) -> np.ndarray:
     """Margin [m] of each row's ZMP to the sole(s) on the floor (positive inside)."""
     out = np.empty(len(zmp))
     for i, contact in enumerate(timeline.contact):

@@ -61,11 +61,11 @@ class StepLearner:
     def of(cls, gait: Gait, joints: dict[str, np.ndarray], gain: float, shift: int) -> "StepLearner":
         """The learner of a planned gait; ``joints`` per side the indices of that leg's servos."""
         step = gait.timeline.step
-        n = len(gait.plan.steps)
+        n = len(gait.footsteps.steps)
         first = np.array([int(np.argmax(step == s)) for s in range(n)], dtype=int)
         ends = np.append(first, int(np.argmax(step == n))) if n else np.zeros(1, dtype=int)
         rows = max(int(np.min(np.diff(ends))), 1) if n else 1
-        learner = cls(step, first, _alike(gait), tuple(s.side for s in gait.plan.steps), rows,
+        learner = cls(step, first, _alike(gait), tuple(s.side for s in gait.footsteps.steps), rows,
                       {side: np.asarray(index, dtype=int) for side, index in joints.items()}, gait.joints.shape[1],
                       gain, shift)
         learner.reset()
@@ -119,8 +119,8 @@ class StepLearner:
 
 def _shape(gait: Gait, k: int) -> np.ndarray:
     """Step ``k``'s swing in its stance foot's frame: start (x, y), end (x, y) [m], start and end yaw [rad]."""
-    stand, before = gait.plan.stance_before(k)
-    goal = gait.plan.steps[k]
+    stand, before = gait.footsteps.stance_before(k)
+    goal = gait.footsteps.steps[k]
     c, s = np.cos(stand.yaw), np.sin(stand.yaw)
     to_stance = np.array([[c, s], [-s, c]])
     out = []
@@ -133,7 +133,7 @@ def _shape(gait: Gait, k: int) -> np.ndarray:
 def _alike(gait: Gait) -> np.ndarray:
     """Per step, whether it swings like a step of the same side before or after it (the first and the closing steps
     of a walk do not)."""
-    n = len(gait.plan.steps)
+    n = len(gait.footsteps.steps)
     shapes = [_shape(gait, k) for k in range(n)]
 
     def same(a: int, b: int) -> bool:

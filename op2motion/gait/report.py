@@ -29,7 +29,7 @@ def gait_summary(gait: Gait) -> dict[str, Any]:
     speed_window = gait.steady_window
     steady = gait.com[[int(round(t / gait.dt)) for t in speed_window], :2]
     return {
-        "preset": gait.params.name, "steps": len(gait.plan.steps), "duration_s": round(gait.duration_s, 3),
+        "preset": gait.params.name, "steps": len(gait.footsteps.steps), "duration_s": round(gait.duration_s, 3),
         "walking_s": round(gait.walking_s, 3), "distance_m": round(distance, 4),
         "planned_speed_mps": 0.0 if distance < STILL_M else round(
             float(np.hypot(*(steady[1] - steady[0]))) / max(speed_window[1] - speed_window[0], 1e-9), 4),
@@ -39,7 +39,7 @@ def gait_summary(gait: Gait) -> dict[str, Any]:
         "zmp_margin_min_at_s": round(float(gait.times[worst]), 3),
         "com_height_m": round(gait.com_height, 4),
         "footsteps": [{"side": f.side, "x_m": round(f.x, 4), "y_m": round(f.y, 4),
-                       "yaw_deg": round(math.degrees(f.yaw), 2)} for f in gait.plan.steps],
+                       "yaw_deg": round(math.degrees(f.yaw), 2)} for f in gait.footsteps.steps],
         "params": asdict(gait.params),
     }
 
@@ -51,7 +51,7 @@ def gait_csv(gait: Gait, spec: Spec) -> str:
 
 def gait_webots(gait: Gait, spec: Spec) -> str:
     """The goals every 8 ms as a Webots ``.motion`` file (lines named by step: ``start``, ``step1``, ...)."""
-    n = len(gait.plan.steps)
+    n = len(gait.footsteps.steps)
     names = ["start" if s < 0 else ("stop" if s >= n else f"step{s + 1}") for s in gait.timeline.step]
     return webots_rows(gait.times, gait.goals, spec, names)
 

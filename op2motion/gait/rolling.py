@@ -1,6 +1,6 @@
 """The rolling planner: a walk planned one phase at a time while it walks, the same pipeline as a planned walk.
 
-A planned walk (:func:`.generator.plan_gait`) sees every footstep before the first; a steered one knows only the
+A planned walk (:func:`.generator.generate_gait`) sees every footstep before the first; a steered one knows only the
 command of the moment. :class:`RollingPlanner` plans the next phase (:mod:`.phases`: a standing spell, the start, a
 step, the end) shortly before it begins (:data:`PLAN_AHEAD_ROWS`), over a window that reaches past it:
 

@@ -21,7 +21,7 @@ def _lead(rows: np.ndarray, lead: int) -> np.ndarray:
     return np.concatenate([np.repeat(rows[:1], lead, axis=0), rows])
 
 
-def gait_plan(gait: Gait) -> Plan:
+def plan_of_gait(gait: Gait) -> Plan:
     """The physics plan of a gait (see the module docstring)."""
     dt = gait.dt
     start = RAMP_S + WALK_SETTLE_S
@@ -40,4 +40,4 @@ def gait_plan(gait: Gait) -> Plan:
 
 def gait_schedule(gait: Gait, spec: Spec) -> Schedule:
     """The open-loop controller that plays a gait's goals every 8 ms (see the module docstring)."""
-    return Schedule(gait_plan(gait), spec.joint_names)
+    return Schedule(plan_of_gait(gait), spec.joint_names)

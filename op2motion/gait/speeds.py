@@ -4,7 +4,7 @@ A position servo follows its goal no faster than its motor turns unloaded (5.76 
 11.1 V: the spec's ``[[servo.rating]]`` at its supply voltage). Past about 90 % of it the loaded servo saturates,
 the joint lags its plan, and the swing foot lands late and low. :func:`speed_check` measures the planned joint
 angles' speeds (central differences at the 8 ms period; the servo feed-forward's slow sag offsets are left out,
-they are not motion the joint makes); :func:`plan_within_speed` plans a gait and either refuses a plan past the
+they are not motion the joint makes); :func:`gait_within_speed` plans a gait and either refuses a plan past the
 limit (naming the joint, its speed and the slowest step that would do) or re-times it: it lengthens the step
 (``step_s``, the stride kept, so the walk is slower) until every joint is within the limit.
 """
@@ -17,7 +17,7 @@ from typing import Any, Callable
 import numpy as np
 
 from op2motion.errors import InputError
-from op2motion.gait.generator import Gait, plan_gait
+from op2motion.gait.generator import Gait, generate_gait
 from op2motion.gait.params import RANGES, GaitParams
 from op2motion.robot.joints import LIMIT_SLACK_RAD, joint_range
 from op2motion.robot.spec import Spec
@@ -67,12 +67,12 @@ def too_fast_message(check: SpeedCheck, step_s: float) -> str:
             f"{step_s * check.ratio * RETIME_MARGIN:.2f} s (the preset's step_s) would do, or re-time the plan)")
 
 
-def plan_within_speed(params: GaitParams, spec: Spec, target: tuple[float, float, float] | None = None,
+def gait_within_speed(params: GaitParams, spec: Spec, target: tuple[float, float, float] | None = None,
                       retime: bool = False, on_progress: Callable[[float, float], Any] | None = None) -> Gait:
-    """:func:`~.generator.plan_gait` with the speed limit: the plan, re-timed if ``retime`` (the gait's
+    """:func:`~.generator.generate_gait` with the speed limit: the plan, re-timed if ``retime`` (the gait's
     ``params.step_s`` says the step it got). Raises :class:`InputError` on the preset when a joint is too fast
     (without ``retime``, or when even the longest step allowed is)."""
-    gait = plan_gait(params, spec, target, on_progress)
+    gait = generate_gait(params, spec, target, on_progress)
     for _ in range(RETIME_TRIES):
         check = speed_check(gait, spec)
         if check.ok:
@@ -81,7 +81,7 @@ def plan_within_speed(params: GaitParams, spec: Spec, target: tuple[float, float
         if not retime or params.step_s >= longest:
             raise InputError(too_fast_message(check, params.step_s), "preset")
         params = replace(params, step_s=min(longest, round(params.step_s * check.ratio * RETIME_MARGIN, 3)))
-        gait = plan_gait(params, spec, target, on_progress)
+        gait = generate_gait(params, spec, target, on_progress)
     check = speed_check(gait, spec)
     if not check.ok:
         raise InputError(too_fast_message(check, params.step_s), "preset")

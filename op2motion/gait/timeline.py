@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from op2motion.gait.footsteps import FootPlan, Footstep
+from op2motion.gait.footsteps import Footstep, Footsteps
 from op2motion.gait.params import GaitParams
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.support import LIFTED_M, other_side
@@ -106,11 +106,11 @@ def swing_path(params: GaitParams, start: np.ndarray, step: Footstep) -> np.ndar
     return path
 
 
-def build_timeline(params: GaitParams, plan: FootPlan) -> Timeline:
+def build_timeline(params: GaitParams, footsteps: Footsteps) -> Timeline:
     """Rows every :data:`CONTROL_PERIOD_S` for the whole walk (see the module docstring)."""
     n_start, n_single, n_double, n_end = (ticks(params.start_s), ticks(params.single_s), ticks(params.double_s),
                                           ticks(params.end_s))
-    where = {side: np.array([f.x, f.y, 0.0, f.yaw]) for side, f in plan.start.items()}
+    where = {side: np.array([f.x, f.y, 0.0, f.yaw]) for side, f in footsteps.start.items()}
     middle = 0.5 * (where["left"][:2] + where["right"][:2])
     rows_step, rows_contact, refs = [], [], []
     feet: dict[str, list[np.ndarray]] = {side: [] for side in ("left", "right")}
@@ -122,13 +122,13 @@ def build_timeline(params: GaitParams, plan: FootPlan) -> Timeline:
         rows_contact.extend(["double"] * n)
         refs.append(ref)
 
-    first_support = plan.stance_before(0)[0]
+    first_support = footsteps.stance_before(0)[0]
     n_lead = ticks(LEAD_S)
     hold(n_lead, -1, np.repeat(middle[None], n_lead, axis=0))
     ramp = quintic_blend(np.arange(1, n_start + 1) / n_start)[:, None]
     hold(n_start, -1, middle + ramp * (zmp_point(first_support, params) - middle))
-    for k, step in enumerate(plan.steps):
-        stand, before = plan.stance_before(k)
+    for k, step in enumerate(footsteps.steps):
+        stand, before = footsteps.stance_before(k)
         feet[step.side].append(swing_path(params, where[step.side], step))
         goal = landing(where[step.side], step)
         feet[stand.side].append(np.repeat(where[stand.side][None], n_single, axis=0))
@@ -136,11 +136,11 @@ def build_timeline(params: GaitParams, plan: FootPlan) -> Timeline:
         rows_contact.extend([stand.side] * n_single)
         refs.append(np.repeat(zmp_point(stand, params)[None], n_single, axis=0))
         where[step.side] = goal
-        last = k == len(plan.steps) - 1
+        last = k == len(footsteps.steps) - 1
         after = 0.5 * (where["left"][:2] + where["right"][:2]) if last else zmp_point(step, params)
         ramp = (np.arange(1, n_double + 1) / n_double)[:, None]
         hold(n_double, k, zmp_point(stand, params) + ramp * (after - zmp_point(stand, params)))
-    hold(n_end, len(plan.steps), np.repeat(refs[-1][-1:], n_end, axis=0))
+    hold(n_end, len(footsteps.steps), np.repeat(refs[-1][-1:], n_end, axis=0))
     feet_rows = {side: np.vstack(v) for side, v in feet.items()}
     contact = tuple(rows_contact)
     supports = tuple(c if c == "double" or feet_rows[other_side(c)][i, 2] >= LIFTED_M

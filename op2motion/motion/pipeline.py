@@ -17,7 +17,7 @@ from op2motion.errors import CheckFailed
 from op2motion.formats.action import ActionFile, Page
 from op2motion.formats.motionfile import Motion
 from op2motion.motion.checks import OVERLAP_TOL_M, clearance, require_clear
-from op2motion.motion.planner import action_pages, plan
+from op2motion.motion.planner import action_pages, trajectory_through
 from op2motion.motion.player import Playback, play, start_ticks
 from op2motion.motion.trajectory import Trajectory, from_playback
 from op2motion.motion.waypoint import Waypoint
@@ -57,7 +57,7 @@ def plan_motion(motion: Motion, spec: Spec, planner: str = "rrt", seed: int = 0)
     time and links) where links would still pass through each other (``planner`` "none")."""
     waypoints = waypoints_of(motion)
     require_poses_clear(waypoints, spec)
-    trajectory = plan(waypoints, spec, motion.profile, motion.p_gain, planner=planner, seed=seed)
+    trajectory = trajectory_through(waypoints, spec, motion.profile, motion.p_gain, planner=planner, seed=seed)
     require_clear(trajectory, spec)
     return trajectory
 

@@ -223,8 +223,9 @@ def _rows(waypoints: Sequence[Waypoint], spec: Spec, profile: str, p_gain: int
     return _robot_rows(waypoints, spec, v_max)
 
 
-def plan(waypoints: Sequence[Waypoint], spec: Spec, profile: str = "quintic",
-         p_gain: int = DEFAULT_P_GAIN, shift_weight: bool = True, planner: str = "rrt", seed: int = 0) -> Trajectory:
+def trajectory_through(waypoints: Sequence[Waypoint], spec: Spec, profile: str = "quintic",
+                       p_gain: int = DEFAULT_P_GAIN, shift_weight: bool = True, planner: str = "rrt",
+                       seed: int = 0) -> Trajectory:
     """Joint goals every 8 ms through ``waypoints`` with ``profile`` (``quintic`` or ``robot``); with
     ``shift_weight``, a weight shift goes in wherever the sequence changes between two feet and one; with
     ``planner`` "rrt", a segment whose straight line collides is planned around (:mod:`.route`, seeded by
@@ -256,8 +257,8 @@ def action_pages(waypoints: Sequence[Waypoint], spec: Spec, name: str, first_pag
                  p_gain: int = DEFAULT_P_GAIN, shift_weight: bool = True, planner: str = "rrt",
                  seed: int = 0) -> tuple[list[bytes], list[str]]:
     """The motion as chained action pages from ``first_page`` on (the robot's profile: what the robot plays),
-    weight shifts inserted and colliding segments planned around as :func:`plan` does, every joint's slope set for
-    ``p_gain``; and the notes."""
+    weight shifts inserted and colliding segments planned around as :func:`trajectory_through` does, every joint's
+    slope set for ``p_gain``; and the notes."""
     check_waypoints(waypoints)
     notes: list[str] = []
     if shift_weight:

@@ -141,12 +141,12 @@ def walk(request: WalkRequest, spec: Spec, progress: ProgressFor | None = None) 
     """``walk``: plan ``request``'s walk and check it (see the module docstring); ``progress`` gives each stage's
     progress (the plan's passes, the physics' simulated seconds, the family's runs)."""
     from op2motion.gait import gait_summary
-    from op2motion.gait.speeds import plan_within_speed
+    from op2motion.gait.speeds import gait_within_speed
 
     progress = progress or no_progress
     params = request.params
     with progress("plan", "pass") as on_progress:
-        gait = plan_within_speed(params, spec, request.target, request.retime, on_progress)
+        gait = gait_within_speed(params, spec, request.target, request.retime, on_progress)
     data: dict[str, Any] = gait_summary(gait)
     lines = [f"walk '{params.name}': {data['steps']} steps in {data['walking_s']:.2f} s, "
              f"{data['distance_m']:.3f} m planned ({data['planned_speed_mps']:.3f} m/s steady), ZMP margin >= "

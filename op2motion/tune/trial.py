@@ -175,10 +175,10 @@ def plan_problem(task: Task, chosen: Any, spec: Any) -> tuple[Any, str | None]:
     """A walk's plan within its servos' speed and ranges (the trial's gait), or why there is none."""
     if task.kind == "stock":
         return chosen, None
-    from op2motion.gait.speeds import plan_within_speed
+    from op2motion.gait.speeds import gait_within_speed
 
     try:
-        return plan_within_speed(chosen, spec), None
+        return gait_within_speed(chosen, spec), None
     except InputError as exc:
         return None, f"plan refused: {exc.message}"
 
