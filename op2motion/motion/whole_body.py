@@ -68,6 +68,7 @@ W_CROUCH_Z = 1e-3           # per m² of torso sinking when the body may crouch
 SETTLE_CALLS = 40           # solves at most to settle on a point,
 SETTLE_ROWS = 5.0           # each moving as far as this many rows may
 MIN_GAIN = 1e-3             # a step that lowers the weighted error by less than this share ends the row's solve
+RECENT = 8                  # points whose pose and features a solver remembers
 
 
 def rotation(vectors: np.ndarray) -> np.ndarray:
@@ -127,9 +128,23 @@ class WholeBodyIk:
         self._elbow_row = row_of(f"{hand[0]}_el")
         first = row_of(f"{other_side(self.frame)}_foot_0")
         self._foot_rows = slice(first, first + 4)
+        self._recent: dict[bytes, tuple[np.ndarray, dict[str, np.ndarray]]] = {}
         self.x0 = np.concatenate([np.zeros(6), self.start[self.arm]])
         ref = self.features(self.servo(self.x0[None]))
         self.feet0, self.com0, self.torso0 = ref["feet"][0], ref["com"][0], ref["torso"][0]
+
+    def _one(self, x: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """The pose (20,) [rad] and the features (each (1, m)) of unknowns ``x`` (9,), remembered for the last few
+        ``x`` (a solve asks for the same point up to three times: bounding a step, costing it, ending on it)."""
+        key = np.asarray(x, dtype=float).tobytes()
+        found = self._recent.get(key)
+        if found is None:
+            q = self.servo(np.asarray(x, dtype=float)[None])
+            found = (q[0], self.features(q))
+            self._recent[key] = found
+            if len(self._recent) > RECENT:
+                self._recent.pop(next(iter(self._recent)))
+        return found
 
     def servo(self, x: np.ndarray) -> np.ndarray:
         """Poses (N, 20) [rad] of unknowns (N, 9): torso shift [m], torso rotation vector [rad], arm joints [rad]."""
@@ -177,14 +192,14 @@ class WholeBodyIk:
 
     def _cost(self, x: np.ndarray, hand: np.ndarray, point: np.ndarray | None,
               pulls: list[tuple[np.ndarray, np.ndarray]]) -> float:
-        values, target = self._stack(self.features(self.servo(x[None])), hand, point)
+        values, target = self._stack(self._one(x)[1], hand, point)
         return float(np.sum((target - values[0]) ** 2) + sum(np.sum(w * (x - ref) ** 2) for w, ref in pulls))
 
     def _bounded(self, x: np.ndarray, trial: np.ndarray, legs: np.ndarray, rows: float) -> np.ndarray:
         """``trial`` pulled back towards ``x`` until no leg joint turns more than ``rows`` times
         :data:`JOINT_ROW_STEP` from ``legs`` (near a straight knee a fraction of a millimetre of sinking is degrees
         of knee)."""
-        if np.abs(self.servo(trial[None])[0, self._leg_joints] - legs).max() <= rows * JOINT_ROW_STEP:
+        if np.abs(self._one(trial)[0][self._leg_joints] - legs).max() <= rows * JOINT_ROW_STEP:
             return trial
         shares = np.linspace(1.0, 0.0, 33)[:, None]
         batch = np.repeat(trial[None], len(shares), axis=0)
@@ -203,7 +218,7 @@ class WholeBodyIk:
         if before is not None:
             pulls.append((W_SMOOTH, 2.0 * x - before))
         n, low, high = len(x), x - rows * ROW_STEP, x + rows * ROW_STEP
-        legs = self.servo(x[None])[0, self._leg_joints]
+        legs = self._one(x)[0][self._leg_joints]
         damping, cost = DAMPING, self._cost(x, hand, point, pulls)
         for _ in range(MAX_ITERATIONS):
             batch = np.repeat(x[None], n + 1, axis=0) + np.vstack([np.zeros(n), np.diag(self._fd_step)])
@@ -229,7 +244,7 @@ class WholeBodyIk:
                 break
             if gain < MIN_GAIN:                       # stalled (at a speed bound or a limit): this row is done
                 break
-        return x, float(np.linalg.norm(self.features(self.servo(x[None]))["hand"][0] - hand))
+        return x, float(np.linalg.norm(self._one(x)[1]["hand"][0] - hand))
 
     def settle(self, x: np.ndarray, hand: np.ndarray, point: np.ndarray | None = None,
                known: Callable[[np.ndarray], bool] | None = None) -> tuple[np.ndarray, float]:
