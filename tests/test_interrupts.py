@@ -4,6 +4,7 @@ no Ray process after ``kill -9``; a name that would make an unreadable file is r
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -118,3 +119,62 @@ def test_an_interrupt_inside_a_compiled_modules_import_is_an_interrupt(monkeypat
     assert cli.main(["urdf"]) == 130
     assert capsys.readouterr().err.strip() == "op2motion: interrupted"
     assert not cli._interrupted_within(ImportError("no module named x"))
+
+
+def test_the_ray_watchdog_ends_its_drivers_session_and_nothing_else():
+    """The watchdog a Ray build starts (op2motion.library.reaper), told its driver ended: it kills the processes
+    marked with the driver, those naming the driver's Ray session folder and everything below them, and leaves
+    another driver's session and other Ray-looking processes of the same process group alone (a ``kill -9`` of one
+    of two builds started from one shell killed the other's GCS server, whose build then hung 60 s)."""
+    from op2motion.library.reaper import _WATCHDOG, MARK
+
+    driver = os.getpid()                           # never killed by the watchdog: it stands for the dead driver
+    sleeper = "import subprocess, sys, time; subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(60)']);" \
+              " time.sleep(60)"
+    ours = f"/tmp/ray/session_2026-11-27_00-04-40_496552_{driver}/logs"
+    theirs = f"/tmp/ray/session_2026-11-27_00-04-40_496552_{driver}7/logs"
+
+    def start(*argv, env=None):
+        return subprocess.Popen([sys.executable, "-c", sleeper, *argv], env=env)
+
+    doomed = {"session": start(f"--log_dir={ours}"), "marked": start(env={**os.environ, MARK: str(driver)})}
+    spared = {"other session": start(f"--log_dir={theirs}"), "ray-named": start("ray::DashboardAgent")}
+    wait_for(lambda: all(len(_children(p.pid)) == 1 for p in (*doomed.values(), *spared.values())), "the children")
+    below = {name: _children(p.pid)[0] for name, p in {**doomed, **spared}.items()}
+    try:
+        watchdog = subprocess.Popen([sys.executable, "-c", _WATCHDOG, f"{MARK}={driver}", str(driver)],
+                                    stdin=subprocess.PIPE)
+        watchdog.stdin.close()                     # the driver's end
+        assert watchdog.wait(timeout=30) == 0
+        for name, proc in doomed.items():
+            assert proc.wait(timeout=10) == -signal.SIGKILL, name
+            wait_for(lambda: not _alive(below[name]), f"the child of the {name} process")
+        for name, proc in spared.items():
+            assert proc.poll() is None and _alive(below[name]), name
+    finally:
+        for proc in (*doomed.values(), *spared.values()):
+            for pid in [proc.pid, *_children(proc.pid)]:
+                with contextlib.suppress(OSError):
+                    os.kill(pid, signal.SIGKILL)
+            proc.wait()
+
+
+def _children(pid: int) -> list[int]:
+    """Live children of ``pid`` (Linux /proc)."""
+    found = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                fields = open(f"/proc/{entry}/stat", encoding="utf-8").read().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid and fields[0] != "Z":
+                found.append(int(entry))
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        return open(f"/proc/{pid}/stat", encoding="utf-8").read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
