@@ -122,41 +122,50 @@ def test_an_interrupt_inside_a_compiled_modules_import_is_an_interrupt(monkeypat
 
 
 def test_the_ray_watchdog_ends_its_drivers_session_and_nothing_else():
-    """The watchdog a Ray build starts (op2motion.library.reaper), told its driver ended: it kills the processes
-    marked with the driver, those naming the driver's Ray session folder and everything below them, and leaves
-    another driver's session and other Ray-looking processes of the same process group alone (a ``kill -9`` of one
-    of two builds started from one shell killed the other's GCS server, whose build then hung 60 s)."""
+    """The watchdog a Ray build starts (op2motion.library.reaper), told its driver ended: it kills what it saw below
+    the driver, the processes marked with the driver, those naming the driver's Ray session folder, and everything
+    below them, and leaves another driver's session and other Ray-looking processes of the same process group alone
+    (a ``kill -9`` of one of two builds started from one shell killed the other's GCS server, whose build then hung
+    60 s)."""
     from op2motion.library.reaper import _WATCHDOG, MARK
 
-    driver = os.getpid()                           # never killed by the watchdog: it stands for the dead driver
     sleeper = "import subprocess, sys, time; subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(60)']);" \
               " time.sleep(60)"
-    ours = f"/tmp/ray/session_2026-11-27_00-04-40_496552_{driver}/logs"
-    theirs = f"/tmp/ray/session_2026-11-27_00-04-40_496552_{driver}7/logs"
 
     def start(*argv, env=None):
         return subprocess.Popen([sys.executable, "-c", sleeper, *argv], env=env)
 
-    doomed = {"session": start(f"--log_dir={ours}"), "marked": start(env={**os.environ, MARK: str(driver)})}
+    driver = start()
+    ours = f"/tmp/ray/session_2026-11-27_00-04-40_496552_{driver.pid}/logs"
+    theirs = f"/tmp/ray/session_2026-11-27_00-04-40_496552_{driver.pid}7/logs"
+    doomed = {"session": start(f"--log_dir={ours}"), "marked": start(env={**os.environ, MARK: str(driver.pid)})}
     spared = {"other session": start(f"--log_dir={theirs}"), "ray-named": start("ray::DashboardAgent")}
-    wait_for(lambda: all(len(_children(p.pid)) == 1 for p in (*doomed.values(), *spared.values())), "the children")
-    below = {name: _children(p.pid)[0] for name, p in {**doomed, **spared}.items()}
+    everyone = (driver, *doomed.values(), *spared.values())
     try:
-        watchdog = subprocess.Popen([sys.executable, "-c", _WATCHDOG, f"{MARK}={driver}", str(driver)],
+        wait_for(lambda: all(len(_children(p.pid)) == 1 for p in everyone), "the children")
+        below = {name: _children(p.pid)[0] for name, p in {"driver": driver, **doomed, **spared}.items()}
+        watchdog = subprocess.Popen([sys.executable, "-c", _WATCHDOG, f"{MARK}={driver.pid}", str(driver.pid)],
                                     stdin=subprocess.PIPE)
-        watchdog.stdin.close()                     # the driver's end
+        time.sleep(WATCHDOG_LOOK_S)                 # it has noted the driver's child
+        driver.kill()
+        driver.wait()
+        watchdog.stdin.close()                      # the driver's end
         assert watchdog.wait(timeout=30) == 0
         for name, proc in doomed.items():
             assert proc.wait(timeout=10) == -signal.SIGKILL, name
+        for name in ("driver", *doomed):
             wait_for(lambda: not _alive(below[name]), f"the child of the {name} process")
         for name, proc in spared.items():
             assert proc.poll() is None and _alive(below[name]), name
     finally:
-        for proc in (*doomed.values(), *spared.values()):
+        for proc in everyone:
             for pid in [proc.pid, *_children(proc.pid)]:
                 with contextlib.suppress(OSError):
                     os.kill(pid, signal.SIGKILL)
             proc.wait()
+
+
+WATCHDOG_LOOK_S = 1.5         # the watchdog notes the driver's descendants twice a second: this is three looks [s]
 
 
 def _children(pid: int) -> list[int]:
