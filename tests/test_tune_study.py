@@ -66,6 +66,37 @@ def test_a_stopped_study_resumes_without_losing_trials(tmp_path):
     assert len(rows(again)) == 20 and set(kept) <= {r.number for r in rows(again)}
 
 
+#: A program that runs four trials of the toy study in ``sys.argv[1]`` and ends as the CLI does (its exit handlers,
+#: then ``os._exit``), or killed (``kill``: ``os._exit`` without them, as ``kill -9`` would).
+_RUN_AND_END = """
+import atexit, os, sys
+sys.path.insert(0, sys.argv[3])
+from test_tune_study import SPACE, SEED, InThread, landscape
+from op2motion.tune.study import open_study, run_study
+run_study(open_study(sys.argv[1], "toy", SPACE, SEED), SPACE, landscape, (), 4, InThread())
+if sys.argv[2] == "end":
+    atexit._run_exitfuncs()
+os._exit(0)
+"""
+
+
+@pytest.mark.parametrize("how", ["end", "kill"])
+def test_the_study_file_is_whole_when_the_program_ends_and_read_back_after_a_kill(tmp_path, how):
+    """The study's SQLite log is folded into the file when the program ends (the file alone holds every trial);
+    killed, it is left beside the file and the next run reads both."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    db = tmp_path / "s.db"
+    done = subprocess.run([sys.executable, "-c", _RUN_AND_END, str(db), how, str(Path(__file__).parent)],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    if how == "end":
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["s.db"]
+    assert len(rows(open_study(db, "toy", SPACE, SEED))) == 4
+
+
 def test_a_study_of_other_parameters_is_refused(tmp_path):
     study = open_study(tmp_path / "s.db", "toy", SPACE, SEED)
     run_study(study, SPACE, landscape, (), 2, InThread())

@@ -14,12 +14,19 @@ and resumed without losing a trial.
   budget of trials (completed and pruned ones count). Trials that were running when a study was killed are marked
   failed and asked again. Ctrl-C or SIGTERM: the running trials are marked failed, every finished one is kept, and
   :class:`~op2motion.errors.Interrupted` says how to resume.
+* **The file** is SQLite in write-ahead-log mode with ``synchronous=NORMAL``: a commit is safe against the program
+  being killed (Ctrl-C, SIGTERM, ``kill -9``), not against the machine losing power in that instant, and it no longer
+  waits for the disk (about 20 commits a trial: with a flush each, a toy study spent three quarters of its time
+  there). While a study runs, ``NAME.db-wal`` lies beside it, folded back in when the program ends (a killed one leaves
+  it: keep the two together; the next run reads both).
 * **Seeds**: the sampler (TPE, multivariate) is seeded; with several workers the order in which trials finish, and
   so what the sampler has seen when it asks, depends on timing.
 """
 
 from __future__ import annotations
 
+import atexit
+import functools
 import logging
 import math
 import time
@@ -90,7 +97,10 @@ def open_study(path: str | Path, name: str, space: SearchSpace, seed: int) -> An
     if target.exists() and not target.is_file():
         raise InputError(f"expected a study file (SQLite), got a folder: {target}", "study")
     try:
-        study = optuna.create_study(storage=f"sqlite:///{target}", study_name=name, load_if_exists=True,
+        storage = optuna.storages.RDBStorage(f"sqlite:///{target}",
+                                             engine_kwargs={"creator": functools.partial(_connect, target)})
+        atexit.register(storage.engine.dispose)         # the last connection closed folds the log into the file
+        study = optuna.create_study(storage=storage, study_name=name, load_if_exists=True,
                                     directions=["maximize", "maximize"], sampler=sampler)
     except Exception as exc:  # noqa: BLE001 (SQLAlchemy and Optuna raise many kinds for a file that is not a study)
         raise InputError(f"expected an Optuna study file (SQLite), got one that cannot be opened: "
@@ -102,6 +112,17 @@ def open_study(path: str | Path, name: str, space: SearchSpace, seed: int) -> An
     for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
         study.tell(trial.number, state=TrialState.FAIL)
     return study
+
+
+def _connect(path: Path) -> Any:
+    """A connection to the study file: write-ahead log, commits not flushed to the disk one by one (see the module
+    docstring)."""
+    import sqlite3
+
+    connection = sqlite3.connect(str(path), check_same_thread=False)
+    connection.execute("PRAGMA journal_mode=WAL")
+    connection.execute("PRAGMA synchronous=NORMAL")
+    return connection
 
 
 def violation(outcome: Outcome) -> float:
