@@ -23,6 +23,8 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from op2motion.physics.scene import EngineName
+
 REASONS = ("tilt", "com_drop", "ground_contact", "swing_foot_contact", "self_collision", "torque_saturation",
            "joint_limit", "slip")
 FALL_REASONS = ("tilt", "com_drop", "ground_contact")
@@ -111,7 +113,7 @@ class RunReport:
     """Verdict and measurements of one physics run (lengths [m], angles [deg], torques [N·m], world frame: the floor,
     the start's flat sole at the origin)."""
 
-    engine: str
+    engine: EngineName
     servo: str
     time_step_s: float
     seconds: float
@@ -258,7 +260,7 @@ class TrialsResult:
 class EngineReport:
     """One engine's part of a check: the main run, the pushed runs and the perturbed runs."""
 
-    engine: str
+    engine: EngineName
     run: RunReport
     pushes: tuple[PushResult, ...] = ()
     trials: TrialsResult | None = None

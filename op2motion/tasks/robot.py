@@ -15,6 +15,7 @@ from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
     from op2motion.bus.tasks import MotionResult, Options
+    from op2motion.physics import EngineName
 
 
 def robot_status(port: str, spec: Spec) -> TaskResult:
@@ -59,7 +60,7 @@ def robot_motion(run: Callable[[Options], MotionResult], options: Options) -> Ta
     return TaskResult(True, None, None, {}, data, lines, file_keys={})
 
 
-def emulated(emulator: Any, link: str, engine: str, start: str, faults: Any, interrupted: bool) -> TaskResult:
+def emulated(emulator: Any, link: str, engine: EngineName, start: str, faults: Any, interrupted: bool) -> TaskResult:
     """``robot emulate``'s report once the emulated OP2 stopped: its link, engine, start, faults, traffic and how
     far it fell behind the wall clock; ``interrupted``: it was stopped by Ctrl-C (not by ``--seconds``)."""
     data = {"link": link, "pty": emulator.pty_name, "engine": engine, "start": start, "faults": faults.describe(),
