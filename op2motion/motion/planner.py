@@ -36,7 +36,7 @@ from op2motion.posture.cost import SELF_CLEARANCE_M
 from op2motion.robot.framework import CONTROL_PERIOD_S, DEFAULT_P_GAIN, slope_of_p_gain
 from op2motion.robot.joints import servo_to_ticks
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import LIFTED_M
+from op2motion.robot.support import LIFTED_M, Support, SupportName
 
 SPEED_FRACTION = 0.5       # of the no-load speed: at the peak speed half the stall torque is still available
 _FIRST_PAGE = 1
@@ -197,10 +197,10 @@ def _robot_rows(waypoints: Sequence[Waypoint], spec: Spec, v_max: float) -> tupl
 
 
 def row_supports(goals: np.ndarray, segment: np.ndarray, waypoints: Sequence[Waypoint],
-                 spec: Spec) -> tuple[str, ...]:
+                 spec: Spec) -> tuple[Support | SupportName, ...]:
     """The support of each row: a single-support segment end's foot stands; the other foot supports too while
     its lowest corner, after the sag, is within :data:`LIFTED_M` of the floor."""
-    out = []
+    out: list[Support | SupportName] = []
     heights = {side: settled_swing_heights(goals, side, spec) for side in ("left", "right")}
     for k, seg in enumerate(segment):
         ends = [waypoints[0]] if seg < 0 else [waypoints[seg], waypoints[seg + 1]]

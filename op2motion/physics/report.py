@@ -24,6 +24,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from op2motion.physics.scene import EngineName
+from op2motion.robot.sides import Side
 
 REASONS = ("tilt", "com_drop", "ground_contact", "swing_foot_contact", "self_collision", "torque_saturation",
            "joint_limit", "slip")
@@ -129,7 +130,7 @@ class RunReport:
     com_drift_m: float
     feet_slip_m: float
     start_gap_m: float               # double support: height of the other foot's lowest corner at the start
-    flat_foot: str
+    flat_foot: Side
     self_collisions: tuple[tuple[str, str], ...]
     ground_contacts: tuple[str, ...]
     max_torque_nm: float             # steady window, worst joint
