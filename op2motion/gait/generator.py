@@ -79,7 +79,7 @@ class Gait:
         return self.timeline.times
 
     @property
-    def supports(self) -> tuple[str, ...]:
+    def supports(self) -> tuple[SupportName, ...]:
         """The physics support of every row."""
         return self.timeline.supports
 
