@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import ast
+import re
+from pathlib import Path
 from typing import get_args
 
 import pytest
@@ -85,3 +88,79 @@ def test_support_narrowing_refuses_naming_the_parameter():
     with pytest.raises(InputError) as err:
         Support.single("double", "support")
     assert err.value.param == "support" and "expected 'left' or 'right'" in err.value.message
+
+
+#: Parameters (and dataclass fields) whose name says they hold one of the choices above.
+CHOICE_NAMES = {"side", "sides", "hand", "hands", "support", "supports", "stance", "swing", "foot", "engine", "engines",
+                "planner", "profile", "executor", "direction", "model", "com_model"}
+#: The ones that stay ``str`` on purpose, "module:qualified name:parameter" -> why.
+PLAIN_STR_ALLOWED = {
+    # book.py is plain data below every layer (it imports nothing of op2motion, so it cannot name Side)
+    "op2motion/book.py:Scenario:support": "the book's scenarios, below robot/sides.py",
+    "op2motion/book.py:Scenario:hand": "the book's scenarios, below robot/sides.py",
+    "op2motion/book.py:ArmRun:hand": "the book's printed arm-IK runs, below robot/sides.py",
+    "op2motion/kinematics/arm_ik.py:Arm:hand": "the hand's point name (left_hand), not a side; Arm.side is the side",
+    "op2motion/library/index.py:IndexRow:hand": "read back as written in a pose file's provenance: narrowing would "
+                                                "drop files the index keeps today",
+    "op2motion/motion/ways.py:Ways.stock:side": "the side a robot lies on (front, back, left, right), not a Side",
+    "op2motion/motion/ways.py:Ways.own:side": "the side a robot lies on (front, back, left, right), not a Side",
+    "op2motion/motion/ways.py:Ways.way:side": "the side a robot lies on (front, back, left, right), not a Side",
+    "op2motion/physics/report.py:PushResult:direction": "a push's direction (forward, backward, left, right), not "
+                                                        "the tuned walk's Direction",
+    "op2motion/robot/joints.py:hip_roll_sign:side": "a joint-name prefix (l, r) as well as a side word",
+    "op2motion/robot/spec.py:Servo:model": "the servo's model name (MX-28), not a kinematic ModelName",
+}
+
+
+
+def _plain(annotation: ast.expr | None) -> bool:
+    """The annotation holds ``str`` outside dict and Mapping keys (the dicts keyed by side stay ``dict[str, ...]``)."""
+    text = "" if annotation is None else ast.unparse(annotation)
+    return bool(re.search(r"\bstr\b", re.sub(r"(dict|Mapping)\[[^\]]*\]", "", text)))
+
+
+def _plain_str_choices(root: Path) -> set[str]:
+    """Every parameter or dataclass field under ``root``/op2motion named like a choice and annotated with ``str``,
+    as "path:qualified name:parameter"."""
+    found = set()
+    for path in sorted((root / "op2motion").rglob("*.py")):
+        where = path.relative_to(root).as_posix()
+
+        def visit(node: ast.AST, scope: str) -> None:
+            for child in ast.iter_child_nodes(node):
+                if isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                    a = child.args
+                    found.update(f"{where}:{scope}{child.name}:{arg.arg}"
+                                 for arg in a.posonlyargs + a.args + a.kwonlyargs
+                                 if arg.arg in CHOICE_NAMES and _plain(arg.annotation))
+                    visit(child, f"{scope}{child.name}.")
+                elif isinstance(child, ast.ClassDef):
+                    found.update(f"{where}:{scope}{child.name}:{st.target.id}" for st in child.body
+                                 if isinstance(st, ast.AnnAssign) and isinstance(st.target, ast.Name)
+                                 and st.target.id in CHOICE_NAMES and _plain(st.annotation))
+                    visit(child, f"{scope}{child.name}.")
+
+        visit(ast.parse(path.read_text(encoding="utf-8")), "")
+    return found
+
+
+def test_no_choice_parameter_is_a_plain_str():
+    """A side, hand, support, engine, planner, profile, executor, direction or model is typed with its alias (or a
+    union with the Support enum), never a plain ``str``, except the few listed with their reason."""
+    found = _plain_str_choices(Path(__file__).resolve().parents[1])
+    assert found - set(PLAIN_STR_ALLOWED) == set(), "annotate these with their Literal alias"
+    assert set(PLAIN_STR_ALLOWED) - found == set(), "stale allow-list entries: remove them"
+
+
+def test_the_plain_str_scan_finds_planted_parameters(tmp_path):
+    """The scan is not vacuous: plain-str choices in a function, a method and a dataclass field are caught; aliases,
+    unions with the enum and dicts keyed by side are not."""
+    (tmp_path / "op2motion").mkdir()
+    (tmp_path / "op2motion" / "planted.py").write_text(
+        "def f(side: str, hand: Side, feet: dict[str, int], supports: Sequence[str]) -> None: ...\n"
+        "class C:\n"
+        "    engine: str | None\n"
+        "    support: Support | SupportName\n"
+        "    def m(self, planner: str = 'rrt', corners: Mapping[str, int] = {}) -> None: ...\n", encoding="utf-8")
+    assert _plain_str_choices(tmp_path) == {"op2motion/planted.py:f:side", "op2motion/planted.py:f:supports",
+                                            "op2motion/planted.py:C:engine", "op2motion/planted.py:C.m:planner"}

@@ -16,16 +16,19 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from op2motion.robot.spec import Spec
+
+if TYPE_CHECKING:
+    from op2motion.physics import EngineName
 
 LOOP_S = 3.0                       # the loop runs this long
 STATUS_REPEAT = 5
 START_TIMEOUT_S = 60.0             # the emulator must serve within this long
 
 
-def robot_figures(spec: Spec, engine: str = "mujoco") -> dict[str, Any]:
+def robot_figures(spec: Spec, engine: EngineName = "mujoco") -> dict[str, Any]:
     """The figures (see the module docstring), the emulator (``engine``) in a process of its own."""
     from op2motion.bus.loop import run_controller
     from op2motion.bus.session import Session

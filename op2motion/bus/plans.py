@@ -23,7 +23,7 @@ from op2motion.motion.trajectory import Trajectory
 from op2motion.physics import Plan, Schedule
 from op2motion.robot.pose import Pose
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import Support
+from op2motion.robot.support import Support, SupportName
 
 if TYPE_CHECKING:
     from op2motion.physics import EngineName
@@ -46,7 +46,7 @@ def ready_pose(spec: Spec) -> Pose:
     return Pose("ready", Support.DOUBLE, generate_gait(params, spec).joints[0])
 
 
-def move(current: np.ndarray, target: Pose, spec: Spec, support: Support | str = Support.DOUBLE) -> Trajectory:
+def move(current: np.ndarray, target: Pose, spec: Spec, support: Support | SupportName = Support.DOUBLE) -> Trajectory:
     """From ``current`` servo angles (20,) [rad] (the robot on ``support``) to ``target``, within the servos'
     speed; through :func:`ready_pose` where no direct way is found."""
     from op2motion.errors import CheckFailed

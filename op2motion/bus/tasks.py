@@ -34,7 +34,7 @@ from op2motion.bus.session import RobotStatus, Session
 from op2motion.errors import CheckFailed, InputError
 from op2motion.robot.pose import Pose
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import Support
+from op2motion.robot.support import Support, SupportName
 
 ACTION_FILE_BYTES = 256 * 512      # an action file: 256 pages of 512 bytes
 OnTick = Callable[[Tick], None]
@@ -123,7 +123,7 @@ def status(port: str, spec: Spec) -> RobotStatus:
         return session.status()
 
 
-def teach(port: str, spec: Spec, name: str, support: str = "double", limp: bool = False,
+def teach(port: str, spec: Spec, name: str, support: Support | SupportName = "double", limp: bool = False,
           wait: Callable[[], None] | None = None) -> tuple[Pose, list[str]]:
     """The robot's present joint angles as a pose. With ``limp`` the torque goes off, ``wait`` lets the user move the
     limbs, the angles are read, and the torque comes back on holding them. Angles beyond a joint's mechanical

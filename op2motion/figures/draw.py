@@ -19,9 +19,10 @@ import numpy as np
 from op2motion.kinematics.points import BodyPoints
 from op2motion.robot.balance import COM_MODEL_FULL, support_polygon
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import SIDES, Support
+from op2motion.robot.support import SIDES, Side, Support, as_side
 
 LEFT_COLOUR, RIGHT_COLOUR, BODY_COLOUR = "tab:blue", "tab:red", "black"
+SIDE_COLOURS: tuple[tuple[Side, str], ...] = (("left", LEFT_COLOUR), ("right", RIGHT_COLOUR))
 LUMPED_COLOUR, FULL_COLOUR, TARGET_COLOUR = "green", "tab:purple", "gold"
 OK_COLOUR, BAD_COLOUR, UNKNOWN_COLOUR = "#1b7a1b", "#b3261e", "#555555"
 _CHAINS = (
@@ -98,7 +99,7 @@ def _draw(ax, xyz: dict[str, np.ndarray], fig: PoseFigure, spec: Spec, h: int | 
             line(np.array([ghost[n] for n in names]), color="grey", linestyle="--", linewidth=1, alpha=0.7)
     for names, colour in _CHAINS:
         line(np.array([xyz[n] for n in names]), color=colour, marker="o", markersize=3, linewidth=2)
-    for side, colour in (("left", LEFT_COLOUR), ("right", RIGHT_COLOUR)):
+    for side, colour in SIDE_COLOURS:
         corners = fig.points.foot_corners(side)[0]
         ring = np.vstack([corners, corners[:1]])
         line(ring, color=colour, linewidth=1.5)
@@ -108,9 +109,9 @@ def _draw(ax, xyz: dict[str, np.ndarray], fig: PoseFigure, spec: Spec, h: int | 
     if fig.double:      # the hull of both real soles
         polys = [(Support.DOUBLE.polygon({s: fig.points.foot_corners(s)[0] for s in SIDES}), FULL_COLOUR)]
     else:               # the book's rectangle (lumped CoM) and the real sole (full-inertia CoM), both shrunk by br
-        polys = [(support_polygon(spec, fig.points.support, fig.br, (sp[0], sp[1])), LUMPED_COLOUR),
-                 (support_polygon(spec, fig.points.support, fig.br, (sp[0], sp[1]), com_model=COM_MODEL_FULL),
-                  FULL_COLOUR)]
+        foot = as_side(fig.points.support, "support")
+        polys = [(support_polygon(spec, foot, fig.br, (sp[0], sp[1])), LUMPED_COLOUR),
+                 (support_polygon(spec, foot, fig.br, (sp[0], sp[1]), com_model=COM_MODEL_FULL), FULL_COLOUR)]
     for poly, colour in polys:
         ring = np.vstack([poly, poly[:1]])
         line(np.column_stack([ring, np.full(len(ring), sp[2])]), color=colour, linestyle="--", linewidth=1)

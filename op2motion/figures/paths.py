@@ -21,12 +21,13 @@ from op2motion.motion.checks import clearance
 from op2motion.posture.cost import SELF_CLEARANCE_M
 from op2motion.robot.joints import servo_to_book
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Side
 
 MOVING_MM = 10.0           # a point drawn when its path spans more than this [mm]
 _TRACKED = (("right_hand", "tab:orange"), ("left_hand", "tab:blue"), ("r_el", "tab:red"), ("l_el", "tab:purple"))
 
 
-def _points(rows: np.ndarray, spec: Spec, side: str) -> dict[str, np.ndarray]:
+def _points(rows: np.ndarray, spec: Spec, side: Side) -> dict[str, np.ndarray]:
     data = forward(servo_to_book(rows, side, spec), spec, "dh").data
     return {name: data[row_of(name)].T * 1000.0 for name, _ in _TRACKED}
 
@@ -41,7 +42,7 @@ def _equal_axes(ax: Any, pts: np.ndarray) -> None:
     ax.tick_params(labelsize=7)
 
 
-def render_route(straight: np.ndarray, planned: np.ndarray, spec: Spec, title: str, side: str = "left") -> bytes:
+def render_route(straight: np.ndarray, planned: np.ndarray, spec: Spec, title: str, side: Side = "left") -> bytes:
     """PNG: the straight rows (K1, 20) [rad] against the planned rows (K2, 20) [rad] (see the module docstring),
     both in the ``side`` sole's frame."""
     plt = _pyplot()

@@ -20,6 +20,7 @@ from op2motion.errors import InputError
 from op2motion.robot.joints import servo_to_ticks
 from op2motion.robot.pose import Pose
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Support, SupportName
 
 MAX_TIME_S = 3600.0   # one pose per hour is the slowest sequence a table holds
 
@@ -92,7 +93,7 @@ def csv_table(poses: Sequence[Pose], spec: Spec, seconds: float = 1.0) -> str:
     return buf.getvalue()
 
 
-def goals_csv(times: np.ndarray, goals: np.ndarray, supports: Sequence[str], spec: Spec) -> str:
+def goals_csv(times: np.ndarray, goals: np.ndarray, supports: Sequence[Support | SupportName], spec: Spec) -> str:
     """CSV of a trajectory: one row per control tick with its time [s], support, goal angles [deg] and ticks."""
     names = spec.joint_names
     buf = io.StringIO()

@@ -38,9 +38,11 @@ from typing import Any, Protocol
 import numpy as np
 
 from op2motion.errors import InputError
+from op2motion.robot.support import Side
 
 SCHEMA = "op2motion.commands/1"
 EVENTS = ("stop", "kick_right", "kick_left")
+KICKS: dict[str, Side] = {"kick_right": "right", "kick_left": "left"}    # the kick events' feet
 MAX_DURATION_S = 600.0
 MAX_ENTRIES = 10_000
 MAX_SPEED_M_S = 1.0
@@ -56,7 +58,7 @@ class Steered(Protocol):
 
     def stop(self) -> None: ...
 
-    def kick(self, foot: str) -> None: ...
+    def kick(self, foot: Side) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -105,7 +107,7 @@ class CommandTimeline:
             if e.event == "stop":
                 walk.stop()
             elif e.event is not None:
-                walk.kick(e.event.split("_", 1)[1])
+                walk.kick(KICKS[e.event])
 
 
 def _number(text: Any, where: str, field: str, low: float, high: float) -> float:

@@ -47,7 +47,7 @@ from op2motion.motion.stillness import Stillness
 from op2motion.physics import Plan, Schedule
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import SIDES
+from op2motion.robot.support import SIDES, Side
 
 MAX_HEADING_RAD = 0.2             # the swing foot is steered at most this far per step (11°)
 MAX_TRIM_RAD = 0.15                # a leg joint's integral trim stays within this [rad] (8.6°)
@@ -280,7 +280,7 @@ class WalkController:
             out[list(leg.index)] = natural * leg.sign
         return out
 
-    def _landed(self, side: str, k: int) -> tuple[np.ndarray, float] | None:
+    def _landed(self, side: Side, k: int) -> tuple[np.ndarray, float] | None:
         """Where the ``side`` foot is held instead of its plan (its measured landing's miss: position (3,) [m] and
         yaw [rad]) at gait row ``k``, or None: after the closing step, the landed foot where it landed."""
         last = self.odometry.last

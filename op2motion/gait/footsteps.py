@@ -21,6 +21,7 @@ import numpy as np
 from op2motion.errors import InputError
 from op2motion.gait.params import GaitParams
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Side
 
 FOOT_GAP_M = 0.005          # soles closer than this from above count as colliding
 PATH_SAMPLES = 9            # poses checked along each swing (start and landing included)
@@ -33,7 +34,7 @@ MAX_TARGET_STEPS = 200      # and within as many steps as --steps allows
 class Footstep:
     """A foot placement: ``side`` (left/right), sole centre (x, y) [m] and yaw [rad] in the world frame."""
 
-    side: str
+    side: Side
     x: float
     y: float
     yaw: float
@@ -68,7 +69,7 @@ def moved(pose: np.ndarray, dx: float, dy: float, dyaw: float) -> np.ndarray:
     return np.array([pose[0] + c * dx - s * dy, pose[1] + s * dx + c * dy, pose[2] + dyaw])
 
 
-def foot_at(side: str, centre: np.ndarray, width: float) -> Footstep:
+def foot_at(side: Side, centre: np.ndarray, width: float) -> Footstep:
     half = width / 2.0 if side == "left" else -width / 2.0
     x, y, yaw = moved(centre, 0.0, half, 0.0)
     return Footstep(side, float(x), float(y), float(yaw))
@@ -79,7 +80,7 @@ def step_width(params: GaitParams, spec: Spec) -> float:
     return params.step_width_m or 2.0 * spec.geometry.hip_half_width
 
 
-def first_side(params: GaitParams) -> str:
+def first_side(params: GaitParams) -> Side:
     """The foot that swings first (see the module docstring)."""
     if params.turn_deg < 0.0 or (params.turn_deg == 0.0 and params.step_side_m < 0.0):
         return "right"
@@ -133,7 +134,7 @@ def _target_moves(params: GaitParams, target: tuple[float, float, float]) -> lis
     return moves
 
 
-def _target_side(moves: list[tuple[float, float, float]]) -> str:
+def _target_side(moves: list[tuple[float, float, float]]) -> Side:
     dx, dy, dyaw = moves[0]
     return "right" if dyaw < 0.0 or (dyaw == 0.0 and dy < 0.0) else "left"
 

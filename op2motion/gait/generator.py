@@ -35,7 +35,7 @@ from op2motion.motion.checks import SMOOTH_ROWS, contact_torques, multibody_zmp,
 from op2motion.robot.balance import polygon_margin
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import Support
+from op2motion.robot.support import Support, SupportName
 
 FRICTION_SMOOTH_RAD_S = 0.05   # the friction feed-forward's sign is smoothed over this speed
 REST_PAD = 4            # rows of rest around the walk when differentiating (the robot stands before and after)
@@ -79,7 +79,7 @@ class Gait:
         return self.timeline.times
 
     @property
-    def supports(self) -> tuple[str, ...]:
+    def supports(self) -> tuple[SupportName, ...]:
         """The physics support of every row."""
         return self.timeline.supports
 
@@ -184,7 +184,7 @@ class _Body:
         return np.array([pin.centerOfMass(model, data, c) for c in configs])
 
 
-def servo_feedforward(spec: Spec, configs: np.ndarray, v: np.ndarray, a: np.ndarray, contact: tuple[str, ...],
+def servo_feedforward(spec: Spec, configs: np.ndarray, v: np.ndarray, a: np.ndarray, contact: tuple[SupportName, ...],
                       p_gains: np.ndarray) -> np.ndarray:
     """Goal offsets (K, 20) [rad] that make the servo model (:mod:`op2motion.model.servo`) at P gains (20,) drive a
     planned motion (pinocchio configurations (K, nq), velocities and accelerations (K, nv), each row on its planned

@@ -21,7 +21,7 @@ from op2motion.gait.phases import WalkState
 from op2motion.kinematics.leg_ik import Leg, leg_fk, rot_z
 from op2motion.model.dynamics import dynamics_for
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import other_side
+from op2motion.robot.support import Side, other_side
 
 STOCK_KICKS = {"right": 12, "left": 13}     # the stock action file's kick pages (framework demos)
 OWN_KICKS = {"right": "kick_right", "left": "kick_left"}
@@ -30,7 +30,7 @@ BLEND_S = 0.8                               # the quintics into and out of the k
 _CACHE: dict[tuple[str, str, bytes | None], tuple[np.ndarray, np.ndarray, tuple[str, ...], str]] = {}
 
 
-def kick_motion(spec: Spec, side: str, action: ActionFile | None = None
+def kick_motion(spec: Spec, side: Side, action: ActionFile | None = None
                 ) -> tuple[np.ndarray, np.ndarray, tuple[str, ...], str]:
     """The kick with the ``side`` foot: goals (K, 20) [rad], P gains (K, 20), the support of each row, its name
     (planned once per spec, side and action file)."""
@@ -54,7 +54,7 @@ def kick_motion(spec: Spec, side: str, action: ActionFile | None = None
 
 
 def kick_chunk(spec: Spec, legs: dict[str, Leg], state: WalkState, stand_goals: np.ndarray, p_gain: float,
-               side: str, action: ActionFile | None = None) -> dict[str, Any]:
+               side: Side, action: ActionFile | None = None) -> dict[str, Any]:
     """The rows of a kick phase from a robot standing at ``stand_goals`` (20,) [rad] on the feet of ``state``: the
     fields of :class:`.rows.RowBuffer` (planned joints = goals: the rows are played open loop)."""
     from op2motion.motion.planner import blend

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from op2motion.gait.generator import Gait
+from op2motion.robot.support import Side
 
 MAX_LEARNED_RAD = 0.15             # a learned correction stays within this per joint and row [rad] (8.6°)
 SHAPE_TOL_M = 0.005                # two steps whose swing starts and ends this close (stance frame) are alike
@@ -47,7 +48,7 @@ class StepLearner:
     step_of_row: np.ndarray
     first_row: np.ndarray
     alike: np.ndarray
-    side_of_step: tuple[str, ...]
+    side_of_step: tuple[Side, ...]
     rows: int
     joints: dict[str, np.ndarray]
     size: int
@@ -76,7 +77,7 @@ class StepLearner:
         self.memory = {side: np.zeros((self.rows, self.size)) for side in self.joints}
         self._pending = {side: np.zeros((self.rows, self.size)) for side in self.joints}
 
-    def _where(self, k: int) -> tuple[str, int] | None:
+    def _where(self, k: int) -> tuple[Side, int] | None:
         """(swing side, row in the step) of gait row ``k``, or None outside the steps."""
         if not 0 <= k < len(self.step_of_row):
             return None
@@ -107,7 +108,7 @@ class StepLearner:
             index = self.joints[side]
             self._pending[side][r, index] += self.gain * miss[index]
 
-    def _commit(self, side: str) -> None:
+    def _commit(self, side: Side) -> None:
         """At the end of a step, fold what it taught into that side's correction (smoothed, bounded)."""
         kernel = np.ones(SMOOTH_ROWS) / SMOOTH_ROWS
         pending = self._pending[side]

@@ -25,22 +25,23 @@ import numpy as np
 
 from op2motion.gait.generator import Gait
 from op2motion.kinematics.leg_ik import Leg, leg_fk, rot_z
+from op2motion.robot.support import Side, SupportName
 
 MAX_PLACEMENT_M = 0.02      # a swing foot is moved at most this far from its plan to keep the line
 MIN_TRACK_SPEED_M_S = 0.02  # below this planned speed there is no direction of travel
 
 
-def landing_rows(contact: tuple[str, ...], after: int) -> dict[int, tuple[str, str]]:
+def landing_rows(contact: tuple[SupportName, ...], after: int) -> dict[int, tuple[Side, Side]]:
     """Per landing, the gait row to measure it (``after`` rows into the double support that follows a single
     support, at most its last row): (the foot stepped from, the foot that landed)."""
-    out: dict[int, tuple[str, str]] = {}
+    out: dict[int, tuple[Side, Side]] = {}
     i = 1
     while i < len(contact):
-        if contact[i] == "double" and contact[i - 1] != "double":
+        stance = contact[i - 1]
+        if contact[i] == "double" and stance != "double":
             end = i
             while end + 1 < len(contact) and contact[end + 1] == "double":
                 end += 1
-            stance = contact[i - 1]
             out[min(i + after, end)] = (stance, "left" if stance == "right" else "right")
             i = end + 1
         else:
@@ -76,7 +77,7 @@ class FootOdometry:
 
     gait: Gait
     legs: dict[str, Leg]
-    rows: dict[int, tuple[str, str]]
+    rows: dict[int, tuple[Side, Side]]
     error: np.ndarray = field(default_factory=lambda: np.zeros(2))
     last: tuple[str, np.ndarray, float] | None = None
 
@@ -97,7 +98,7 @@ class FootOdometry:
         feet = self.gait.timeline.feet
         self._landing(measured, stance, landed, feet[stance][k], feet[landed][k], k == max(self.rows))
 
-    def _landing(self, measured: np.ndarray, stance: str, landed: str, stance_plan: np.ndarray,
+    def _landing(self, measured: np.ndarray, stance: Side, landed: str, stance_plan: np.ndarray,
                  landed_plan: np.ndarray, closing: bool) -> None:
         """One landing measured: the ``landed`` foot against the ``stance`` one from the joints (20,) [rad], less
         the plan's soles (x, y, z [m], yaw [rad]); a ``closing`` landing's miss is kept in :attr:`last`."""

@@ -31,7 +31,7 @@ from op2motion.gait.footsteps import Footstep, foot_at, moved, step_width, swing
 from op2motion.gait.params import GaitParams
 from op2motion.gait.timeline import LEAD_S, landing, quintic_blend, swing_path, ticks, zmp_point
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import other_side
+from op2motion.robot.support import Side, SupportName, other_side
 
 STAND_S = 0.16              # a standing phase [s] (the command is looked at again after each)
 CLOSE_SHARE = 0.5           # a stop closes the feet at once from a stride within this share of the envelope's
@@ -53,10 +53,10 @@ class Phase:
 
     kind: str
     feet: Mapping[str, np.ndarray]
-    contact: tuple[str, ...]
+    contact: tuple[SupportName, ...]
     zmp_ref: np.ndarray
     stride: Stride = Stride()
-    swing: str | None = None
+    swing: Side | None = None
     closing: bool = False
     step: int = -1
 
@@ -77,14 +77,14 @@ class WalkState:
     right: Footstep
     centre: tuple[float, float, float]
     stride: Stride = Stride()
-    swing: str = "left"
+    swing: Side = "left"
     mode: str = "stand"
     row: int = 0
     first_step_row: int = 0
     halved: bool = False
     steps: int = 0
 
-    def foot(self, side: str) -> Footstep:
+    def foot(self, side: Side) -> Footstep:
         """The ``side`` foot's placement."""
         return self.left if side == "left" else self.right
 
@@ -107,9 +107,11 @@ def _where(state: WalkState) -> dict[str, np.ndarray]:
             for side in ("left", "right")}
 
 
-def _hold(state: WalkState, n: int, ref: np.ndarray) -> tuple[dict[str, np.ndarray], tuple[str, ...], np.ndarray]:
+def _hold(state: WalkState, n: int, ref: np.ndarray) -> tuple[dict[str, np.ndarray], tuple[SupportName, ...],
+                                                           np.ndarray]:
     where = _where(state)
-    return ({side: np.repeat(where[side][None], n, axis=0) for side in where}, ("double",) * n,
+    double: tuple[SupportName, ...] = ("double",)
+    return ({side: np.repeat(where[side][None], n, axis=0) for side in where}, double * n,
             np.broadcast_to(ref, (n, 2)).copy())
 
 
@@ -117,7 +119,7 @@ def _middle(state: WalkState) -> np.ndarray:
     return 0.5 * np.array([state.left.x + state.right.x, state.left.y + state.right.y])
 
 
-def first_side(stride: Stride) -> str:
+def first_side(stride: Stride) -> Side:
     """The foot that swings first towards ``stride``: the one on the side of a turn or a side step (left for a walk
     straight ahead or back), so the leading foot opens the gap and the feet never cross."""
     return "right" if stride.dyaw < 0.0 or (stride.dyaw == 0.0 and stride.dy < 0.0) else "left"
@@ -152,7 +154,8 @@ def _step(state: WalkState, stride: Stride, params: GaitParams, spec: Spec, clos
     stand = state.foot(other_side(side))
     where = _where(state)
     n_single, n_double = ticks(params.single_s), ticks(params.double_s)
-    feet = {side: swing_path(params, where[side], target), stand.side: np.repeat(where[stand.side][None], n_single, 0)}
+    feet: dict[str, np.ndarray] = {side: swing_path(params, where[side], target),
+                                   stand.side: np.repeat(where[stand.side][None], n_single, 0)}
     landed = landing(where[side], target)
     placed = state.placed(Footstep(side, float(landed[0]), float(landed[1]), float(landed[3])))
     after = _middle(placed) if closing else zmp_point(target, params)

@@ -42,7 +42,7 @@ from op2motion.kinematics.leg_ik import Leg, rot_z
 from op2motion.motion.checks import SMOOTH_ROWS
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import LIFTED_M, SIDES, other_side
+from op2motion.robot.support import LIFTED_M, SIDES, Side, SupportName, other_side
 
 HISTORY_ROWS = 8            # rows already planned that lead each window (the differences at its start are right)
 LOOKAHEAD_S = 0.64          # the body is planned this far beyond the phase (the multibody correction's own preview: two
@@ -63,7 +63,7 @@ class _Window:
     reference, torso poses, arms, servo angles, and the CoM path they are fitted to."""
 
     feet: dict[str, np.ndarray]
-    contact: tuple[str, ...]
+    contact: tuple[SupportName, ...]
     ref: np.ndarray
     pos: np.ndarray
     rot: np.ndarray
@@ -79,7 +79,7 @@ class _History:
     """The last :data:`HISTORY_ROWS` rows planned: soles, contact, torso poses, joints, ZMP reference."""
 
     feet: dict[str, np.ndarray]
-    contact: tuple[str, ...]
+    contact: tuple[SupportName, ...]
     pos: np.ndarray
     rot: np.ndarray
     joints: np.ndarray
@@ -98,7 +98,7 @@ class RollingPlanner:
     def __init__(self, params: GaitParams, spec: Spec, envelope: Envelope, legs: Mapping[str, Leg],
                  action: ActionFile | None = None):
         self.params, self.spec, self.envelope, self.legs, self.action = params, spec, envelope, dict(legs), action
-        self.pending_kick: str | None = None                    # a kick asked for (right or left), not yet planned
+        self.pending_kick: Side | None = None                    # a kick asked for (right or left), not yet planned
         self.row_now = -1                                       # the last row handed to the controller
         self.stop_row: int | None = None                        # the row a stop was asked at
         self.state: WalkState = initial_state(params, spec)
@@ -117,7 +117,9 @@ class RollingPlanner:
         p = self.params
         feet = {side: np.repeat(np.array([[self.state.foot(side).x, self.state.foot(side).y, 0.0,
                                             self.state.foot(side).yaw]]), HISTORY_ROWS, axis=0) for side in SIDES}
-        window = self._window(feet, ("double",) * HISTORY_ROWS, np.zeros((HISTORY_ROWS, 2)), 0, HISTORY_ROWS)
+        double: tuple[SupportName, ...] = ("double",)
+        standing = double * HISTORY_ROWS
+        window = self._window(feet, standing, np.zeros((HISTORY_ROWS, 2)), 0, HISTORY_ROWS)
         com = window.body.com(window.body.configs(window.joints, window.pos, window.rot))
         middle = 0.5 * (feet["left"][0, :2] + feet["right"][0, :2])
         window.target = np.repeat(middle[None], HISTORY_ROWS, axis=0)
@@ -134,7 +136,7 @@ class RollingPlanner:
         """The planned joints (20,) [rad] of the standing robot before the first phase."""
         return self.history.joints[-1].copy()
 
-    def _window(self, feet: dict[str, np.ndarray], contact: tuple[str, ...], ref: np.ndarray, history: int,
+    def _window(self, feet: dict[str, np.ndarray], contact: tuple[SupportName, ...], ref: np.ndarray, history: int,
                 rows: int) -> _Window:
         """A window over these rows: torso poses from the soles, its height constant, positions between the
         feet to start from."""
@@ -279,7 +281,7 @@ class RollingPlanner:
         self.state, self.cart = after, self._next_cart
         self.history = _History.of(w, slice(h0 + n - HISTORY_ROWS, h0 + n))
 
-    def _kick(self, side: str) -> None:
+    def _kick(self, side: Side) -> None:
         """Commit a kick phase (:mod:`.kick`) from the standing robot; afterwards it stands where it stood."""
         from op2motion.gait.kick import kick_chunk
 

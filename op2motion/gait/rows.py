@@ -20,7 +20,7 @@ from op2motion.errors import InputError
 from op2motion.gait.generator import Gait
 from op2motion.kinematics.leg_ik import Leg, leg_ik, rot_z, within_reach
 from op2motion.robot.framework import CONTROL_PERIOD_S
-from op2motion.robot.support import SIDES, Support
+from op2motion.robot.support import SIDES, Side, Support
 
 REACH_SHARE = 0.999                # a corrected leg stretches at most to this share of its length
 #: Per-row numeric fields and the shape of one row of each (joints and goals in the spec's joint order [rad], P gains,
@@ -93,11 +93,11 @@ class RowBuffer:
         """Row ``k`` of an object field."""
         return self.objects[name][self._index(k)]
 
-    def feet(self, side: str, k: int) -> np.ndarray:
+    def feet(self, side: Side, k: int) -> np.ndarray:
         """The ``side`` sole (x, y, z [m], yaw [rad]) at row ``k``."""
         return self.get(f"feet_{side}", k)
 
-    def legs(self, side: str, k: int) -> np.ndarray:
+    def legs(self, side: Side, k: int) -> np.ndarray:
         """The ``side`` leg's planned servo angles (6,) [rad] at row ``k``."""
         return self.get(f"legs_{side}", k)
 

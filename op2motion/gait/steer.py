@@ -43,7 +43,7 @@ from op2motion.gait.timeline import ticks
 from op2motion.physics import RAMP_S, WALK_HOLD_S, WALK_SETTLE_S, Plan, WalkClock
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import Support
+from op2motion.robot.support import Side, Support
 
 LEAD_S = RAMP_S + WALK_SETTLE_S     # before the walk's first row [s] (the physics check ramps gravity in meanwhile)
 STEER_PRESET = "steer"              # the preset a steered walk takes by default
@@ -108,7 +108,7 @@ class SteerableWalk(WalkController):
             self.planner.stop()
         self._stopping = True
 
-    def kick(self, foot: str) -> None:
+    def kick(self, foot: Side) -> None:
         """Stop, kick with the ``right`` or ``left`` foot, walk on with the command in force (:mod:`.kick`)."""
         from op2motion.errors import InputError
 
@@ -176,7 +176,7 @@ class SteerableWalk(WalkController):
         self._clock_s, self._fed, self._command, self._stopping = clock, clock, command, stopping
         return goals
 
-    def _landed(self, side: str, k: int) -> tuple[np.ndarray, float] | None:
+    def _landed(self, side: Side, k: int) -> tuple[np.ndarray, float] | None:
         """The foot that closed the feet, where it landed; as it swings again, carried to its planned path."""
         held = super()._landed(side, k)
         if held is None:

@@ -23,6 +23,7 @@ from op2motion.gait.odometry import FootOdometry
 from op2motion.gait.rows import RowBuffer
 from op2motion.kinematics.leg_ik import Leg
 from op2motion.robot.framework import CONTROL_PERIOD_S
+from op2motion.robot.support import Side
 
 
 class RollingLearner(StepLearner):
@@ -48,7 +49,7 @@ class RollingLearner(StepLearner):
         super().reset()
         self.alike_of, self.last_shape = {}, {}
 
-    def _where(self, k: int) -> tuple[str, int] | None:
+    def _where(self, k: int) -> tuple[Side, int] | None:
         if not self.source.has(k):
             return None
         learn = self.source.obj("learn", k)
@@ -73,7 +74,7 @@ class RollingOdometry(FootOdometry):
 
     source: RowBuffer
     after: int
-    due: dict[int, tuple[str, str, bool]]
+    due: dict[int, tuple[Side, Side, bool]]
 
     @classmethod
     def rolling(cls, source: RowBuffer, legs: Mapping[str, Leg], after: int) -> "RollingOdometry":

@@ -37,6 +37,7 @@ from op2motion.gait.stock_config import StockConfig
 from op2motion.kinematics.leg_ik import Leg, leg_ik, leg_of, rot_x, rot_y, rot_z
 from op2motion.robot.framework import CONTROL_PERIOD_S, FRAMEWORK_TICKS_PER_DEG
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Side
 
 TIME_UNIT_MS = CONTROL_PERIOD_S * 1000.0
 CENTER_TICK, MAX_TICK = 2048, 4095
@@ -102,7 +103,7 @@ class StockTick:
     time_ms: float
 
 
-def framework_leg(spec: Spec, side: str) -> Leg:
+def framework_leg(spec: Spec, side: Side) -> Leg:
     """The ``side`` leg as the framework's IK sees it: the spec's joint order and directions, the framework's
     lengths (the spec's ``[framework]`` table; the shipped spec's when a spec states none), the hip at the origin."""
     lengths = spec.framework_leg_m
@@ -259,7 +260,7 @@ class StockWalking:
                          roll / 2.0, pitch, a_l + yaw / 2.0])
         return right, left, pelvis_r, pelvis_l, swinging
 
-    def _leg_degrees(self, side: str, end: np.ndarray) -> np.ndarray | None:
+    def _leg_degrees(self, side: Side, end: np.ndarray) -> np.ndarray | None:
         """The module's IK angles [deg] of one leg (its own joint order, direction not yet applied: our servo angle
         over the joint's direction), or None where the foot is out of reach."""
         leg = self._legs[side]

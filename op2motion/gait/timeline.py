@@ -20,7 +20,7 @@ import numpy as np
 from op2motion.gait.footsteps import Footstep, Footsteps
 from op2motion.gait.params import GaitParams
 from op2motion.robot.framework import CONTROL_PERIOD_S
-from op2motion.robot.support import LIFTED_M, other_side
+from op2motion.robot.support import LIFTED_M, SupportName, other_side
 
 LEAD_S = 0.5             # standing still before the start ramp: the preview moves the CoM ahead of the reference
 
@@ -61,8 +61,8 @@ class Timeline:
 
     times: np.ndarray
     step: np.ndarray
-    contact: tuple[str, ...]
-    supports: tuple[str, ...]
+    contact: tuple[SupportName, ...]
+    supports: tuple[SupportName, ...]
     zmp_ref: np.ndarray
     feet: dict[str, np.ndarray]
 
@@ -112,7 +112,8 @@ def build_timeline(params: GaitParams, footsteps: Footsteps) -> Timeline:
                                           ticks(params.end_s))
     where = {side: np.array([f.x, f.y, 0.0, f.yaw]) for side, f in footsteps.start.items()}
     middle = 0.5 * (where["left"][:2] + where["right"][:2])
-    rows_step, rows_contact, refs = [], [], []
+    rows_step, refs = [], []
+    rows_contact: list[SupportName] = []
     feet: dict[str, list[np.ndarray]] = {side: [] for side in ("left", "right")}
 
     def hold(n: int, step: int, ref: np.ndarray) -> None:

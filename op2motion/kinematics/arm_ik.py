@@ -26,6 +26,7 @@ import numpy as np
 from op2motion.errors import InputError, LimitViolation, ModelError
 from op2motion.kinematics import ModelName, forward
 from op2motion.robot.joints import BookAngles, book_bounds, book_to_servo, limit_violations
+from op2motion.robot.sides import Side, as_side
 from op2motion.robot.spec import Spec
 
 TOL_M = 1e-4                # iterated mode: stop when the hand is this close to the target [m]
@@ -43,7 +44,8 @@ class Arm:
     th_upper: int
     th_lower: int
     phi: int
-    hand: str
+    hand: str           # the hand's point name (``left_hand``)
+    side: Side
 
     @property
     def names(self) -> tuple[str, str, str]:
@@ -51,13 +53,11 @@ class Arm:
         return (f"th{self.th_upper + 1}", f"th{self.th_lower + 1}", f"phi{self.phi + 1}")
 
 
-ARMS = {"left": Arm(6, 7, 4, "left_hand"), "right": Arm(8, 9, 5, "right_hand")}
+ARMS = {"left": Arm(6, 7, 4, "left_hand", "left"), "right": Arm(8, 9, 5, "right_hand", "right")}
 
 
-def _arm(hand: str) -> Arm:
-    if hand not in ARMS:
-        raise InputError(f"expected 'left' or 'right', got {hand!r}", "hand")
-    return ARMS[hand]
+def _arm(hand: object) -> Arm:
+    return ARMS[as_side(hand, "hand")]
 
 
 def _delta(delta: object) -> np.ndarray:
@@ -74,7 +74,7 @@ def _arm_angles(angles: BookAngles, arm: Arm) -> tuple[float, float, float]:
     return a, a + th[arm.th_lower], phi[0] + phi[1] + phi[arm.phi]
 
 
-def book_step(angles: BookAngles, hand: str, delta: object, spec: Spec) -> np.ndarray:
+def book_step(angles: BookAngles, hand: Side, delta: object, spec: Spec) -> np.ndarray:
     """The book's single Taylor step: changes (d_upper, d_lower, d_phi) [rad] for a hand displacement [m].
 
     Code 2.15 (left arm) / 2.17 (right arm). The coronal denominator uses ``sign(th12378)`` (``sign(th123910)``),
@@ -102,7 +102,7 @@ def book_step(angles: BookAngles, hand: str, delta: object, spec: Spec) -> np.nd
     return np.array([d_upper, d_lower, -d[1] / den])
 
 
-def pb_hand_jacobian(angles: BookAngles, hand: str, spec: Spec) -> np.ndarray:
+def pb_hand_jacobian(angles: BookAngles, hand: Side, spec: Spec) -> np.ndarray:
     """Exact 3x3 Jacobian [m/rad] of the projection model's hand w.r.t. (upper th, lower th, phi) of one arm."""
     arm = _arm(hand)
     g = spec.geometry
@@ -142,7 +142,7 @@ def _hands(angles: BookAngles, arm: Arm, q: np.ndarray, spec: Spec, model: Model
 class ArmIKResult:
     """Outcome of one arm IK solve; angles in rad, lengths in m."""
 
-    hand: str
+    hand: Side
     model: ModelName
     mode: str
     initial: BookAngles
@@ -159,7 +159,7 @@ class ArmIKResult:
         return float(np.linalg.norm(self.achieved - self.requested))
 
 
-def solve_arm_ik(angles: BookAngles, hand: str, delta: object, spec: Spec, model: ModelName = "pb", *,
+def solve_arm_ik(angles: BookAngles, hand: Side, delta: object, spec: Spec, model: ModelName = "pb", *,
                  single_step: bool = False, tol: float = TOL_M, enforce_limits: bool = True) -> ArmIKResult:
     """Move one hand by ``delta`` [m] (world frame) with that arm's three joints.
 
@@ -217,7 +217,7 @@ class _ArmSolve:
         give the target's distance. Best residual wins."""
         a, arm, spec = self.angles, self.arm, self.spec
         seeds: list[Callable[[], np.ndarray]] = [lambda: q0,
-                                                 lambda: q0 + book_step(a, arm.hand.split("_")[0], d, spec)]
+                                                 lambda: q0 + book_step(a, arm.side, d, spec)]
         if self.model == "dh":
             pb = replace(self, model="pb")
             seeds.append(lambda: pb.damped_newton(q0, _hands(a, arm, q0, spec, "pb")[0] + d)[0])
@@ -282,7 +282,7 @@ class _ArmSolve:
 
 def _jacobian(angles: BookAngles, arm: Arm, q: np.ndarray, spec: Spec, model: ModelName) -> np.ndarray:
     if model == "pb":
-        return pb_hand_jacobian(_with_arm(angles, arm, q), arm.hand.split("_")[0], spec)
+        return pb_hand_jacobian(_with_arm(angles, arm, q), arm.side, spec)
     h = FD_STEP_RAD
     probes = np.vstack([q + h * e for e in np.eye(3)] + [q - h * e for e in np.eye(3)])
     hands = _hands(angles, arm, probes, spec, model)

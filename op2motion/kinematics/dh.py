@@ -28,6 +28,7 @@ from op2motion.kinematics.points import ROW, BodyPoints, fill_support_foot, new_
 from op2motion.kinematics.trig import sincos
 from op2motion.robot.joints import BookAngles
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Side, Support
 
 MATRIX_BELOW = 64  # batches smaller than this (a PSO swarm) use the 4x4 matrix evaluator
 _HALF_PI = math.pi / 2
@@ -40,7 +41,8 @@ def _shifted(c: np.ndarray, s: np.ndarray, sign: float, offset: float) -> tuple[
     return ((c, s), (-s, c), (-c, -s), (s, -c))[quarter]
 
 
-def _columns(q: np.ndarray, out: np.ndarray, spec: Spec, support: str, full_com: np.ndarray | None = None) -> None:
+def _columns(q: np.ndarray, out: np.ndarray, spec: Spec, support: Support | Side,
+             full_com: np.ndarray | None = None) -> None:
     """Column evaluator: q is (m, 20) [rad]; fills out (rows, 3, m) and, if given, the full CoM (3, m)."""
     m = q.shape[0]
     sin_q, cos_q = sincos(np.ascontiguousarray(q.T))
@@ -69,8 +71,8 @@ def _columns(q: np.ndarray, out: np.ndarray, spec: Spec, support: str, full_com:
         full_com /= plan.total
 
 
-def _matrices(q: np.ndarray, out: np.ndarray, spec: Spec, support: str, full_com: np.ndarray | None = None,
-              frames: np.ndarray | None = None) -> None:
+def _matrices(q: np.ndarray, out: np.ndarray, spec: Spec, support: Support | Side,
+              full_com: np.ndarray | None = None, frames: np.ndarray | None = None) -> None:
     """4x4 matrix evaluator for small batches; fills out (rows, 3, m) like :func:`_columns` (from the chain
     ``frames`` if already known)."""
     plan = matrix_plan(spec, support)

@@ -18,7 +18,7 @@ import numpy as np
 
 from op2motion.kinematics.points import ROW
 from op2motion.robot.spec import BOOK_VARS, Spec
-from op2motion.robot.support import other_side
+from op2motion.robot.support import Side, Support, other_side
 
 _HALF_PI = math.pi / 2
 # World axes of frame 0 (book W with gamma = 0): x0 = +Y, y0 = +Z, z0 = +X.
@@ -54,7 +54,7 @@ _CACHE: dict[tuple[str, str, str], Any] = {}
 T = TypeVar("T")
 
 
-def cached(kind: str, spec: Spec, support: str, build: Callable[[Spec, str], T]) -> T:
+def cached(kind: str, spec: Spec, support: Support | Side, build: Callable[[Spec, Support | Side], T]) -> T:
     """``build(spec, support)``, made once per (kind, spec content, support)."""
     key = (kind, spec.sha256, support)
     if key not in _CACHE:
@@ -63,12 +63,12 @@ def cached(kind: str, spec: Spec, support: str, build: Callable[[Spec, str], T])
     return built
 
 
-def chain(spec: Spec, support: str) -> tuple[Step, ...]:
+def chain(spec: Spec, support: Support | Side) -> tuple[Step, ...]:
     """The book's D-H chain with the real robot's lengths, rooted at the ``support`` ankle (frame "0")."""
     return cached("chain", spec, support, _build_chain)
 
 
-def _build_chain(spec: Spec, support: str) -> tuple[Step, ...]:
+def _build_chain(spec: Spec, support: Support | Side) -> tuple[Step, ...]:
     g = spec.geometry
     left = support == "left"
     sgn = 1.0 if left else -1.0
@@ -105,7 +105,7 @@ def _build_chain(spec: Spec, support: str) -> tuple[Step, ...]:
     return tuple(steps)
 
 
-def chain_points(spec: Spec, support: str) -> tuple[tuple[str, str, tuple[float, float, float]], ...]:
+def chain_points(spec: Spec, support: Support | Side) -> tuple[tuple[str, str, tuple[float, float, float]], ...]:
     """(row, frame, point in that frame) of every body point the chain gives (pelvis and soles aside)."""
     g = spec.geometry
     s, w = ("l", "r") if support == "left" else ("r", "l")
@@ -139,11 +139,11 @@ class MatrixPlan:
     slots: dict              # frame name -> slot
 
 
-def matrix_plan(spec: Spec, support: str) -> MatrixPlan:
+def matrix_plan(spec: Spec, support: Support | Side) -> MatrixPlan:
     return cached("matrix", spec, support, _build_matrix_plan)
 
 
-def _build_matrix_plan(spec: Spec, support: str) -> MatrixPlan:
+def _build_matrix_plan(spec: Spec, support: Support | Side) -> MatrixPlan:
     steps = chain(spec, support)
     by_frame = {st.frame: st for st in steps}
     # Level order: each level lists children of the previous level's frames in that order, so ranges are contiguous.
@@ -192,7 +192,7 @@ def _build_matrix_plan(spec: Spec, support: str) -> MatrixPlan:
                        np.array([fixed_of(by_frame[f]) for f in fixed_only]), root, tuple(levels), slots)
 
 
-def matrix_frames(q: np.ndarray, spec: Spec, support: str) -> np.ndarray:
+def matrix_frames(q: np.ndarray, spec: Spec, support: Support | Side) -> np.ndarray:
     """Every frame of the chain for each pose, (slots, m, 4, 4), slot order of :func:`matrix_plan`."""
     m = q.shape[0]
     plan = matrix_plan(spec, support)
@@ -209,12 +209,12 @@ def matrix_frames(q: np.ndarray, spec: Spec, support: str) -> np.ndarray:
     return frames
 
 
-def point_layout(spec: Spec, support: str) -> tuple:
+def point_layout(spec: Spec, support: Support | Side) -> tuple:
     """Index arrays for the matrix evaluator's point gathering (cached per spec and support)."""
     return cached("layout", spec, support, _build_point_layout)
 
 
-def _build_point_layout(spec: Spec, support: str) -> tuple:
+def _build_point_layout(spec: Spec, support: Support | Side) -> tuple:
     slots = matrix_plan(spec, support).slots
     points = chain_points(spec, support)
     origin = [(ROW[r], slots[f]) for r, f, p in points if p == (0.0, 0.0, 0.0)]

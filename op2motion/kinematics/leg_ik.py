@@ -15,11 +15,13 @@ ankle pitch and roll from the direction of ``r``; the hip's yaw, roll and pitch 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Mapping
 
 import numpy as np
 
 from op2motion.errors import InputError, ModelError
 from op2motion.robot.joints import LEG_JOINTS
+from op2motion.robot.sides import Side
 from op2motion.robot.spec import Spec
 
 _AXES = (2, 0, 1, 1, 1, 0)          # the principal axis of each leg joint: Z, X, Y, Y, Y, X
@@ -31,7 +33,7 @@ class Leg:
     """One leg's geometry from the spec: hip centre [m] in the torso frame, thigh and calf [m], ankle to sole [m],
     servo index and axis sign of each leg joint (natural angle x sign = servo angle)."""
 
-    side: str
+    side: Side
     hip: np.ndarray
     thigh: float
     calf: float
@@ -40,7 +42,7 @@ class Leg:
     sign: np.ndarray
 
 
-def leg_of(spec: Spec, side: str) -> Leg:
+def leg_of(spec: Spec, side: Side) -> Leg:
     """The ``side`` leg of the spec. Raises :class:`ModelError` if the leg is not the OP2's structure (principal
     axes, hip roll and pitch in one point, knee and ankle straight below)."""
     p = side[0]
@@ -154,7 +156,7 @@ def leg_ik(leg: Leg, sole: np.ndarray, rot: np.ndarray) -> np.ndarray:
     return out * leg.sign
 
 
-def legs_ik(spec: Spec, soles: dict[str, tuple[np.ndarray, np.ndarray]], base: np.ndarray) -> np.ndarray:
+def legs_ik(spec: Spec, soles: Mapping[Side, tuple[np.ndarray, np.ndarray]], base: np.ndarray) -> np.ndarray:
     """Full servo rows (N, 20) [rad]: ``base`` (N, 20) or (20,) with both legs replaced by the IK of ``soles``
     (side -> (positions (N, 3) [m], rotations (N, 3, 3)) in the torso frame)."""
     n = len(next(iter(soles.values()))[0])

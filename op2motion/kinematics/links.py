@@ -18,6 +18,7 @@ from op2motion.kinematics.dh_chain import cached, matrix_frames, matrix_plan
 from op2motion.kinematics.tree import link_frames
 from op2motion.robot.joints import BookAngles, book_to_servo
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Side, Support
 
 CALIBRATION_POSES = 3
 ATTACHED_M = 1e-9   # a link rides on a chain frame when its frame keeps its place in that frame to this [m or rad]
@@ -32,12 +33,12 @@ class Attachment:
     local: np.ndarray
 
 
-def attachments(spec: Spec, support: str) -> dict[str, Attachment]:
+def attachments(spec: Spec, support: Support | Side) -> dict[str, Attachment]:
     """``{link: Attachment}`` for every link of ``spec`` with ``support`` as the chain's root (cached)."""
     return cached("links", spec, support, _calibrate)
 
 
-def _calibrate(spec: Spec, support: str) -> dict[str, Attachment]:
+def _calibrate(spec: Spec, support: Support | Side) -> dict[str, Attachment]:
     rng = np.random.default_rng(0)
     angles = BookAngles.random(CALIBRATION_POSES, rng, support)
     frames = matrix_frames(angles.vector(), spec, support)                  # (slots, k, 4, 4) in the sole frame
@@ -76,12 +77,12 @@ class FullComPlan:
     total: float
 
 
-def full_com_plan(spec: Spec, support: str) -> FullComPlan:
+def full_com_plan(spec: Spec, support: Support | Side) -> FullComPlan:
     """The plan of the full-inertia CoM for ``support`` (computed once per spec)."""
     return cached("fullcom", spec, support, _build_full_com_plan)
 
 
-def _build_full_com_plan(spec: Spec, support: str) -> FullComPlan:
+def _build_full_com_plan(spec: Spec, support: Support | Side) -> FullComPlan:
     attached = attachments(spec, support)
     masses: dict[int, float] = {}
     weighted: dict[int, np.ndarray] = {}

@@ -15,7 +15,7 @@ import numpy as np
 
 from op2motion.errors import ModelError
 from op2motion.robot.spec import Foot
-from op2motion.robot.support import other_side
+from op2motion.robot.support import Side, Support, as_side, other_side
 
 #: Unique point rows, in storage order.
 #: The full-body kinematic model: the book's D-H chain (``dh``) or its projection formulas (``pb``).
@@ -60,7 +60,7 @@ class BodyPoints:
 
     data: np.ndarray
     com: np.ndarray
-    support: str
+    support: Support | Side
     model: ModelName
     com_full: np.ndarray | None = None
 
@@ -76,7 +76,7 @@ class BodyPoints:
         return self.com_full
 
     @property
-    def swing(self) -> str:
+    def swing(self) -> Side:
         """The swing side (``left`` or ``right``)."""
         return other_side(self.support)
 
@@ -84,7 +84,7 @@ class BodyPoints:
         """Point ``name`` for every pose, (N, 3) [m]."""
         return self.data[row_of(name)].T
 
-    def foot_corners(self, side: str) -> np.ndarray:
+    def foot_corners(self, side: Support | Side) -> np.ndarray:
         """Corners of the ``left`` or ``right`` foot sole, (N, 4, 3) [m] (front-left, front-right, back-right,
         back-left)."""
         start = ROW[f"{side}_foot_0"]
@@ -119,9 +119,9 @@ class BodyPoints:
         return {name: [float(v) for v in self.data[row_of(name), :, i]] for name in POINT_NAMES}
 
 
-def fill_support_foot(out: np.ndarray, foot: "Foot", support: str) -> None:
+def fill_support_foot(out: np.ndarray, foot: "Foot", support: Support | Side) -> None:
     """Rows of a (rows, 3, N) slab that do not depend on the angles: the support sole (the world origin) and its
     corners on the floor."""
     out[ROW[f"{support}_sole"]] = 0.0
-    for i, (dx, dy) in enumerate(foot.corners(support)):
+    for i, (dx, dy) in enumerate(foot.corners(as_side(support, "support"))):
         out[ROW[f"{support}_foot_{i}"]] = np.array([dx, dy, 0.0])[:, None]

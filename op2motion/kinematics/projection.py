@@ -32,7 +32,7 @@ from op2motion.kinematics.points import ROW, BodyPoints, fill_support_foot, new_
 from op2motion.kinematics.trig import sincos
 from op2motion.robot.joints import BookAngles
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import other_side
+from op2motion.robot.support import Side, other_side
 
 PSI_TOLERANCE_RAD = 1e-12  # psi must be zero for this model
 
@@ -111,7 +111,7 @@ def _chunk(th: np.ndarray, phi: np.ndarray, out: np.ndarray, spec: Spec, left: b
     head = _Link(arm_t[4], trig_f[1])
 
     s, w = ("l", "r") if left else ("r", "l")
-    support_side = "left" if left else "right"
+    support_side: Side = "left" if left else "right"
     swing_side = other_side(support_side)
     row = lambda name: out[ROW[name]]  # noqa: E731
     ankle = row(f"{s}_ankle")

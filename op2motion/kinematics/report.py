@@ -31,7 +31,7 @@ class PoseReport:
     centre, X forward, Y left, Z up; moved to ``sp`` and turned by ``gamma`` when given)."""
 
     model: ModelName
-    support: str
+    support: Support
     points: BodyPoints
     com: np.ndarray
     br: float
@@ -100,10 +100,10 @@ def evaluate(angles: BookAngles, spec: Spec, model: ModelName = "dh", br: float 
     one = angles.row(0)
     points = forward(one, spec, model, sp, gamma)
     com = points.com[:, 0].copy()
-    margin = float(stability_margin(com[None, :2], spec, one.support, check_br(br), (sp[0], sp[1]), gamma)[0])
+    margin = float(stability_margin(com[None, :2], spec, one.support.stance, check_br(br), (sp[0], sp[1]), gamma)[0])
     servo = book_to_servo(one, spec)[0]
     full = forward(one, spec, "dh", sp, gamma, full_com=True).full()[:, 0].copy()   # true geometry, any model
-    margin_full = float(stability_margin(full[None, :2], spec, one.support, br, (sp[0], sp[1]), gamma,
+    margin_full = float(stability_margin(full[None, :2], spec, one.support.stance, br, (sp[0], sp[1]), gamma,
                                          COM_MODEL_FULL)[0])
     try:
         ticks: dict[str, int] | None = {str(j.id): int(t) for j, t in zip(spec.joints, servo_to_ticks(servo, spec))}

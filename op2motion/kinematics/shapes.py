@@ -25,6 +25,7 @@ import numpy as np
 from op2motion.kinematics.dh_chain import cached
 from op2motion.kinematics.links import attachments
 from op2motion.robot.spec import Spec, rpy_matrix
+from op2motion.robot.support import Side, Support
 
 RIM_MISS_SHARE = 0.118      # a cylinder's rim lies this share of its radius outside its capsule (sqrt(1.25) - 1)
 BROAD_PHASE_M = 0.03        # default: clearances beyond this are reported as lower bounds, not exactly
@@ -71,12 +72,12 @@ class ShapeSet:
         return RIM_MISS_SHARE * per_pair, 0.5 * per_pair
 
 
-def shape_set(spec: Spec, support: str) -> ShapeSet:
+def shape_set(spec: Spec, support: Support | Side) -> ShapeSet:
     """The shapes and pairs of ``spec`` on the chain rooted at ``support`` (cached)."""
     return cached("shapes", spec, support, _build)
 
 
-def _build(spec: Spec, support: str) -> ShapeSet:
+def _build(spec: Spec, support: Support | Side) -> ShapeSet:
     attached = attachments(spec, support)
     links, slots, local, is_box, half, segment, radius, bound = [], [], [], [], [], [], [], []
     for c in spec.collisions:

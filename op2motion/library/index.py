@@ -18,6 +18,7 @@ from op2motion.errors import InputError, Op2MotionError
 from op2motion.fileio import write_atomic
 from op2motion.formats.posefile import read_pose
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Side, Support
 
 INDEX_JSON, INDEX_CSV = "index.json", "index.csv"
 POSE_GLOB = "reach-*.json"
@@ -29,7 +30,7 @@ class IndexRow:
 
     name: str
     hand: str
-    support: str
+    support: Support | Side
     br: float
     x: float
     y: float

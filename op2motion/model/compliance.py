@@ -36,7 +36,7 @@ from op2motion.kinematics.points import row_of
 from op2motion.model.servo import ServoModel
 from op2motion.robot.joints import LEG_JOINTS
 from op2motion.robot.spec import GRAVITY_M_S2, Spec
-from op2motion.robot.support import other_side
+from op2motion.robot.support import Side, Support, other_side
 
 
 @dataclass(frozen=True)
@@ -190,7 +190,7 @@ class SwingLegSag:
     """How far the swing leg's own weight lowers its foot on compliant servos, for one spec, support and servo
     model; evaluated on the D-H chain's frames (:func:`op2motion.kinematics.dh_chain.matrix_frames`)."""
 
-    def __init__(self, spec: Spec, support: str, servo: ServoModel | None = None):
+    def __init__(self, spec: Spec, support: Support | Side, servo: ServoModel | None = None):
         servo = servo or ServoModel.of(spec)
         attached = attachments(spec, support)
         side = other_side(support)[0]

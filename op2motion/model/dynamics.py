@@ -15,7 +15,7 @@ import numpy as np
 from op2motion.errors import InputError
 from op2motion.model.urdf import build_urdf, frame_link, frame_points, sole_link
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import SIDES, Support
+from op2motion.robot.support import SIDES, Support, SupportName
 
 
 @dataclass(frozen=True)
@@ -61,18 +61,18 @@ class Dynamics:
         q[self.q_index] = servo
         return q
 
-    def level_configuration(self, servo: np.ndarray, support: str) -> np.ndarray:
+    def level_configuration(self, servo: np.ndarray, support: Support | SupportName) -> np.ndarray:
         """Configuration whose free flyer puts the support sole at the world origin, level: gravity (world -Z)
         then acts as it does on the robot standing on that foot."""
         q = self.configuration(servo)
         q[:7] = self.pin.SE3ToXYZQUAT(self._sole_frame(q, support).inverse())
         return q
 
-    def _sole_frame(self, q: np.ndarray, support: str) -> Any:
+    def _sole_frame(self, q: np.ndarray, support: Support | SupportName) -> Any:
         self.pin.framesForwardKinematics(self.model, self.data, q)
         return self.data.oMf[self.sole_ids[Support.of(support).stance]]
 
-    def joint_centres(self, servo: np.ndarray, support: str) -> dict[str, np.ndarray]:
+    def joint_centres(self, servo: np.ndarray, support: Support | SupportName) -> dict[str, np.ndarray]:
         """Joint origins and named frames [m] in the support sole frame."""
         q = self.configuration(servo)
         inv = self._sole_frame(q, support).inverse()
@@ -81,7 +81,7 @@ class Dynamics:
             out[name] = (inv * self.data.oMf[self.model.getFrameId(link)]).translation.copy()
         return out
 
-    def frame_jacobian(self, servo: np.ndarray, frame: str, support: str) -> np.ndarray:
+    def frame_jacobian(self, servo: np.ndarray, frame: str, support: Support | SupportName) -> np.ndarray:
         """Jacobian (6, 20) of a named frame (e.g. ``left_hand``) w.r.t. the servo angles, with the support sole
         fixed and level: rows are linear [m/rad] then angular [rad/rad] velocity in the support sole frame."""
         pin = self.pin
@@ -98,13 +98,13 @@ class Dynamics:
         base = -np.linalg.solve(sole[:, :6], sole[:, 6:])
         return (jac[:, 6:] + jac[:, :6] @ base)[:, self.v_index - 6]
 
-    def com(self, servo: np.ndarray, support: str) -> np.ndarray:
+    def com(self, servo: np.ndarray, support: Support | SupportName) -> np.ndarray:
         """Full-inertia centre of mass [m] in the support sole frame."""
         q = self.configuration(servo)
         c = self.pin.centerOfMass(self.model, self.data, q)
         return self._sole_frame(q, support).inverse().act(c)
 
-    def static_torques(self, servo: np.ndarray, support: str) -> TorqueReport:
+    def static_torques(self, servo: np.ndarray, support: Support | SupportName) -> TorqueReport:
         """Joint torques [N·m] that hold the pose still on ``support`` ("left", "right" or "double").
 
         Generalised gravity from RNEA at rest, balanced by a contact wrench at the support sole(s): the torso's six

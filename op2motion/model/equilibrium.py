@@ -33,7 +33,7 @@ import numpy as np
 
 from op2motion.model.dynamics import dynamics_for
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import Support
+from op2motion.robot.support import Support, SupportName
 
 TOLERANCE_NM = 1e-6          # largest torque imbalance [N·m] of a solution
 MAX_ITERATIONS = 30
@@ -41,7 +41,7 @@ PROBE_RAD = 1e-6             # finite-difference step [rad]
 MAX_SAG_RAD = 0.6            # a solution farther than this from the goal is not the pose's equilibrium
 
 
-def sagged_angles(goal: np.ndarray, support: Support | str, spec: Spec, kp: np.ndarray,
+def sagged_angles(goal: np.ndarray, support: Support | SupportName, spec: Spec, kp: np.ndarray,
                   torque_max: float) -> np.ndarray | None:
     """The servo angles (20,) [rad] at which servos of stiffness ``kp`` (20,) [N·m/rad] holding ``goal`` (20,)
     [rad] carry the body at rest on ``support``; ``None`` where no equilibrium exists within the servos'
@@ -60,7 +60,7 @@ def loaded_foot_margin(goal: np.ndarray, spec: Spec, kp: np.ndarray, torque_max:
     return -math.inf if found is None else found[1]
 
 
-def _sagged(goal: np.ndarray, support: Support | str, spec: Spec, kp: np.ndarray, torque_max: float,
+def _sagged(goal: np.ndarray, support: Support | SupportName, spec: Spec, kp: np.ndarray, torque_max: float,
             loaded_only: bool = False) -> tuple[np.ndarray, float] | None:
     """The sagged angles and, on two feet, the least CoP margin of the soles (``loaded_only``: the loaded sole's
     once the other has rolled onto its edge; +inf on one foot); None where the servos cannot hold the pose."""

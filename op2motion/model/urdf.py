@@ -18,6 +18,7 @@ import numpy as np
 
 from op2motion.errors import InputError
 from op2motion.robot.spec import Inertial, Spec
+from op2motion.robot.support import Side, Support
 
 FRAME_LINK_MASS_KG = 1e-5      # named frames (hands, soles, ...): tiny mass so no tool invents 1 kg for them
 FRAME_LINK_INERTIA = 1e-10     # [kg·m²]
@@ -44,7 +45,7 @@ URDF_ROOT = "base_link"     # the root ROS tools expect; a fixed joint carries t
 FRAME_SUFFIX = "_link"
 
 
-def sole_link(side: str) -> str:
+def sole_link(side: Side) -> str:
     """The URDF link at the centre of the ``left`` or ``right`` sole."""
     return f"{side}_sole{FRAME_SUFFIX}"
 
@@ -54,16 +55,16 @@ def frame_link(spec: Spec, name: str) -> str:
     if name in spec.points:
         return spec.points[name].frame
     if name in ("left_sole", "right_sole"):
-        return sole_link(name.split("_")[0])
+        return sole_link("left" if name == "left_sole" else "right")
     raise InputError(f"expected a named point ({', '.join(spec.points)}) or a sole, got {name!r}", "frame")
 
 
-def foot_link(spec: Spec, side: str) -> str:
+def foot_link(spec: Spec, side: Support | Side) -> str:
     """The URDF link that carries the ``left`` or ``right`` foot (the ankle-roll joint's child)."""
     return spec.joint(f"{side[0]}_ank_roll").child
 
 
-def foot_box_corners(spec: Spec, side: str) -> np.ndarray:
+def foot_box_corners(spec: Spec, side: Support | Side) -> np.ndarray:
     """The 4 bottom corners (4, 3) [m] of a foot's collision box in its ankle-roll link frame (the sole)."""
     link = foot_link(spec, side)
     boxes = spec.collisions_of(link, "box")

@@ -29,7 +29,7 @@ from op2motion.posture.cost import SAG_TILT_LIMIT_RAD, SELF_CLEARANCE_M, CostMod
 from op2motion.robot.balance import polygon_margin
 from op2motion.robot.joints import joint_range, servo_to_book
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import Support, as_side
+from op2motion.robot.support import Side, Support, as_side
 
 ROUTE_SLACK_M = 0.002      # planned paths keep this much more than SELF_CLEARANCE_M: smoothing and balance leans
 PLAN_CLEARANCE_M = SELF_CLEARANCE_M + ROUTE_SLACK_M
@@ -77,7 +77,7 @@ class Limits:
                 & (m.swing >= self.swing) & (m.tilt <= self.tilt))
 
 
-def body_cost(spec: Spec, stance: str) -> CostModel:
+def body_cost(spec: Spec, stance: Support | Side) -> CostModel:
     """The posture cost standing on ``stance`` (full sole, full-inertia CoM), used for what it measures beside the
     hand: clearance between links, the settled CoM's margin, the swing foot's lift, the sag tilt."""
     return CostModel(PostureProblem(as_side(stance, "support"), "left", _ANY_HAND_TARGET, 1.0), spec)
@@ -86,7 +86,7 @@ def body_cost(spec: Spec, stance: str) -> CostModel:
 class BodyChecks:
     """The measures of poses standing on ``side`` (``left``/``right``) or on both feet (None), prepared once."""
 
-    def __init__(self, spec: Spec, side: str | None):
+    def __init__(self, spec: Spec, side: Support | Side | None):
         self.spec, self.side = spec, side
         self.frame = side or "left"
         self.cost = body_cost(spec, self.frame)

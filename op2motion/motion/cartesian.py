@@ -37,7 +37,7 @@ from op2motion.posture.cost import SELF_CLEARANCE_M, TARGET_LIMIT_M
 from op2motion.robot.framework import CONTROL_PERIOD_S, DEFAULT_P_GAIN
 from op2motion.robot.pose import Pose
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import Support
+from op2motion.robot.support import Side, Support
 
 LINE_TOL_M = 0.002          # the hand may leave the line by this much
 LINE_MARGIN_M = 0.005       # the CoM stays this far inside the support (settled on one foot)
@@ -58,7 +58,7 @@ class LineRequest:
     the two), in ``duration_s`` [s]; ``orientation``: ``free``, ``keep`` (the forearm's direction held) or a
     direction (3,) to turn the forearm to; ``back``: then back to the start along the line in as long again."""
 
-    hand: str
+    hand: Side
     duration_s: float
     target_m: tuple[float, float, float] | None = None
     delta_m: tuple[float, float, float] | None = None
@@ -99,7 +99,7 @@ class LineMove:
     joint speeds (K, 20) [rad/s] and the forearm's angle from its commanded direction (K,) [rad] (None: free)."""
 
     pose: Pose
-    hand: str
+    hand: Side
     start_m: np.ndarray
     end_m: np.ndarray
     goals: np.ndarray
@@ -138,7 +138,7 @@ class LineMove:
         k = len(self.goals)
         segment = np.zeros(k, dtype=int)
         segment[0] = -1
-        return Trajectory(self.goals, np.full(self.goals.shape, float(p_gain)), (str(self.pose.support),) * k,
+        return Trajectory(self.goals, np.full(self.goals.shape, float(p_gain)), (self.pose.support.value,) * k,
                           segment, (f"{self.hand} hand line",))
 
     def motion(self, name: str, p_gain: int = DEFAULT_P_GAIN) -> Motion:
@@ -285,7 +285,7 @@ def _checked(pose: Pose, request: LineRequest, spec: Spec, ik: WholeBodyIk, rows
     speeds = np.gradient(goals, CONTROL_PERIOD_S, axis=0)
     share = (rows.targets - start) @ (end - start) / max(float(np.sum((end - start) ** 2)), 1e-18)
     _refuse_off_line(request, np.linalg.norm(reached["hand"] - rows.targets, axis=1), share, speeds, ik.arm, spec)
-    measured = BodyChecks(spec, None if Support.of(pose.support).is_double else str(pose.support)).measure(goals)
+    measured = BodyChecks(spec, None if Support.of(pose.support).is_double else pose.support.stance).measure(goals)
     pointing = None
     if rows.points is not None:
         pointing = np.arccos(np.clip(np.einsum("ij,ij->i", reached["point"], rows.points), -1.0, 1.0))
@@ -313,7 +313,7 @@ def line_move(pose: Pose, request: LineRequest, spec: Spec) -> LineMove:
     """The hand of ``request`` moved along a straight line from ``pose`` (see the module docstring): the ways of
     :mod:`.line_solve` in turn, the first that passes every check."""
     request = request.validated()
-    ik = WholeBodyIk(spec, str(pose.support), request.hand, pose.servo)
+    ik = WholeBodyIk(spec, pose.support, request.hand, pose.servo)
     first = ik.features(pose.servo[None])
     start = first["hand"][0]
     end = np.asarray(request.target_m, dtype=float) if request.target_m is not None else start + request.delta_m
@@ -321,7 +321,7 @@ def line_move(pose: Pose, request: LineRequest, spec: Spec) -> LineMove:
         raise InputError(f"expected a line of at most {MAX_LINE_M:g} m, got {np.linalg.norm(end - start):.3f} m",
                          "to" if request.target_m is not None else "by")
     _, targets, points = _targets(request, start, end, first["point"][0])
-    crouching = WholeBodyIk(spec, str(pose.support), request.hand, pose.servo, crouch=True)
+    crouching = WholeBodyIk(spec, pose.support, request.hand, pose.servo, crouch=True)
     failures: list[Exception] = []
     search = EndSearch()
     tips = None

@@ -34,7 +34,7 @@ from op2motion.motion.trajectory import Trajectory
 from op2motion.robot.balance import polygon_margin
 from op2motion.robot.joints import servo_to_book
 from op2motion.robot.spec import GRAVITY_M_S2, Spec
-from op2motion.robot.support import Support, fixed_foot
+from op2motion.robot.support import Side, Support, SupportName, fixed_foot
 
 MAX_RATIO = 99.0          # a torque ratio is reported up to this (a goal faster than the no-load speed has none)
 SMOOTH_ROWS = 5           # 40 ms: the goals' derivatives are taken after this moving average
@@ -47,7 +47,7 @@ class MotionChecks:
     the ZMP's margin to the row's support polygon [m] (negative outside), and the worst joint's torque ratio
     (needed / available) with its torque [N·m]."""
 
-    fixed_foot: str
+    fixed_foot: Side
     clearance_m: np.ndarray
     clearance_links: tuple[tuple[str, str], ...]
     com: np.ndarray
@@ -69,7 +69,7 @@ class MotionChecks:
                 "torque_joint": self.torque_joint[t], "fixed_foot": self.fixed_foot}
 
 
-def clearance(goals: np.ndarray, spec: Spec, side: str = "left") -> tuple[np.ndarray, list[tuple[str, str]]]:
+def clearance(goals: np.ndarray, spec: Spec, side: Support | Side = "left") -> tuple[np.ndarray, list[tuple[str, str]]]:
     """Least clearance [m] (K,) between the spec's collision shapes for each row of goals (K, 20) [rad], and the
     links of the closest pair."""
     shapes = shape_set(spec, side)
@@ -142,7 +142,7 @@ def multibody_zmp(dyn: Any, configs: np.ndarray, dt: float) -> tuple[np.ndarray,
 
 
 def contact_torques(dyn: Any, configs: np.ndarray, v: np.ndarray, a: np.ndarray,
-                    supports: tuple[str, ...]) -> np.ndarray:
+                    supports: tuple[Support | SupportName, ...]) -> np.ndarray:
     """Joint torques (K, 20) [N·m] about the spec's joint axes that move pinocchio configurations (K, nq) with
     velocities and accelerations (K, nv) while the soles of each row's support carry the robot: inverse dynamics
     (RNEA) less the contact wrenches, the smallest (least-squares) wrenches at the soles that balance the floating
@@ -161,7 +161,7 @@ def contact_torques(dyn: Any, configs: np.ndarray, v: np.ndarray, a: np.ndarray,
 
 
 def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | None = None,
-                     foot: str | None = None) -> MotionChecks:
+                     foot: Side | None = None) -> MotionChecks:
     """All checks of the module docstring on every row of ``trajectory``. ``foot`` picks the frame of the report:
     that sole where it stood at the start, as the physics world has it (default: the fixed foot's). Velocities and
     accelerations are taken from the goals smoothed over :data:`SMOOTH_ROWS` rows: goals come in whole ticks
@@ -170,7 +170,7 @@ def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | Non
     pin, model, data = dyn.pin, dyn.model, dyn.data
     servo = servo or ServoModel.of(spec)
     dt, goals = trajectory.dt, trajectory.goals
-    side: str = fixed_foot(trajectory.supports)
+    side: Side = fixed_foot(trajectory.supports)
     smooth = smoothed(goals, SMOOTH_ROWS)
     configs = np.array([dyn.level_configuration(g, side) for g in smooth])
     k = len(goals)
@@ -201,7 +201,7 @@ def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | Non
     return MotionChecks(side, least, tuple(links), com, zmp, margin, tuple(polygons), ratio, torque, tuple(joint))
 
 
-def in_sole_frame(track: Sequence[Sequence[float]], start: np.ndarray, measured: str, wanted: str,
+def in_sole_frame(track: Sequence[Sequence[float]], start: np.ndarray, measured: Side, wanted: Side,
                   spec: Spec) -> list[tuple[float, float, float]]:
     """Rows (time [s], x [m], y [m]) measured in the ``measured`` sole's frame, in the ``wanted`` sole's frame
     instead, the two soles placed as the start pose ``start`` (20,) [rad] has them (D-H chain)."""

@@ -15,7 +15,7 @@ import numpy as np
 
 from op2motion.errors import CheckFailed
 from op2motion.formats.action import ActionFile, Page
-from op2motion.formats.motionfile import Motion
+from op2motion.formats.motionfile import Motion, PlannerName
 from op2motion.motion.checks import OVERLAP_TOL_M, clearance, require_clear
 from op2motion.motion.planner import action_pages, trajectory_through
 from op2motion.motion.player import Playback, play, start_ticks
@@ -51,7 +51,7 @@ def waypoints_of(motion: Motion) -> list[Waypoint]:
     return [Waypoint(s.pose.name, s.pose.servo, s.duration_s, s.pause_s, s.pose.support) for s in motion.steps]
 
 
-def plan_motion(motion: Motion, spec: Spec, planner: str = "rrt", seed: int = 0) -> Trajectory:
+def plan_motion(motion: Motion, spec: Spec, planner: PlannerName = "rrt", seed: int = 0) -> Trajectory:
     """A motion's goals every 8 ms with its profile and P gain, weight shifts inserted, segments whose straight
     line collides planned around (``planner`` "rrt", seeded by ``seed``: :mod:`.route`); refused (naming segment,
     time and links) where links would still pass through each other (``planner`` "none")."""
@@ -75,7 +75,7 @@ def require_poses_clear(waypoints: list[Waypoint], spec: Spec) -> None:
 
 
 def motion_to_action(motion: Motion, spec: Spec, base: ActionFile, first: int | None = None,
-                     force: bool = False, planner: str = "rrt", seed: int = 0
+                     force: bool = False, planner: PlannerName = "rrt", seed: int = 0
                      ) -> tuple[ActionFile, list[int], list[str]]:
     """``base`` with the motion written as chained pages (at most 7 steps each, linked by ``next``) from ``first``
     on (default: the first run of empty pages; occupied pages refused unless ``force``), colliding segments planned

@@ -26,7 +26,7 @@ import numpy as np
 from op2motion.errors import CheckFailed, InputError
 from op2motion.formats.action import ActionFile
 from op2motion.formats.actionlayout import MAX_BYTE, MAX_STEPS, NUM_PAGES, PageHeader, StepBytes, encode_page
-from op2motion.formats.motionfile import PROFILES
+from op2motion.formats.motionfile import PROFILES, PlannerName, Profile
 from op2motion.motion.player import play, start_ticks, step_calls
 from op2motion.motion.route import route, routed_clearance, with_stops
 from op2motion.motion.shift import balanced, settled_swing_heights, with_weight_shifts
@@ -36,7 +36,7 @@ from op2motion.posture.cost import SELF_CLEARANCE_M
 from op2motion.robot.framework import CONTROL_PERIOD_S, DEFAULT_P_GAIN, slope_of_p_gain
 from op2motion.robot.joints import servo_to_ticks
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import LIFTED_M
+from op2motion.robot.support import LIFTED_M, Support, SupportName
 
 SPEED_FRACTION = 0.5       # of the no-load speed: at the peak speed half the stall torque is still available
 _FIRST_PAGE = 1
@@ -197,10 +197,10 @@ def _robot_rows(waypoints: Sequence[Waypoint], spec: Spec, v_max: float) -> tupl
 
 
 def row_supports(goals: np.ndarray, segment: np.ndarray, waypoints: Sequence[Waypoint],
-                 spec: Spec) -> tuple[str, ...]:
+                 spec: Spec) -> tuple[Support | SupportName, ...]:
     """The support of each row: a single-support segment end's foot stands; the other foot supports too while
     its lowest corner, after the sag, is within :data:`LIFTED_M` of the floor."""
-    out = []
+    out: list[Support | SupportName] = []
     heights = {side: settled_swing_heights(goals, side, spec) for side in ("left", "right")}
     for k, seg in enumerate(segment):
         ends = [waypoints[0]] if seg < 0 else [waypoints[seg], waypoints[seg + 1]]
@@ -213,7 +213,7 @@ def row_supports(goals: np.ndarray, segment: np.ndarray, waypoints: Sequence[Way
     return tuple(out)
 
 
-def _rows(waypoints: Sequence[Waypoint], spec: Spec, profile: str, p_gain: int
+def _rows(waypoints: Sequence[Waypoint], spec: Spec, profile: Profile, p_gain: int
           ) -> tuple[np.ndarray, np.ndarray, list[str], np.ndarray]:
     """Goals (K, 20), the segment of each row, the timing notes and the P gains (K, 20) of ``profile``."""
     v_max = SPEED_FRACTION * spec.servo.no_load_speed_rad_s
@@ -223,8 +223,8 @@ def _rows(waypoints: Sequence[Waypoint], spec: Spec, profile: str, p_gain: int
     return _robot_rows(waypoints, spec, v_max)
 
 
-def trajectory_through(waypoints: Sequence[Waypoint], spec: Spec, profile: str = "quintic",
-                       p_gain: int = DEFAULT_P_GAIN, shift_weight: bool = True, planner: str = "rrt",
+def trajectory_through(waypoints: Sequence[Waypoint], spec: Spec, profile: Profile = "quintic",
+                       p_gain: int = DEFAULT_P_GAIN, shift_weight: bool = True, planner: PlannerName = "rrt",
                        seed: int = 0) -> Trajectory:
     """Joint goals every 8 ms through ``waypoints`` with ``profile`` (``quintic`` or ``robot``); with
     ``shift_weight``, a weight shift goes in wherever the sequence changes between two feet and one; with
@@ -254,7 +254,7 @@ def trajectory_through(waypoints: Sequence[Waypoint], spec: Spec, profile: str =
 
 
 def action_pages(waypoints: Sequence[Waypoint], spec: Spec, name: str, first_page: int,
-                 p_gain: int = DEFAULT_P_GAIN, shift_weight: bool = True, planner: str = "rrt",
+                 p_gain: int = DEFAULT_P_GAIN, shift_weight: bool = True, planner: PlannerName = "rrt",
                  seed: int = 0) -> tuple[list[bytes], list[str]]:
     """The motion as chained action pages from ``first_page`` on (the robot's profile: what the robot plays),
     weight shifts inserted and colliding segments planned around as :func:`trajectory_through` does, every joint's

@@ -32,7 +32,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from op2motion.errors import CheckFailed, InputError
-from op2motion.formats.motionfile import PLANNERS
+from op2motion.formats.motionfile import PLANNERS, PlannerName
 from op2motion.motion.body_checks import BodyChecks, Limits, Measures
 from op2motion.motion.checks import OVERLAP_TOL_M, clearance
 from op2motion.motion.rrt import Box, RrtSettings, Validity, rrt_connect, shortcut
@@ -53,7 +53,7 @@ SEARCH_NAMES = {"rrt": "RRT-Connect", "ompl": "OMPL's RRT-Connect"}
 Search = Callable[[np.ndarray, np.ndarray, Validity, Box, np.random.Generator, RrtSettings], "list[np.ndarray] | None"]
 
 
-def _search(planner: str) -> Search:
+def _search(planner: PlannerName) -> Search:
     """The search function of ``planner`` ("rrt" or "ompl"; OMPL imported only when it is asked for)."""
     if planner == "ompl":
         from op2motion.motion.rrt_ompl import ompl_rrt_connect
@@ -132,7 +132,7 @@ def _durations(points: list[np.ndarray], total_s: float, box: Box) -> list[float
 
 
 def _plan(seg: _Segment, limits: Limits, rng: np.random.Generator, search: RrtSettings,
-          settings: RrtSettings, planner: str = "rrt") -> list[np.ndarray] | None:
+          settings: RrtSettings, planner: PlannerName = "rrt") -> list[np.ndarray] | None:
     """``planner``'s RRT-Connect then shortcuts in ``seg``'s space with every state within ``limits``; None if none
     found."""
 
@@ -145,7 +145,7 @@ def _plan(seg: _Segment, limits: Limits, rng: np.random.Generator, search: RrtSe
 
 
 def route_segment(a: Waypoint, b: Waypoint, spec: Spec, seed: int, settings: RrtSettings = RrtSettings(),
-                  planner: str = "rrt") -> tuple[list[Waypoint], str | None]:
+                  planner: PlannerName = "rrt") -> tuple[list[Waypoint], str | None]:
     """The waypoints that replace ``b`` (via poses, then ``b``) and why the straight line needed them (None and
     ``[b]`` when it did not), searched by ``planner`` ("rrt" or "ompl"). Raises :class:`CheckFailed` when no path
     is found."""
@@ -193,7 +193,7 @@ def route_segment(a: Waypoint, b: Waypoint, spec: Spec, seed: int, settings: Rrt
     return vias + [replace(b, duration_s=durations[-1])], why
 
 
-def route(waypoints: Sequence[Waypoint], spec: Spec, planner: str = "rrt", seed: int = 0,
+def route(waypoints: Sequence[Waypoint], spec: Spec, planner: PlannerName = "rrt", seed: int = 0,
           settings: RrtSettings = RrtSettings()) -> Routed:
     """``waypoints`` with every colliding segment planned around (``planner`` "rrt": ours, "ompl": OMPL's
     RRT-Connect), or as they are ("none")."""

@@ -23,7 +23,7 @@ from op2motion.model.compliance import Compliance, SwingLegSag
 from op2motion.motion.waypoint import Waypoint
 from op2motion.robot.joints import hip_roll_sign, servo_to_book
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import Support
+from op2motion.robot.support import Side, Support, as_side
 
 SHIFT_S = 1.0                  # the time a weight shift takes [s]
 SHIFT_TOL_M = 1e-4             # the centre of mass lands this close to its target
@@ -52,19 +52,19 @@ def _leaned(spec: Spec, servo: np.ndarray, roll: np.ndarray | float, pitch: np.n
     return out
 
 
-def settled_coms(servo: np.ndarray, side: str, spec: Spec, model: Compliance | None = None) -> np.ndarray:
+def settled_coms(servo: np.ndarray, side: Support | Side, spec: Spec, model: Compliance | None = None) -> np.ndarray:
     """Where the full-inertia CoM of poses (N, 20) would settle [m] (N, 2) standing on the ``side`` foot alone, in
     that sole's frame (infinite where the servos cannot hold it)."""
     points = forward(servo_to_book(np.atleast_2d(servo), side, spec), spec, "dh", full_com=True)
     return (model or Compliance(spec)).settle(points, points.full()).com_xy.T
 
 
-def settled_com(servo: np.ndarray, side: str, spec: Spec, model: Compliance | None = None) -> np.ndarray:
+def settled_com(servo: np.ndarray, side: Support | Side, spec: Spec, model: Compliance | None = None) -> np.ndarray:
     """:func:`settled_coms` of one pose (20,): [m] (2,)."""
     return settled_coms(servo, side, spec, model)[0]
 
 
-def weight_shift(servo: np.ndarray, side: str, spec: Spec,
+def weight_shift(servo: np.ndarray, side: Support | Side, spec: Spec,
                  target_xy: Sequence[float] | np.ndarray = (0.0, 0.0)) -> np.ndarray:
     """``servo`` (a double-support pose) leaned until the CoM it would settle at on the ``side`` foot alone is
     over ``target_xy`` [m] in that sole's frame (default: the sole's centre below the ankle)."""
@@ -90,7 +90,7 @@ def weight_shift(servo: np.ndarray, side: str, spec: Spec,
                       f"leaning the legs (would need more than {np.degrees(MAX_LEAN_RAD):.0f}°)")
 
 
-def settled_swing_heights(goals: np.ndarray, side: str, spec: Spec) -> np.ndarray:
+def settled_swing_heights(goals: np.ndarray, side: Support | Side, spec: Spec) -> np.ndarray:
     """The lowest corner [m] (K,) of the other foot for poses standing on ``side``, after the servos' sag (the
     support leg's and the swing leg's own, :mod:`op2motion.model.compliance`); rigid where no equilibrium exists."""
     model, swing = Compliance(spec), SwingLegSag(spec, side)
@@ -106,10 +106,10 @@ def settled_swing_heights(goals: np.ndarray, side: str, spec: Spec) -> np.ndarra
     return np.concatenate(heights)
 
 
-def _inside(xy: np.ndarray, side: str, spec: Spec) -> np.ndarray:
+def _inside(xy: np.ndarray, side: Support | Side, spec: Spec) -> np.ndarray:
     """``xy`` [m] in the ``side`` sole's frame, moved to at least :data:`SHIFT_EDGE_M` inside its edges (to the
     middle between two edges closer together than twice that)."""
-    front, back, left, right = spec.sole_extents(side)
+    front, back, left, right = spec.sole_extents(as_side(side))
     out = []
     for v, lo, hi in ((xy[0], -back + SHIFT_EDGE_M, front - SHIFT_EDGE_M), (xy[1], -right + SHIFT_EDGE_M,
                                                                            left - SHIFT_EDGE_M)):
@@ -117,7 +117,7 @@ def _inside(xy: np.ndarray, side: str, spec: Spec) -> np.ndarray:
     return np.array(out)
 
 
-def _folded(spec: Spec, servo: np.ndarray, side: str, fold: np.ndarray) -> np.ndarray:
+def _folded(spec: Spec, servo: np.ndarray, side: Support | Side, fold: np.ndarray) -> np.ndarray:
     """Poses (N, 20): ``servo`` with the ``side`` leg folded by ``fold`` (N,) [rad] (the thigh turned forward by
     ``fold``, the shank back by twice that, the foot back by ``fold`` again, so the foot rises parallel to the sole
     it started from) and turned outward at the hip by :data:`LIFT_ABDUCT_RAD` (the foot kept parallel): the
@@ -132,11 +132,11 @@ def _folded(spec: Spec, servo: np.ndarray, side: str, fold: np.ndarray) -> np.nd
     return out
 
 
-def lift_swing(servo: np.ndarray, side: str, spec: Spec, clear_m: float = LIFT_CLEAR_M) -> np.ndarray:
+def lift_swing(servo: np.ndarray, side: Support | Side, spec: Spec, clear_m: float = LIFT_CLEAR_M) -> np.ndarray:
     """A double-support pose ``servo`` (its weight already over the ``side`` foot) with the other leg folded until
     its foot's lowest corner, after the sag of standing on ``side`` alone, is ``clear_m`` [m] above the floor:
     the step that takes the load off a foot before the leg goes anywhere."""
-    swing = "right" if side == "left" else "left"
+    swing: Side = "right" if side == "left" else "left"
     folds = np.linspace(0.0, MAX_FOLD_RAD, 241)
     heights = settled_swing_heights(_folded(spec, servo, swing, folds), side, spec)
     clear = np.flatnonzero(heights >= clear_m)
@@ -180,7 +180,7 @@ def with_weight_shifts(waypoints: Sequence[Waypoint], spec: Spec) -> tuple[list[
     return out, notes
 
 
-def segment_side(a: Waypoint, b: Waypoint) -> str | None:
+def segment_side(a: Waypoint, b: Waypoint) -> Support | None:
     """The foot a segment stands on when one of its ends is a single-support pose (None for two feet)."""
     singles = [w.support for w in (a, b) if not w.support.is_double]
     if len(set(singles)) > 1:
@@ -213,7 +213,7 @@ def balanced(goals: np.ndarray, segment: np.ndarray, waypoints: Sequence[Waypoin
     return out
 
 
-def _lean_to(rows: np.ndarray, side: str, target: np.ndarray, spec: Spec, model: Compliance,
+def _lean_to(rows: np.ndarray, side: Support | Side, target: np.ndarray, spec: Spec, model: Compliance,
              name: str) -> np.ndarray:
     """Rows (N, 20) leaned (Newton, batched) until their settled CoMs on ``side`` are at ``target`` (N, 2) [m]."""
     lean = np.zeros((len(rows), 2))

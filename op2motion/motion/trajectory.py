@@ -17,7 +17,7 @@ from op2motion.physics import Schedule
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.joints import ticks_to_servo
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import LIFTED_M
+from op2motion.robot.support import LIFTED_M, Side, Support, SupportName
 
 
 @dataclass(frozen=True)
@@ -28,7 +28,7 @@ class Trajectory:
 
     goals: np.ndarray
     p_gains: np.ndarray
-    supports: tuple[str, ...]
+    supports: tuple[Support | SupportName, ...]
     segment: np.ndarray
     segment_names: tuple[str, ...]
     dt: float = CONTROL_PERIOD_S
@@ -71,14 +71,15 @@ class Trajectory:
 
 
 
-def goal_supports(goals: np.ndarray, spec: Spec) -> tuple[str, ...]:
+def goal_supports(goals: np.ndarray, spec: Spec) -> tuple[SupportName, ...]:
     """The support of each row of goals (K, 20) [rad]: standing on one sole laid flat, the other foot is lifted
     when its lowest corner is more than :data:`LIFTED_M` above the floor after the servos' sag
     (:func:`.shift.settled_swing_heights`: a kick, a step); otherwise both feet stand."""
     from op2motion.motion.shift import settled_swing_heights
 
     lifted = {}
-    for stance, swing in (("left", "right"), ("right", "left")):
+    pairs: tuple[tuple[Side, Side], ...] = (("left", "right"), ("right", "left"))
+    for stance, swing in pairs:
         lifted[swing] = settled_swing_heights(np.atleast_2d(goals), stance, spec) > LIFTED_M
     return tuple("left" if r else "right" if le else "double" for r, le in zip(lifted["right"], lifted["left"]))
 

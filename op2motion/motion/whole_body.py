@@ -40,7 +40,7 @@ from op2motion.motion.body_checks import body_cost
 from op2motion.posture.cost import torso_axes
 from op2motion.robot.joints import joint_range, servo_to_book
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import Support, other_side
+from op2motion.robot.support import Side, Support, SupportName, other_side
 
 W_HAND = 1.0
 W_FEET = 10.0
@@ -87,10 +87,10 @@ class WholeBodyIk:
     """The IK of one hand on a robot standing on ``support`` (``left``, ``right`` or ``double``: then the left sole
     is the frame), prepared at the pose ``start`` (20,) [rad]."""
 
-    def __init__(self, spec: Spec, support: str, hand: str, start: np.ndarray, crouch: bool = False):
+    def __init__(self, spec: Spec, support: Support | SupportName, hand: Side, start: np.ndarray, crouch: bool = False):
         self.spec, self.hand = spec, hand
         sup = Support.of(support)
-        self.frame = "left" if sup.is_double else str(sup)
+        self.frame = sup.stance
         self.double = sup.is_double
         self.start = np.asarray(start, dtype=float).copy()
         self.arm = np.array([spec.joint_names.index(f"{hand[0]}_{j}") for j in ARM_JOINTS])

@@ -23,7 +23,7 @@ from op2motion.model.dynamics import dynamics_for
 from op2motion.model.urdf import foot_box_corners, foot_link
 from op2motion.robot.balance import polygon_margin
 from op2motion.robot.spec import Collision, Spec, rpy_matrix
-from op2motion.robot.support import SIDES, Support
+from op2motion.robot.support import SIDES, Side, Support, SupportName
 
 GROUND_TOLERANCE_M = 1e-9
 #: How a run may start lying, and the torso's rotation for each: face down (``front``: the torso's x axis, its front,
@@ -78,7 +78,7 @@ class Body:
         return BodyState(com, soles, corners)
 
 
-def sole_flat(body: Body, q: np.ndarray, side: str) -> tuple[np.ndarray, np.ndarray]:
+def sole_flat(body: Body, q: np.ndarray, side: Side) -> tuple[np.ndarray, np.ndarray]:
     """Torso pose (position, rotation) that puts the ``side`` sole at the origin, level, facing +X."""
     state = body.state(np.zeros(3), np.eye(3), q)
     pos, rot = state.soles[side]
@@ -86,7 +86,7 @@ def sole_flat(body: Body, q: np.ndarray, side: str) -> tuple[np.ndarray, np.ndar
     return -base_rot @ pos, base_rot
 
 
-def placement(body: Body, q: np.ndarray, support: str) -> tuple[np.ndarray, np.ndarray, str, float]:
+def placement(body: Body, q: np.ndarray, support: Support | SupportName) -> tuple[np.ndarray, np.ndarray, Side, float]:
     """Where a pose starts: torso (position [m], rotation), the sole laid level, and the settling gap [m]: how
     high the supporting foot that does not touch starts above the floor (0 when every supporting foot touches).
     See the module docstring."""

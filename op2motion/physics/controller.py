@@ -33,7 +33,7 @@ from op2motion.errors import InputError
 from op2motion.physics.plan import DEFAULT_SECONDS, Plan
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import Support
+from op2motion.robot.support import Support, SupportName
 
 Goals = Mapping[str, float]
 
@@ -77,7 +77,7 @@ class Schedule:
         self._t = 0.0
 
     @classmethod
-    def hold(cls, servo: np.ndarray, support: Support | str, spec: Spec, seconds: float = DEFAULT_SECONDS,
+    def hold(cls, servo: np.ndarray, support: Support | SupportName, spec: Spec, seconds: float = DEFAULT_SECONDS,
              p_gains: np.ndarray | None = None) -> "Schedule":
         """One pose, servo angles (20,) [rad] in the spec's joint order, held on ``support`` for ``seconds``; the
         servos' P gains (20,) default to the spec's."""
@@ -86,7 +86,7 @@ class Schedule:
         return cls(Plan.hold(servo, support, seconds, gains), spec.joint_names)
 
     @classmethod
-    def motion(cls, goals: np.ndarray, p_gains: np.ndarray, supports: Sequence[Support | str], spec: Spec,
+    def motion(cls, goals: np.ndarray, p_gains: np.ndarray, supports: Sequence[Support | SupportName], spec: Spec,
                dt: float = CONTROL_PERIOD_S) -> "Schedule":
         """A motion: goals (K, 20) [rad] every ``dt`` [s] with the P gains (K, 20) they were sent with, each row on
         its support (see :meth:`.plan.Plan.motion`)."""

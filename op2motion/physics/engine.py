@@ -15,7 +15,7 @@ import numpy as np
 
 from op2motion.errors import InputError
 from op2motion.model.servo import ServoModel
-from op2motion.physics.scene import ENGINES, FLOOR_FRICTION, TIME_STEP_S, Contact
+from op2motion.physics.scene import ENGINES, FLOOR_FRICTION, TIME_STEP_S, Contact, EngineName
 from op2motion.robot.spec import Spec
 
 __all__ = ["ENGINES", "TIME_STEP_S", "Contact", "Engine", "make_engine", "snapshot_png"]
@@ -53,7 +53,7 @@ class Engine(Protocol):
         """Release the world."""
 
 
-def make_engine(name: str, spec: Spec, servo: ServoModel, friction: float = FLOOR_FRICTION) -> Engine:
+def make_engine(name: EngineName, spec: Spec, servo: ServoModel, friction: float = FLOOR_FRICTION) -> Engine:
     """A fresh world of engine ``name`` (one of :data:`ENGINES`) with the robot and a floor of Coulomb
     ``friction``."""
     if name == "pybullet":

@@ -20,6 +20,7 @@ from op2motion.physics.judge import LOADING_TILT_LIMIT_DEG, Judgement, steady_wi
 from op2motion.physics.loop import StartFacts
 from op2motion.physics.plan import Plan
 from op2motion.physics.report import FootLoad, MotionMeasures, RunReport, WorstTorque
+from op2motion.physics.scene import EngineName
 from op2motion.physics.track import Track
 from op2motion.robot.balance import polygon_margin
 from op2motion.robot.spec import Spec
@@ -32,7 +33,7 @@ PLAYING_AFTER_S = 0.5       # a motion's tracking is measured until this long af
 class RunSetupFacts:
     """What a report says about its run's setup: engine, servo model, time step [s]."""
 
-    engine: str
+    engine: EngineName
     servo: ServoModel
     time_step_s: float
 

@@ -25,7 +25,7 @@ import numpy as np
 from op2motion.errors import InputError
 from op2motion.physics.body import Body, BodyState, placement, sole_flat
 from op2motion.robot.framework import CONTROL_PERIOD_S
-from op2motion.robot.support import Support, fixed_foot
+from op2motion.robot.support import Side, Support, SupportName, fixed_foot
 
 RAMP_S = 1.0                   # gravity ramps in over this long when a run cannot start sagged; the loading window
 STEADY_S = 1.0                 # the last second of a run: the steady window for torques, sag and centre of pressure
@@ -85,7 +85,7 @@ class Plan:
             object.__setattr__(self, "contact", tuple(Support.of(s) for s in self.contact))
 
     @classmethod
-    def hold(cls, servo: np.ndarray, support: Support | str, seconds: float, p_gains: np.ndarray) -> "Plan":
+    def hold(cls, servo: np.ndarray, support: Support | SupportName, seconds: float, p_gains: np.ndarray) -> "Plan":
         """One pose (servo angles (20,) [rad]) held for ``seconds`` (:data:`MIN_SECONDS` to :data:`MAX_SECONDS`)
         with servo P gains (20,)."""
         if not (isinstance(seconds, (int, float)) and math.isfinite(seconds) and MIN_SECONDS <= seconds <= MAX_SECONDS):
@@ -97,7 +97,7 @@ class Plan:
                    float(seconds))
 
     @classmethod
-    def motion(cls, goals: np.ndarray, p_gains: np.ndarray, supports: tuple[Support | str, ...],
+    def motion(cls, goals: np.ndarray, p_gains: np.ndarray, supports: tuple[Support | SupportName, ...],
                dt: float = CONTROL_PERIOD_S) -> "Plan":
         """Goals (K, 20) [rad] sent every ``dt`` [s] with P gains (K, 20), each row on its support, after
         settling; the last goal held :data:`MOTION_HOLD_S`."""
@@ -152,7 +152,7 @@ class PlannedStates:
 
     rot: np.ndarray
     states: tuple[BodyState, ...]
-    flat_foot: str
+    flat_foot: Side
     gap: float
     start_pos: np.ndarray
     start_rot: np.ndarray

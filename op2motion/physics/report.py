@@ -23,6 +23,9 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+from op2motion.physics.scene import EngineName
+from op2motion.robot.sides import Side
+
 REASONS = ("tilt", "com_drop", "ground_contact", "swing_foot_contact", "self_collision", "torque_saturation",
            "joint_limit", "slip")
 FALL_REASONS = ("tilt", "com_drop", "ground_contact")
@@ -111,7 +114,7 @@ class RunReport:
     """Verdict and measurements of one physics run (lengths [m], angles [deg], torques [N·m], world frame: the floor,
     the start's flat sole at the origin)."""
 
-    engine: str
+    engine: EngineName
     servo: str
     time_step_s: float
     seconds: float
@@ -127,7 +130,7 @@ class RunReport:
     com_drift_m: float
     feet_slip_m: float
     start_gap_m: float               # double support: height of the other foot's lowest corner at the start
-    flat_foot: str
+    flat_foot: Side
     self_collisions: tuple[tuple[str, str], ...]
     ground_contacts: tuple[str, ...]
     max_torque_nm: float             # steady window, worst joint
@@ -258,7 +261,7 @@ class TrialsResult:
 class EngineReport:
     """One engine's part of a check: the main run, the pushed runs and the perturbed runs."""
 
-    engine: str
+    engine: EngineName
     run: RunReport
     pushes: tuple[PushResult, ...] = ()
     trials: TrialsResult | None = None

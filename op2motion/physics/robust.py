@@ -94,7 +94,7 @@ class RobustRun:
     """One member in one engine: ``problem`` None when it passed."""
 
     member: Member
-    engine: str
+    engine: EngineName
     report: EngineReport
     problem: str | None
 

@@ -143,7 +143,7 @@ class _Runner:
         if self.on_progress is not None:
             self.on_progress(self.done + t, self.total)
 
-    def run(self, engine_name: str, run: RunSetup = RunSetup(), snapshot: bool = False,
+    def run(self, engine_name: EngineName, run: RunSetup = RunSetup(), snapshot: bool = False,
             keep_track: bool = False) -> RunReport:
         """One run in a fresh world, judged and measured."""
         engine = make_engine(engine_name, self.spec, self.servo, self.setup.friction)
@@ -164,7 +164,7 @@ class _Runner:
             engine.close()
             self.done += plan.duration_s
 
-    def pushed(self, engine_name: str, pushes: Pushes) -> tuple[PushResult, ...]:
+    def pushed(self, engine_name: EngineName, pushes: Pushes) -> tuple[PushResult, ...]:
         """One run per push direction."""
         at = self.controller.plan.default_push_s() if pushes.at_s is None else pushes.at_s
         out = []

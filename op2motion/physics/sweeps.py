@@ -18,6 +18,7 @@ from op2motion.physics.controller import Schedule
 from op2motion.physics.runner import check
 from op2motion.robot.joints import BookAngles, book_to_servo, hip_roll_sign
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Side, Support, SupportName
 
 if TYPE_CHECKING:
     from op2motion.physics.scene import EngineName
@@ -29,7 +30,7 @@ LEAN_TOL_M = 1e-5
 LEAN_STEP_RAD = 1e-4
 
 
-def servo_pose(spec: Spec, support: str = "left", **degrees: float) -> np.ndarray:
+def servo_pose(spec: Spec, support: Support | SupportName = "left", **degrees: float) -> np.ndarray:
     """Servo angles (20,) [rad]: the book's standing pose with some joints set to ``degrees``."""
     servo = book_to_servo(BookAngles.standing("left" if support == "double" else support), spec)[0]
     for name, value in degrees.items():
@@ -37,7 +38,7 @@ def servo_pose(spec: Spec, support: str = "left", **degrees: float) -> np.ndarra
     return servo
 
 
-def balanced(spec: Spec, servo: np.ndarray, support: str, target_xy: Sequence[float] = (0.0, 0.0),
+def balanced(spec: Spec, servo: np.ndarray, support: Support | Side, target_xy: Sequence[float] = (0.0, 0.0),
              iterations: int = 20) -> np.ndarray:
     """The pose with its full-inertia CoM over ``target_xy`` [m] of the support sole frame: the support ankle's
     roll and pitch tilt the whole body, the support hip roll turns back by the same roll (torso level)."""
@@ -94,14 +95,14 @@ def centred(spec: Spec, servo: np.ndarray, x: float = 0.0, iterations: int = 20)
     return out
 
 
-def sweep_base(spec: Spec, support: str) -> np.ndarray:
+def sweep_base(spec: Spec, support: Support | SupportName) -> np.ndarray:
     """The start of a lean sweep (see the module docstring) on ``left`` or ``double`` support."""
     if support == "double":
         return centred(spec, servo_pose(spec, "double", **ARMS_FORWARD))
     return balanced(spec, servo_pose(spec, "left", **ARMS_FORWARD, **FOLDED_SWING), "left", ONE_LEG_COM_XY_M)
 
 
-def leaned(spec: Spec, base: np.ndarray, support: str, kind: str, degrees: float) -> np.ndarray:
+def leaned(spec: Spec, base: np.ndarray, support: Support | SupportName, kind: str, degrees: float) -> np.ndarray:
     """``base`` leaned by ``degrees`` at the support ankle(s): ``pitch`` (positive forward) or ``roll`` (positive
     to the left, outward for the left foot; in double support the legs lean as a parallelogram, torso level)."""
     out = np.array(base, dtype=float)
@@ -115,7 +116,7 @@ def leaned(spec: Spec, base: np.ndarray, support: str, kind: str, degrees: float
     return out
 
 
-def sweep_verdict(task: tuple[str, str, float, EngineName, float]) -> tuple[bool, float, list[str], float]:
+def sweep_verdict(task: tuple[SupportName, str, float, EngineName, float]) -> tuple[bool, float, list[str], float]:
     """One pose of a sweep, (support, kind, degrees, engine, seconds) -> (stable, margin [m], reasons, foot margin
     [m]); the margin is the settled one for a standing pose, the one when gravity reached full strength for a
     falling one; the foot margin is the least margin of a foot's own CoP to its sole among the feet carrying at

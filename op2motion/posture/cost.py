@@ -42,7 +42,7 @@ from op2motion.robot.balance import (
 )
 from op2motion.robot.joints import BookAngles
 from op2motion.robot.spec import GRAVITY_M_S2, Spec
-from op2motion.robot.support import LIFTED_M, Side, as_side, other_side
+from op2motion.robot.support import LIFTED_M, Side, Support, as_side, other_side
 
 if TYPE_CHECKING:
     from op2motion.posture.kernel_plan import KernelPlan
@@ -155,7 +155,7 @@ def torso_tilt(points: BodyPoints, spec: Spec, axes: np.ndarray | None = None) -
     return np.arccos(np.clip(axes[2, 2], -1.0, 1.0))
 
 
-def self_collision_penalty(frames: np.ndarray, spec: Spec, support: str) -> tuple[np.ndarray, np.ndarray]:
+def self_collision_penalty(frames: np.ndarray, spec: Spec, support: Support | Side) -> tuple[np.ndarray, np.ndarray]:
     """The self-collision penalty (N,) and the least clearance [m] (N,) of a batch of poses given by their D-H chain
     frames (slots, N, 4, 4): 100 plus the slope where the clearance is below :data:`SELF_CLEARANCE_M`."""
     clearance = clearances(frames, shape_set(spec, support), CLEARANCE_EXACT_M).min(axis=0)

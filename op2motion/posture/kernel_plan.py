@@ -19,7 +19,7 @@ from op2motion.kinematics.points import ALL_ROWS, ROW, row_of
 from op2motion.kinematics.shapes import BOX_CORNERS, BOX_EDGES, ROUNDS, SEGMENT_GRID, shape_set
 from op2motion.model.compliance import Compliance, SwingLegSag
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import other_side
+from op2motion.robot.support import Side, Support, as_side, other_side
 
 CONST_NAMES = ("penalty", "w_violation", "w_margin", "margin_cap_m", "w_upright", "sag_tilt_limit_rad",
                "self_clearance_m", "lifted_m", "floor_tolerance_m", "gravity_m_s2")
@@ -92,7 +92,7 @@ class KernelPlan(NamedTuple):
     rounds: int
 
 
-def _chains(compliance: Compliance, support: str) -> tuple[np.ndarray, ...]:
+def _chains(compliance: Compliance, support: Support | Side) -> tuple[np.ndarray, ...]:
     plans = compliance.chains[support]
     most = max(len(p[0]) for p in plans)
     rows = np.full((2, most), -1, dtype=np.int64)
@@ -111,7 +111,7 @@ def _chains(compliance: Compliance, support: str) -> tuple[np.ndarray, ...]:
     return rows, size, s0, sz, rx, axis_rows
 
 
-def kernel_plan(spec: Spec, support: str, hand_point: str, target: np.ndarray,
+def kernel_plan(spec: Spec, support: Support | Side, hand_point: str, target: np.ndarray,
                 extents: tuple[float, float, float, float], full: bool, consts: dict[str, float]) -> KernelPlan:
     """The kernel's constants for one problem (support foot, reaching hand, target [m], support rectangle [m],
     the cost's weights by :data:`CONST_NAMES`)."""
@@ -132,7 +132,7 @@ def kernel_plan(spec: Spec, support: str, hand_point: str, target: np.ndarray,
     row_slot[origin_rows] = origin_frames
     row_slot[offset_rows], row_point[offset_rows] = offset_frames, offsets
     const_rows = np.zeros((len(ALL_ROWS), 3))
-    for i, (dx, dy) in enumerate(spec.foot.corners(support)):
+    for i, (dx, dy) in enumerate(spec.foot.corners(as_side(support, "support"))):
         const_rows[ROW[f"{support}_foot_{i}"]] = (dx, dy, 0.0)
     pelvis = np.array([ROW["pelvis"], mp.slots["5"], mp.slots["6"]], dtype=np.int64)
     row_slot[ROW["pelvis"]] = -2                                               # the hips' midpoint

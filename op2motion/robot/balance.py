@@ -15,6 +15,7 @@ from typing import Final, Literal, get_args
 import numpy as np
 
 from op2motion.errors import InputError
+from op2motion.robot.sides import Side
 from op2motion.robot.spec import Spec
 
 PENALTY = 100.0  # the book's penalty value (code 2.8, 2.9)
@@ -35,7 +36,7 @@ def check_br(br: float) -> float:
     return float(br)
 
 
-def support_extents(spec: Spec, support: str, br: float = 1.0,
+def support_extents(spec: Spec, support: Side, br: float = 1.0,
                     com_model: ComModel = COM_MODEL_LUMPED) -> tuple[float, float, float, float]:
     """The support rectangle (front, back, left, right) [m] about the sole centre, shrunk by ``br``, that goes with
     a CoM model: the book's foot (table 2.7) for the book's lumped CoM, the real sole (the foot box) for the
@@ -56,7 +57,7 @@ def rectangle_margin(dx: np.ndarray, dy: np.ndarray, extents: tuple[float, float
     return np.where(inside >= 0.0, inside, -outside)
 
 
-def support_polygon(spec: Spec, support: str, br: float = 1.0, sp: tuple[float, float] = (0.0, 0.0),
+def support_polygon(spec: Spec, support: Side, br: float = 1.0, sp: tuple[float, float] = (0.0, 0.0),
                     gamma: float = 0.0, com_model: ComModel = COM_MODEL_LUMPED) -> np.ndarray:
     """Corners (4, 2) [m] of the br-shrunk support rectangle of ``com_model`` in the world XY plane."""
     front, back, left, right = support_extents(spec, support, br, com_model)
@@ -72,7 +73,7 @@ def _local(xy: np.ndarray, sp: tuple[float, float], gamma: float) -> tuple[np.nd
     return c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]
 
 
-def stability_margin(com_xy: np.ndarray, spec: Spec, support: str, br: float = 1.0,
+def stability_margin(com_xy: np.ndarray, spec: Spec, support: Side, br: float = 1.0,
                      sp: tuple[float, float] = (0.0, 0.0), gamma: float = 0.0,
                      com_model: ComModel = COM_MODEL_LUMPED) -> np.ndarray:
     """Signed distance (N,) [m] from the CoM ground projection to the edge of the rectangle that goes with
@@ -81,7 +82,7 @@ def stability_margin(com_xy: np.ndarray, spec: Spec, support: str, br: float = 1
     return rectangle_margin(dx, dy, support_extents(spec, support, br, com_model))
 
 
-def penalty_stability(com_xy: np.ndarray, spec: Spec, support: str, br: float = 1.0,
+def penalty_stability(com_xy: np.ndarray, spec: Spec, support: Side, br: float = 1.0,
                       sp: tuple[float, float] = (0.0, 0.0), gamma: float = 0.0) -> np.ndarray:
     """Book code 2.9 ``PenaltyStability``: 100 where the CoM leaves the br-shrunk rectangle, else 0; (N,)."""
     front, back, left, right = spec.foot.extents(support, check_br(br))

@@ -18,7 +18,7 @@ import numpy as np
 from op2motion import book
 from op2motion.errors import InputError, LimitKind, LimitViolation
 from op2motion.robot.spec import BOOK_VARS, Joint, Spec
-from op2motion.robot.support import Support
+from op2motion.robot.support import Side, Support
 
 N_TH, N_PHI, N_PSI = 11, 6, 3
 #: The joints of one leg from the hip down, by official name without the side's ``l_``/``r_`` prefix.
@@ -54,7 +54,7 @@ class BookAngles:
         object.__setattr__(self, "support", Support.single(self.support))
 
     @classmethod
-    def make(cls, th: object, phi: object, psi: object = None, support: str = "left") -> "BookAngles":
+    def make(cls, th: object, phi: object, psi: object = None, support: Support | Side = "left") -> "BookAngles":
         """Validate angles [rad] (one pose as 1-D sequences, or N poses as 2-D arrays)."""
         th_a, phi_a = _angles("th", th, N_TH), _angles("phi", phi, N_PHI)
         psi_a = np.zeros((th_a.shape[0], N_PSI)) if psi is None else _angles("psi", psi, N_PSI)
@@ -64,20 +64,20 @@ class BookAngles:
         return cls(th_a, phi_a, psi_a, Support.single(support))
 
     @classmethod
-    def from_deg(cls, th: object, phi: object, psi: object = None, support: str = "left") -> "BookAngles":
+    def from_deg(cls, th: object, phi: object, psi: object = None, support: Support | Side = "left") -> "BookAngles":
         """Like :meth:`make` with angles in degrees."""
         conv = lambda v, name, n: np.radians(_angles(name, v, n))  # noqa: E731
         return cls.make(conv(th, "th", N_TH), conv(phi, "phi", N_PHI),
                         None if psi is None else conv(psi, "psi", N_PSI), support)
 
     @classmethod
-    def standing(cls, support: str = "left", n: int = 1) -> "BookAngles":
+    def standing(cls, support: Support | Side = "left", n: int = 1) -> "BookAngles":
         """The book's standing pose, repeated ``n`` times."""
         rep = lambda v: np.radians(np.tile(np.array(v, dtype=float), (n, 1)))  # noqa: E731
         return cls.make(rep(book.STANDING_TH_DEG), rep(book.STANDING_PHI_DEG), rep(book.STANDING_PSI_DEG), support)
 
     @classmethod
-    def from_vector(cls, x: np.ndarray, support: str = "left") -> "BookAngles":
+    def from_vector(cls, x: np.ndarray, support: Support | Side = "left") -> "BookAngles":
         """From the PSO vector layout (N,20) = [th(11), phi(6), psi(3)] [rad] (book code 2.11)."""
         x = np.atleast_2d(np.asarray(x, dtype=float))
         if x.shape[1] != N_TH + N_PHI + N_PSI:
@@ -85,7 +85,8 @@ class BookAngles:
         return cls(x[:, :N_TH], x[:, N_TH:N_TH + N_PHI], x[:, N_TH + N_PHI:], Support.single(support))
 
     @classmethod
-    def random(cls, n: int, rng: np.random.Generator, support: str = "left", psi: bool = True) -> "BookAngles":
+    def random(cls, n: int, rng: np.random.Generator, support: Support | Side = "left",
+               psi: bool = True) -> "BookAngles":
         """``n`` poses drawn uniformly from the book's PSO box (psi = 0 unless ``psi``)."""
         lo, hi = np.radians(book.PSO_LOWER_DEG), np.radians(book.PSO_UPPER_DEG)
         x = lo + (hi - lo) * rng.random((n, lo.size))
@@ -111,7 +112,7 @@ class BookAngles:
         return {k: [float(v) for v in np.degrees(getattr(self, k)[i])] for k in ("th", "phi", "psi")}
 
 
-def _map_arrays(spec: Spec, support: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _map_arrays(spec: Spec, support: Support | Side) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     idx = np.array([BOOK_VARS.index(j.book[support].var) for j in spec.joints])
     sign = np.array([float(j.book[support].sign) for j in spec.joints])
     offset = np.array([j.book[support].offset for j in spec.joints])
@@ -124,7 +125,7 @@ def book_to_servo(angles: BookAngles, spec: Spec) -> np.ndarray:
     return sign * angles.vector()[:, idx] + offset
 
 
-def servo_to_book(servo: np.ndarray, support: str, spec: Spec) -> BookAngles:
+def servo_to_book(servo: np.ndarray, support: Support | Side, spec: Spec) -> BookAngles:
     """Book variables for servo angles (N,20) or (20,) [rad] in ID order, seen from ``support``."""
     servo = _angles("servo angles", servo, len(spec.joints))
     idx, sign, offset = _map_arrays(spec, Support.single(support))
@@ -203,7 +204,7 @@ def limit_violations(servo: np.ndarray | Sequence[float], spec: Spec,
     return out
 
 
-def book_bounds(spec: Spec, support: str, variables: Sequence[str] = BOOK_VARS,
+def book_bounds(spec: Spec, support: Support | Side, variables: Sequence[str] = BOOK_VARS,
                 kind: LimitKind = "cable-safe") -> tuple[np.ndarray, np.ndarray]:
     """Bounds [rad] (lower, upper) of book ``variables`` that keep every servo inside its ``kind`` range, seen
     from ``support`` (each book variable drives exactly one servo: ``servo = sign * var + offset``)."""

@@ -18,7 +18,7 @@ import numpy as np
 from op2motion.errors import InputError, LimitError
 from op2motion.robot.joints import BookAngles, book_to_servo, limit_violations, servo_to_book
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import Support
+from op2motion.robot.support import Side, Support
 
 MAX_NAME_LEN = 100
 _NAME = re.compile(r"[A-Za-z0-9_-][A-Za-z0-9_.-]*")
@@ -52,7 +52,7 @@ class Pose:
         object.__setattr__(self, "support", Support.of(self.support))
 
     @property
-    def stance(self) -> str:
+    def stance(self) -> Side:
         """The foot the world frame is rooted on (the left foot for double support)."""
         return self.support.stance
 

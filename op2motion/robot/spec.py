@@ -14,6 +14,7 @@ from typing import Mapping
 import numpy as np
 
 from op2motion.errors import SpecError
+from op2motion.robot.sides import Side
 
 SCHEMA = "op2motion.spec/2"
 GRAVITY_M_S2 = 9.81          # standard gravity, for every model of the robot
@@ -122,7 +123,7 @@ class Foot:
     inner: float
     outer: float
 
-    def extents(self, side: str, br: float = 1.0) -> tuple[float, float, float, float]:
+    def extents(self, side: Side, br: float = 1.0) -> tuple[float, float, float, float]:
         """(front, back, left, right) half-extents [m] of the ``side`` sole about its centre, shrunk by ``br``.
 
         The outer edge is on the left of the left foot and on the right of the right foot (book fig. 2.30).
@@ -130,7 +131,7 @@ class Foot:
         left, right = (self.outer, self.inner) if side == "left" else (self.inner, self.outer)
         return br * self.front, br * self.back, br * left, br * right
 
-    def corners(self, side: str) -> tuple[tuple[float, float], ...]:
+    def corners(self, side: Side) -> tuple[tuple[float, float], ...]:
         """Sole corners (forward, left) [m] about the sole centre: front-left, front-right, back-right, back-left."""
         front, back, left, right = self.extents(side)
         return ((front, left), (front, -right), (-back, -right), (-back, left))
@@ -313,7 +314,7 @@ class Spec:
                 return item
         raise SpecError(f"{self.path}: no inertial for link {link!r}")
 
-    def foot_box(self, side: str) -> Collision:
+    def foot_box(self, side: Side) -> Collision:
         """The collision box of the ``left`` or ``right`` foot: the real sole is its underside."""
         link = self.joint(f"{side[0]}_ank_roll").child
         boxes = self.collisions_of(link, "box")
@@ -321,7 +322,7 @@ class Spec:
             raise SpecError(f"expected an unrotated box collision shape on {link} (the sole)", self.path)
         return boxes[0]
 
-    def sole_extents(self, side: str, br: float = 1.0) -> tuple[float, float, float, float]:
+    def sole_extents(self, side: Side, br: float = 1.0) -> tuple[float, float, float, float]:
         """(front, back, left, right) half-extents [m] of the real sole (the foot box's underside) about the sole
         centre below the ankle, shrunk by ``br``."""
         box = self.foot_box(side)

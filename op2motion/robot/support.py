@@ -27,7 +27,7 @@ from op2motion.robot.sides import as_side as as_side
 LIFTED_M = 0.005     # a foot whose lowest corner is this far above the floor is lifted: it does not support
 
 
-def other_side(side: str) -> Side:
+def other_side(side: Support | Side) -> Side:
     """``left`` -> ``right`` and back."""
     return "right" if side == "left" else "left"
 
@@ -86,7 +86,7 @@ class Support(str, Enum):
         return convex_hull(np.vstack([np.asarray(corners[side])[:, :2] for side in self.feet]))
 
 
-def fixed_foot(supports: Iterable[Support | str]) -> Side:
+def fixed_foot(supports: Iterable[Support | SupportName]) -> Side:
     """The foot that stays on the floor in every one of ``supports`` (the left one when both do, or none does)."""
     common = set.intersection(*(set(Support.of(s).feet) for s in supports))
     return "left" if "left" in common or not common else "right"

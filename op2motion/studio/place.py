@@ -7,6 +7,7 @@ import numpy as np
 
 from op2motion.kinematics.tree import link_frames
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Side
 
 
 def wxyz(rot: np.ndarray) -> tuple[float, float, float, float]:
@@ -17,7 +18,7 @@ def wxyz(rot: np.ndarray) -> tuple[float, float, float, float]:
     return float(w), float(x), float(y), float(z)
 
 
-def root_in_sole(spec: Spec, servo: np.ndarray, stance: str) -> tuple[np.ndarray, np.ndarray]:
+def root_in_sole(spec: Spec, servo: np.ndarray, stance: Side) -> tuple[np.ndarray, np.ndarray]:
     """The torso (URDF root) frame in the stance sole frame: rotation (3, 3) and origin (3,) [m]."""
     rot, origin = link_frames(spec, servo)[spec.joint(f"{stance[0]}_ank_roll").child]
     sole = origin + rot @ np.array([0.0, 0.0, -spec.foot.sole_below_ankle])

@@ -28,6 +28,7 @@ import numpy as np
 from op2motion.errors import Op2MotionError
 from op2motion.model.urdf import build_urdf
 from op2motion.robot.spec import Spec
+from op2motion.robot.support import Side
 from op2motion.studio.actions import ActionPanel
 from op2motion.studio.edits import Edits
 from op2motion.studio.folder import Workspace
@@ -148,7 +149,7 @@ class Studio(Edits, LongWork, ActionPanel, RobotPanel):
             control.on_update(self._target_handler(hand, control))
             self._targets[hand] = control
 
-    def _target_handler(self, hand: str, control: Any) -> Any:
+    def _target_handler(self, hand: Side, control: Any) -> Any:
         def dragged(event: Any) -> None:
             self._dragging = True
             try:
@@ -157,7 +158,7 @@ class Studio(Edits, LongWork, ActionPanel, RobotPanel):
                 self._dragging = False
         return dragged
 
-    def _reach(self, hand: str, target: tuple[float, float, float]) -> Readout:
+    def _reach(self, hand: Side, target: tuple[float, float, float]) -> Readout:
         readout, left = self.session.reach(hand, target)
         self._target_goal[hand] = target
         self._verdict.content = (f"{hand} hand {left * 1000:.1f} mm from its target"

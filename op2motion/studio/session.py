@@ -37,7 +37,7 @@ from op2motion.robot.balance import (
 from op2motion.robot.joints import book_to_servo, joint_range, servo_to_book, servo_to_ticks
 from op2motion.robot.pose import Pose
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import SIDES, Support, as_side
+from op2motion.robot.support import SIDES, Side, Support, SupportName, as_side
 
 CLEARANCE_WARN_M = 0.004      # links closer than this are highlighted (the optimiser's self-clearance floor)
 
@@ -62,7 +62,7 @@ class JointState:
 class Readout:
     """What the page shows after an edit (lengths [m], world = stance sole frame)."""
 
-    support: str
+    support: SupportName
     com_lumped: tuple[float, float, float]
     com_full: tuple[float, float, float]
     margin_lumped_m: float               # lumped CoM to the book's foot rectangle (single support; NaN on two feet)
@@ -133,7 +133,7 @@ class Session:
         lo, hi = (math.degrees(v) for v in joint_range(self.spec.joints[i], "mechanical"))
         return self.set_joint(name, min(max(math.degrees(self.servo[i]) + float(delta_deg), lo), hi))
 
-    def set_support(self, support: str) -> Readout:
+    def set_support(self, support: Support | SupportName) -> Readout:
         """Stand on ``left``, ``right`` or ``double``."""
         self.support = Support.of(support)
         return self.readout()
@@ -225,7 +225,7 @@ class Session:
         write_atomic(target, self._opened().data)
         return target
 
-    def balance(self, hand: str, pinned: list[str], on_iteration: Any = None) -> tuple[Readout, str]:
+    def balance(self, hand: Side, pinned: list[str], on_iteration: Any = None) -> tuple[Readout, str]:
         """Re-solve the body with the optimiser from the pose as it is: the ``hand`` kept where it is, the
         ``pinned`` joints kept at their angles, the rest free within the optimiser's box; the pose is adopted only
         when the optimiser reaches (hand within 1 mm, balanced, clear of itself). Returns the readout and the
@@ -241,7 +241,7 @@ class Session:
         from op2motion.posture.solve import optimize_posture
         from op2motion.robot.spec import BOOK_VARS
 
-        support = self.support.value
+        support = self.support.stance                 # one foot (refused above): its value
         start = servo_to_book(self.servo[None], support, self.spec).vector()[0]
         target = self.readout().hands[f"{hand}_hand"]
         problem = PostureProblem(as_side(support, "support"), as_side(hand, "hand"), target, 1.0)
@@ -256,7 +256,7 @@ class Session:
             self.servo = book_to_servo(result.angles, self.spec)[0]
         return self.readout(), result.message
 
-    def reach(self, hand: str, target: object) -> tuple[Readout, float]:
+    def reach(self, hand: Side, target: object) -> tuple[Readout, float]:
         """Move one hand towards ``target`` (x, y, z) [m] with its arm's three joints (the project's arm IK, within
         the cable-safe ranges); returns the readout and the distance [m] left to the target."""
         if hand not in ("left", "right"):

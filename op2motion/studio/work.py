@@ -13,7 +13,7 @@ import numpy as np
 
 from op2motion.errors import Op2MotionError
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import as_side
+from op2motion.robot.support import Side, as_side
 from op2motion.studio.place import root_in_sole, wxyz
 from op2motion.studio.session import Readout, Session
 
@@ -101,7 +101,7 @@ class LongWork:
         self._progress.value = 0.0
         threading.Thread(target=self._optimise, args=(hand, target), daemon=True).start()
 
-    def _optimise(self, hand: str, target: tuple[float, float, float]) -> None:
+    def _optimise(self, hand: Side, target: tuple[float, float, float]) -> None:
         from op2motion.posture.cost import PostureProblem
         from op2motion.posture.pso import PSOSettings
         from op2motion.workflow import solve
@@ -146,7 +146,7 @@ class LongWork:
                 self._progress.value = min(100.0, 100.0 * done[0] / iterations)
         return tick
 
-    def _balance(self, hand: str, pins: list[str]) -> None:
+    def _balance(self, hand: Side, pins: list[str]) -> None:
         from op2motion.posture.pso import PSOSettings
 
         try:

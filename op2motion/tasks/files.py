@@ -17,7 +17,7 @@ from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
     from op2motion.formats.action import ActionFile
-    from op2motion.formats.motionfile import Motion
+    from op2motion.formats.motionfile import Motion, PlannerName
     from op2motion.robot.pose import Pose
 
 
@@ -95,7 +95,7 @@ def list_pages(action: ActionFile, spec: Spec) -> TaskResult:
 
 
 def export_motion(motion: Motion, spec: Spec, fmt: str, output: Path, pages: PageWrite = PageWrite(),
-                  planner: str = "rrt", seed: int = 0) -> TaskResult:
+                  planner: PlannerName = "rrt", seed: int = 0) -> TaskResult:
     """``motion export``: ``motion`` planned and written as chained action pages (``action``, into ``pages``), or
     its goals every 8 ms as Webots or CSV, at ``output``; the planner's notes as warnings."""
     from op2motion.formats.tables import goals_csv, webots_rows, webots_warnings

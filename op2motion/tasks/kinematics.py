@@ -17,6 +17,7 @@ if TYPE_CHECKING:
     from op2motion.kinematics.points import ModelName
     from op2motion.robot.joints import BookAngles
     from op2motion.robot.pose import Pose
+    from op2motion.robot.support import Side
 
 
 def fk(angles: BookAngles, spec: Spec, model: ModelName = "dh", br: float = 1.0,
@@ -101,7 +102,7 @@ class ArmMove:
 
     name: str
     angles: BookAngles
-    hand: str
+    hand: Side
     delta_m: tuple[float, float, float]
     model: ModelName = "pb"
     single_step: bool = False

@@ -19,6 +19,7 @@ from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
     from op2motion.formats.action import ActionFile
+    from op2motion.formats.motionfile import PlannerName
     from op2motion.motion.cartesian import LineMove, LineRequest
     from op2motion.motion.trajectory import Trajectory
     from op2motion.physics import CheckReport, EngineName
@@ -161,7 +162,7 @@ def play_page(action: ActionFile, page: int, spec: Spec, how: MotionCheck, start
                         on_progress=on_progress)
 
 
-def plan_motion(motion: Any, spec: Spec, how: MotionCheck, planner: str = "rrt", seed: int = 0,
+def plan_motion(motion: Any, spec: Spec, how: MotionCheck, planner: PlannerName = "rrt", seed: int = 0,
                 on_progress: Progress | None = None) -> TaskResult:
     """``motion plan``: ``motion`` (a :class:`~op2motion.formats.motionfile.Motion`) planned (weight shifts, lifts,
     segments around collisions with ``planner`` seeded by ``seed``), checked (:func:`check_motion`); its notes are

@@ -15,6 +15,8 @@ from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
     from op2motion.bus.tasks import MotionResult, Options
+    from op2motion.physics import EngineName
+    from op2motion.robot.support import Support, SupportName
 
 
 def robot_status(port: str, spec: Spec) -> TaskResult:
@@ -28,8 +30,8 @@ def robot_status(port: str, spec: Spec) -> TaskResult:
     return TaskResult(problem is None, problem, None, {}, state.as_dict(), ("\n".join(state.lines()),), file_keys={})
 
 
-def robot_read(port: str, spec: Spec, name: str, output: Path, support: str = "double", limp: bool = False,
-               wait: Callable[[], None] | None = None) -> TaskResult:
+def robot_read(port: str, spec: Spec, name: str, output: Path, support: Support | SupportName = "double",
+               limp: bool = False, wait: Callable[[], None] | None = None) -> TaskResult:
     """``robot read``: the present joint angles as pose ``name`` on ``support``, for ``output`` (``limp``: the
     torque off while ``wait`` lets the user move the limbs, then on again holding them)."""
     from op2motion.bus.tasks import teach
@@ -59,7 +61,7 @@ def robot_motion(run: Callable[[Options], MotionResult], options: Options) -> Ta
     return TaskResult(True, None, None, {}, data, lines, file_keys={})
 
 
-def emulated(emulator: Any, link: str, engine: str, start: str, faults: Any, interrupted: bool) -> TaskResult:
+def emulated(emulator: Any, link: str, engine: EngineName, start: str, faults: Any, interrupted: bool) -> TaskResult:
     """``robot emulate``'s report once the emulated OP2 stopped: its link, engine, start, faults, traffic and how
     far it fell behind the wall clock; ``interrupted``: it was stopped by Ctrl-C (not by ``--seconds``)."""
     data = {"link": link, "pty": emulator.pty_name, "engine": engine, "start": start, "faults": faults.describe(),

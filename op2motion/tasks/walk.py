@@ -42,7 +42,7 @@ class WalkRequest:
     tables: tuple[tuple[str, str], ...] = ()
 
 
-def walk_line(engine: str, s: dict[str, Any]) -> str:
+def walk_line(engine: EngineName, s: dict[str, Any]) -> str:
     """One engine's walk in words (``s``: its ``walk_summary`` entry)."""
     w = s["worst_torque"]
     line = (f"  {engine}: {'FELL' if s['fell'] else 'walked'}"

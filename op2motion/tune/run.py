@@ -25,6 +25,7 @@ from op2motion.workers import ExecutorName
 
 if TYPE_CHECKING:
     from op2motion.physics import EngineName
+    from op2motion.tune.trial import Direction
 
 VERIFY_STEPS = 20           # the verification's walk [steps] (the acceptance's)
 VERIFY_PUSH_N = 2.0         # ... and its side pushes [N] (op2motion's walk; docs/walking.md's robustness runs)
@@ -37,7 +38,7 @@ class TuneResult:
     written (or None), and the cost (wall time [s] of this run, the trials' summed time [s], workers, executor)."""
 
     kind: str
-    direction: str
+    direction: Direction
     table: list[TrialRow]
     chosen: TrialRow | None = None
     verified: dict[str, Outcome] = field(default_factory=dict)

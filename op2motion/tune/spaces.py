@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from op2motion.errors import InputError
 from op2motion.tune.space import Param, SearchSpace
+from op2motion.tune.trial import Direction
 
 
 def _gait(name: str, low: float, high: float, unit: str = "") -> Param:
@@ -32,7 +33,7 @@ def _shared() -> tuple[Param, ...]:
             _gait("heading_gain_scale", 0.5, 2.0))
 
 
-def walk_space(direction: str) -> SearchSpace:
+def walk_space(direction: Direction) -> SearchSpace:
     """The default space of op2motion's walk in ``direction`` (forward, backward, sideways, turn)."""
     stride = {"forward": (_gait("step_length_m", 0.08, 0.105, "m"), _gait("zmp_offset_x_m", -0.01, 0.01, "m"),
                           _gait("torso_pitch_deg", 0.0, 6.0, "deg")),

@@ -54,7 +54,7 @@ class Task:
     steps; the side pushes [N] (0: none)."""
 
     kind: str
-    direction: str
+    direction: Direction
     base: Any
     spec_path: str | None = None
     members: tuple[str, ...] | None = None

@@ -20,7 +20,7 @@ byte is served.
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
@@ -28,6 +28,9 @@ from op2motion.bus.emulator.devices import Board, Servo
 from op2motion.bus.tables import SPEED_RAD_S_PER_UNIT, TORQUE_LIMIT_FULL, magnitude
 from op2motion.robot.imu import encode, imu_of
 from op2motion.robot.spec import Spec
+
+if TYPE_CHECKING:
+    from op2motion.physics import EngineName
 
 STARTS = ("standing", "lying_front", "lying_back", "lying_left", "lying_right")
 AMBIENT_C = 30.0                   # the air inside the robot [°C]
@@ -44,7 +47,7 @@ MOVING_RAD_S = 0.05                # ... and so does a joint this fast
 class EmulatedBody:
     """The simulated OP2 behind the tables (see the module docstring)."""
 
-    def __init__(self, spec: Spec, engine: str, start: str, supply_v: float):
+    def __init__(self, spec: Spec, engine: EngineName, start: str, supply_v: float):
         from op2motion.model.servo import ServoModel
         from op2motion.physics.engine import make_engine
         from op2motion.physics.sensors import Imu

@@ -22,7 +22,7 @@ import threading
 import time
 import tty
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from op2motion.bus.emulator.body import EmulatedBody
 from op2motion.bus.emulator.devices import Servo
@@ -32,6 +32,9 @@ from op2motion.bus.realtime import EMULATOR_PRIORITY, realtime, steady
 from op2motion.bus.tables import TORQUE_LIMIT_FULL
 from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
+
+if TYPE_CHECKING:
+    from op2motion.physics import EngineName
 
 BATCH_STEPS = 4                    # physics steps between two looks at the port
 MAX_BEHIND_S = 0.05                # further behind the wall clock than this, simulated time slips instead
@@ -44,7 +47,7 @@ TRUTH_BYTES = 16384                # the truth file's size (its JSON padded with
 class Emulator:
     """An emulated OP2 (see the module docstring)."""
 
-    def __init__(self, spec: Spec, engine: str = "mujoco", start: str = "standing", faults: Faults | None = None,
+    def __init__(self, spec: Spec, engine: EngineName = "mujoco", start: str = "standing", faults: Faults | None = None,
                  truth_path: str | Path | None = None):
         self.spec = spec
         self.truth_path = None if truth_path is None else Path(truth_path)
