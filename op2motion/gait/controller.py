@@ -122,7 +122,7 @@ class WalkController:
     @property
     def _swing_shaped(self) -> bool:
         """Does the preset shape the swing foot (:mod:`.swing_foot`)?"""
-        return bool(self.params.swing_level or self.params.swing_toe_deg)
+        return bool(self.params.swing_level or self.params.swing_level_roll or self.params.swing_toe_deg)
 
     @property
     def plan_yaw(self) -> np.ndarray:
@@ -335,7 +335,7 @@ class WalkController:
             if contact not in ("double", side) and self._swing_shaped:
                 sole, sole_rot = toe_raised(sole, sole_rot, phase, math.radians(self.params.swing_toe_deg),
                                             self.spec.sole_extents(side)[1])
-                share = self.params.swing_level * self.state.error
+                share = np.array([self.params.swing_level, self.params.swing_level_roll]) * self.state.error
                 tilt = rot_y(float(share[0])) @ rot_x(float(share[1]))
                 body_pos, body_rot = pivot + tilt @ (moved_pos - pivot), tilt @ moved_rot
             moved = leg_ik(leg, *within_reach(leg, body_rot.T @ (sole - body_pos), body_rot.T @ sole_rot,

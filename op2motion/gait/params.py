@@ -51,9 +51,10 @@ left), so the mean speed is about ``step_length_m / step_s``. Keys (defaults in 
                             ``pitch_step_lead_s`` times its pitch rate), held under that foot while it stands
                             (0: off, the plan's footsteps)
 ``pitch_step_lead_s``       how far ahead [s] the pitch is extrapolated by its rate for the step adjustment
-``swing_level``             share of the torso's measured pitch and roll error the swing leg is solved against, so
-                            that its sole stays level and at its planned place in the world (0: off, the sole
-                            follows the torso; :mod:`.swing_foot`)
+``swing_level``             share of the torso's measured pitch error the swing leg is solved against, so that its
+                            sole stays level and at its planned place in the world (0: off, the sole follows the
+                            torso; :mod:`.swing_foot`)
+``swing_level_roll``        the same for the torso's roll error
 ``swing_toe_deg``           the swing sole's toe raised by this much at mid swing [deg] (0: flat)
 ==========================  ====================================================================================
 """
@@ -108,6 +109,7 @@ class GaitParams:
     pitch_step_m_rad: float = 0.0
     pitch_step_lead_s: float = 0.0
     swing_level: float = 0.0
+    swing_level_roll: float = 0.0
     swing_toe_deg: float = 0.0
 
     def __post_init__(self) -> None:
@@ -165,7 +167,7 @@ RANGES: dict[str, tuple[float, float]] = {
     "arm_swing_deg": (0.0, 40.0), "start_s": (0.2, 5.0), "end_s": (0.2, 5.0), "p_gain": (1, 254),
     "max_speed_share": (0.5, 1.25), "gyro_gain_scale": (0.0, 3.0), "gyro_stiff_share": (0.0, 3.0),
     "heading_gain_scale": (0.0, 3.0), "pitch_step_m_rad": (0.0, 1.0), "pitch_step_lead_s": (0.0, 0.5),
-    "swing_level": (0.0, 1.0), "swing_toe_deg": (0.0, 15.0),
+    "swing_level": (0.0, 1.0), "swing_level_roll": (0.0, 1.0), "swing_toe_deg": (0.0, 15.0),
 }
 DEFAULTS = GaitParams()
 

@@ -1,12 +1,12 @@
 """The swing foot's own attitude: level in the world however the torso tilts, and its toe raised over the floor.
 
-Two preset keys (:mod:`.params`), both off by default (the plan's swing foot, carried with the torso's attitude):
+Three preset keys (:mod:`.params`), all off by default (the plan's swing foot, carried with the torso's attitude):
 
-* ``swing_level`` (share, 0–1): the swing leg's goals are solved for the torso turned by that share of its measured
-  attitude error (pitch and roll, about the support point) on top of the stabiliser's turn, so the swing sole stays
-  where the plan puts it in the world, level and at its height, instead of following a torso that pitches forward
-  (its toe then points down: on servos at 0.6 of the model's stiffness, a torso pitched 3-5° forward caught the swing
-  toe on the floor half way through the swing and the body tripped);
+* ``swing_level`` and ``swing_level_roll`` (shares, 0–1): the swing leg's goals are solved for the torso turned by
+  these shares of its measured attitude error (pitch, roll; about the support point) on top of the stabiliser's
+  turn, so the swing sole stays where the plan puts it in the world, level and at its height, instead of following
+  a torso that pitches forward (its toe then points down: on servos at 0.6 of the model's stiffness, a torso pitched
+  3-5° forward caught the swing toe on the floor half way through the swing and the body tripped);
 * ``swing_toe_deg`` [deg]: the swing sole's toe raised by this angle at mid swing (``sin(pi phase)``: level at lift-off
   and landing), turned about its heel's edge so that the heel keeps its height.
 """
