@@ -126,3 +126,14 @@ def test_out_of_range_swing_keys_are_refused_by_name(key, value):
     with pytest.raises(InputError) as e:
         GaitParams(**{key: value})
     assert e.value.param == key
+
+
+def test_tune_walk_searches_the_swing_keys_only_when_asked_for():
+    from op2motion.tune.spaces import walk_space
+
+    space = walk_space("forward")
+    assert not {"swing_level", "swing_level_roll", "swing_toe_deg"} & set(space.names)
+    added = space.narrowed([["swing_level", "0.5", "1"]])
+    assert added.names[-1] == "swing_level" and (added.params[-1].low, added.params[-1].high) == (0.5, 1.0)
+    with pytest.raises(InputError, match="within"):
+        space.narrowed([["swing_toe_deg", "0", "30"]])
