@@ -1,9 +1,9 @@
-"""Check the shipped tuned walks in the foreign simulator (``tests/foreign_sim/harness.py``: MuJoCo, its own loop,
-servo model, IMU and floor) on the independently built body (``tests/data/op2_official_mesh.toml``), planned on the
-shipped spec: ``walking/fast.toml`` and ``walking/fast_ctl.toml`` under ``WalkController`` and
-``walking/stock_config.ini`` under op2motion's emulation of the stock Walking module, against the forward preset and the stock defaults; 20 steps each on every
-body of the foreign body's robustness family (its torso's CoM and mass, the servos' stiffness, the floor's
-friction), IMU readings 16 ms late. ``python tests/foreign_sim/tune_check.py fast`` checks one walk.
+"""Check the shipped tuned walks in the foreign simulator (``tests/foreign_sim/harness.py``: MuJoCo, its own loop, servo
+model, IMU and floor) on the independently built body (``tests/data/op2_official_mesh.toml``), planned on the shipped
+spec: ``walking/fast.toml`` and ``walking/fast_ctl.toml`` under ``WalkController`` and ``walking/stock_config.ini``
+under op2motion's emulation of the stock Walking module, against the forward preset and the stock defaults; 20 steps
+each on every body of the foreign body's robustness family (its torso's CoM and mass, the servos' stiffness, the
+floor's friction), IMU readings 16 ms late. ``python tests/foreign_sim/tune_check.py fast`` checks one walk.
 
 Run from the repository root: ``python tests/foreign_sim/tune_check.py`` (a few minutes on 2 cores); prints a
 Markdown table.
