@@ -1,6 +1,5 @@
 """The walk controller's opt-in swing shaping (:mod:`op2motion.gait.swing_foot`: the swing sole kept level in the
-world, its toe raised) and its sagittal step adjustment (:mod:`op2motion.gait.pitch_step`): fast checks, no physics
-(the walks on the foreign simulator's family: docs/tuning.md)."""
+world, its toe raised): fast checks, no physics (the walks on the foreign simulator's family: docs/tuning.md)."""
 
 from __future__ import annotations
 
@@ -14,7 +13,6 @@ from op2motion.errors import InputError
 from op2motion.gait import load_preset
 from op2motion.gait.controller import WalkController
 from op2motion.gait.params import GaitParams
-from op2motion.gait.pitch_step import MAX_PITCH_STEP_M, PitchStep
 from op2motion.gait.swing_foot import toe_raised
 from op2motion.kinematics.leg_ik import leg_fk, rot_x, rot_y, rot_z
 from op2motion.robot.specfile import default_spec
@@ -97,31 +95,14 @@ def test_a_levelled_swing_sole_stays_where_the_plan_puts_it_in_the_world(spec, g
     assert np.allclose(changes["level"][index], changes["plain"][index])
 
 
-def test_the_pitch_step_lands_forward_of_a_forward_fall_and_holds_the_foot_there():
-    gain = 0.1
-    step = PitchStep(gain)
-    step.update(0.05, 0.0, "right", 0.5)                 # the left foot half way through its swing
-    assert step.held["left"] == pytest.approx(0.5 * gain * 0.05) and step.held["right"] == 0.0
-    step.update(0.05, 0.0, "right", 1.0)
-    assert step.held["left"] == pytest.approx(gain * 0.05)
-    step.update(-0.05, 0.0, "double", 0.0)               # landed: kept while it stands, whatever the pitch now
-    step.update(-0.05, 0.0, "left", 0.5)                 # the right foot swings, backward of its plan
-    assert step.held["left"] == pytest.approx(gain * 0.05)
-    assert step.held["right"] == pytest.approx(-0.5 * gain * 0.05)
-    step.update(1.0, 0.0, "right", 1.0)                  # a large error: bounded
-    assert step.held["left"] == pytest.approx(MAX_PITCH_STEP_M)
-    assert np.allclose(step.move("left", math.pi / 2), [0.0, MAX_PITCH_STEP_M, 0.0])   # along the heading
-
-
 def test_the_shipped_presets_shape_nothing(spec):
     """The new keys default to off; every shipped walking preset leaves them so."""
     for name in ("forward", "backward", "sideways", "turn_left", "turn_right", "steer"):
         p = load_preset(name)
-        assert (p.swing_level, p.swing_level_roll, p.swing_toe_deg, p.pitch_step_m_rad) == (0.0, 0.0, 0.0, 0.0)
+        assert (p.swing_level, p.swing_level_roll, p.swing_toe_deg) == (0.0, 0.0, 0.0)
 
 
-@pytest.mark.parametrize("key, value", [("swing_level", 1.5), ("swing_level_roll", -0.1), ("swing_toe_deg", 20.0),
-                                        ("pitch_step_m_rad", -1.0), ("pitch_step_lead_s", 1.0)])
+@pytest.mark.parametrize("key, value", [("swing_level", 1.5), ("swing_level_roll", -0.1), ("swing_toe_deg", 20.0)])
 def test_out_of_range_swing_keys_are_refused_by_name(key, value):
     with pytest.raises(InputError) as e:
         GaitParams(**{key: value})

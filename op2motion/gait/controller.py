@@ -24,9 +24,9 @@ Inside, per tick (gains in :class:`Feedback`):
    softer servo lacks added (:mod:`.calibration`); slow integral trims of the legs' sag; the swing leg's
    feed-forward learnt from the steps before (:mod:`.learning`), so the swing foot lands where planned whatever the
    servos' real stiffness;
-6. **stepping against a fall** (a preset's ``pitch_step_m_rad``, off by default): the swing foot lands further
-   forward the more the torso pitches forward of the plan, and stays there while it stands (:mod:`.pitch_step`);
-   and the swing sole kept level in the world, its toe raised (``swing_level``, ``swing_toe_deg``: :mod:`.swing_foot`).
+6. **the swing foot's attitude** (a preset's ``swing_level``, ``swing_level_roll``, ``swing_toe_deg``, off by
+   default): the swing sole kept level and at its planned place in the world however the torso tilts, its toe
+   raised over the floor (:mod:`.swing_foot`).
 """
 
 from __future__ import annotations
@@ -42,7 +42,6 @@ from op2motion.gait.feedback import GYRO_GAINS_S, OPEN_LOOP, STOCK_GYRO_GAINS_S,
 from op2motion.gait.generator import Gait
 from op2motion.gait.learning import StepLearner
 from op2motion.gait.odometry import FootOdometry, left_of
-from op2motion.gait.pitch_step import PitchStep
 from op2motion.gait.presets import load_preset
 from op2motion.gait.rows import REACH_SHARE, RowBuffer, rows_of_gait, swing_phase
 from op2motion.gait.schedule import gait_plan
@@ -117,7 +116,6 @@ class WalkController:
         self.state = _State()
         self.stillness = Stillness()
         self._k = -1
-        self.pitch_step = PitchStep(self.params.pitch_step_m_rad, self.params.pitch_step_lead_s)
 
     @property
     def _swing_shaped(self) -> bool:
@@ -179,7 +177,6 @@ class WalkController:
         self.learner.reset()
         self.calibration.reset()
         self.odometry.reset()
-        self.pitch_step.reset()
         return dict(zip(self.spec.joint_names, self._planned_goals(0.0, self._row(0.0)).tolist()))
 
     def step(self, t_s: float, gyro_rad_s: np.ndarray, accel_m_s2: np.ndarray,
@@ -199,10 +196,7 @@ class WalkController:
         turn = np.clip(turn, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
         change = self._damping(np.asarray(gyro_rad_s, dtype=float)) * self._standing_share(k)
         heading = self._heading(float(gyro_rad_s[2]), k)
-        if row >= 0:
-            self.pitch_step.update(float(error[0]), float(gyro[0]), self.rows.obj("contact", k),
-                                   self.rows.value("swing_phase", k))
-        if np.any(turn) or heading or f.placement or f.accept_landing or self.pitch_step.active or self._swing_shaped:
+        if np.any(turn) or heading or f.placement or f.accept_landing or self._swing_shaped:
             change += self._leg_change(k, float(turn[0]), float(turn[1]), heading)
         planned = self._planned_goals(t_s, row)
         if row >= 0 and self.rows.value("open", k):
@@ -329,7 +323,6 @@ class WalkController:
                 sole, sole_rot = sole + landed[0], rot_z(landed[1]) @ sole_rot
             if contact not in ("double", side) and self.feedback.placement:
                 sole = sole + phase * self.odometry.shift(self.feedback.placement, rows.get("velocity", k))
-            sole = sole + self.pitch_step.move(side, rows.value("plan_yaw", k))
             planned = rows.legs(side, k)
             body_pos, body_rot = moved_pos, moved_rot
             if contact not in ("double", side) and self._swing_shaped:

@@ -46,11 +46,6 @@ left), so the mean speed is about ``step_length_m / step_s``. Keys (defaults in 
                             gain times stiffness, stays the model's), since the damping that holds soft servos
                             makes stiff ones oscillate
 ``heading_gain_scale``      the walk controller's heading loop gains times this (1: its own)
-``pitch_step_m_rad``        the walk controller's sagittal step adjustment [m/rad]: the swing foot lands this far
-                            forward per radian the torso pitches forward of the plan (its estimate, plus
-                            ``pitch_step_lead_s`` times its pitch rate), held under that foot while it stands
-                            (0: off, the plan's footsteps)
-``pitch_step_lead_s``       how far ahead [s] the pitch is extrapolated by its rate for the step adjustment
 ``swing_level``             share of the torso's measured pitch error the swing leg is solved against, so that its
                             sole stays level and at its planned place in the world (0: off, the sole follows the
                             torso; :mod:`.swing_foot`)
@@ -106,8 +101,6 @@ class GaitParams:
     gyro_gain_scale: float = 1.0
     gyro_stiff_share: float = 0.0
     heading_gain_scale: float = 1.0
-    pitch_step_m_rad: float = 0.0
-    pitch_step_lead_s: float = 0.0
     swing_level: float = 0.0
     swing_level_roll: float = 0.0
     swing_toe_deg: float = 0.0
@@ -166,7 +159,7 @@ RANGES: dict[str, tuple[float, float]] = {
     "preview_s": (0.4, 3.0), "zmp_weight": (1e-6, 1e6), "jerk_weight": (1e-12, 1.0), "zmp_passes": (0, 5),
     "arm_swing_deg": (0.0, 40.0), "start_s": (0.2, 5.0), "end_s": (0.2, 5.0), "p_gain": (1, 254),
     "max_speed_share": (0.5, 1.25), "gyro_gain_scale": (0.0, 3.0), "gyro_stiff_share": (0.0, 3.0),
-    "heading_gain_scale": (0.0, 3.0), "pitch_step_m_rad": (0.0, 1.0), "pitch_step_lead_s": (0.0, 0.5),
+    "heading_gain_scale": (0.0, 3.0),
     "swing_level": (0.0, 1.0), "swing_level_roll": (0.0, 1.0), "swing_toe_deg": (0.0, 15.0),
 }
 DEFAULTS = GaitParams()
