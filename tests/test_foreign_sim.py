@@ -203,3 +203,47 @@ def test_the_tuned_fast_walk_in_the_foreign_simulator(foreign_urdf: str) -> None
     assert speed >= FAST_MIN_SPEED_M_S, speed
     assert abs(result["lateral_m"]) <= FAST_MAX_DRIFT_SHARE * result["distance_m"], result["lateral_m"]
     assert abs(result["end_yaw_deg"]) <= FAST_MAX_YAW_DEG, result["end_yaw_deg"]
+
+
+SOFT_CORNER = "x +20 mm, mass ×1.15, stiffness ×0.6, friction 0.5"   # the family's heavy, soft, slippery corner
+CTL_MIN_SPEED_M_S = 0.28        # walking/fast_ctl.toml there: at least this steady speed (0.298)
+
+
+def _steady_speed(result: dict, clock: object) -> float:
+    """The torso's forward speed [m/s] over the walk's steady window."""
+    times = np.array([row[0] for row in result["trace"]])
+    x = np.array([row[4] for row in result["trace"]])
+    t0 = clock.start_s + clock.steady_from_s  # type: ignore[attr-defined]
+    t1 = clock.start_s + clock.steady_to_s  # type: ignore[attr-defined]
+    return float((np.interp(t1, times, x) - np.interp(t0, times, x)) / (t1 - t0))
+
+
+def test_the_swing_shaping_carries_a_fast_walk_over_the_soft_heavy_corner() -> None:
+    """``walking/fast_ctl.toml`` (P 32, the swing sole kept level and its toe raised: op2motion/gait/swing_foot.py)
+    on the foreign body's heavy, soft, slippery, front-heavy corner: walks 20 steps straight; the same preset with the
+    swing shaping off catches its swing toe and falls within a few steps."""
+    from dataclasses import replace
+
+    from op2motion.gait.presets import load_preset
+    from op2motion.gait.speeds import gait_within_speed
+    from op2motion.physics import family
+
+    official = load_spec(FOREIGN_BODY)
+    member = next(m for m in family(official) if m.name == SOFT_CORNER)
+    urdf = build_urdf(member.body(official))
+    servo = ServoModel(kp_nm_rad=member.stiffness * ServoModel().kp_nm_rad)
+    spec = default_spec()
+    shaped = load_preset("fast_ctl").with_steps(FAST_STEPS)
+    assert shaped.swing_level and shaped.swing_toe_deg
+    results = {}
+    for name, params in (("shaped", shaped), ("plain", replace(shaped, swing_level=0.0, swing_level_roll=0.0,
+                                                               swing_toe_deg=0.0))):
+        ctl = WalkController(gait_within_speed(params, spec), spec)
+        results[name] = (simulate(urdf, ctl, ctl.plan.duration_s, friction=member.friction, latency_ticks=2,
+                                  servo=servo), ctl)
+    result, ctl = results["shaped"]
+    assert not result["fell"], result["fall_time_s"]
+    assert _steady_speed(result, ctl.plan.walk) >= CTL_MIN_SPEED_M_S
+    assert abs(result["lateral_m"]) <= FAST_MAX_DRIFT_SHARE * result["distance_m"], result["lateral_m"]
+    assert abs(result["end_yaw_deg"]) <= FAST_MAX_YAW_DEG, result["end_yaw_deg"]
+    assert results["plain"][0]["fell"]

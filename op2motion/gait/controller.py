@@ -23,7 +23,10 @@ Inside, per tick (gains in :class:`Feedback`):
 5. **the servos**: their stiffness measured while the robot stands before the first step, and the feed-forward a
    softer servo lacks added (:mod:`.calibration`); slow integral trims of the legs' sag; the swing leg's
    feed-forward learnt from the steps before (:mod:`.learning`), so the swing foot lands where planned whatever the
-   servos' real stiffness.
+   servos' real stiffness;
+6. **the swing foot's attitude** (a preset's ``swing_level``, ``swing_level_roll``, ``swing_toe_deg``, off by
+   default): the swing sole kept level and at its planned place in the world however the torso tilts, its toe
+   raised over the floor (:mod:`.swing_foot`).
 """
 
 from __future__ import annotations
@@ -42,6 +45,7 @@ from op2motion.gait.odometry import FootOdometry, left_of
 from op2motion.gait.presets import load_preset
 from op2motion.gait.rows import REACH_SHARE, RowBuffer, rows_of_gait, swing_phase
 from op2motion.gait.schedule import plan_of_gait
+from op2motion.gait.swing_foot import toe_raised
 from op2motion.kinematics.leg_ik import leg_ik, leg_of, rot_x, rot_y, rot_z, within_reach
 from op2motion.motion.stillness import Stillness
 from op2motion.physics import Plan, Schedule
@@ -81,6 +85,7 @@ class _State:
     intended: list[np.ndarray] = field(default_factory=list)                # recent intended joints (20,) [rad]
     started: bool = False
     accel: np.ndarray | None = None
+    error: np.ndarray = field(default_factory=lambda: np.zeros(2))        # last attitude error (pitch, roll) [rad]
 
 
 class WalkController:
@@ -111,6 +116,11 @@ class WalkController:
         self.state = _State()
         self.stillness = Stillness()
         self._k = -1
+
+    @property
+    def _swing_shaped(self) -> bool:
+        """Does the preset shape the swing foot (:mod:`.swing_foot`)?"""
+        return bool(self.params.swing_level or self.params.swing_level_roll or self.params.swing_toe_deg)
 
     @property
     def plan_yaw(self) -> np.ndarray:
@@ -179,13 +189,14 @@ class WalkController:
         self.stillness.update(np.asarray(gyro_rad_s, dtype=float), measured)
         gyro = np.array([gyro_rad_s[1], gyro_rad_s[0]])   # pitch rate (about y), roll rate (about x)
         error = self._estimate(gyro, np.asarray(accel_m_s2, dtype=float), k)
+        self.state.error = error
         f = self.feedback
         kp = np.add(f.kp, np.multiply(f.soft_kp, self.calibration.softness))
         turn = -(kp * error + np.multiply(f.ki, self.state.integral) + np.multiply(f.kd, gyro))
         turn = np.clip(turn, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
         change = self._damping(np.asarray(gyro_rad_s, dtype=float)) * self._standing_share(k)
         heading = self._heading(float(gyro_rad_s[2]), k)
-        if np.any(turn) or heading or f.placement or f.accept_landing:
+        if np.any(turn) or heading or f.placement or f.accept_landing or self._swing_shaped:
             change += self._leg_change(k, float(turn[0]), float(turn[1]), heading)
         planned = self._planned_goals(t_s, row)
         if row >= 0 and self.rows.value("open", k):
@@ -313,7 +324,14 @@ class WalkController:
             if contact not in ("double", side) and self.feedback.placement:
                 sole = sole + phase * self.odometry.shift(self.feedback.placement, rows.get("velocity", k))
             planned = rows.legs(side, k)
-            moved = leg_ik(leg, *within_reach(leg, moved_rot.T @ (sole - moved_pos), moved_rot.T @ sole_rot,
+            body_pos, body_rot = moved_pos, moved_rot
+            if contact not in ("double", side) and self._swing_shaped:
+                sole, sole_rot = toe_raised(sole, sole_rot, phase, math.radians(self.params.swing_toe_deg),
+                                            self.spec.sole_extents(side)[1])
+                share = np.array([self.params.swing_level, self.params.swing_level_roll]) * self.state.error
+                tilt = rot_y(float(share[0])) @ rot_x(float(share[1]))
+                body_pos, body_rot = pivot + tilt @ (moved_pos - pivot), tilt @ moved_rot
+            moved = leg_ik(leg, *within_reach(leg, body_rot.T @ (sole - body_pos), body_rot.T @ sole_rot,
                                               REACH_SHARE))[0]
             out[list(leg.index)] = moved - planned
         return out

@@ -46,6 +46,11 @@ left), so the mean speed is about ``step_length_m / step_s``. Keys (defaults in 
                             gain times stiffness, stays the model's), since the damping that holds soft servos
                             makes stiff ones oscillate
 ``heading_gain_scale``      the walk controller's heading loop gains times this (1: its own)
+``swing_level``             share of the torso's measured pitch error the swing leg is solved against, so that its
+                            sole stays level and at its planned place in the world (0: off, the sole follows the
+                            torso; :mod:`.swing_foot`)
+``swing_level_roll``        the same for the torso's roll error
+``swing_toe_deg``           the swing sole's toe raised by this much at mid swing [deg] (0: flat)
 ==========================  ====================================================================================
 """
 
@@ -96,6 +101,9 @@ class GaitParams:
     gyro_gain_scale: float = 1.0
     gyro_stiff_share: float = 0.0
     heading_gain_scale: float = 1.0
+    swing_level: float = 0.0
+    swing_level_roll: float = 0.0
+    swing_toe_deg: float = 0.0
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -152,6 +160,7 @@ RANGES: dict[str, tuple[float, float]] = {
     "arm_swing_deg": (0.0, 40.0), "start_s": (0.2, 5.0), "end_s": (0.2, 5.0), "p_gain": (1, 254),
     "max_speed_share": (0.5, 1.25), "gyro_gain_scale": (0.0, 3.0), "gyro_stiff_share": (0.0, 3.0),
     "heading_gain_scale": (0.0, 3.0),
+    "swing_level": (0.0, 1.0), "swing_level_roll": (0.0, 1.0), "swing_toe_deg": (0.0, 15.0),
 }
 DEFAULTS = GaitParams()
 

@@ -5,10 +5,11 @@ Each range is within what the setting allows (the preset's :data:`~op2motion.gai
 keys) and around what walks today; ``--param NAME LOW HIGH`` narrows or moves one (:meth:`~.space.SearchSpace.
 narrowed`), ``--only NAME ...`` searches just those (the others keep the base preset's values).
 
-The servos' P gain is not searched unless asked for (``--param p_gain 32 48``): a walk tuned on stiffer servos leans
-on a setting that a simulator driving the servos by their own model, or a robot whose firmware resets it, does not
-apply, and then walks on servos softer than it was tuned for (the first shipped ``fast`` walk, P 40, fell on the soft
-bodies of an independent simulator that way).
+The swing shaping keys (``swing_level``, ``swing_level_roll``, ``swing_toe_deg``) are searched only when asked for
+too. The servos' P gain is not searched unless asked for (``--param p_gain 32 48``): a walk tuned on stiffer servos
+leans on a setting that a simulator driving the servos by their own model, or a robot whose firmware resets it, does
+not apply, and then walks on servos softer than it was tuned for (the first shipped ``fast`` walk, P 40, fell on the
+soft bodies of an independent simulator that way).
 """
 
 from __future__ import annotations
@@ -42,7 +43,14 @@ def walk_space(direction: Direction) -> SearchSpace:
               "turn": (_gait("turn_deg", 8.0, 22.0, "deg"), _gait("zmp_offset_y_m", -0.01, 0.005, "m"))}
     if direction not in stride:
         raise InputError(f"expected one of {', '.join(stride)}, got {direction!r}", "direction")
-    return SearchSpace(stride[direction] + _shared(), optional=(_gait("p_gain", 28, 48),))
+    return SearchSpace(stride[direction] + _shared(), optional=(_gait("p_gain", 28, 48), *_swing()))
+
+
+def _swing() -> tuple[Param, ...]:
+    """The walk controller's swing shaping (:mod:`op2motion.gait.swing_foot`), searched only when asked for
+    (``--param swing_level 0.4 1``): off in every shipped preset that was tuned without it."""
+    return (_gait("swing_level", 0.4, 1.0), _gait("swing_level_roll", 0.0, 1.0),
+            _gait("swing_toe_deg", 0.0, 8.0, "deg"))
 
 
 def stock_space() -> SearchSpace:
