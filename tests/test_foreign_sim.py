@@ -184,14 +184,15 @@ def test_get_up_in_the_foreign_simulator(foreign_urdf: str, lying: str) -> None:
 
 
 FAST_STEPS = 20                 # the acceptance's 20 steps
-FAST_MIN_SPEED_M_S = 0.28       # walking/fast.toml on the foreign body, nominal: at least this steady speed (0.292)
+FAST_MIN_SPEED_M_S = 0.30       # walking/fast.toml on the foreign body, nominal: at least this steady speed (0.313;
+#                                 the issue's bound)
 FAST_MAX_DRIFT_SHARE = 0.05     # ... sideways drift at most this share of the way
 FAST_MAX_YAW_DEG = 5.0          # ... heading within this of the start's
 
 
 def test_the_tuned_fast_walk_in_the_foreign_simulator(foreign_urdf: str) -> None:
-    """``walking/fast.toml`` (tuned in op2motion's engines) on the foreign body, nominal world: no fall, faster than
-    the forward preset can go, straight (its family there: README, 4 of 15 bodies fall)."""
+    """``walking/fast.toml`` on the foreign body, nominal world: no fall, at 0.30 m/s or more, straight (its whole
+    family there: docs/tuning.md, ``python tests/foreign_sim/tune_check.py fast``)."""
     ctl = WalkController.from_preset("fast", steps=FAST_STEPS, spec=default_spec())
     result = simulate(foreign_urdf, ctl, seconds=ctl.plan.duration_s, latency_ticks=2)
     clock = ctl.plan.walk
@@ -206,7 +207,7 @@ def test_the_tuned_fast_walk_in_the_foreign_simulator(foreign_urdf: str) -> None
 
 
 SOFT_CORNER = "x +20 mm, mass ×1.15, stiffness ×0.6, friction 0.5"   # the family's heavy, soft, slippery corner
-CTL_MIN_SPEED_M_S = 0.28        # walking/fast_ctl.toml there: at least this steady speed (0.298)
+CTL_MIN_SPEED_M_S = 0.28        # walking/fast.toml there: at least this steady speed (0.298)
 
 
 def _steady_speed(result: dict, clock: object) -> float:
@@ -219,7 +220,7 @@ def _steady_speed(result: dict, clock: object) -> float:
 
 
 def test_the_swing_shaping_carries_a_fast_walk_over_the_soft_heavy_corner() -> None:
-    """``walking/fast_ctl.toml`` (P 32, the swing sole kept level and its toe raised: op2motion/gait/swing_foot.py)
+    """``walking/fast.toml`` (P 32, the swing sole kept level and its toe raised: op2motion/gait/swing_foot.py)
     on the foreign body's heavy, soft, slippery, front-heavy corner: walks 20 steps straight; the same preset with the
     swing shaping off catches its swing toe and falls within a few steps."""
     from dataclasses import replace
@@ -233,7 +234,7 @@ def test_the_swing_shaping_carries_a_fast_walk_over_the_soft_heavy_corner() -> N
     urdf = build_urdf(member.body(official))
     servo = ServoModel(kp_nm_rad=member.stiffness * ServoModel().kp_nm_rad)
     spec = default_spec()
-    shaped = load_preset("fast_ctl").with_steps(FAST_STEPS)
+    shaped = load_preset("fast").with_steps(FAST_STEPS)
     assert shaped.swing_level and shaped.swing_toe_deg
     results = {}
     for name, params in (("shaped", shaped), ("plain", replace(shaped, swing_level=0.0, swing_level_roll=0.0,

@@ -95,8 +95,10 @@ def test_a_levelled_swing_sole_stays_where_the_plan_puts_it_in_the_world(spec, g
     assert np.allclose(changes["level"][index], changes["plain"][index])
 
 
-def test_the_shipped_presets_shape_nothing(spec):
-    """The new keys default to off; every shipped walking preset leaves them so."""
+def test_the_shipped_presets_shape_nothing_but_the_fast_walk(spec):
+    """The new keys default to off; every shipped walking preset leaves them so but ``fast``, tuned with them."""
+    fast = load_preset("fast")
+    assert fast.swing_level > 0.0 and fast.swing_toe_deg > 0.0
     for name in ("forward", "backward", "sideways", "turn_left", "turn_right", "steer"):
         p = load_preset(name)
         assert (p.swing_level, p.swing_level_roll, p.swing_toe_deg) == (0.0, 0.0, 0.0)

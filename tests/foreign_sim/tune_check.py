@@ -1,6 +1,6 @@
 """Check the shipped tuned walks in the foreign simulator (``tests/foreign_sim/harness.py``: MuJoCo, its own loop, servo
 model, IMU and floor) on the independently built body (``tests/data/op2_official_mesh.toml``), planned on the shipped
-spec: ``walking/fast.toml`` and ``walking/fast_ctl.toml`` under ``WalkController`` and ``walking/stock_config.ini``
+spec: ``walking/fast.toml`` under ``WalkController`` and ``walking/stock_config.ini``
 under op2motion's emulation of the stock Walking module, against the forward preset and the stock defaults; 20 steps
 each on every body of the foreign body's robustness family (its torso's CoM and mass, the servos' stiffness, the
 floor's friction), IMU readings 16 ms late. ``python tests/foreign_sim/tune_check.py fast`` checks one walk.
@@ -35,7 +35,6 @@ def walks() -> dict[str, object]:
     stock_defaults = StockConfig(x_move_amplitude_mm=30.0)
     out = {"forward.toml": lambda: WalkController.from_preset("forward", steps=STEPS, spec=spec),
            "fast.toml": lambda: WalkController.from_preset("fast", steps=STEPS, spec=spec),
-           "fast_ctl.toml": lambda: WalkController.from_preset("fast_ctl", steps=STEPS, spec=spec),
            "stock defaults (X 30 mm)": lambda: StockWalkController(stock_defaults, spec, STEPS)}
     tuned = ROOT / "walking" / "stock_config.ini"
     if tuned.exists():                                   # shipped only once a study finds one that holds
