@@ -36,9 +36,9 @@ from op2motion.physics.report import (
     FootLoad,
     MotionMeasures,
     PushResult,
+    RunMeasures,
     RunReport,
     TrialsResult,
-    WalkMeasures,
     WorstTorque,
 )
 from op2motion.physics.robust import Member, RobustReport, RobustRun, family, robust_check, stands
@@ -46,13 +46,13 @@ from op2motion.physics.robust_table import pose_robust_table, robust_markdown, r
 from op2motion.physics.runner import MAX_PUSH_N, Pushes, Setup, Trials, check
 from op2motion.physics.scene import ENGINES, FLOOR_FRICTION, TIME_STEP_S, EngineName
 from op2motion.physics.sensors import Sensors
-from op2motion.physics.walk import WALK_HOLD_S, WALK_SETTLE_S
 
 __all__ = ["DEFAULT_SECONDS", "ENGINES", "FALL_REASONS", "FLOOR_FRICTION", "MAX_PUSH_N", "MAX_SECONDS",
            "LYING", "MIN_SECONDS", "MOTION_HOLD_S", "MOTION_SETTLE_S", "RAMP_S", "REASONS", "TIME_STEP_S",
-           "WALK_HOLD_S", "WALK_SETTLE_S", "CheckReport", "Controller", "Engine", "EngineName", "EngineReport",
+           "CheckReport", "Controller", "Engine", "EngineName", "EngineReport",
            "Failure", "FootLoad", "Goals",
-           "Member", "MotionMeasures", "Plan", "PushResult", "Pushes", "RobustReport", "RobustRun", "RunReport",
+           "Member", "MotionMeasures", "Plan", "PushResult", "Pushes", "RobustReport", "RobustRun", "RunMeasures",
+           "RunReport",
            "Schedule", "Sensors", "Setup", "Trials",
-           "TrialsResult", "WalkClock", "WalkMeasures", "WorstTorque", "check", "family", "make_engine",
+           "TrialsResult", "WalkClock", "WorstTorque", "check", "family", "make_engine",
            "pose_robust_table", "robust_check", "robust_markdown", "robust_summary", "stands"]
