@@ -27,11 +27,7 @@ from typing import Any
 import numpy as np
 
 from op2motion.errors import InputError
-from op2motion.physics.body import margin_to
-from op2motion.physics.loop import StartFacts
-from op2motion.physics.plan import Plan, WalkClock
-from op2motion.physics.report import WorstTorque
-from op2motion.physics.track import Track
+from op2motion.physics import Plan, StartFacts, Track, WalkClock, WorstTorque, margin_to
 from op2motion.robot.spec import Spec
 
 WALK_SETTLE_S = 0.5            # after gravity reached full strength, before the first goal moves

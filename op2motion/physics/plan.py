@@ -33,7 +33,6 @@ from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.support import Side, Support, SupportName, fixed_foot
 
 if TYPE_CHECKING:
-    from op2motion.physics.loop import StartFacts
     from op2motion.physics.track import Track
     from op2motion.robot.spec import Spec
 
@@ -81,7 +80,8 @@ class Plan:
     base: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
     contact: tuple[Support, ...] | None = None
     walk: WalkClock | None = None
-    measure: Callable[[Track, StartFacts, Plan, Spec], Any] | None = field(default=None, repr=False, compare=False)
+    # the start is a .loop.StartFacts, not named here: the loop imports this module
+    measure: Callable[[Track, Any, Plan, Spec], Any] | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         goals, gains = np.asarray(self.goals, dtype=float), np.asarray(self.p_gains, dtype=float)
