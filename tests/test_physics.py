@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import os
 import tempfile
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -16,7 +17,7 @@ from op2motion.formats.posefile import read_pose
 from op2motion.model.dynamics import dynamics_for
 from op2motion.model.servo import ServoModel
 from op2motion.model.urdf import FRAME_LINK_MASS_KG, link_inertial
-from op2motion.physics import ENGINES, Pushes, Schedule, Setup, check, make_engine
+from op2motion.physics import ENGINES, MIN_SECONDS, Pushes, Schedule, Setup, check, make_engine
 from op2motion.physics.body import Body, placement
 from op2motion.physics.pybullet_engine import PyBulletEngine, load_robot, quiet_c_output
 from op2motion.physics.sweeps import ARMS_FORWARD, FOLDED_SWING, balanced, servo_pose
@@ -85,6 +86,26 @@ def test_same_input_same_verdict(spec):
     servo = servo_pose(spec)
     for engine in ENGINES:
         assert _run(servo, "double", spec, 3.0, engine) == _run(servo, "double", spec, 3.0, engine)
+
+
+@pytest.mark.physics
+def test_a_plans_own_measurements_come_back_in_the_walk_slot(spec):
+    """Physics knows no walk: what a plan's hook (``Plan.measure``) returns after a run is kept in the run report's
+    ``walk`` slot, and nothing else changes; a plan without one gets nothing there."""
+    plain = Schedule.hold(servo_pose(spec), "double", spec, MIN_SECONDS)
+    calls = []
+
+    def hook(track, start, plan, spec_):
+        calls.append((plan is hooked.plan, spec_ is spec, start.planned.flat_foot))
+        return ("measured", len(track.times))
+
+    hooked = Schedule(replace(plain.plan, measure=hook), spec.joint_names)
+    assert hooked.plan == plain.plan                  # the hook is no part of the plan's equality
+    run = check(hooked, spec, ("pybullet",)).run
+    assert calls == [(True, True, run.flat_foot)]    # once, after the run, with that run's start
+    assert run.walk[0] == "measured" and run.walk[1] > 0
+    without = check(plain, spec, ("pybullet",)).run
+    assert without.walk is None and replace(run, walk=None) == without
 
 
 # --- every failure mode has a pose that fails with exactly that reason -----------------------------------------

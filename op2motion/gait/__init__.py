@@ -13,12 +13,14 @@ from op2motion.gait.commands import CommandTimeline, read_commands, timeline_of
 from op2motion.gait.controller import WalkController
 from op2motion.gait.envelope import STEER_ENVELOPE, Envelope
 from op2motion.gait.generator import Gait, generate_gait
+from op2motion.gait.measures import WALK_HOLD_S, WALK_SETTLE_S, WalkMeasures, walk_measures
 from op2motion.gait.params import GaitParams, read_preset
 from op2motion.gait.presets import PRESETS, load_preset, preset_path
 from op2motion.gait.report import gait_csv, gait_summary, gait_webots, side_pushes, walk_summary
 from op2motion.gait.schedule import gait_schedule, plan_of_gait
 from op2motion.gait.steer import SteerableWalk
 
-__all__ = ["PRESETS", "STEER_ENVELOPE", "CommandTimeline", "Envelope", "Gait", "GaitParams", "WalkController",
+__all__ = ["PRESETS", "STEER_ENVELOPE", "WALK_HOLD_S", "WALK_SETTLE_S", "CommandTimeline", "Envelope", "Gait",
+           "GaitParams", "WalkController", "WalkMeasures", "walk_measures",
            "gait_csv", "plan_of_gait", "gait_schedule", "gait_summary", "gait_webots", "load_preset", "generate_gait",
            "SteerableWalk", "preset_path", "read_commands", "read_preset", "side_pushes", "timeline_of", "walk_summary"]

@@ -8,7 +8,8 @@ Markdown (the JSON: :func:`op2motion.physics.robust_table.robust_summary`).
 
 from __future__ import annotations
 
-from op2motion.physics import EngineReport, RobustReport, RobustRun, WalkMeasures, robust_markdown
+from op2motion.gait.measures import WalkMeasures
+from op2motion.physics import EngineReport, RobustReport, RobustRun, robust_markdown
 
 MAX_DRIFT_SHARE = 0.05      # lateral drift over distance walked
 MAX_HEADING_DEG = 5.0       # heading error at the end [deg]

@@ -1,10 +1,10 @@
 """A planned gait as a physics controller: the open-loop :class:`~op2motion.physics.Schedule` of its goals.
 
 The robot starts in the plan's first pose (its planned joint angles, both soles flat), settles while gravity ramps
-in (:data:`~op2motion.physics.RAMP_S` + :data:`~op2motion.physics.WALK_SETTLE_S`), during which the goals move from
-the planned joints to the first goals (when the servo feed-forward leads them), walks, and holds the last goal
-:data:`~op2motion.physics.WALK_HOLD_S`. The plan carries the torso poses and the planned contact of every row, and
-the walking clock the walk's measurements use (:mod:`op2motion.physics.walk`).
+in (:data:`~op2motion.physics.RAMP_S` + :data:`~op2motion.gait.measures.WALK_SETTLE_S`), during which the goals move
+from the planned joints to the first goals (when the servo feed-forward leads them), walks, and holds the last goal
+:data:`~op2motion.gait.measures.WALK_HOLD_S`. The plan carries the torso poses and the planned contact of every row,
+the walking clock the walk's measurements use, and those measurements as its hook (:mod:`op2motion.gait.measures`).
 """
 
 from __future__ import annotations
@@ -12,7 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from op2motion.gait.generator import Gait
-from op2motion.physics import RAMP_S, WALK_HOLD_S, WALK_SETTLE_S, Plan, Schedule, WalkClock
+from op2motion.gait.measures import WALK_HOLD_S, WALK_SETTLE_S, walk_measures
+from op2motion.physics import RAMP_S, Plan, Schedule, WalkClock
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support
 
@@ -35,7 +36,7 @@ def plan_of_gait(gait: Gait) -> Plan:
     return Plan("walk", goals, _lead(gait.p_gains, lead), (supports[0],) * lead + supports, dt,
                 0.0, (len(goals) - 1) * dt + WALK_HOLD_S, (_lead(gait.torso_pos, lead), _lead(gait.torso_rot, lead)),
                 (contact[0],) * lead + contact,
-                WalkClock(start, gait.walking_s, steady_from, steady_to))
+                WalkClock(start, gait.walking_s, steady_from, steady_to), measure=walk_measures)
 
 
 def gait_schedule(gait: Gait, spec: Spec) -> Schedule:

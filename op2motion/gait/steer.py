@@ -34,13 +34,14 @@ from op2motion.gait.commands import CommandTimeline
 from op2motion.gait.controller import LANDING_ROWS, WalkController
 from op2motion.gait.envelope import STEER_ENVELOPE, Envelope
 from op2motion.gait.feedback import Feedback
+from op2motion.gait.measures import WALK_HOLD_S, WALK_SETTLE_S, walk_measures
 from op2motion.gait.params import GaitParams
 from op2motion.gait.phases import Intent
 from op2motion.gait.presets import load_preset
 from op2motion.gait.rolling import RollingPlanner
 from op2motion.gait.steer_feedback import RollingCalibration, RollingLearner, RollingOdometry
 from op2motion.gait.timeline import ticks
-from op2motion.physics import RAMP_S, WALK_HOLD_S, WALK_SETTLE_S, Plan, WalkClock
+from op2motion.physics import RAMP_S, Plan, WalkClock
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Side, Support
@@ -253,7 +254,7 @@ def plan_of_rows(twin: SteerableWalk, count: int) -> Plan:
     clock = WalkClock(lead * dt, (walk_to - walk_from) * dt, steady_from * dt, steady_to * dt)
     return Plan("walk", goals, led(numeric["p_gains"]), (supports[0],) * lead + supports, dt, 0.0,
                 (len(goals) - 1) * dt + WALK_HOLD_S, (led(numeric["torso_pos"]), led(numeric["torso_rot"])),
-                (contact[0],) * lead + contact, clock)
+                (contact[0],) * lead + contact, clock, measure=walk_measures)
 
 
 def planned_summary(walk: SteerableWalk) -> dict[str, Any]:

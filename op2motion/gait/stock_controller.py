@@ -3,10 +3,10 @@
 reads the CM-730 (the spec's ``[imu]`` mapping: the counts from the centre of the fore-aft and the sideways channels).
 
 The walk runs as the framework's demos run it: the robot stands in the module's own stance while gravity ramps in and
-settles (:data:`~op2motion.physics.RAMP_S` + :data:`~op2motion.physics.WALK_SETTLE_S`), then ``Start()`` with the
+settles (:data:`~op2motion.physics.RAMP_S` + :data:`~op2motion.gait.measures.WALK_SETTLE_S`), then ``Start()`` with the
 commanded step (``X/Y/A_MOVE_AMPLITUDE``); ``Stop()`` as the last step begins, after which the module closes the
 walk itself (the step is latched to zero at its next phase) and halts; the last goals are held
-:data:`~op2motion.physics.WALK_HOLD_S`.
+:data:`~op2motion.gait.measures.WALK_HOLD_S`.
 
 The plan the judge compares the run with (:func:`stock_plan`) is the same schedule played open loop (balance off),
 its torso path worked out from the legs' forward kinematics on the spec's robot with the standing foot flat where it
@@ -22,10 +22,11 @@ from typing import Mapping
 
 import numpy as np
 
+from op2motion.gait.measures import WALK_HOLD_S, WALK_SETTLE_S, walk_measures
 from op2motion.gait.stock_config import StockConfig
 from op2motion.gait.stock_walking import ARM_POSE_DEG, StockTick, StockWalking, angle_to_tick
 from op2motion.kinematics.leg_ik import leg_fk, leg_of
-from op2motion.physics import RAMP_S, WALK_HOLD_S, WALK_SETTLE_S, Plan, WalkClock
+from op2motion.physics import RAMP_S, Plan, WalkClock
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.imu import encode, imu_of
 from op2motion.robot.joints import ticks_to_servo
@@ -166,7 +167,7 @@ def stock_plan(config: StockConfig, spec: Spec, steps: int, command: StockComman
     steady_to = last * dt - start_s
     clock = WalkClock(start_s, (s.halt_row - s.start_row) * dt, steady_from, max(steady_to, steady_from + dt))
     return Plan("walk", s.goals, s.p_gains, supports, dt, 0.0, (len(s.goals) - 1) * dt + WALK_HOLD_S, base,
-                supports, clock)
+                supports, clock, measure=walk_measures)
 
 
 class StockWalkController:

@@ -14,9 +14,10 @@ controller's :class:`Plan`. The result is a typed :class:`CheckReport`::
 
 from __future__ import annotations
 
-from op2motion.physics.body import LYING
+from op2motion.physics.body import LYING, margin_to
 from op2motion.physics.controller import Controller, Goals, Schedule
 from op2motion.physics.engine import Engine, make_engine
+from op2motion.physics.loop import StartFacts
 from op2motion.physics.plan import (
     DEFAULT_SECONDS,
     MAX_SECONDS,
@@ -36,9 +37,9 @@ from op2motion.physics.report import (
     FootLoad,
     MotionMeasures,
     PushResult,
+    RunMeasures,
     RunReport,
     TrialsResult,
-    WalkMeasures,
     WorstTorque,
 )
 from op2motion.physics.robust import Member, RobustReport, RobustRun, family, robust_check, stands
@@ -46,13 +47,14 @@ from op2motion.physics.robust_table import pose_robust_table, robust_markdown, r
 from op2motion.physics.runner import MAX_PUSH_N, Pushes, Setup, Trials, check
 from op2motion.physics.scene import ENGINES, FLOOR_FRICTION, TIME_STEP_S, EngineName
 from op2motion.physics.sensors import Sensors
-from op2motion.physics.walk import WALK_HOLD_S, WALK_SETTLE_S
+from op2motion.physics.track import Track
 
 __all__ = ["DEFAULT_SECONDS", "ENGINES", "FALL_REASONS", "FLOOR_FRICTION", "MAX_PUSH_N", "MAX_SECONDS",
            "LYING", "MIN_SECONDS", "MOTION_HOLD_S", "MOTION_SETTLE_S", "RAMP_S", "REASONS", "TIME_STEP_S",
-           "WALK_HOLD_S", "WALK_SETTLE_S", "CheckReport", "Controller", "Engine", "EngineName", "EngineReport",
+           "CheckReport", "Controller", "Engine", "EngineName", "EngineReport",
            "Failure", "FootLoad", "Goals",
-           "Member", "MotionMeasures", "Plan", "PushResult", "Pushes", "RobustReport", "RobustRun", "RunReport",
-           "Schedule", "Sensors", "Setup", "Trials",
-           "TrialsResult", "WalkClock", "WalkMeasures", "WorstTorque", "check", "family", "make_engine",
+           "Member", "MotionMeasures", "Plan", "PushResult", "Pushes", "RobustReport", "RobustRun", "RunMeasures",
+           "RunReport",
+           "Schedule", "Sensors", "Setup", "StartFacts", "Track", "Trials",
+           "TrialsResult", "WalkClock", "WorstTorque", "check", "family", "make_engine", "margin_to",
            "pose_robust_table", "robust_check", "robust_markdown", "robust_summary", "stands"]

@@ -10,6 +10,10 @@ the last row after the motion until ``duration_s``. Three kinds:
 * ``walk``: a motion whose torso poses are planned too (no foot stays where it started), with a walking clock for
   the walk's measurements (:class:`WalkClock`; built by :mod:`op2motion.gait`).
 
+A plan may carry its own measurements as a hook (:attr:`Plan.measure`): the physics check calls it after every run
+and keeps what it returns in the run report's ``walk`` slot. Physics knows no walk: the gait's plans bring
+:func:`op2motion.gait.measures.walk_measures`.
+
 :func:`planned_states` says where every row puts the robot with rigid servos: the torso attitude, the centre of mass
 and the feet, placed with the fixed foot level on the floor where it started (or at the planned torso poses); the
 judge measures tilt and sinking against it, so a planned turn or crouch is not a fall.
@@ -19,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
@@ -26,6 +31,10 @@ from op2motion.errors import InputError
 from op2motion.physics.body import Body, BodyState, placement, sole_flat
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.support import Side, Support, SupportName, fixed_foot
+
+if TYPE_CHECKING:
+    from op2motion.physics.track import Track
+    from op2motion.robot.spec import Spec
 
 RAMP_S = 1.0                   # gravity ramps in over this long when a run cannot start sagged; the loading window
 STEADY_S = 1.0                 # the last second of a run: the steady window for torques, sag and centre of pressure
@@ -53,7 +62,13 @@ class WalkClock:
 class Plan:
     """Planned goals (K, 20) [rad] with P gains (K, 20) and supports (K,), one row per ``dt`` [s] from ``start_s``
     [s], for ``duration_s`` [s]; optionally the planned torso poses ((K, 3) [m], (K, 3, 3)), the planned contact of
-    each row (walks: the sole(s) meant to be on the floor) and a walk's clock."""
+    each row (walks: the sole(s) meant to be on the floor) and a walk's clock.
+
+    ``measure``: the plan's own measurements of a run of it, a wing's hook (a walk's:
+    :func:`op2motion.gait.measures.walk_measures`): called as ``measure(track, start, plan, spec)`` after each run
+    (:class:`.track.Track`, :class:`.loop.StartFacts`, this plan, the :class:`~op2motion.robot.spec.Spec`), what it
+    returns is stored in the run report's ``walk`` slot (:attr:`.report.RunReport.walk`); None: nothing more is
+    measured. Left out of the plan's equality and repr."""
 
     kind: str
     goals: np.ndarray
@@ -65,6 +80,8 @@ class Plan:
     base: tuple[np.ndarray, np.ndarray] | None = field(default=None, repr=False)
     contact: tuple[Support, ...] | None = None
     walk: WalkClock | None = None
+    # the start is a .loop.StartFacts, not named here: the loop imports this module
+    measure: Callable[[Track, Any, Plan, Spec], Any] | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         goals, gains = np.asarray(self.goals, dtype=float), np.asarray(self.p_gains, dtype=float)

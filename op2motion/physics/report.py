@@ -21,7 +21,7 @@ stood, both fell, or both failed for the same reasons without falling.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 from op2motion.physics.scene import EngineName
 from op2motion.robot.sides import Side
@@ -94,19 +94,14 @@ class MotionMeasures:
     cop_track: tuple[tuple[float, float, float], ...] = field(repr=False)
 
 
-@dataclass(frozen=True)
-class WalkMeasures:
-    """A walk's measurements (:mod:`.walk`): distance [m], steady and overall speed [m/s], lateral drift [m],
-    heading error [deg], turn rate [deg/s], share of samples with the CoP inside the planned soles, worst torque."""
+class RunMeasures(Protocol):
+    """What physics reads of a wing's own measurements of a run (:attr:`RunReport.walk`, made by the plan's hook
+    :attr:`.plan.Plan.measure`, e.g. a walk's :class:`op2motion.gait.measures.WalkMeasures`): only its columns in
+    the robustness family's JSON (:func:`.robust_table.robust_summary`)."""
 
-    distance_m: float
-    mean_speed_mps: float
-    overall_speed_mps: float
-    lateral_drift_m: float
-    heading_error_deg: float
-    turn_rate_deg_s: float
-    cop_inside_fraction: float
-    worst_torque: WorstTorque
+    def robust_row(self) -> dict[str, Any]:
+        """JSON-ready columns for the family's rows."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -143,7 +138,7 @@ class RunReport:
     ended: str = "full"              # why the run ended: full (its duration), settled or fell (physics.stopping)
     feet: dict[str, FootLoad] = field(default_factory=dict)
     motion: MotionMeasures | None = None
-    walk: WalkMeasures | None = None
+    walk: Any = None                 # the plan's own measurements (:attr:`.plan.Plan.measure`; a walk's), if any
     snapshot_png: bytes | None = field(default=None, repr=False, compare=False)
     track: Any = field(default=None, repr=False, compare=False)     # the samples (:class:`.track.Track`), if kept
 
@@ -181,7 +176,7 @@ class RunReport:
         return "falls" if self.fell else ", ".join(sorted(self.reasons))
 
     def as_dict(self) -> dict[str, Any]:
-        """JSON-ready (without the snapshot and the walk's measurements)."""
+        """JSON-ready (without the snapshot and the plan's own (a walk's) measurements)."""
         out = asdict(self)
         for key in ("snapshot_png", "motion", "walk", "track"):
             del out[key]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
+from op2motion.physics.report import RunMeasures
 from op2motion.physics.robust import RobustReport, RobustRun
 
 
@@ -38,16 +39,16 @@ def pose_robust_table(report: RobustReport) -> str:
 
 def robust_summary(report: RobustReport) -> dict[str, Any]:
     """The family's JSON: ``pass_rate``, ``passed``, ``failures`` {reason: runs}, ``disagreements`` [member] and
-    ``runs`` [{``member``, ``engine``, ``passed``, ``problem``, ``reasons``, plus the walk's measures}]."""
+    ``runs`` [{``member``, ``engine``, ``passed``, ``problem``, ``reasons``, ``support_margin_m``, plus the plan's own
+    measures' columns (:meth:`.report.RunMeasures.robust_row`; a walk's: speed, drift, heading, distance)}]."""
     runs = []
     for run in report.runs:
         row: dict[str, Any] = {"member": run.member.name, "engine": run.engine, "passed": run.passed,
                                "problem": run.problem, "reasons": run.report.run.reasons,
                                "support_margin_m": round(run.report.run.support_margin_m, 5)}
-        walk = run.report.run.walk
-        if walk is not None:
-            row.update(mean_speed_mps=round(walk.mean_speed_mps, 4), lateral_drift_m=round(walk.lateral_drift_m, 4),
-                       heading_error_deg=round(walk.heading_error_deg, 2), distance_m=round(walk.distance_m, 4))
+        measures: RunMeasures | None = run.report.run.walk
+        if measures is not None:
+            row.update(measures.robust_row())
         runs.append(row)
     return {"pass_rate": round(report.pass_rate, 4), "passed": report.passed, "failures": dict(report.failures),
             "disagreements": report.disagreements, "runs": runs}

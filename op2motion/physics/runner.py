@@ -3,8 +3,9 @@
 Per engine: the main run, then (with :class:`Pushes`) one run per push direction with a push at the torso's centre
 of mass, then (with :class:`Trials`) runs from randomly perturbed starts (seeded). Every run is a fresh world with
 the same servo model (:class:`Setup`: the MX-28 at its P gains, scaled stiffness, a rated voltage), judged by
-:mod:`.judge` against the controller's plan and measured by :mod:`.measure` (and :mod:`.walk` for a walk). The engines
-*agree* when the same thing happened in each (:meth:`.report.CheckReport.agree`).
+:mod:`.judge` against the controller's plan and measured by :mod:`.measure` (and by the plan's own hook,
+:attr:`.plan.Plan.measure`, when it has one: a walk's measurements come from :mod:`op2motion.gait.measures`). The
+engines *agree* when the same thing happened in each (:meth:`.report.CheckReport.agree`).
 """
 
 from __future__ import annotations
@@ -27,7 +28,6 @@ from op2motion.physics.plan import Plan
 from op2motion.physics.report import PUSH_DIRECTIONS, CheckReport, EngineReport, PushResult, RunReport, TrialsResult
 from op2motion.physics.scene import FLOOR_FRICTION, EngineName
 from op2motion.physics.sensors import Sensors
-from op2motion.physics.walk import walk_measures
 from op2motion.robot.spec import Spec
 
 MAX_PUSH_N = 100.0
@@ -155,8 +155,8 @@ class _Runner:
             judged = judge(track, start, plan, self.spec, self.tilt_limit)
             report = run_report(track, start, plan, self.spec, judged,
                                 RunSetupFacts(engine_name, self.servo, engine.time_step))
-            if plan.walk is not None:
-                report = replace(report, walk=walk_measures(track, start, plan, self.spec))
+            if plan.measure is not None:
+                report = replace(report, walk=plan.measure(track, start, plan, self.spec))
             if snapshot:
                 report = replace(report, snapshot_png=snapshot_png(engine, self.spec, self.servo))
             return replace(report, track=track) if keep_track else report

@@ -1,7 +1,7 @@
 """What a run records: every :data:`SAMPLE_S` the torso, the centre of mass, the soles, the joints, the servo
 torques, the contacts. :class:`Recorder` samples a live engine; :class:`Track` is the finished record (arrays along
-the samples) that the judge (:mod:`.judge`) and the measurements (:mod:`.measure`, :mod:`.walk`) read, so both can be
-tested on made-up tracks.
+the samples) that the judge (:mod:`.judge`) and the measurements (:mod:`.measure`, and a plan's own hook such as a
+walk's, :mod:`op2motion.gait.measures`) read, so both can be tested on made-up tracks.
 """
 
 from __future__ import annotations

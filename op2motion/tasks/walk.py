@@ -108,7 +108,8 @@ def _outputs(request: WalkRequest, gait: Any, spec: Spec, report: CheckReport | 
 
     from op2motion.figures.gait import render_gait
     from op2motion.gait import gait_csv, gait_webots
-    from op2motion.physics import RAMP_S, WALK_SETTLE_S
+    from op2motion.gait.measures import WALK_SETTLE_S
+    from op2motion.physics import RAMP_S
 
     out: dict[str, Output] = {}
     for role, path in request.tables:

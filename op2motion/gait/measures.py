@@ -1,4 +1,8 @@
-"""A walk's measurements, from a recorded run and its plan's walking clock (:class:`.plan.WalkClock`).
+"""A walk's measurements, from a recorded run and its plan's walking clock (:class:`~op2motion.physics.WalkClock`).
+
+Every walk plan the gait builds carries :func:`walk_measures` as its hook (:attr:`op2motion.physics.Plan.measure`):
+the physics check calls it after each run and stores the :class:`WalkMeasures` in the run report's ``walk`` slot
+(:attr:`op2motion.physics.RunReport.walk`); physics itself knows nothing of walks.
 
 * distance [m]: the whole-body CoM's horizontal travel from the first step to the end of the run; the mean speed
   is the steady walking speed: the CoM's travel over the steady window (from the second step's touchdown to the
@@ -17,21 +21,41 @@
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from op2motion.errors import InputError
-from op2motion.physics.body import margin_to
-from op2motion.physics.loop import StartFacts
-from op2motion.physics.plan import Plan, WalkClock
-from op2motion.physics.report import WalkMeasures, WorstTorque
-from op2motion.physics.track import Track
+from op2motion.physics import Plan, StartFacts, Track, WalkClock, WorstTorque, margin_to
 from op2motion.robot.spec import Spec
 
 WALK_SETTLE_S = 0.5            # after gravity reached full strength, before the first goal moves
 WALK_HOLD_S = 1.5              # the last goal held after the walk (the last second is the steady window)
 LIMITED_FRACTION = 0.95        # a servo delivering this share of the torque available at its speed is at its limit
 COP_TOLERANCE_M = 0.001        # a measured CoP this close outside the soles still counts as inside (contact noise)
+
+
+@dataclass(frozen=True)
+class WalkMeasures:
+    """A walk's measurements (see the module docstring): distance [m], steady and overall speed [m/s], lateral drift
+    [m], heading error [deg], turn rate [deg/s], share of samples with the CoP inside the planned soles, worst
+    torque."""
+
+    distance_m: float
+    mean_speed_mps: float
+    overall_speed_mps: float
+    lateral_drift_m: float
+    heading_error_deg: float
+    turn_rate_deg_s: float
+    cop_inside_fraction: float
+    worst_torque: WorstTorque
+
+    def robust_row(self) -> dict[str, Any]:
+        """The walk's columns in the robustness family's JSON (:func:`op2motion.physics.robust_summary`): steady
+        speed [m/s], lateral drift [m], heading error [deg], distance [m], rounded."""
+        return {"mean_speed_mps": round(self.mean_speed_mps, 4), "lateral_drift_m": round(self.lateral_drift_m, 4),
+                "heading_error_deg": round(self.heading_error_deg, 2), "distance_m": round(self.distance_m, 4)}
 
 
 def _yaw(rot: np.ndarray) -> float:
@@ -77,7 +101,8 @@ def worst_walk_torque(track: Track, plan: Plan, spec: Spec, clock: WalkClock) ->
 
 
 def walk_measures(track: Track, start: StartFacts, plan: Plan, spec: Spec) -> WalkMeasures:
-    """The measurements of a walk (see the module docstring)."""
+    """The measurements of a walk (see the module docstring); the hook of every walk plan
+    (:attr:`op2motion.physics.Plan.measure`)."""
     clock = plan.walk
     if clock is None:
         raise InputError(f"expected a walk's plan (with a walking clock), got a '{plan.kind}' plan", "plan")
