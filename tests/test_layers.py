@@ -195,3 +195,10 @@ def test_physics_check_is_the_only_way_into_physics():
             used = set(re.findall(r"op2motion\.(physics[\w.]*)", path.read_text(encoding="utf-8")))
             assert used <= PHYSICS_API, (path.name, used - PHYSICS_API)
             assert "sys.path" not in path.read_text(encoding="utf-8"), f"{path.name} reaches into another folder"
+
+
+def test_every_module_says_what_it_is():
+    """Every module of the package, packages included, opens with a docstring."""
+    bare = [str(p.relative_to(PACKAGE)) for p in sorted(PACKAGE.rglob("*.py"))
+            if not ast.get_docstring(ast.parse(p.read_text(encoding="utf-8")))]
+    assert bare == []
