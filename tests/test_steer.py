@@ -4,6 +4,7 @@ the dry run equal to the walk), commands taking effect from the next step, and `
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 
@@ -231,18 +232,43 @@ def test_a_command_takes_effect_from_the_next_step_and_stop_ends_in_done(spec):
     assert walk.done
 
 
-@pytest.mark.parametrize("late", range(0, 40, 4))
-def test_a_stop_at_any_tick_ends_within_two_steps(spec, late):
-    """Whenever in a step the stop comes (a phase's planning may have begun with the walking command), at most two
-    steps begin after it, the last closing the feet."""
+BRANCH_LEAD_S = 0.32        # the stop tests' shared walk ends this long before their earliest stop [s]
+
+
+@pytest.fixture(scope="module")
+def walking(spec) -> SteerableWalk:
+    """A walk commanded forward at LEAD_S + 1 s, driven to :data:`BRANCH_LEAD_S` before LEAD_S + 4 s, at a tick
+    with no planning in progress (so that a copy of it walks on exactly as it would have)."""
     walk = WalkController.steerable(spec)
     _drive(walk, LEAD_S + 1.0, spec)
-    _drive_more(walk, LEAD_S + 1.0, 3.0 + late * DT, spec, lambda w: w.command(0.25, 0.0, 0.0))
+    _drive_more(walk, LEAD_S + 1.0, 3.0 - BRANCH_LEAD_S, spec, lambda w: w.command(0.25, 0.0, 0.0))
+    assert walk.planner.task is None
+    return walk
+
+
+@pytest.mark.parametrize("late", range(0, 40, 4))
+def test_a_stop_at_any_tick_ends_within_two_steps(spec, walking, late):
+    """Whenever in a step the stop comes (a phase's planning may have begun with the walking command), at most two
+    steps begin after it, the last closing the feet."""
+    walk = copy.deepcopy(walking)
+    _drive_more(walk, LEAD_S + 4.0 - BRANCH_LEAD_S, BRANCH_LEAD_S + late * DT, spec, lambda w: None)
     t = LEAD_S + 4.0 + late * DT
     stop_row = walk._row(t)
     _drive_more(walk, t, 2.5, spec, lambda w: w.stop())
     after = [p for first, p in walk.planner.phases if p.kind == "step" and first > stop_row]
     assert 1 <= len(after) <= 2 and after[-1].closing
+
+
+def test_a_copied_walk_walks_on_as_the_original(spec, walking):
+    """The stop tests branch from one walk: a copy steps exactly as a walk driven from the start."""
+    walk = WalkController.steerable(spec)
+    _drive(walk, LEAD_S + 1.0, spec)
+    _drive_more(walk, LEAD_S + 1.0, 3.0, spec, lambda w: w.command(0.25, 0.0, 0.0))
+    copied = copy.deepcopy(walking)
+    _drive_more(copied, LEAD_S + 4.0 - BRANCH_LEAD_S, BRANCH_LEAD_S, spec, lambda w: None)
+    assert [(k, p.kind) for k, p in copied.planner.phases] == [(k, p.kind) for k, p in walk.planner.phases]
+    k = walk._row(LEAD_S + 4.0)
+    assert np.array_equal(copied.rows.get("joints", k), walk.rows.get("joints", k))
 
 
 def _drive_more(walk: SteerableWalk, t0: float, seconds: float, spec, first) -> None:

@@ -138,6 +138,21 @@ def _problem(name: str, robust: Any, report: CheckReport | None) -> str | None:
     return None
 
 
+def _refuse_work_early(request: WalkRequest, spec: Spec) -> None:
+    """Refuse, before planning, a check that would simulate more than the cap even for the shortest walk of its
+    steps (the walk lasts at least ``steps`` x ``step_s``; the check after planning counts its whole duration)."""
+    from op2motion.gait import side_pushes
+    from op2motion.physics import family
+    from op2motion.physics.runner import check_work, runs_per_engine
+
+    pushes = side_pushes(request.push_n) if request.push_n else None
+    if request.robust:
+        runs = len(family(spec)) * len(request.engines) * runs_per_engine(pushes, None)
+    else:
+        runs = len(request.engines) * runs_per_engine(pushes, request.trials)
+    check_work(runs, request.params.steps * request.params.step_s)
+
+
 def walk(request: WalkRequest, spec: Spec, progress: ProgressFor | None = None) -> TaskResult:
     """``walk``: plan ``request``'s walk and check it (see the module docstring); ``progress`` gives each stage's
     progress (the plan's passes, the physics' simulated seconds, the family's runs)."""
@@ -146,6 +161,8 @@ def walk(request: WalkRequest, spec: Spec, progress: ProgressFor | None = None) 
 
     progress = progress or no_progress
     params = request.params
+    if request.validate and request.target is None:
+        _refuse_work_early(request, spec)
     with progress("plan", "pass") as on_progress:
         gait = gait_within_speed(params, spec, request.target, request.retime, on_progress)
     data: dict[str, Any] = gait_summary(gait)
