@@ -142,8 +142,7 @@ def _refuse_work_early(request: WalkRequest, spec: Spec) -> None:
     """Refuse, before planning, a check that would simulate more than the cap even for the shortest walk of its
     steps (the walk lasts at least ``steps`` x ``step_s``; the check after planning counts its whole duration)."""
     from op2motion.gait import side_pushes
-    from op2motion.physics import family
-    from op2motion.physics.runner import check_work, runs_per_engine
+    from op2motion.physics import check_work, family, runs_per_engine
 
     pushes = side_pushes(request.push_n) if request.push_n else None
     if request.robust:
