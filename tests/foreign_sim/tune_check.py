@@ -36,9 +36,8 @@ def walks() -> dict[str, object]:
     out = {"forward.toml": lambda: WalkController.from_preset("forward", steps=STEPS, spec=spec),
            "fast.toml": lambda: WalkController.from_preset("fast", steps=STEPS, spec=spec),
            "stock defaults (X 30 mm)": lambda: StockWalkController(stock_defaults, spec, STEPS)}
-    tuned = ROOT / "walking" / "stock_config.ini"
-    if tuned.exists():                                   # shipped only once a study finds one that holds
-        out["stock_config.ini"] = lambda: StockWalkController(read_stock_config(tuned), spec, STEPS)
+    tuned = read_stock_config(ROOT / "walking" / "stock_config.ini")
+    out["stock_config.ini"] = lambda: StockWalkController(tuned, spec, STEPS)
     return out
 
 
