@@ -42,9 +42,9 @@ from op2motion.physics.report import (
     TrialsResult,
     WorstTorque,
 )
-from op2motion.physics.robust import Member, RobustReport, RobustRun, family, robust_check, stands
+from op2motion.physics.robust import Member, RobustReport, RobustRun, family, robust_check, robust_runs, stands
 from op2motion.physics.robust_table import pose_robust_table, robust_markdown, robust_summary
-from op2motion.physics.runner import MAX_PUSH_N, Pushes, Setup, Trials, check, check_work, runs_per_engine
+from op2motion.physics.runner import MAX_PUSH_N, Pushes, Setup, Trials, check, check_runs, check_work
 from op2motion.physics.scene import ENGINES, FLOOR_FRICTION, TIME_STEP_S, EngineName
 from op2motion.physics.sensors import Sensors
 from op2motion.physics.track import Track
@@ -56,5 +56,6 @@ __all__ = ["DEFAULT_SECONDS", "ENGINES", "FALL_REASONS", "FLOOR_FRICTION", "MAX_
            "Member", "MotionMeasures", "Plan", "PushResult", "Pushes", "RobustReport", "RobustRun", "RunMeasures",
            "RunReport",
            "Schedule", "Sensors", "Setup", "StartFacts", "Track", "Trials",
-           "TrialsResult", "WalkClock", "WorstTorque", "check", "check_work", "family", "make_engine", "margin_to",
-           "pose_robust_table", "robust_check", "robust_markdown", "robust_summary", "runs_per_engine", "stands"]
+           "TrialsResult", "WalkClock", "WorstTorque", "check", "check_runs", "check_work", "family", "make_engine",
+           "margin_to",
+           "pose_robust_table", "robust_check", "robust_markdown", "robust_runs", "robust_summary", "stands"]

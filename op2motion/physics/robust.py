@@ -21,7 +21,7 @@ from typing import Any, Callable, Iterable
 
 from op2motion.physics.controller import Controller
 from op2motion.physics.report import EngineReport
-from op2motion.physics.runner import Pushes, Setup, check, check_work, runs_per_engine
+from op2motion.physics.runner import Pushes, Setup, check, check_runs, check_work, runs_per_engine
 from op2motion.physics.scene import EngineName
 from op2motion.physics.sensors import Sensors
 from op2motion.robot.spec import Spec, Uncertainty
@@ -149,6 +149,11 @@ class RobustReport:
         return max(self.runs, key=score)
 
 
+def robust_runs(members: int, engines: int, pushes: Pushes | None) -> int:
+    """The runs a robustness check makes: every member in every engine, each with its pushes."""
+    return members * check_runs(engines, pushes, None)
+
+
 def robust_check(make_controller: Callable[[], Controller], spec: Spec, engines: Iterable[EngineName],
                  judge: Judge = stands, pushes: Pushes | None = None, members: Iterable[Member] | None = None,
                  on_progress: Callable[[float, float], Any] | None = None) -> RobustReport:
@@ -157,7 +162,7 @@ def robust_check(make_controller: Callable[[], Controller], spec: Spec, engines:
     chosen = tuple(family(spec) if members is None else members)
     names = tuple(engines)
     per = runs_per_engine(pushes, None)
-    check_work(len(chosen) * len(names) * per, make_controller().plan.duration_s,
+    check_work(robust_runs(len(chosen), len(names), pushes), make_controller().plan.duration_s,
                f"{len(chosen)} bodies x {len(names)} engine(s) x {per}")
     runs = []
     total = len(chosen) * len(names)

@@ -182,6 +182,11 @@ def runs_per_engine(pushes: Pushes | None, trials: Trials | None) -> int:
     return 1 + (len(pushes.directions) if pushes is not None and pushing else 0) + (trials.runs if trials else 0)
 
 
+def check_runs(engines: int, pushes: Pushes | None, trials: Trials | None) -> int:
+    """The runs a check makes in ``engines`` engines (see :func:`runs_per_engine`)."""
+    return engines * runs_per_engine(pushes, trials)
+
+
 def check_work(runs: int, seconds_each: float, counted: str | None = None) -> None:
     """Refuse more than :data:`MAX_SIMULATED_S` of simulated time in one request (runs x seconds), before any work:
     engines, bodies, pushes, trials and steps multiply. ``counted`` says how the runs came about."""
@@ -203,9 +208,9 @@ def check(controller: Controller, spec: Spec, engines: Sequence[EngineName] = ("
         raise InputError(f"expected a controller (plan, start, step, done), got {type(controller).__name__}",
                          "controller")
     pushing = pushes is not None and pushes.force_n > 0.0
-    per_engine = runs_per_engine(pushes, trials)
-    check_work(per_engine * len(engines), controller.plan.duration_s)
-    runner = _Runner(controller, spec, setup, per_engine * len(engines), on_progress)
+    planned = check_runs(len(engines), pushes, trials)
+    check_work(planned, controller.plan.duration_s)
+    runner = _Runner(controller, spec, setup, planned, on_progress)
     reports: dict[str, EngineReport] = {}
     for k, name in enumerate(engines):
         main = runner.run(name, snapshot=setup.snapshot and k == 0, keep_track=setup.keep_track)

@@ -142,13 +142,12 @@ def _refuse_work_early(request: WalkRequest, spec: Spec) -> None:
     """Refuse, before planning, a check that would simulate more than the cap even for the shortest walk of its
     steps (the walk lasts at least ``steps`` x ``step_s``; the check after planning counts its whole duration)."""
     from op2motion.gait import side_pushes
-    from op2motion.physics import check_work, family, runs_per_engine
+    from op2motion.physics import check_runs, check_work, family, robust_runs
 
     pushes = side_pushes(request.push_n) if request.push_n else None
-    if request.robust:
-        runs = len(family(spec)) * len(request.engines) * runs_per_engine(pushes, None)
-    else:
-        runs = len(request.engines) * runs_per_engine(pushes, request.trials)
+    engines = len(request.engines)
+    runs = (robust_runs(len(family(spec)), engines, pushes) if request.robust
+            else check_runs(engines, pushes, request.trials))
     check_work(runs, request.params.steps * request.params.step_s)
 
 
