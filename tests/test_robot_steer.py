@@ -170,4 +170,5 @@ def test_a_pushed_robot_walk_gets_up_and_walks_on(tmp_path):
     assert [e.split(" (")[0] for e in events[:4]] == ["fall detected", "still; getting up", "standing again",
                                                        "resumed"], events
     assert report["torque_limit_min"] < 1023                                  # lowered while it fell
-    assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and truth["x_m"] > WALKED_M   # up, having walked
+    # up, having walked (0.59-0.63 m in five runs here, 0.19 m once in CI: the message shows the torso and the events)
+    assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and truth["x_m"] > WALKED_M, (truth, events)
