@@ -134,13 +134,21 @@ class WholeBodyIk:
         self.feet0, self.com0, self.torso0 = ref["feet"][0], ref["com"][0], ref["torso"][0]
 
     def _one(self, x: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
-        """The pose (20,) [rad] and the features (each (1, m)) of unknowns ``x`` (9,), remembered for the last few
-        ``x`` (a solve asks for the same point up to three times: bounding a step, costing it, ending on it)."""
+        """The pose (20,) [rad] and the features (each (1, m)) of unknowns ``x`` (9,): the first row of
+        :meth:`_stencil`."""
+        q, f = self._stencil(x)
+        return q[0], {k: v[:1] for k, v in f.items()}
+
+    def _stencil(self, x: np.ndarray) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """The poses (10, 20) [rad] and features (each (10, m)) of unknowns ``x`` (9,) and of ``x`` with each unknown
+        moved by its finite-difference step, remembered for the last few ``x``: a trial step is costed on its
+        first row and, taken, its Jacobian comes from the rest (one batch is not much dearer than one pose)."""
         key = np.asarray(x, dtype=float).tobytes()
         found = self._recent.get(key)
         if found is None:
-            q = self.servo(np.asarray(x, dtype=float)[None])
-            found = (q[0], self.features(q))
+            batch = np.asarray(x, dtype=float)[None] + np.vstack([np.zeros(len(self._fd_step)), np.diag(self._fd_step)])
+            q = self.servo(batch)
+            found = (q, self.features(q))
             self._recent[key] = found
             if len(self._recent) > RECENT:
                 self._recent.pop(next(iter(self._recent)))
@@ -221,8 +229,7 @@ class WholeBodyIk:
         legs = self._one(x)[0][self._leg_joints]
         damping, cost = DAMPING, self._cost(x, hand, point, pulls)
         for _ in range(MAX_ITERATIONS):
-            batch = np.repeat(x[None], n + 1, axis=0) + np.vstack([np.zeros(n), np.diag(self._fd_step)])
-            f = self.features(self.servo(batch))
+            f = self._stencil(x)[1]
             error = float(np.linalg.norm(f["hand"][0] - hand))
             feet = float(np.abs(f["feet"][0] - self.feet0).max()) if self.double else 0.0
             if error < SOLVE_TOL_M and feet < SOLVE_TOL_M:
