@@ -33,11 +33,11 @@ from collections.abc import Callable
 
 import numpy as np
 
-from op2motion.kinematics import forward
-from op2motion.kinematics.leg_ik import Leg, leg_fk, leg_ik, leg_of, within_reach
+from op2motion.errors import InputError, ModelError
+from op2motion.kinematics.leg_ik import Leg, leg_fk, leg_of
 from op2motion.kinematics.points import row_of
 from op2motion.motion.body_checks import body_cost
-from op2motion.posture.cost import torso_axes
+from op2motion.posture.cost import CLEARANCE_EXACT_M, torso_axes
 from op2motion.robot.joints import joint_range, servo_to_book
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Side, Support, SupportName, other_side
@@ -69,18 +69,6 @@ SETTLE_CALLS = 40           # solves at most to settle on a point,
 SETTLE_ROWS = 5.0           # each moving as far as this many rows may
 MIN_GAIN = 1e-3             # a step that lowers the weighted error by less than this share ends the row's solve
 RECENT = 8                  # points whose pose and features a solver remembers
-
-
-def rotation(vectors: np.ndarray) -> np.ndarray:
-    """Rotation matrices (N, 3, 3) of rotation vectors (N, 3) [rad] (Rodrigues)."""
-    v = np.atleast_2d(vectors)
-    angle = np.linalg.norm(v, axis=1)
-    axis = v / np.maximum(angle, 1e-12)[:, None]
-    k = np.zeros((len(v), 3, 3))
-    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -axis[:, 2], axis[:, 1], -axis[:, 0]
-    k = k - k.transpose(0, 2, 1)
-    s, c = np.sin(angle)[:, None, None], np.cos(angle)[:, None, None]
-    return np.eye(3) + s * k + (1.0 - c) * k @ k
 
 
 class WholeBodyIk:
@@ -118,12 +106,22 @@ class WholeBodyIk:
         if crouch:                                   # sinking is free, and measured downwards (a straight leg
             self._w_posture[2] = W_CROUCH_Z          # cannot rise: its upward difference is zero)
             self._fd_step[2] = -FD_STEP
+        self._leg_arrays = (np.array([leg.hip for leg in self.legs]),
+                            np.array([[leg.thigh, leg.calf, leg.ankle_to_sole] for leg in self.legs]),
+                            np.array([leg.sign for leg in self.legs], dtype=float),
+                            np.array([leg.index for leg in self.legs]),
+                            np.array([self.soles_world[leg.side][0] for leg in self.legs]),
+                            np.array([self.soles_world[leg.side][1] for leg in self.legs]),
+                            np.array([self.reach[leg.side] for leg in self.legs]))
         hard = np.array([joint_range(spec.joints[i], "mechanical") for i in moved])
         self._moved = moved
         self._leg_joints = np.concatenate([np.array(leg.index) for leg in self.legs])
         self.lower = np.minimum(hard[:, 0] + LIMIT_MARGIN_RAD, self.start[moved])
         self.upper = np.maximum(hard[:, 1] - LIMIT_MARGIN_RAD, self.start[moved])
-        self._clearance = body_cost(spec, self.frame)
+        plan = body_cost(spec, self.frame).kernel_plan()
+        if plan is None:
+            raise ModelError("expected the D-H model's compiled plan for the whole-body IK", "model")
+        self._plan = plan
         self._hand_row = row_of(f"{hand}_hand")
         self._elbow_row = row_of(f"{hand[0]}_el")
         first = row_of(f"{other_side(self.frame)}_foot_0")
@@ -155,34 +153,35 @@ class WholeBodyIk:
         return found
 
     def servo(self, x: np.ndarray) -> np.ndarray:
-        """Poses (N, 20) [rad] of unknowns (N, 9): torso shift [m], torso rotation vector [rad], arm joints [rad]."""
-        x = np.atleast_2d(x)
-        rot = rotation(x[:, 3:6]) @ self.torso_rot                         # the torso in the world
-        pos = self.torso_pos + x[:, :3]
-        out = np.repeat(self.start[None], len(x), axis=0)
-        out[:, self.arm] = x[:, 6:9]
-        for leg in self.legs:
-            p, r = self.soles_world[leg.side]
-            local = np.einsum("nji,nj->ni", rot, p - pos)                   # the sole in the torso frame
-            local_rot = rot.transpose(0, 2, 1) @ r
-            out[:, list(leg.index)] = leg_ik(leg, *within_reach(leg, local, local_rot, self.reach[leg.side]))
-        out[:, self._moved] = np.clip(out[:, self._moved], self.lower, self.upper)
+        """Poses (N, 20) [rad] of unknowns (N, 9): torso shift [m], torso rotation vector [rad], arm joints [rad]
+        (one compiled loop: :func:`~op2motion.motion.whole_body_kernel.servo_rows`)."""
+        from op2motion.motion.whole_body_kernel import HIP_BELOW, servo_rows
+
+        x = np.ascontiguousarray(np.atleast_2d(x), dtype=float)
+        out = np.empty((len(x), len(self.start)))
+        failed = servo_rows(x, (self.torso_rot, self.torso_pos, self.start, self.arm), self._leg_arrays,
+                            (self._moved, self.lower, self.upper), out)
+        if failed >= 0:
+            leg, why = self.legs[failed // 3], failed % 3
+            raise InputError(f"expected the {leg.side} sole within the leg's reach with the hip above the ankle, got "
+                             f"{'a hip below its ankle' if why == HIP_BELOW else 'a sole out of reach'}", "leg")
         return out
 
     def features(self, q: np.ndarray) -> dict[str, np.ndarray]:
         """Hand (N, 3), forearm direction (N, 3), other sole's corners (N, 12), CoM x, y (N, 2), torso x, z
         axes (N, 6) and how far links are inside :data:`CLEAR_TASK_M` of each other (N, 1) of poses (N, 20)
-        [rad, m]."""
+        [rad, m] (the D-H model's points, full-inertia CoM and clearance in one compiled loop:
+        :func:`~op2motion.posture.kernel_body.body_features`)."""
+        from op2motion.posture.kernel_body import body_features
+
         angles = servo_to_book(q, self.frame, self.spec)
-        points = forward(angles, self.spec, "dh", full_com=True)
-        clearance = self._clearance(angles).clearance
-        data = points.data
-        hand, elbow = data[self._hand_row].T, data[self._elbow_row].T
+        pts, com, clearance = body_features(self._plan, angles.vector(), CLEARANCE_EXACT_M)
+        hand, elbow = pts[:, self._hand_row], pts[:, self._elbow_row]
         forearm = hand - elbow
-        axes = torso_axes(data, self.spec)
+        axes = torso_axes(pts.transpose(1, 2, 0), self.spec)
         return {"hand": hand, "point": forearm / np.linalg.norm(forearm, axis=1, keepdims=True),
-                "feet": data[self._foot_rows].transpose(2, 0, 1).reshape(len(q), -1),
-                "com": points.full()[:2].T, "torso": np.concatenate([axes[0].T, axes[2].T], axis=1),
+                "feet": pts[:, self._foot_rows].reshape(len(q), -1), "com": com[:, :2],
+                "torso": np.concatenate([axes[0].T, axes[2].T], axis=1),
                 "close": np.maximum(CLEAR_TASK_M - clearance, 0.0)[:, None], "knees": q[:, self._straight_knees]}
 
     def _stack(self, f: dict[str, np.ndarray], hand: np.ndarray, point: np.ndarray | None) -> tuple[np.ndarray,
