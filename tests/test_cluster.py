@@ -32,8 +32,8 @@ def _free_port() -> int:
 def ray_head():
     """A Ray head on this machine (token authentication off: a test cluster on loopback; a short temp folder:
     Ray's sockets must fit in 107 bytes)."""
-    env = {**os.environ, "RAY_AUTH_MODE": "disabled", "RAY_USAGE_STATS_ENABLED": "0"}
     temp = tempfile.mkdtemp(prefix="ray", dir="/tmp")
+    env = {**os.environ, "RAY_AUTH_MODE": "disabled", "RAY_USAGE_STATS_ENABLED": "0", HEAD_MARK: temp}
     port = _free_port()
     cli = [sys.executable, "-c", "from ray.scripts.scripts import main; main()"]
     started = subprocess.run([*cli, "start", "--head", f"--port={port}", "--num-cpus=2", "--include-dashboard=false",
@@ -47,19 +47,42 @@ def ray_head():
         shutil.rmtree(temp, ignore_errors=True)
 
 
+#: Set in the environment of the test head's ``ray start``, which every process of that head inherits.
+HEAD_MARK = "OP2MOTION_TEST_RAY_HEAD"
+
+
+def _head_processes(temp: str) -> list[int]:
+    """This head's processes: those naming its temp folder on their command line or carrying its mark in their
+    environment, and everything below them (a Ray agent renames itself, ``ray::DashboardAgent``, which hides both:
+    they outlived the clean-up)."""
+    mark = f"{HEAD_MARK}={temp}".encode()
+    parents, mine = {}, set()
+    for pid in os.listdir("/proc"):
+        if pid.isdigit() and int(pid) != os.getpid():
+            try:
+                with open(f"/proc/{pid}/stat", "rb") as f:
+                    parents[int(pid)] = int(f.read().rsplit(b")", 1)[1].split()[1])
+                with open(f"/proc/{pid}/cmdline", "rb") as f:
+                    named = temp.encode() in f.read()
+                with open(f"/proc/{pid}/environ", "rb") as f:
+                    marked = mark in f.read().split(b"\0")
+            except (OSError, IndexError, ValueError):
+                continue
+            if named or marked:
+                mine.add(int(pid))
+    grown = True
+    while grown:
+        below = {pid for pid, parent in parents.items() if parent in mine} - mine
+        mine |= below
+        grown = bool(below)
+    return sorted(mine)
+
+
 def _stop_cluster(temp: str) -> None:
-    """End this head's processes only (each names its temp folder on its command line): ``ray stop`` would end
-    every Ray on the machine, a library build's or tuning study's in another test among them."""
+    """End this head's processes only: ``ray stop`` would end every Ray on the machine, a library build's or tuning
+    study's in another test among them."""
     for _ in range(3):
-        mine = []
-        for pid in os.listdir("/proc"):
-            if pid.isdigit() and int(pid) != os.getpid():
-                try:
-                    with open(f"/proc/{pid}/cmdline", "rb") as f:
-                        if temp.encode() in f.read():
-                            mine.append(int(pid))
-                except OSError:
-                    pass
+        mine = _head_processes(temp)
         if not mine:
             return
         for pid in mine:
@@ -95,6 +118,51 @@ def test_a_grid_built_on_a_ray_cluster_equals_the_process_pool(tmp_path, ray_hea
         assert servo_ray[name] == pytest.approx(servo_pool[name], abs=SAME_DEG)
     again = _build(tmp_path, env, "ray_lib", "--executor", "ray", "--address", address)   # resumable: all done
     assert again["skipped"] == 2 and again["solved"] == on_ray["solved"]
+
+
+def test_the_test_head_leaves_no_process_behind(ray_head):
+    """The fixture's clean-up ends every process of its head, the renamed Ray agents too (they outlived it, found
+    only by the test they were started in)."""
+    temp = ray_head[1][HEAD_MARK]
+    started = _head_processes(temp)
+    assert any(_name(pid).startswith("ray::") for pid in started), [_name(pid) for pid in started]
+    _stop_cluster(temp)
+    test = os.environ["PYTEST_CURRENT_TEST"].split(" ")[0].encode()
+    left = []
+    for pid in os.listdir("/proc"):
+        if pid.isdigit() and _alive(int(pid)) and _name(int(pid)).startswith("ray::"):
+            try:
+                with open(f"/proc/{pid}/environ", "rb") as f:
+                    if test in f.read():
+                        left.append(_name(int(pid)))
+            except OSError:
+                pass
+    assert [pid for pid in started if _alive(pid)] == [] and left == []
+
+
+def _name(pid: int) -> str:
+    try:
+        with open(f"/proc/{pid}/cmdline", "rb") as f:
+            return f.read().split(b"\0")[0].decode(errors="replace")
+    except OSError:
+        return ""
+
+
+def _alive(pid: int) -> bool:
+    """Running (a zombie waiting for its new parent to reap it has ended)."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as f:
+            return f.read().rsplit(b")", 1)[1].split()[0] != b"Z"
+    except (OSError, IndexError):
+        return False
+
+
+def _name(pid: int) -> str:
+    try:
+        with open(f"/proc/{pid}/cmdline", "rb") as f:
+            return f.read().split(b"\0")[0].decode(errors="replace")
+    except OSError:
+        return ""
 
 
 def test_ray_asked_of_a_cluster_that_is_not_there(tmp_path):
