@@ -19,7 +19,6 @@ import math
 import numpy as np
 from numba import njit
 
-from op2motion.posture.kernel_body import chain, full_com, points
 from op2motion.posture.kernel_geometry import clearance_of, mul
 from op2motion.posture.kernel_plan import KernelPlan
 
@@ -69,12 +68,11 @@ def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, within: floa
     ``within`` [m]; see :func:`swarm_terms`.
 
     One loop on purpose: with every array local, LLVM keeps the small systems in registers (split into helpers
-    that share scratch arrays, the same arithmetic ran 2.5 times slower); the chain, points and CoM are
-    :mod:`.kernel_body`'s (inlined by LLVM: the same speed)."""
-    (parent, _, _, _, _, _, _, _, _, row_slot, _, _, _, lumped, _, _, _, total_mass, ch_rows, ch_size, ch_s0, ch_sz,
-     ch_rx, ch_axis_rows, sw_slots, sw_local, sw_axes, sw_kp, sw_link_slots, sw_link_com, sw_link_mass, _, _, _, _,
-     _, _, _, _, hand_row, ankle_row, swing_first, torso_rows, torso_ab, target, extents, full, consts, _, _, _,
-     _) = plan
+    that share scratch arrays, the same arithmetic ran 2.5 times slower)."""
+    (parent, slot_joint, slot_fixed, var, sign, offset, basis, fixed_local, root, row_slot, row_point, const_rows,
+     pelvis, lumped, com_slots, com_mass, com_weighted, total_mass, ch_rows, ch_size, ch_s0, ch_sz, ch_rx,
+     ch_axis_rows, sw_slots, sw_local, sw_axes, sw_kp, sw_link_slots, sw_link_com, sw_link_mass, _, _, _, _, _, _,
+     _, _, hand_row, ankle_row, swing_first, torso_rows, torso_ab, target, extents, full, consts, _, _, _, _) = plan
     u, legs = ch_s0.shape[1], sw_slots.shape[0]
     frames, local, pts = np.empty((parent.shape[0], 4, 4)), np.empty((4, 4)), np.empty((row_slot.shape[0], 3))
     system, rhs, sol, thetas = np.empty((u, u)), np.empty(u), np.empty(u), np.zeros((2, u))
@@ -84,8 +82,27 @@ def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, within: floa
     top = ch_rx.shape[1] - 1                                   # where the CoM's coefficients sit
     flat = local.reshape(16)
     for i in range(q.shape[0]):
-        chain(q, i, plan, frames, local, flat)                         # the D-H chain, then the body points
-        points(frames, plan, pts)
+        frames[0] = root                                       # the D-H chain, parents before children
+        for s in range(1, parent.shape[0]):
+            j = slot_joint[s]
+            if j >= 0:
+                delta = sign[j] * q[i, var[j]] + offset[j]
+                c, sn = math.cos(delta), math.sin(delta)
+                for e in range(16):
+                    flat[e] = c * basis[j, 0, e] + sn * basis[j, 1, e] + basis[j, 2, e]
+                mul(frames[parent[s]], local, frames[s])
+            else:
+                mul(frames[parent[s]], fixed_local[slot_fixed[s]], frames[s])
+        for r in range(row_slot.shape[0]):                     # body points
+            s = row_slot[r]
+            for k in range(3):
+                if s >= 0:
+                    pts[r, k] = (frames[s, k, 0] * row_point[r, 0] + frames[s, k, 1] * row_point[r, 1]
+                                 + frames[s, k, 2] * row_point[r, 2] + frames[s, k, 3])
+                elif s == -1:
+                    pts[r, k] = const_rows[r, k]
+                else:                                          # the pelvis: the hips' midpoint
+                    pts[r, k] = 0.5 * (frames[pelvis[1], k, 3] + frames[pelvis[2], k, 3])
         sq = 0.0
         for k in range(3):
             sq += (pts[hand_row, k] - target[k]) * (pts[hand_row, k] - target[k])
@@ -94,7 +111,15 @@ def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, within: floa
         swing_min_z = min(min(pts[f, 2], pts[f + 1, 2]), min(pts[f + 2, 2], pts[f + 3, 2]))
         com_x, com_y, sag_tilt = 0.0, 0.0, 0.0
         if full:                                               # the body physics simulates: full inertia
-            full_com(frames, plan, com)
+            com[:] = 0.0                                       # sum of R (M c) + M o over the link inertials
+            for m in range(com_slots.shape[0]):
+                for k in range(3):
+                    com[k] += (frames[com_slots[m], k, 0] * com_weighted[m, 0]
+                               + frames[com_slots[m], k, 1] * com_weighted[m, 1]
+                               + frames[com_slots[m], k, 2] * com_weighted[m, 2]
+                               + com_mass[m] * frames[com_slots[m], k, 3])
+            for k in range(3):
+                com[k] /= total_mass
             settled_ok = True                                  # the compliance systems, pitch in x, roll in y
             for ch in range(2):
                 n = ch_size[ch]

@@ -1,9 +1,10 @@
-"""The compiled kernel's body (numba, cached on disk): the D-H chain of one pose, its body points and full-inertia
-CoM, shared by the PSO's cost loop (:mod:`.kernel`) and :func:`body_features`, which gives the whole-body IK
-(:mod:`op2motion.motion.whole_body`) every pose's points, CoM and least self-clearance in one compiled loop (the same
-numbers as :func:`op2motion.kinematics.forward` on the D-H model and the cost model's clearance, without a NumPy call
-per term: the IK asks for a few poses at a time, thousands of times a line).
-"""
+"""The compiled body of a batch of poses (numba, cached on disk): for each pose its D-H chain, body points,
+full-inertia CoM and least self-clearance, in one loop. :func:`body_features` gives the whole-body IK
+(:mod:`op2motion.motion.whole_body`) the numbers of :func:`op2motion.kinematics.forward` on the D-H model and of the
+cost model's clearance without a NumPy call per term (it asks for a few poses at a time, thousands of times a line;
+a test holds both to the same numbers). The PSO's loop (:mod:`.kernel`) does the same arithmetic inline: calling
+these helpers from it cost the PSO 9 % (``pso_solve_ms`` 36.8 -> 40.2 ms), so it keeps its own copy, held to the
+same NumPy model by its own test."""
 
 from __future__ import annotations
 
