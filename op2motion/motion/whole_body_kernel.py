@@ -2,7 +2,8 @@
 servo angles, the legs by the closed-form leg IK (the arithmetic of :func:`op2motion.kinematics.leg_ik.leg_ik` and
 :func:`~op2motion.kinematics.leg_ik.within_reach`, pose by pose; a test holds both to the same numbers). The IK asks
 for a few poses at a time, thousands of times a line: in NumPy each ask cost some fifty array calls.
-"""
+ The first call after an install compiles it (about 4 s, then
+cached beside the module); 3 x 3 products are written out (NumPy's ``@`` on them compiled for 7 s)."""
 
 from __future__ import annotations
 
@@ -15,17 +16,28 @@ OK, OUT_OF_REACH, HIP_BELOW = 0, 1, 2      # what a leg's IK found
 
 
 @njit(cache=True, error_model="numpy")
+def _mul(a: np.ndarray, b: np.ndarray, out: np.ndarray, a_transposed: bool = False) -> None:
+    """out = a @ b (or a.T @ b) for 3 x 3 matrices (no BLAS call: it compiled slowly for matrices this small)."""
+    for i in range(3):
+        for j in range(3):
+            acc = 0.0
+            for k in range(3):
+                acc += (a[k, i] if a_transposed else a[i, k]) * b[k, j]
+            out[i, j] = acc
+
+
+@njit(cache=True, error_model="numpy")
 def _rodrigues(v: np.ndarray, out: np.ndarray) -> None:
-    """The rotation matrix (3, 3) of a rotation vector (3,) [rad]."""
+    """The rotation matrix (3, 3) of a rotation vector (3,) [rad]: I + sin(a) K + (1 - cos(a)) K²."""
     angle = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
     d = max(angle, 1e-12)
     x, y, z = v[0] / d, v[1] / d, v[2] / d
     s, c1 = math.sin(angle), 1.0 - math.cos(angle)
-    k = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-    kk = k @ k
+    k = ((0.0, -z, y), (z, 0.0, -x), (-y, x, 0.0))
     for i in range(3):
         for j in range(3):
-            out[i, j] = (1.0 if i == j else 0.0) + s * k[i, j] + c1 * kk[i, j]
+            kk = k[i][0] * k[0][j] + k[i][1] * k[1][j] + k[i][2] * k[2][j]
+            out[i, j] = (1.0 if i == j else 0.0) + s * k[i][j] + c1 * kk
 
 
 @njit(cache=True, error_model="numpy")
@@ -35,13 +47,17 @@ def _leg(hip: np.ndarray, lengths: np.ndarray, sole: np.ndarray, rot: np.ndarray
     (3, 3) in the torso frame, pulled in to ``share`` of the straight leg first; ``lengths``: thigh, calf, ankle to
     sole [m]. Returns :data:`OK` or why not."""
     a, b, foot = lengths[0], lengths[1], lengths[2]
-    span = sole + rot[:, 2] * foot - hip
+    span = np.empty(3)
+    for k in range(3):
+        span[k] = sole[k] + rot[k, 2] * foot - hip[k]
     length = math.sqrt(span[0] * span[0] + span[1] * span[1] + span[2] * span[2])
     reach = (a + b) * share
     scale = 1.0 - reach / max(length, 1e-12) if length > reach else 0.0
-    ankle = sole - span * scale + rot[:, 2] * foot
-    d = hip - ankle
-    r = rot.T @ d                                     # the hip seen from the ankle, foot frame
+    r = np.zeros(3)                                   # the hip seen from the ankle, foot frame
+    for k in range(3):
+        d = hip[k] - (sole[k] - span[k] * scale + rot[k, 2] * foot)
+        for i in range(3):
+            r[i] += rot[k, i] * d
     c = math.sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
     if c > a + b + 1e-9 or c < abs(a - b) + 1e-6:
         return OUT_OF_REACH
@@ -52,8 +68,12 @@ def _leg(hip: np.ndarray, lengths: np.ndarray, sole: np.ndarray, rot: np.ndarray
     ank = math.atan2(-a * math.sin(knee), a * math.cos(knee) + b) - math.atan2(r[0], math.hypot(r[1], r[2]))
     cr, sr = math.cos(-ank_roll), math.sin(-ank_roll)
     cp, sp = math.cos(-(knee + ank)), math.sin(-(knee + ank))
-    m = rot @ np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]]) @ np.array(
-        [[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+    turn = np.empty((3, 3))                           # rot_x(-ank_roll) @ rot_y(-(knee + ank))
+    turn[0, 0], turn[0, 1], turn[0, 2] = cp, 0.0, sp
+    turn[1, 0], turn[1, 1], turn[1, 2] = -sr * -sp, cr, -sr * cp
+    turn[2, 0], turn[2, 1], turn[2, 2] = cr * -sp, sr, cr * cp
+    m = np.empty((3, 3))
+    _mul(rot, turn, m)
     out[0] = math.atan2(-m[0, 1], m[1, 1])
     out[1] = math.atan2(m[2, 1], math.hypot(m[2, 0], m[2, 2]))
     out[2] = math.atan2(-m[2, 0], m[2, 2])
@@ -72,17 +92,21 @@ def servo_rows(x: np.ndarray, body: tuple, legs: tuple, limits: tuple, out: np.n
     torso_rot, torso_pos, start, arm = body
     hips, lengths, signs, index, soles, sole_rots, shares = legs
     moved, lower, upper = limits
-    turn, rot, angles = np.empty((3, 3)), np.empty((3, 3)), np.empty(6)
+    turn, rot, local_rot, angles = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty(6)
+    local = np.empty(3)
     for n in range(x.shape[0]):
         _rodrigues(x[n, 3:6], turn)
-        rot[:, :] = turn @ torso_rot                  # the torso in the world
-        pos = torso_pos + x[n, :3]
+        _mul(turn, torso_rot, rot)                    # the torso in the world
         out[n, :] = start
         for k in range(3):
             out[n, arm[k]] = x[n, 6 + k]
         for leg in range(hips.shape[0]):
-            local = rot.T @ (soles[leg] - pos)        # the sole in the torso frame
-            why = _leg(hips[leg], lengths[leg], local, rot.T @ sole_rots[leg], shares[leg], angles)
+            for i in range(3):                        # the sole in the torso frame
+                local[i] = 0.0
+                for k in range(3):
+                    local[i] += rot[k, i] * (soles[leg, k] - torso_pos[k] - x[n, k])
+            _mul(rot, sole_rots[leg], local_rot, True)
+            why = _leg(hips[leg], lengths[leg], local, local_rot, shares[leg], angles)
             if why != OK:
                 return leg * 3 + why
             for k in range(6):
