@@ -1,9 +1,9 @@
 """The whole-body IK's poses in one compiled loop (numba, cached on disk): unknowns (torso shift and turn, arm) to
 servo angles, the legs by the closed-form leg IK (the arithmetic of :func:`op2motion.kinematics.leg_ik.leg_ik` and
 :func:`~op2motion.kinematics.leg_ik.within_reach`, pose by pose; a test holds both to the same numbers). The IK asks
-for a few poses at a time, thousands of times a line: in NumPy each ask cost some fifty array calls.
- The first call after an install compiles it (about 4 s, then
-cached beside the module); 3 x 3 products are written out (NumPy's ``@`` on them compiled for 7 s)."""
+for a few poses at a time, thousands of times a line: in NumPy each ask cost some fifty array calls. The first
+call after an install compiles it (about 4 s, then cached beside the module); 3 x 3 products are written out
+(NumPy's ``@`` on them compiled for 7 s)."""
 
 from __future__ import annotations
 
