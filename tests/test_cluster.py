@@ -157,14 +157,6 @@ def _alive(pid: int) -> bool:
         return False
 
 
-def _name(pid: int) -> str:
-    try:
-        with open(f"/proc/{pid}/cmdline", "rb") as f:
-            return f.read().split(b"\0")[0].decode(errors="replace")
-    except OSError:
-        return ""
-
-
 def test_ray_asked_of_a_cluster_that_is_not_there(tmp_path):
     done = subprocess.run([sys.executable, "-m", "op2motion", "library", "build", *GRID, "--out", "lib",
                            "--executor", "ray", "--address", f"127.0.0.1:{_free_port()}"], cwd=tmp_path,

@@ -1,6 +1,6 @@
-"""The whole-body IK's compiled poses and features (op2motion.motion.whole_body_kernel, posture.kernel_body) give the
-numbers of the NumPy leg IK (kinematics.leg_ik), the D-H points and full-inertia CoM (kinematics.forward) and the
-cost model's clearance, on random unknowns around several poses, on one foot and on two."""
+"""The whole-body IK's compiled poses and features (op2motion.motion.whole_body_kernel, posture.kernel.body_features)
+give the numbers of the NumPy leg IK (kinematics.leg_ik), the D-H points and full-inertia CoM (kinematics.forward)
+and the cost model's clearance, on random unknowns around several poses, on one foot and on two."""
 
 from __future__ import annotations
 

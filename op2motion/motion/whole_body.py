@@ -171,8 +171,8 @@ class WholeBodyIk:
         """Hand (N, 3), forearm direction (N, 3), other sole's corners (N, 12), CoM x, y (N, 2), torso x, z
         axes (N, 6) and how far links are inside :data:`CLEAR_TASK_M` of each other (N, 1) of poses (N, 20)
         [rad, m] (the D-H model's points, full-inertia CoM and clearance in one compiled loop:
-        :func:`~op2motion.posture.kernel_body.body_features`)."""
-        from op2motion.posture.kernel_body import body_features
+        :func:`~op2motion.posture.kernel.body_features`)."""
+        from op2motion.posture.kernel import body_features
 
         angles = servo_to_book(q, self.frame, self.spec)
         pts, com, clearance = body_features(self._plan, angles.vector(), CLEARANCE_EXACT_M)

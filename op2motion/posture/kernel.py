@@ -19,6 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
+from op2motion.errors import ModelError
 from op2motion.posture.kernel_geometry import clearance_of, mul
 from op2motion.posture.kernel_plan import KernelPlan
 
@@ -63,9 +64,11 @@ def _solve(m: np.ndarray, rhs: np.ndarray, n: int, out: np.ndarray) -> float:
 
 
 @njit(cache=True, error_model="numpy")
-def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, within: float, out: np.ndarray) -> None:
+def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, within: float, out: np.ndarray,
+           body_pts: np.ndarray, body_com: np.ndarray) -> None:
     """Every cost term of poses ``q`` (N, 20) [rad] into ``out`` (N, len(TERMS)), clearances exact below
-    ``within`` [m]; see :func:`swarm_terms`.
+    ``within`` [m]; see :func:`swarm_terms`. Where ``body_pts`` (N, R, 3) and ``body_com`` (N, 3) have rows (else
+    (0, ...)), each pose's body points and full-inertia CoM [m] too (:func:`body_features`).
 
     One loop on purpose: with every array local, LLVM keeps the small systems in registers (split into helpers
     that share scratch arrays, the same arithmetic ran 2.5 times slower)."""
@@ -103,6 +106,8 @@ def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, within: floa
                     pts[r, k] = const_rows[r, k]
                 else:                                          # the pelvis: the hips' midpoint
                     pts[r, k] = 0.5 * (frames[pelvis[1], k, 3] + frames[pelvis[2], k, 3])
+        if body_pts.shape[0] > 0:
+            body_pts[i] = pts
         sq = 0.0
         for k in range(3):
             sq += (pts[hand_row, k] - target[k]) * (pts[hand_row, k] - target[k])
@@ -120,6 +125,8 @@ def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, within: floa
                                + com_mass[m] * frames[com_slots[m], k, 3])
             for k in range(3):
                 com[k] /= total_mass
+            if body_com.shape[0] > 0:
+                body_com[i] = com
             settled_ok = True                                  # the compliance systems, pitch in x, roll in y
             for ch in range(2):
                 n = ch_size[ch]
@@ -231,5 +238,20 @@ def swarm_terms(plan: KernelPlan, q: np.ndarray, only_below: np.ndarray | None =
     limit = np.full(q.shape[0], np.inf) if only_below is None else np.ascontiguousarray(only_below, dtype=float)
     out = np.empty((q.shape[0], len(TERMS)))
     within = plan.consts[_C_CLEAR] if exact_below_m is None else float(exact_below_m)
-    _swarm(q, limit, plan, within, out)
+    _swarm(q, limit, plan, within, out, np.empty((0, plan.row_slot.shape[0], 3)), np.empty((0, 3)))
     return out
+
+
+def body_features(plan: KernelPlan, q: np.ndarray, within_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Body points (N, R, 3) [m] (rows as :mod:`op2motion.kinematics.points`), full-inertia CoM (N, 3) [m] and least
+    self-clearance (N,) [m] (exact below ``within_m``, a lower bound above it) of poses ``q`` (N, 20) [rad, book
+    variables] in the frame of ``plan``'s support sole (a plan of the full-inertia body): the numbers of
+    :func:`op2motion.kinematics.forward` on the D-H model and the cost model's clearance, from the same loop (the
+    whole-body IK asks for a few poses at a time, thousands of times a line)."""
+    q = np.ascontiguousarray(q, dtype=float)
+    if not plan.full:
+        raise ModelError("expected a plan of the full-inertia body for its CoM", "plan")
+    out = np.empty((q.shape[0], len(TERMS)))
+    pts, com = np.empty((q.shape[0], plan.row_slot.shape[0], 3)), np.empty((q.shape[0], 3))
+    _swarm(q, np.full(q.shape[0], np.inf), plan, float(within_m), out, pts, com)
+    return pts, com, out[:, _T_CLEARANCE]
