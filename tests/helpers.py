@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import ast
+import functools
 import re
 import time
 from pathlib import Path
@@ -42,6 +44,13 @@ def share_numba_cache(root: Path) -> None:
         if (root / source).is_file():
             stat = (ROOT / source).stat()
             os.utime(root / source, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+
+
+@functools.cache
+def source_tree(path: Path) -> ast.Module:
+    """The parsed source of one file of the repository, parsed once per test process (several tests walk the
+    package's sources: the layers, the choices, the commands' shapes)."""
+    return ast.parse(path.read_text(encoding="utf-8"))
 
 
 def pose_path(name: str) -> str:

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import get_args
 
 import pytest
+from helpers import source_tree
 
 from op2motion.cli import build_parser
 from op2motion.errors import InputError
@@ -140,7 +141,7 @@ def _plain_str_choices(root: Path) -> set[str]:
                                  and st.target.id in CHOICE_NAMES and _plain(st.annotation))
                     visit(child, f"{scope}{child.name}.")
 
-        visit(ast.parse(path.read_text(encoding="utf-8")), "")
+        visit(source_tree(path), "")
     return found
 
 

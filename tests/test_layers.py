@@ -10,6 +10,7 @@ import re
 from pathlib import Path
 
 import pytest
+from helpers import source_tree
 
 PACKAGE = Path(__file__).resolve().parents[1] / "op2motion"
 #: Layers, lowest first. A module may import modules of lower layers and of its own package; never higher ones.
@@ -47,7 +48,7 @@ def _imports(path: Path) -> set[str]:
     name = _module_name(path)
     package = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
     found: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+    for node in ast.walk(source_tree(path)):
         if isinstance(node, ast.ImportFrom):
             if node.level:
                 base = package[:len(package) - (node.level - 1)] if node.level > 1 else package
@@ -148,7 +149,7 @@ UNROLLED_KERNELS = {"op2motion/kinematics/projection.py:_chunk",    # the book's
 
 def _functions():
     for path in sorted(PACKAGE.rglob("*.py")):
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in ast.walk(source_tree(path)):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
                 yield f"{path.relative_to(PACKAGE.parent)}:{node.name}", node
 
@@ -200,5 +201,5 @@ def test_physics_check_is_the_only_way_into_physics():
 def test_every_module_says_what_it_is():
     """Every module of the package, packages included, opens with a docstring."""
     bare = [str(p.relative_to(PACKAGE)) for p in sorted(PACKAGE.rglob("*.py"))
-            if not ast.get_docstring(ast.parse(p.read_text(encoding="utf-8")))]
+            if not ast.get_docstring(source_tree(p))]
     assert bare == []

@@ -8,7 +8,7 @@ import ast
 import json
 
 import pytest
-from helpers import DATA, POSES, ROOT, run_cli
+from helpers import DATA, POSES, ROOT, run_cli, source_tree
 
 from op2motion.tasks.result import Output, TaskResult
 
@@ -78,7 +78,7 @@ def test_the_cli_delivers_a_yes_with_its_files_and_todays_keys(tmp_path, capsys)
 @pytest.mark.parametrize("name", DELIVERING)
 def test_delivering_commands_hold_no_verdict_logic(name):
     """No result dict built, no physics verdict asked for, no check run in the module: the task does that."""
-    tree = ast.parse((ROOT / "op2motion" / "commands" / name).read_text(encoding="utf-8"))
+    tree = source_tree(ROOT / "op2motion" / "commands" / name)
     for node in ast.walk(tree):
         if isinstance(node, ast.Assign) and any(isinstance(t, ast.Subscript) for t in node.targets):
             raise AssertionError(f"{name}:{node.lineno}: a result built by item assignment")
@@ -98,7 +98,7 @@ def test_only_the_delivery_prints_a_report_or_says_no():
     for path in sorted((ROOT / "op2motion" / "commands").glob("*.py")):
         if path.name in ("deliver.py", "common.py"):
             continue
-        tree = ast.parse(path.read_text(encoding="utf-8"))
+        tree = source_tree(path)
         for node in ast.walk(tree):
             if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", "")) in (
                     "emit", "dump", "dumps"):
