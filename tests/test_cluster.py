@@ -107,6 +107,9 @@ def _poses(folder):
 
 
 def test_a_grid_built_on_a_ray_cluster_equals_the_process_pool(tmp_path, ray_head):
+    """The grid built on the cluster is the process pool's, pose for pose, and resumes with the same index; then the
+    fixture's clean-up ends every process of its head, the renamed Ray agents too (they once outlived it, found only
+    by the test they were started in). One head for both: each start costs seconds of CPU."""
     address, env = ray_head
     on_ray = _build(tmp_path, env, "ray_lib", "--executor", "ray", "--address", address)
     pooled = _build(tmp_path, env, "pool_lib", "--workers", "2")
@@ -118,12 +121,11 @@ def test_a_grid_built_on_a_ray_cluster_equals_the_process_pool(tmp_path, ray_hea
         assert servo_ray[name] == pytest.approx(servo_pool[name], abs=SAME_DEG)
     again = _build(tmp_path, env, "ray_lib", "--executor", "ray", "--address", address)   # resumable: all done
     assert again["skipped"] == 2 and again["solved"] == on_ray["solved"]
+    _head_ends_whole(env[HEAD_MARK])
 
 
-def test_the_test_head_leaves_no_process_behind(ray_head):
-    """The fixture's clean-up ends every process of its head, the renamed Ray agents too (they outlived it, found
-    only by the test they were started in)."""
-    temp = ray_head[1][HEAD_MARK]
+def _head_ends_whole(temp: str) -> None:
+    """Stop the head started with temp folder ``temp`` as the fixture does; nothing of it may be left running."""
     started = _head_processes(temp)
     assert any(_name(pid).startswith("ray::") for pid in started), [_name(pid) for pid in started]
     _stop_cluster(temp)
