@@ -16,7 +16,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "op2motion"
 #: Layers, lowest first. A module may import modules of lower layers and of its own package; never higher ones.
 LAYERS = [
     {"errors", "version"},
-    {"book", "fileio", "bench_wall", "workers"},
+    {"book", "fileio", "bench_wall", "workers", "compiled"},
     {"robot"},
     {"kinematics", "formats"},
     {"model"},

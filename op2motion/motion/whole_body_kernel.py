@@ -12,6 +12,8 @@ import math
 import numpy as np
 from numba import njit
 
+from op2motion.compiled import CompileOnce
+
 OK, OUT_OF_REACH, HIP_BELOW = 0, 1, 2      # what a leg's IK found
 
 
@@ -82,7 +84,7 @@ def _leg(hip: np.ndarray, lengths: np.ndarray, sole: np.ndarray, rot: np.ndarray
 
 
 @njit(cache=True, error_model="numpy")
-def servo_rows(x: np.ndarray, body: tuple, legs: tuple, limits: tuple, out: np.ndarray) -> int:
+def _servo_rows(x: np.ndarray, body: tuple, legs: tuple, limits: tuple, out: np.ndarray) -> int:
     """Poses ``out`` (N, 20) [rad] of unknowns ``x`` (N, 9): the torso shift [m] and rotation vector [rad] from
     ``body`` = (torso rotation (3, 3), torso position (3,) in the stance sole's frame, the start pose (20,), the arm
     joints' indices (3,)), the other joints from the start; each leg l of ``legs`` = (hips (L, 3), thigh, calf and
@@ -114,3 +116,7 @@ def servo_rows(x: np.ndarray, body: tuple, legs: tuple, limits: tuple, out: np.n
         for k in range(moved.shape[0]):
             out[n, moved[k]] = min(max(out[n, moved[k]], lower[k]), upper[k])
     return -1
+
+
+#: :func:`_servo_rows`, compiled by one process at a time on a fresh install (:mod:`op2motion.compiled`).
+servo_rows: CompileOnce[int] = CompileOnce(_servo_rows)

@@ -19,6 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
+from op2motion.compiled import CompileOnce
 from op2motion.errors import ModelError
 from op2motion.posture.kernel_geometry import clearance_of, mul
 from op2motion.posture.kernel_plan import KernelPlan
@@ -226,6 +227,10 @@ def _torso_tilt(pts: np.ndarray, rows: np.ndarray, ab: np.ndarray) -> float:
     return math.acos(min(max(ab[1] * (u2 / nu) - ab[0] * w_z, -1.0), 1.0))
 
 
+#: The loop, compiled by one process at a time on a fresh install (:mod:`op2motion.compiled`).
+_SWARM: CompileOnce[None] = CompileOnce(_swarm)
+
+
 def swarm_terms(plan: KernelPlan, q: np.ndarray, only_below: np.ndarray | None = None,
                 exact_below_m: float | None = None) -> np.ndarray:
     """Every cost term (columns :data:`TERMS`) of poses ``q`` (N, 20) [rad, book variables], (N, len(TERMS)).
@@ -238,7 +243,7 @@ def swarm_terms(plan: KernelPlan, q: np.ndarray, only_below: np.ndarray | None =
     limit = np.full(q.shape[0], np.inf) if only_below is None else np.ascontiguousarray(only_below, dtype=float)
     out = np.empty((q.shape[0], len(TERMS)))
     within = plan.consts[_C_CLEAR] if exact_below_m is None else float(exact_below_m)
-    _swarm(q, limit, plan, within, out, np.empty((0, plan.row_slot.shape[0], 3)), np.empty((0, 3)))
+    _SWARM(q, limit, plan, within, out, np.empty((0, plan.row_slot.shape[0], 3)), np.empty((0, 3)))
     return out
 
 
@@ -253,5 +258,5 @@ def body_features(plan: KernelPlan, q: np.ndarray, within_m: float) -> tuple[np.
         raise ModelError("expected a plan of the full-inertia body for its CoM", "plan")
     out = np.empty((q.shape[0], len(TERMS)))
     pts, com = np.empty((q.shape[0], plan.row_slot.shape[0], 3)), np.empty((q.shape[0], 3))
-    _swarm(q, np.full(q.shape[0], np.inf), plan, float(within_m), out, pts, com)
+    _SWARM(q, np.full(q.shape[0], np.inf), plan, float(within_m), out, pts, com)
     return pts, com, out[:, _T_CLEARANCE]

@@ -1,0 +1,62 @@
+"""Kernels compiled by one process at a time (op2motion.compiled): processes that start together on a fresh install
+compile a kernel once between them; the others load what the first cached."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import textwrap
+
+from helpers import ROOT
+
+from op2motion.compiled import lock_path
+
+PROCESSES = 2
+
+KERNEL = textwrap.dedent('''
+    import json, sys, time
+    import numpy as np
+    from numba import njit
+    from op2motion.compiled import CompileOnce
+
+    @njit(cache=True)
+    def _twice(x):                          # a sort: compiles for about a second, time enough to overlap
+        return 2.0 * np.sort(x).sum()
+
+    twice = CompileOnce(_twice)
+    sys.stdin.read()                        # all started: go together
+    value = twice(np.arange(4.0))
+    print(json.dumps({"value": value, "hits": sum(_twice.stats.cache_hits.values()),
+                      "misses": sum(_twice.stats.cache_misses.values())}))
+''')
+
+
+def test_processes_started_together_compile_a_kernel_once(tmp_path):
+    (tmp_path / "tiny_kernel.py").write_text(KERNEL, encoding="utf-8")
+    procs = [subprocess.Popen([sys.executable, "-c", "import tiny_kernel"], cwd=tmp_path, stdin=subprocess.PIPE,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              env={"PYTHONPATH": f"{tmp_path}:{ROOT}", "PATH": "/usr/bin:/bin",
+                                   "NUMBA_CACHE_DIR": str(tmp_path / "cache")})
+             for _ in range(PROCESSES)]
+    for p in procs:                             # all imported numba and wait at stdin: let them go at once
+        p.stdin.close()
+    outs = [(p.stdout.read(), p.stderr.read(), p.wait(timeout=120))[:2] for p in procs]
+    assert [p.returncode for p in procs] == [0] * PROCESSES, [err for _, err in outs]
+    found = [json.loads(out) for out, _ in outs]
+    assert all(f["value"] == 12.0 for f in found)
+    assert sorted(f["misses"] for f in found) == [0] * (PROCESSES - 1) + [1]     # one compiled ...
+    assert sum(f["hits"] for f in found) == PROCESSES - 1                        # ... the others loaded its cache
+
+
+def test_the_lock_names_the_kernel_and_its_copy():
+    from numba import njit
+
+    def a(x):
+        return x
+
+    def b(x):
+        return x
+
+    assert lock_path(njit(a)) != lock_path(njit(b))
+    assert lock_path(njit(a)) == lock_path(a) and lock_path(a).name.startswith("op2motion-compile-")
