@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import functools
 import os
 import sys
 from typing import Sequence
@@ -19,11 +18,8 @@ from op2motion.robot.specfile import load_spec
 from op2motion.version import __version__
 
 
-@functools.cache
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of every subcommand (each command module registers its own), built once per process:
-    parsing leaves it as it was, and a program that runs several commands (the tests, a script calling
-    :func:`main`) saves the 7 ms of building it again."""
+    """The argument parser of every subcommand (each command module registers its own)."""
     from op2motion.commands import (
         bench,
         common,
