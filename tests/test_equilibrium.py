@@ -9,7 +9,7 @@ import pytest
 
 from op2motion.formats.posefile import read_pose
 from op2motion.model.dynamics import dynamics_for
-from op2motion.model.equilibrium import _right_from_left, loaded_foot_margin, sagged_angles
+from op2motion.model.equilibrium import CHORD_REUSE_RAD, Chord, _right_from_left, loaded_foot_margin, sagged_angles
 from op2motion.model.servo import ServoModel
 from op2motion.physics import Schedule, Setup, check
 from op2motion.physics.sweeps import sweep_base
@@ -25,6 +25,7 @@ SETTLED_TOL_DEG = 0.5          # physics started at the sagged angles moves them
 HOLD_S = 2.5                   # the shortest check [s]
 SOLE_TOL_M = 1e-6              # the right sole stays where it was put down, seen from the left one
 FOOT_COP_TOL_M = 0.002         # the solved split's per-foot CoP margin against both engines' measured ones
+CHORD_SAME_M = 1e-6            # a margin solved with a lent Jacobian against a fresh solve's [m]
 
 
 @pytest.fixture(scope="module")
@@ -93,6 +94,14 @@ def test_a_lean_that_rolls_the_lighter_foot_loads_the_other_one_towards_its_edge
     assert sagged_angles(lean(4.0), "double", spec, servo.kp, servo.torque_max) is not None
     assert sagged_angles(lean(12.0), "double", spec, servo.kp, servo.torque_max) is None
     assert margins[4.0] > margins[8.0] > margins[12.0] > 0.0
+
+    # a run of nearby leans sharing one Jacobian (as a line's rows do) finds the fresh solves' margins
+    chord = Chord()
+    for deg in np.arange(0.0, 12.5, 0.5):
+        lent = loaded_foot_margin(lean(deg), spec, servo.kp, servo.torque_max, chord)
+        fresh = loaded_foot_margin(lean(deg), spec, servo.kp, servo.torque_max)
+        assert lent == pytest.approx(fresh, abs=CHORD_SAME_M), deg
+    assert np.max(np.abs(chord.goal - lean(12.0))) <= CHORD_REUSE_RAD    # taken afresh on the way, not at 0°
 
 
 @pytest.mark.physics

@@ -27,7 +27,8 @@ oscillator with about a quarter of critical damping), and near a foot's edge tha
 from __future__ import annotations
 
 import math
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, Callable
 
 import numpy as np
 
@@ -39,6 +40,7 @@ TOLERANCE_NM = 1e-6          # largest torque imbalance [N·m] of a solution
 MAX_ITERATIONS = 30
 PROBE_RAD = 1e-6             # finite-difference step [rad]
 MAX_SAG_RAD = 0.6            # a solution farther than this from the goal is not the pose's equilibrium
+CHORD_REUSE_RAD = 0.05       # a Jacobian taken at a goal starts the solves of goals this close (each joint) [rad]
 
 
 def sagged_angles(goal: np.ndarray, support: Support | SupportName, spec: Spec, kp: np.ndarray,
@@ -50,20 +52,40 @@ def sagged_angles(goal: np.ndarray, support: Support | SupportName, spec: Spec, 
     return None if found is None or found[1] < 0.0 else found[0]
 
 
-def loaded_foot_margin(goal: np.ndarray, spec: Spec, kp: np.ndarray, torque_max: float) -> float:
+def loaded_foot_margin(goal: np.ndarray, spec: Spec, kp: np.ndarray, torque_max: float,
+                       chord: Chord | None = None) -> float:
     """On two feet: the margin [m] of the loaded sole's own centre of pressure to its edge where the compliant servos
     hold ``goal`` (20,) [rad] at rest (the statically indeterminate split solved as in the module docstring). In a
     lean the robot tips where the loaded foot's own CoP reaches its edge, whatever the hull of both soles says;
     where the split puts the lighter foot's CoP outside it, that foot rolls onto its edge and the loaded one takes
-    the rest of the moment (:func:`_feet_margins`). -inf where no equilibrium exists."""
-    found = _sagged(goal, Support.DOUBLE, spec, kp, torque_max, loaded_only=True)
+    the rest of the moment (:func:`_feet_margins`). -inf where no equilibrium exists. A caller solving a run of
+    nearby goals (the rows of a line) passes one :class:`Chord` to every call."""
+    found = _sagged(goal, Support.DOUBLE, spec, kp, torque_max, loaded_only=True, chord=chord)
     return -math.inf if found is None else found[1]
 
 
+@dataclass
+class Chord:
+    """The finite-difference Jacobian of the last fresh solve and the goal (20,) [rad] it was taken at, shared by a
+    run of solves of nearby goals: the chord method converges with a Jacobian taken a little way off too, so a goal
+    within :data:`CHORD_REUSE_RAD` of that one starts with it (it costs 26 evaluations of the model to take, a
+    solve about five); where that solve does not converge, a fresh Jacobian is taken at the goal and the verdict is
+    that solve's, as without a Chord."""
+
+    goal: np.ndarray | None = None
+    jac: np.ndarray | None = None
+
+    def serves(self, goal: np.ndarray) -> bool:
+        """Whether the kept Jacobian may start the solve of ``goal`` (20,) [rad]."""
+        return (self.goal is not None and self.goal.shape == goal.shape
+                and float(np.max(np.abs(goal - self.goal))) <= CHORD_REUSE_RAD)
+
+
 def _sagged(goal: np.ndarray, support: Support | SupportName, spec: Spec, kp: np.ndarray, torque_max: float,
-            loaded_only: bool = False) -> tuple[np.ndarray, float] | None:
+            loaded_only: bool = False, chord: Chord | None = None) -> tuple[np.ndarray, float] | None:
     """The sagged angles and, on two feet, the least CoP margin of the soles (``loaded_only``: the loaded sole's
-    once the other has rolled onto its edge; +inf on one foot); None where the servos cannot hold the pose."""
+    once the other has rolled onto its edge; +inf on one foot); None where the servos cannot hold the pose. On two
+    feet ``chord`` may lend the Jacobian of a nearby solve (:class:`Chord`)."""
     dyn = dynamics_for(spec)
     support = Support.of(support)
     goal = np.asarray(goal, dtype=float)
@@ -84,25 +106,21 @@ def _sagged(goal: np.ndarray, support: Support | SupportName, spec: Spec, kp: np
 
         x0 = goal.copy()
     r0 = residual(x0)
-    jac = np.empty((x0.size, x0.size))
-    for j in range(x0.size):
-        probe = x0.copy()
-        probe[j] += PROBE_RAD
-        jac[:, j] = (residual(probe) - r0) / PROBE_RAD
-    if not support.is_double and np.max(np.linalg.eigvals(jac).real) >= 0.0:
-        return None                           # gravity is stiffer than the servos in some direction
-    x, r = x0, r0
-    for _ in range(MAX_ITERATIONS):
-        if np.max(np.abs(r)) < TOLERANCE_NM:
-            break
-        try:
-            x = x - np.linalg.solve(jac, r)
-        except np.linalg.LinAlgError:             # singular: the servos and gravity balance in some direction
-            return None
-        if not np.all(np.isfinite(x)) or np.max(np.abs(x[:n] - goal)) > MAX_SAG_RAD:
-            return None
-        r = residual(x)
-    else:
+    x = None
+    if chord is not None and chord.jac is not None and support.is_double and chord.serves(goal):
+        x = _newton(residual, x0, r0, chord.jac, goal)
+    if x is None:
+        jac = np.empty((x0.size, x0.size))
+        for j in range(x0.size):
+            probe = x0.copy()
+            probe[j] += PROBE_RAD
+            jac[:, j] = (residual(probe) - r0) / PROBE_RAD
+        if chord is not None and support.is_double:
+            chord.goal, chord.jac = goal.copy(), jac
+        if not support.is_double and np.max(np.linalg.eigvals(jac).real) >= 0.0:
+            return None                           # gravity is stiffer than the servos in some direction
+        x = _newton(residual, x0, r0, jac, goal)
+    if x is None:
         return None
     q = x[:n]
     if np.max(np.abs(kp * (goal - q))) > torque_max:
@@ -111,6 +129,24 @@ def _sagged(goal: np.ndarray, support: Support | SupportName, spec: Spec, kp: np
         return q, math.inf
     raw, loaded = _feet_margins(dyn, q, x[n:])
     return q, (loaded if loaded_only else min(raw))
+
+
+def _newton(residual: Callable[[np.ndarray], np.ndarray], x0: np.ndarray, r0: np.ndarray, jac: np.ndarray,
+            goal: np.ndarray) -> np.ndarray | None:
+    """Newton's chord iterations from ``x0`` (its residual ``r0``) with the fixed Jacobian ``jac``: the root, or None
+    where they do not converge to one within :data:`MAX_SAG_RAD` of ``goal`` (20,) [rad] (its first 20 entries)."""
+    x, r = x0, r0
+    for _ in range(MAX_ITERATIONS):
+        if np.max(np.abs(r)) < TOLERANCE_NM:
+            return x
+        try:
+            x = x - np.linalg.solve(jac, r)
+        except np.linalg.LinAlgError:             # singular: the servos and gravity balance in some direction
+            return None
+        if not np.all(np.isfinite(x)) or np.max(np.abs(x[:goal.size] - goal)) > MAX_SAG_RAD:
+            return None
+        r = residual(x)
+    return None
 
 
 def _right_from_left(dyn: Any, q: np.ndarray) -> tuple[Any, np.ndarray]:

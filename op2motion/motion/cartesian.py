@@ -227,17 +227,18 @@ def _refuse_too_fast(request: LineRequest, speeds: np.ndarray, spec: Spec) -> No
 def _feet_margin_of(spec: Spec) -> Callable[[np.ndarray], float]:
     """The loaded sole's own CoP margin [m] of goals (20,) [rad] on two feet, the default servos sagging
     (:func:`~op2motion.model.equilibrium.loaded_foot_margin`); each pose solved once (a forward way watches the rows
-    the final check measures again)."""
-    from op2motion.model.equilibrium import loaded_foot_margin
+    the final check measures again), nearby poses sharing a Jacobian (:class:`~op2motion.model.equilibrium.Chord`)."""
+    from op2motion.model.equilibrium import Chord, loaded_foot_margin
     from op2motion.model.servo import ServoModel
 
     servo = ServoModel.of(spec)
     known: dict[bytes, float] = {}
+    chord = Chord()             # the rows of a line lie close together: one Jacobian serves a run of them
 
     def margin(goal: np.ndarray) -> float:
         key = np.asarray(goal, dtype=float).tobytes()
         if key not in known:
-            known[key] = loaded_foot_margin(goal, spec, servo.kp, servo.torque_max)
+            known[key] = loaded_foot_margin(goal, spec, servo.kp, servo.torque_max, chord)
         return known[key]
     return margin
 
