@@ -5,8 +5,9 @@ together on a fresh install or checkout (a library build's workers, a test run's
 same kernel: seconds of CPU each (the PSO's loop about 9 s, the whole-body IK's 4 s on one core), all of them
 at once. :class:`CompileOnce` wraps a kernel so that its first call in each process runs under a lock file named
 after the kernel: the first process compiles and writes the cache, the others wait and then load it (a few tenths
-of a second). Later calls go straight to the kernel. Where no lock file can be made (a read-only temp folder), the
-first call runs unlocked, as before.
+of a second). Later calls go straight to the kernel. Where no lock file can be made (a read-only temp folder, a
+symbolic link planted in its place), or the lock stays taken for :data:`WAIT_S` (a process stopped mid-compile with
+Ctrl-Z, another user's process holding it), the first call runs unlocked, as before: a lock never stops a command.
 """
 
 from __future__ import annotations
@@ -17,10 +18,13 @@ import hashlib
 import os
 import tempfile
 import threading
+import time
 from pathlib import Path
 from typing import Any, Generic, Iterator, TypeVar, cast
 
 R = TypeVar("R")
+WAIT_S = 120.0          # the longest wait for another process's compile (the PSO loop's takes 9 s on one core) [s]
+POLL_S = 0.05           # how often a waiting process tries the lock [s]
 
 
 class CompileOnce(Generic[R]):
@@ -51,14 +55,23 @@ def lock_path(kernel: Any) -> Path:
 
 @contextlib.contextmanager
 def _held(path: Path) -> Iterator[None]:
-    """An exclusive ``flock`` on ``path`` while inside; nothing when the file cannot be opened."""
+    """An exclusive ``flock`` on ``path`` while inside, waited for at most :data:`WAIT_S`; nothing when the file
+    cannot be opened (never through a symbolic link) or the wait runs out."""
     try:
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+        fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o666)
     except OSError:
         yield
         return
     try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
+        deadline = time.monotonic() + WAIT_S
+        while True:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() >= deadline:
+                    break
+                time.sleep(POLL_S)
         yield
     finally:
-        os.close(fd)          # closing the last descriptor releases the lock
+        os.close(fd)          # closing the last descriptor releases the lock (if it was taken)

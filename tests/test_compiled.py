@@ -13,6 +13,7 @@ from helpers import ROOT
 from op2motion.compiled import lock_path
 
 PROCESSES = 2
+WAIT_HERE_S = 0.3          # the wait for a held lock, shortened for the test [s]
 
 KERNEL = textwrap.dedent('''
     import json, sys, time
@@ -60,3 +61,40 @@ def test_the_lock_names_the_kernel_and_its_copy():
 
     assert lock_path(njit(a)) != lock_path(njit(b))
     assert lock_path(njit(a)) == lock_path(a) and lock_path(a).name.startswith("op2motion-compile-")
+
+
+def test_a_lock_held_elsewhere_delays_the_first_call_at_most_the_wait(tmp_path, monkeypatch):
+    """A process stopped mid-compile (Ctrl-Z) keeps its lock: the next process waits :data:`WAIT_S`, then compiles
+    by itself; a symbolic link planted as the lock file is not followed."""
+    import fcntl
+    import os
+    import time
+
+    import numpy as np
+    from numba import njit
+
+    import op2motion.compiled as compiled
+
+    def _sum(x):
+        return x.sum()
+
+    kernel = njit(_sum)
+    path = lock_path(kernel)
+    held = os.open(path, os.O_RDWR | os.O_CREAT)
+    fcntl.flock(held, fcntl.LOCK_EX)                      # as another process mid-compile would
+    monkeypatch.setattr(compiled, "WAIT_S", WAIT_HERE_S)
+    try:
+        t0 = time.monotonic()
+        assert compiled.CompileOnce(kernel)(np.arange(3.0)) == 3.0
+        assert WAIT_HERE_S <= time.monotonic() - t0
+    finally:
+        os.close(held)
+        path.unlink(missing_ok=True)
+    target = tmp_path / "not_ours"
+    target.write_text("kept", encoding="utf-8")
+    path.symlink_to(target)
+    try:
+        assert compiled.CompileOnce(kernel)(np.arange(4.0)) == 6.0
+        assert target.read_text(encoding="utf-8") == "kept" and path.is_symlink()
+    finally:
+        path.unlink()
