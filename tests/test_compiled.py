@@ -8,6 +8,7 @@ import subprocess
 import sys
 import textwrap
 
+import pytest
 from helpers import ROOT
 
 from op2motion.compiled import lock_path
@@ -33,6 +34,7 @@ KERNEL = textwrap.dedent('''
 ''')
 
 
+@pytest.mark.slow
 def test_processes_started_together_compile_a_kernel_once(tmp_path):
     (tmp_path / "tiny_kernel.py").write_text(KERNEL, encoding="utf-8")
     procs = [subprocess.Popen([sys.executable, "-c", "import tiny_kernel"], cwd=tmp_path, stdin=subprocess.PIPE,

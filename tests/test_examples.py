@@ -25,8 +25,9 @@ def test_every_example_is_tested():
     assert sorted(p.name for p in EXAMPLES.glob("*.py")) == sorted(PROMISES)
 
 
-@pytest.mark.parametrize("script", [pytest.param(s, marks=pytest.mark.physics) if physics else s
-                                    for s, (_, _, physics) in PROMISES.items()])
+@pytest.mark.parametrize("script", [pytest.param(s, marks=pytest.mark.physics) if physics else
+                                    pytest.param(s, marks=pytest.mark.slow) if "library" in s else s
+                                    for s, (_, _, physics) in PROMISES.items()])   # a library build: worker processes
 def test_the_example_runs(tmp_path, script):
     printed, files, _ = PROMISES[script]
     done = subprocess.run([sys.executable, str(EXAMPLES / script)], cwd=tmp_path, capture_output=True, text=True,

@@ -143,6 +143,7 @@ def test_webots_and_csv(spec):
     assert table[0].startswith("name,time_s,support,r_sho_pitch_deg") and table[2].startswith("standing,1.000,double")
 
 
+@pytest.mark.slow
 def test_library_build_and_resume(spec, tmp_path):
     jobs = grid_jobs(["left"], ["left", "right"], [0.7], axis(0.09, 0.11, 2, "x"), [0.03], [0.07])
     settings = BuildSettings(PSOSettings(iterations=120), restarts=0)
@@ -176,6 +177,7 @@ def test_a_robust_library_build_holds_each_pose_on_the_family_and_counts(spec, t
     assert "robust_passed" in (tmp_path / "index.csv").read_text(encoding="utf-8").splitlines()[0]
 
 
+@pytest.mark.slow
 def test_killed_library_build_leaves_no_half_written_file(tmp_path):
     cmd = [sys.executable, "-m", "op2motion", "library", "build", "--x", "0.06", "0.14", "5", "--y", "0", "0.04",
            "2", "--z", "0.07", "0.07", "1", "--hands", "left", "--supports", "left", "--workers", "2",
@@ -240,6 +242,7 @@ ORPHAN_GRACE_S = 10.0
 WORKER_BUSY_S = 1.5     # CPU time after which a worker is surely solving, not starting up (imports: < 1 s)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="needs Linux /proc to list processes")
 def test_sigkill_of_the_parent_leaves_no_worker_and_the_rerun_completes(tmp_path):
     cmd = [sys.executable, "-m", "op2motion", "library", "build", "--x", "0.06", "0.14", "4", "--y", "0", "0.04",
@@ -275,6 +278,7 @@ def test_sigkill_of_the_parent_leaves_no_worker_and_the_rerun_completes(tmp_path
 INTERRUPT_EXIT_S = 3.0
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_a_build_fast_with_a_complete_index_and_it_resumes(tmp_path, spec):
     cmd = [sys.executable, "-m", "op2motion", "library", "build", "--x", "0.06", "0.14", "5", "--y", "0", "0.04",
            "2", "--z", "0.07", "0.07", "1", "--hands", "left", "--supports", "left", "--workers", "2",

@@ -41,6 +41,7 @@ def _last_line(err: str) -> str:
     return err.strip().splitlines()[-1]
 
 
+@pytest.mark.physics
 def test_sigterm_to_a_validated_walk_writes_nothing(tmp_path):
     proc = _start(tmp_path, "walk", "--steps", "60", "--validate", "--engine", "both", "--plot", "w.png", "--out",
                   "w.csv")                                # planned in about a second, then 15 s or more of physics
@@ -122,6 +123,7 @@ def test_an_interrupt_inside_a_compiled_modules_import_is_an_interrupt(monkeypat
     assert not cli._interrupted_within(ImportError("no module named x"))
 
 
+@pytest.mark.slow
 def test_the_ray_watchdog_ends_its_drivers_session_and_nothing_else():
     """The watchdog a Ray build starts (op2motion.library.reaper), told its driver ended: it kills what it saw below
     the driver, the processes marked with the driver, those naming the driver's Ray session folder, and everything

@@ -65,8 +65,13 @@ def _physics(line: str) -> bool:
     return "--validate" in line or line.split()[1] == "validate"
 
 
-@pytest.mark.parametrize("line", [pytest.param(line, marks=pytest.mark.physics) if _physics(line) else line
-                                  for line in _example_lines()], ids=lambda line: " ".join(line.split()[:3]))
+def _marks(line: str) -> list[pytest.MarkDecorator]:
+    """physics where the example runs an engine; slow where it starts worker processes (a library build)."""
+    return [pytest.mark.physics] if _physics(line) else [pytest.mark.slow] if line.split()[1] == "library" else []
+
+
+@pytest.mark.parametrize("line", [pytest.param(line, marks=_marks(line)) for line in _example_lines()],
+                         ids=lambda line: " ".join(line.split()[:3]))
 def test_readme_example_runs_as_written(clone, line):
     argv = shlex.split(line)
     done = subprocess.run([sys.executable, "-m", "op2motion", *argv[1:]], cwd=clone, capture_output=True, text=True,

@@ -193,6 +193,7 @@ def _stuck_client(url: str) -> socket.socket:
     return s
 
 
+@pytest.mark.slow
 def test_ctrl_c_ends_the_server_within_3_s_even_with_a_stuck_client(tmp_path):
     import signal
 

@@ -80,6 +80,7 @@ os._exit(0)
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("how", ["end", "kill"])
 def test_the_study_file_is_whole_when_the_program_ends_and_read_back_after_a_kill(tmp_path, how):
     """The study's SQLite log is folded into the file when the program ends (the file alone holds every trial);
