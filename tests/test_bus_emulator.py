@@ -19,6 +19,7 @@ from op2motion.bus.robot import POWER_ON_WAIT_S
 SPEED_TOL = 0.10               # the walk through the bus: speed within 10 % of walk --validate's
 HEADING_TOL_DEG = 5.0          # ... heading within 5°
 STEPS = 20
+FIRST_MOVE_S = 1.0             # the follower's first goals reach the servos within this, however loaded the machine [s]
 
 pytestmark = pytest.mark.physics
 
@@ -102,10 +103,17 @@ def test_the_robot_follows_a_target_at_a_capped_speed(spec, tmp_path):
             target = start.copy()
             target[joint] += math.radians(30.0)
             follower.set_target(target)
-            time.sleep(0.2)
-            moved = math.radians(abs((emulator.report()["goal_ticks"][joint] - 2048) * 360 / 4096)) - abs(start[joint])
-            assert 0.0 < moved <= FOLLOW_SPEED_RAD_S * 0.2 + math.radians(2.0)           # capped, not a jump
-            time.sleep(0.8)
+            t0 = time.monotonic()
+
+            def moved() -> float:
+                goal_rad = math.radians(abs((emulator.report()["goal_ticks"][joint] - 2048) * 360 / 4096))
+                return goal_rad - abs(start[joint])
+
+            while moved() <= 0.0 and time.monotonic() - t0 < FIRST_MOVE_S:     # a loaded machine: the first goals
+                time.sleep(0.02)                                              # may take a few periods to arrive
+            so_far, elapsed = moved(), time.monotonic() - t0
+            assert 0.0 < so_far <= FOLLOW_SPEED_RAD_S * elapsed + math.radians(2.0), (so_far, elapsed)  # capped
+            time.sleep(1.0)
             goal_deg = (emulator.report()["goal_ticks"][joint] - 2048) * 360 / 4096
             assert goal_deg == pytest.approx(math.degrees(target[joint]), abs=0.2)
             assert follower.running()
