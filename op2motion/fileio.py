@@ -115,17 +115,23 @@ _closing = False
 
 def _temp_beside(target: Path) -> tuple[int, Path]:
     """Create a new temp file beside ``target`` (mode 0666 less the umask) and return (fd, path); it is recorded
-    until :func:`_done_with` so that :func:`remove_temps` can clean up after an interrupt."""
+    until :func:`_done_with` so that :func:`remove_temps` can clean up after an interrupt. It is recorded before it
+    is created: an interrupt raised the moment the file exists (a signal's handler runs as soon as ``os.open``
+    returns) must not leave it unrecorded."""
     for _ in range(100):
         tmp = target.with_name(f".{target.name}.{secrets.token_hex(6)}.tmp")
         with _temps_lock:
             if _closing:
                 raise OutputError("not written: the program is ending", str(target))
+            _temps.add(tmp)
             try:
                 fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)
-            except FileExistsError:
+            except FileExistsError:     # another's temp file (48 random bits alike): not ours to remove
+                _temps.discard(tmp)
                 continue
-            _temps.add(tmp)
+            except OSError:
+                _temps.discard(tmp)
+                raise
             return fd, tmp
     raise OutputError("cannot create a temporary file", str(target))  # pragma: no cover
 

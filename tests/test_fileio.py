@@ -9,7 +9,7 @@ import time
 import pytest
 
 from op2motion.errors import OutputError
-from op2motion.fileio import OutputSet, check_output_path
+from op2motion.fileio import OutputSet, check_output_path, remove_temps, write_atomic
 
 ROUNDS = 30
 SLOW_RENAME_S = 0.002
@@ -90,3 +90,22 @@ def test_a_failed_commit_leaves_nothing(tmp_path):
     with pytest.raises(OutputError, match="cannot write"):
         outputs.commit()
     assert os.listdir(tmp_path) == []
+
+
+def test_an_interrupt_the_moment_a_temp_file_exists_leaves_no_temp_file(tmp_path, monkeypatch):
+    """SIGTERM's handler runs as soon as ``os.open`` returns: a build terminated then left ``.index.csv.*.tmp``
+    behind (4 runs in 25 on a loaded machine), because the temp file was recorded only after it was created."""
+    real_open = os.open
+
+    def open_then_interrupted(path, flags, mode=0o777):
+        real_open(path, flags, mode)        # the file exists; the interrupt lands before the caller sees its fd
+        raise KeyboardInterrupt
+
+    (tmp_path / "index.csv").write_text("old\n")
+    monkeypatch.setattr("op2motion.fileio.os.open", open_then_interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        write_atomic(tmp_path / "index.csv", "new\n")
+    monkeypatch.undo()
+    assert remove_temps() == 1          # what the CLI does on every interrupt
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["index.csv"]
+    assert (tmp_path / "index.csv").read_text() == "old\n"
