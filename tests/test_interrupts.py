@@ -62,6 +62,63 @@ def test_sigterm_to_a_process_pool_build_leaves_a_complete_index(tmp_path):
     assert not [p for p in (tmp_path / "lib").iterdir() if p.name.endswith(".tmp")]
 
 
+#: Run before the command in a test's process: the first worker process started sends this process a SIGTERM right
+#: after it is spawned, before it has been handed its start-up message (the moment a real SIGTERM once landed in).
+SIGTERM_AS_A_WORKER_STARTS = """
+import os, signal, multiprocessing.util as util
+_spawn = util.spawnv_passfds
+def _spawn_then_sigterm(path, args, passfds):
+    pid = _spawn(path, args, passfds)
+    if any(b"spawn_main" in os.fsencode(arg) for arg in args):      # a worker, not the resource tracker
+        util.spawnv_passfds = _spawn
+        os.kill(os.getpid(), signal.SIGTERM)
+    return pid
+util.spawnv_passfds = _spawn_then_sigterm
+"""
+
+
+def test_a_sigterm_while_the_build_starts_its_workers_is_an_interrupt_without_a_traceback(tmp_path):
+    """A SIGTERM while the pool spawned its workers left one reading half its start-up message: it printed
+    ``EOFError: Ran out of input`` with a traceback after the build's last line."""
+    script = SIGTERM_AS_A_WORKER_STARTS + (
+        "import sys\nfrom op2motion.cli import entry\n"
+        f"sys.argv = ['op2motion', 'library', 'build', {', '.join(repr(a) for a in GRID)}, '--out', 'lib', "
+        "'--workers', '2']\nentry()\n")
+    done = subprocess.run([sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 130 and "resume" in _last_line(done.stderr), done.stderr
+    assert "Traceback" not in done.stderr and "EOFError" not in done.stderr, done.stderr
+    assert (tmp_path / "lib" / "index.json").exists()
+
+
+def test_a_sigterm_while_a_study_starts_a_worker_is_an_interrupt_and_its_workers_use_one_thread():
+    """The tuning pool spawns its workers as trials are submitted: a SIGTERM then is held until the worker has
+    started (then raised as an interrupt, no traceback), and a worker started then runs one maths thread."""
+    script = SIGTERM_AS_A_WORKER_STARTS + """
+import signal, sys
+from op2motion.tune.executor import ProcessTrials
+def _terminated(signum, frame):
+    raise KeyboardInterrupt
+signal.signal(signal.SIGTERM, _terminated)
+trials = ProcessTrials(2)
+try:
+    trials.submit(0, os.getenv, "NUMBA_NUM_THREADS")
+    print("not interrupted")
+except KeyboardInterrupt:
+    print("interrupted")
+trials.submit(1, os.getenv, "NUMBA_NUM_THREADS")
+found = []
+while trials.running:
+    found += trials.finished()
+print(sorted(found))
+trials.close()
+"""
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_NUM_THREADS"}
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120, env=env)
+    assert done.returncode == 0 and "Traceback" not in done.stderr, done.stderr
+    assert done.stdout.splitlines()[0] == "interrupted"
+    assert done.stdout.splitlines()[-1] in ("[(0, '1'), (1, '1')]", "[(1, '1')]"), done.stdout
+
+
 def _ray_processes(mark: str) -> list[int]:
     """Processes whose environment carries the build's Ray mark (op2motion.library.reaper)."""
     found = []

@@ -27,7 +27,7 @@ from op2motion.library.index import INDEX_JSON, IndexRow, load_index, reconcile,
 from op2motion.library.jobs import BuildSettings, Recorder, solve_job
 from op2motion.robot.spec import Spec
 from op2motion.robot.specfile import spec_text
-from op2motion.workers import EXECUTORS, ExecutorName, one_thread_each, worker_init
+from op2motion.workers import EXECUTORS, ExecutorName, one_thread_each, starting_workers, worker_init
 
 __all__ = ["BuildSettings", "BuildSummary", "Executor", "build_library", "check_workers"]
 
@@ -144,19 +144,15 @@ def build_library(jobs: Sequence[Job], spec: Spec, out_dir: str | Path, settings
 def _run(todo: Sequence[Job], spec: Spec, spec_path: str | None, settings: BuildSettings, workers: int,
          record: Recorder) -> None:
     ctx = multiprocessing.get_context("spawn")  # fresh interpreters: no inherited threads or pyswarms state
-    main = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None  # workers inherit Ctrl-C ignored
+    pool = None
     try:
-        with one_thread_each():
+        with one_thread_each(), starting_workers():
             pool = ctx.Pool(workers, initializer=worker_init, initargs=(os.getpid(),))
-    finally:
-        if main:
-            signal.signal(signal.SIGINT, previous)
-    try:
         tasks = [(job, spec_path, spec.sha256, settings, None) for job in todo]
         for row, pose_text in pool.imap_unordered(solve_job, tasks):
             record(row, pose_text)
         pool.close()
     finally:
-        pool.terminate()   # on Ctrl-C: pending targets cancelled, workers ended at once
-        pool.join()
+        if pool is not None:
+            pool.terminate()   # on Ctrl-C: pending targets cancelled, workers ended at once
+            pool.join()

@@ -40,16 +40,18 @@ class ProcessTrials:
     """Trials in a pool of worker processes (see the module docstring)."""
 
     def __init__(self, workers: int):
-        from op2motion.workers import one_thread_each, worker_init
+        from op2motion.workers import worker_init
 
         self.workers = workers
-        with one_thread_each():
-            self._pool = cf.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
-                                                initializer=worker_init, initargs=(os.getpid(),))
+        self._pool = cf.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
+                                            initializer=worker_init, initargs=(os.getpid(),))
         self._futures: dict[cf.Future[Any], int] = {}
 
     def submit(self, number: int, fn: Callable[..., Any], *args: Any) -> None:
-        self._futures[self._pool.submit(fn, *args)] = number
+        from op2motion.workers import one_thread_each, starting_workers
+
+        with one_thread_each(), starting_workers():      # a spawning pool starts its workers as trials come
+            self._futures[self._pool.submit(fn, *args)] = number
 
     def finished(self) -> list[tuple[int, Any]]:
         if not self._futures:
