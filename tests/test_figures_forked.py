@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 
 from op2motion.figures.background import Renderers
@@ -33,3 +36,34 @@ def test_a_failing_figure_fails_where_the_caller_sees_it():
             assert "fails here" in str(exc)
         else:
             raise AssertionError("the error must reach the caller")
+
+
+#: Each renderer forked sends itself Ctrl-C's signal the moment it exists (as a Ctrl-C at a command's start would
+#: reach it, before it could say it ignores Ctrl-C); it then draws its figure as asked.
+CTRL_C_AS_A_RENDERER_FORKS = """
+import os, signal
+_fork = os.fork
+def _fork_then_ctrl_c():
+    pid = _fork()
+    if pid == 0:
+        os.kill(os.getpid(), signal.SIGINT)
+    return pid
+os.fork = _fork_then_ctrl_c
+import sys
+sys.path.insert(0, "tests")
+from test_figures_forked import _curve
+from op2motion.figures.background import Renderers
+with Renderers(2) as renderers:
+    jobs = [renderers.submit(_curve, 1.0), renderers.submit(_curve, 2.0)]
+    drawn = [renderers.result(j) for j in jobs]
+print(drawn == [_curve(1.0), _curve(2.0)])
+"""
+
+
+def test_a_ctrl_c_as_the_renderers_fork_is_ignored_by_them():
+    """The renderers start with Ctrl-C ignored (the command decides what it ends): one forked before it set that
+    itself printed a KeyboardInterrupt traceback when a Ctrl-C reached it at that moment."""
+    done = subprocess.run([sys.executable, "-c", CTRL_C_AS_A_RENDERER_FORKS], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0 and done.stdout.strip() == "True", done.stdout + done.stderr
+    assert "Traceback" not in done.stderr and "KeyboardInterrupt" not in done.stderr, done.stderr

@@ -22,7 +22,8 @@ _WAIT_S = 60.0      # a renderer that has not answered in this long is given up 
 def _serve(conns: list[Any]) -> None:
     """In the first renderer: load matplotlib once, fork one more renderer per extra pipe (the copies share what
     was loaded), then each draws the one figure asked on its pipe and sends it back."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)            # the parent decides what Ctrl-C ends
+    signal.signal(signal.SIGINT, signal.SIG_IGN)            # the parent decides what Ctrl-C ends (it started us
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)           # with it ignored); a SIGTERM ends a renderer quietly
     with contextlib.suppress(Exception):
         import matplotlib
 
@@ -62,15 +63,21 @@ class Renderers:
         self._jobs: list[tuple[Any, Callable[..., Any], tuple]] = []
         if "fork" not in multiprocessing.get_all_start_methods():
             return
+        from op2motion.workers import starting_workers
+
         ctx = multiprocessing.get_context("fork")
-        with contextlib.suppress(OSError):
-            pipes = [ctx.Pipe() for _ in range(count)]
-            proc = ctx.Process(target=_serve, args=([child for _, child in pipes],), daemon=True)
-            proc.start()
-            for parent, child in pipes:
-                child.close()
-                self._idle.append((proc, parent))
-            self._procs.append(proc)
+        try:
+            with contextlib.suppress(OSError), starting_workers():     # no Ctrl-C inside the renderer as it forks
+                pipes = [ctx.Pipe() for _ in range(count)]
+                proc = ctx.Process(target=_serve, args=([child for _, child in pipes],), daemon=True)
+                proc.start()
+                self._procs.append(proc)
+                for parent, child in pipes:
+                    child.close()
+                    self._idle.append((proc, parent))
+        except BaseException:       # a SIGTERM held while forking: the renderer ends with the command
+            self.close()
+            raise
 
     def __enter__(self) -> "Renderers":
         return self
