@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Mapping, Type
 
 from op2motion.errors import InputError, Op2MotionError, OutputError
+from op2motion.processes.interrupts import signals_held
 
 MAX_INPUT_BYTES = 16 * 2 ** 20    # every file op2motion reads is far smaller (an action file: 128 KiB)
 
@@ -236,9 +237,10 @@ class OutputSet:
                     os.fsync(handle.fileno())
                 with contextlib.suppress(FileNotFoundError):
                     os.chmod(tmp, target.stat().st_mode & 0o7777)
-            for tmp, target in temps:
-                os.replace(tmp, target)
-            temps.clear()
+            with signals_held():        # renamed all or none: an interrupt here waits for the last rename
+                for tmp, target in temps:
+                    os.replace(tmp, target)
+                temps.clear()
         except OSError as exc:
             raise OutputError(f"cannot write: {exc.strerror or exc}", getattr(exc, "filename", None)) from None
         finally:

@@ -16,10 +16,10 @@ from op2motion.errors import InputError
 from op2motion.formats.motionfile import PLANNERS, PROFILES, PlannerName, Profile
 from op2motion.kinematics import MODELS, ModelName
 from op2motion.physics import ENGINES, EngineName
+from op2motion.processes.workers import EXECUTORS, ExecutorName
 from op2motion.robot.balance import COM_MODELS, ComModel
 from op2motion.robot.support import SIDES, Side, Support, SupportName, as_side
 from op2motion.tune.trial import DIRECTIONS, Direction
-from op2motion.workers import EXECUTORS, ExecutorName
 
 
 def _choices(flag: str) -> list[tuple[str, set]]:

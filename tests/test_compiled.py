@@ -1,5 +1,5 @@
-"""Kernels compiled by one process at a time (op2motion.compiled): processes that start together on a fresh install
-compile a kernel once between them; the others load what the first cached."""
+"""Kernels compiled by one process at a time (op2motion.processes.compiled): processes that start together on a
+fresh install compile a kernel once between them; the others load what the first cached."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import textwrap
 import pytest
 from helpers import ROOT
 
-from op2motion.compiled import lock_path
+from op2motion.processes.compiled import lock_path
 
 PROCESSES = 2
 WAIT_HERE_S = 0.3          # the wait for a held lock, shortened for the test [s]
@@ -20,7 +20,7 @@ KERNEL = textwrap.dedent('''
     import json, sys, time
     import numpy as np
     from numba import njit
-    from op2motion.compiled import CompileOnce
+    from op2motion.processes.compiled import CompileOnce
 
     @njit(cache=True)
     def _twice(x):                          # a sort: compiles for about a second, time enough to overlap
@@ -75,7 +75,7 @@ def test_a_lock_held_elsewhere_delays_the_first_call_at_most_the_wait(tmp_path, 
     import numpy as np
     from numba import njit
 
-    import op2motion.compiled as compiled
+    import op2motion.processes.compiled as compiled
 
     def _sum(x):
         return x.sum()

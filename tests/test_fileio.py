@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 import threading
 import time
 
@@ -109,3 +110,44 @@ def test_an_interrupt_the_moment_a_temp_file_exists_leaves_no_temp_file(tmp_path
     assert remove_temps() == 1          # what the CLI does on every interrupt
     assert sorted(p.name for p in tmp_path.iterdir()) == ["index.csv"]
     assert (tmp_path / "index.csv").read_text() == "old\n"
+
+
+def test_ctrl_c_between_a_sets_renames_waits_for_the_last_one(tmp_path, monkeypatch):
+    """A pose, its figure and its cost curve are renamed into place one after the other: Ctrl-C between two renames
+    left a new pose beside the old figures. It now waits for the last rename (and interrupts just after)."""
+    paths = {name: tmp_path / name for name in ("p.json", "p.png", "p_cost.png")}
+    for path in paths.values():
+        path.write_text("old")
+    replace = os.replace
+
+    def replace_then_ctrl_c(a, b):
+        replace(a, b)
+        os.kill(os.getpid(), signal.SIGINT)       # as a Ctrl-C lands, after the first rename
+
+    monkeypatch.setattr("op2motion.fileio.os.replace", replace_then_ctrl_c)
+    outputs = OutputSet(paths)
+    for key in paths:
+        outputs.put(key, "new")
+    with pytest.raises(KeyboardInterrupt):
+        outputs.commit()
+    assert {path.read_text() for path in paths.values()} == {"new"}
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(paths)
+
+
+def test_a_held_signal_reaches_the_handler_there_before_once_the_moment_ends():
+    from op2motion.processes.interrupts import signals_held
+
+    came: list[int] = []
+    previous = signal.signal(signal.SIGTERM, lambda signum, frame: came.append(signum))
+    try:
+        with signals_held():
+            os.kill(os.getpid(), signal.SIGTERM)
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.01)
+            assert came == []                       # held
+        assert came == [signal.SIGTERM]             # delivered once, to the handler there before
+        with signals_held(ignore_ctrl_c=True):
+            assert signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    finally:
+        signal.signal(signal.SIGTERM, previous)

@@ -63,7 +63,7 @@ class Renderers:
         self._jobs: list[tuple[Any, Callable[..., Any], tuple]] = []
         if "fork" not in multiprocessing.get_all_start_methods():
             return
-        from op2motion.workers import starting_workers
+        from op2motion.processes.workers import starting_workers
 
         ctx = multiprocessing.get_context("fork")
         try:

@@ -25,9 +25,9 @@ from op2motion.errors import InputError, Interrupted
 from op2motion.library.grid import Job
 from op2motion.library.index import INDEX_JSON, IndexRow, load_index, reconcile, write_index
 from op2motion.library.jobs import BuildSettings, Recorder, solve_job
+from op2motion.processes.workers import EXECUTORS, ExecutorName, one_thread_each, starting_workers, worker_init
 from op2motion.robot.spec import Spec
 from op2motion.robot.specfile import spec_text
-from op2motion.workers import EXECUTORS, ExecutorName, one_thread_each, starting_workers, worker_init
 
 __all__ = ["BuildSettings", "BuildSummary", "Executor", "build_library", "check_workers"]
 

@@ -22,8 +22,8 @@ from typing import Any, Iterator, Sequence
 from op2motion.errors import InputError
 from op2motion.library.grid import Job
 from op2motion.library.jobs import BuildSettings, Recorder, solve_job
+from op2motion.processes.workers import THREAD_VARIABLES
 from op2motion.robot.spec import Spec
-from op2motion.workers import THREAD_VARIABLES
 
 CONNECT_TIMEOUT_S = 3.0     # a cluster's head that does not accept a TCP connection in this long is not there [s]
 ANSWER_TIMEOUT_S = 3.0      # ... nor one that does not answer the HTTP/2 greeting of Ray's GCS (gRPC) in this long [s]

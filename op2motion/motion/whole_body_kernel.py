@@ -12,7 +12,7 @@ import math
 import numpy as np
 from numba import njit
 
-from op2motion.compiled import CompileOnce
+from op2motion.processes.compiled import CompileOnce
 
 OK, OUT_OF_REACH, HIP_BELOW = 0, 1, 2      # what a leg's IK found
 
@@ -118,5 +118,5 @@ def _servo_rows(x: np.ndarray, body: tuple, legs: tuple, limits: tuple, out: np.
     return -1
 
 
-#: :func:`_servo_rows`, compiled by one process at a time on a fresh install (:mod:`op2motion.compiled`).
+#: :func:`_servo_rows`, compiled by one process at a time on a fresh install (:mod:`op2motion.processes.compiled`).
 servo_rows: CompileOnce[int] = CompileOnce(_servo_rows)

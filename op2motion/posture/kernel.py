@@ -19,10 +19,10 @@ import math
 import numpy as np
 from numba import njit
 
-from op2motion.compiled import CompileOnce
 from op2motion.errors import ModelError
 from op2motion.posture.kernel_geometry import clearance_of, mul
 from op2motion.posture.kernel_plan import KernelPlan
+from op2motion.processes.compiled import CompileOnce
 
 TERMS = ("total", "book", "hand_error", "margin", "swing_min_z", "tilt", "collision", "sag_tilt", "clearance",
          "swing_lift")
@@ -227,7 +227,7 @@ def _torso_tilt(pts: np.ndarray, rows: np.ndarray, ab: np.ndarray) -> float:
     return math.acos(min(max(ab[1] * (u2 / nu) - ab[0] * w_z, -1.0), 1.0))
 
 
-#: The loop, compiled by one process at a time on a fresh install (:mod:`op2motion.compiled`).
+#: The loop, compiled by one process at a time on a fresh install (:mod:`op2motion.processes.compiled`).
 _SWARM: CompileOnce[None] = CompileOnce(_swarm)
 
 

@@ -15,10 +15,10 @@ from op2motion.tasks.progress import ProgressFor, no_progress
 from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
+    from op2motion.processes.workers import ExecutorName
     from op2motion.tune.run import TuneResult
     from op2motion.tune.space import SearchSpace
     from op2motion.tune.trial import Task
-    from op2motion.workers import ExecutorName
 
 
 @dataclass(frozen=True)

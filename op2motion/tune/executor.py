@@ -1,7 +1,7 @@
 """Where a study's trials run: worker processes on this machine, or Ray tasks (this machine or a cluster).
 
 Both keep ``workers`` trials in flight and hand back each finished one as it comes: :class:`ProcessTrials` runs a
-pool of spawned processes that die with their parent and use one maths thread each (:mod:`op2motion.workers`);
+pool of spawned processes that die with their parent and use one maths thread each (:mod:`op2motion.processes.workers`);
 :class:`RayTrials` runs Ray tasks in a :func:`op2motion.library.cluster.ray_session` (Ray's output off the
 terminal, Ctrl-C and SIGTERM noted between Ray's calls, no Ray process left behind). The function run must be a
 module-level function with picklable arguments.
@@ -15,7 +15,7 @@ import multiprocessing
 import os
 from typing import Any, Callable, Iterator, Protocol
 
-from op2motion.workers import ExecutorName
+from op2motion.processes.workers import ExecutorName
 
 WAIT_S = 0.25                 # the driver waits this long at a time, so signals are handled between waits [s]
 
@@ -40,7 +40,7 @@ class ProcessTrials:
     """Trials in a pool of worker processes (see the module docstring)."""
 
     def __init__(self, workers: int):
-        from op2motion.workers import worker_init
+        from op2motion.processes.workers import worker_init
 
         self.workers = workers
         self._pool = cf.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
@@ -48,7 +48,7 @@ class ProcessTrials:
         self._futures: dict[cf.Future[Any], int] = {}
 
     def submit(self, number: int, fn: Callable[..., Any], *args: Any) -> None:
-        from op2motion.workers import one_thread_each, starting_workers
+        from op2motion.processes.workers import one_thread_each, starting_workers
 
         with one_thread_each(), starting_workers():      # a spawning pool starts its workers as trials come
             self._futures[self._pool.submit(fn, *args)] = number

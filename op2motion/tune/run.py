@@ -19,9 +19,9 @@ import time
 from dataclasses import dataclass, field, fields, replace
 from typing import TYPE_CHECKING, Any, Callable
 
+from op2motion.processes.workers import ExecutorName
 from op2motion.tune.study import Outcome, TrialRow, pareto, rows
 from op2motion.tune.trial import Task, evaluate
-from op2motion.workers import ExecutorName
 
 if TYPE_CHECKING:
     from op2motion.physics import EngineName

@@ -4,8 +4,8 @@ Shared by the pose-library builds (:mod:`op2motion.library.build`) and the gait 
 :func:`worker_init` makes a pool's worker ignore Ctrl-C (the parent decides) and die with its parent (Linux
 ``PR_SET_PDEATHSIG``, and a watchdog thread that polls the parent's pid elsewhere); :func:`one_thread_each` starts
 workers whose BLAS and numba use one thread (the workers fill the cores already: threads spinning against other
-processes made a library target take eight times as long); :func:`starting_workers` holds Ctrl-C and SIGTERM while
-workers start, so that an interrupt never cuts a worker's start-up message in half.
+processes made a library target take eight times as long); :func:`starting_workers` ignores Ctrl-C and holds SIGTERM
+while workers start, so that an interrupt never cuts a worker's start-up message in half.
 """
 
 from __future__ import annotations
@@ -16,7 +16,9 @@ import os
 import signal
 import threading
 import time
-from typing import Any, Iterator, Literal, get_args
+from typing import Iterator, Literal, get_args
+
+from op2motion.processes.interrupts import signals_held
 
 #: Where a pool's work runs: local worker processes, or a Ray cluster.
 ExecutorName = Literal["process", "ray"]
@@ -61,24 +63,8 @@ def one_thread_each() -> Iterator[None]:
 @contextlib.contextmanager
 def starting_workers() -> Iterator[None]:
     """Start worker processes in here: Ctrl-C is ignored (the workers start with it ignored, :func:`worker_init`
-    keeps it so) and a SIGTERM is held until the block ends, then raised as :class:`KeyboardInterrupt` (what the
-    CLI makes of SIGTERM). A signal acted on while a spawned worker starts would leave it reading half a start-up
-    message, and it would print a traceback as the command ends. Only in the main thread (elsewhere: a plain
-    block)."""
-    if threading.current_thread() is not threading.main_thread():
+    keeps it so) and a SIGTERM is held until the block ends, then delivered (:func:`op2motion.processes.interrupts.
+    signals_held`). A signal acted on while a spawned worker starts would leave it reading half a start-up message,
+    and it would print a traceback as the command ends."""
+    with signals_held(ignore_ctrl_c=True):
         yield
-        return
-    held: list[int] = []
-
-    def hold(signum: int, frame: Any) -> None:
-        held.append(signum)
-
-    previous_int = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    previous_term = signal.signal(signal.SIGTERM, hold)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous_int)
-        signal.signal(signal.SIGTERM, previous_term)
-    if held:
-        raise KeyboardInterrupt
