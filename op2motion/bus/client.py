@@ -1,14 +1,21 @@
-"""Protocol 1.0 transactions on a :class:`~.port.Port`: ping, read, write, sync write and bulk read, each bounded in
-time and retried a bounded number of times.
+"""Protocol 1.0 transactions on a port: ping, read, write, sync write and bulk read, each bounded in time and
+retried a bounded number of times, on the port's clock (:mod:`.clock`: the wall, or an emulator's lockstep time).
 
-Before each request the input is flushed (a late reply of an earlier request must not be taken for this one's);
-a reply counts only when it comes from the device asked and carries the length asked for; an echo of our own
-packet is skipped. The wait for the first byte is the request's time on the wire plus a latency allowance (the USB
-adapter, the device's return delay); once replies come, a pause of :data:`GAP_S` ends the wait (devices answer back
-to back, so the rest were lost), and the whole wait never exceeds the replies' time on the wire (1.5 x, 10 bits a
-byte at 1 Mbps) on top of that. A device that does not answer, answers
-garbage or reports a checksum or instruction error (our packet arrived damaged) is asked again, at most
-``retries`` more times; then the transaction returns None and the caller decides.
+**How long a reply may take** (:class:`~.link.LinkBudget`): the request's and the replies' bytes at the baud rate,
+each device's return delay, and the link's tail: what the USB adapter holds back (an FTDI's latency timer) and the
+system adds, as measured at connect (:func:`~.link.measure_link`; until then the kernel's default timer, 16 ms, is
+assumed). The wait for the first reply is its time on the wire plus the tail; once replies come, a pause of the tail
+plus the next device's delay ends the wait (devices answer back to back: a longer pause means the rest were lost);
+the whole wait never exceeds all the replies' time plus the tail, nor a caller's cap.
+
+**Replies that come late** (after their wait ended) are never taken for a later request's: the devices a request
+still owed are kept, in order, for one more tail after the wait's end; a reply matching the first of them (by ID and length)
+before any reply to the new request is that late reply, dropped and counted (``stray_packets``), as is anything the
+port held before a request went out. A one-off command asks again only after that window (so a retry's reply is
+never mistaken for the late one). A reply counts only when it comes from a device asked and carries the length
+asked for; an echo of our own packet is skipped. A device that does not answer, answers garbage or reports a checksum
+or instruction error (our packet arrived damaged) is asked again, at most ``retries`` more times; then the
+transaction returns None and the caller decides.
 
 :meth:`Bus.bulk_read` is one try by design: the 8 ms loop asks again for only the devices that did not answer
 (:mod:`.loop`).
@@ -16,23 +23,22 @@ garbage or reports a checksum or instruction error (our packet arrived damaged) 
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 from typing import Iterable, Mapping, Sequence
 
 from op2motion.bus import protocol as p
-from op2motion.bus.port import BAUD, Port
+from op2motion.bus.clock import Clock
+from op2motion.bus.link import ASSUMED_TAIL_S, LinkBudget
+from op2motion.bus.port import PortLike
 
-BYTE_S = 10.0 / BAUD               # one byte on the wire: start, 8 data, stop bits
-WIRE_MARGIN = 1.5                  # replies may take this much longer than their bytes
-COMMAND_LATENCY_S = 0.012          # one-off commands: allowance for a device (and a USB adapter) to answer
 RETRIES = 3                        # a one-off command is tried 1 + RETRIES times
-GAP_S = 0.0015                     # replies that stop this long are over (a USB adapter's low-latency timer: 1 ms)
+COMMAND_MARGIN_S = 0.003           # one-off commands: beyond the wire's own figures (a loaded PC's scheduling)
 
 
 @dataclass
 class BusStats:
-    """What the bus saw: requests sent, replies that never came, packets thrown away, retries."""
+    """What the bus saw: requests sent, replies that never came, packets thrown away (late replies, noise),
+    retries."""
 
     requests: int = 0
     timeouts: int = 0
@@ -48,28 +54,46 @@ class BusStats:
 
 
 class Bus:
-    """Transactions on one port (see the module docstring)."""
+    """Transactions on one port (see the module docstring). ``margin_s`` is what one-off commands allow beyond the
+    wire's figures."""
 
-    def __init__(self, port: Port, retries: int = RETRIES, latency_s: float = COMMAND_LATENCY_S):
-        self.port, self.retries, self.latency_s = port, retries, latency_s
+    def __init__(self, port: PortLike, retries: int = RETRIES, margin_s: float = COMMAND_MARGIN_S):
+        self.port, self.retries, self.margin_s = port, retries, margin_s
+        self.clock: Clock = port.clock
+        self.link = LinkBudget(tail_s=ASSUMED_TAIL_S)
         self.parser = p.StreamParser()
         self.stats = BusStats()
+        self.owed: list[tuple[int, int]] = []           # (id, parameter count) a request still owes, in order
+        self.owed_until = 0.0                           # ... which can no longer come after this time
 
     def _send(self, packet: bytes) -> None:
-        self.port.flush_input()
+        for _ in self.parser.feed(self.port.flush_input()):
+            self.stats.stray += 1
         self.parser.clear()
         self.stats.requests += 1
         self.port.write(packet)
 
-    def _collect(self, sent: bytes, expect: Mapping[int, int], latency_s: float, cap: float | None = None
+    def _late(self, packet: p.Packet) -> bool:
+        """Whether ``packet`` is a reply an earlier request still owed (then it is dropped from what is owed)."""
+        if not self.owed:
+            return False
+        if self.clock.now() > self.owed_until:
+            self.owed = []
+            return False
+        key = (packet.id, len(packet.params))
+        if key in self.owed:
+            del self.owed[:self.owed.index(key) + 1]
+            return True
+        return False
+
+    def _collect(self, sent: bytes, expect: Mapping[int, int], margin_s: float, cap: float | None = None
                  ) -> dict[int, p.Packet]:
-        """Replies to ``sent`` from the devices in ``expect`` ({id: parameter count}), until all came, or nothing
-        came within ``latency_s`` (plus the request's wire time), or the replies stopped for :data:`GAP_S` (devices
-        answer back to back: a gap means the rest were lost), or the whole wait (all bytes' wire time + the
-        latency) is over, or the monotonic time ``cap``."""
-        now = time.monotonic()
-        first = now + len(sent) * BYTE_S * WIRE_MARGIN + latency_s
-        end = first + sum(n + p.MIN_PACKET_BYTES for n in expect.values()) * BYTE_S * WIRE_MARGIN
+        """Replies to ``sent`` from the devices in ``expect`` ({id: parameter count}, in the order they answer),
+        within the waits of the module docstring (``margin_s`` on top of each; never past the time ``cap``)."""
+        now = self.clock.now()
+        order = list(expect.items())
+        first, end = self.link.first_and_last(len(sent), order)
+        first, end = now + first + margin_s, now + end + margin_s
         if cap is not None:
             first, end = min(first, cap), min(end, cap)
         got: dict[int, p.Packet] = {}
@@ -77,24 +101,29 @@ class Bus:
         bad_before = self.parser.bad_checksums
         last: float | None = None
         while len(got) < len(expect):
-            deadline = first if last is None else min(end, last + GAP_S)
+            nxt = next((d for d, _ in order if d not in got), None)
+            deadline = first if last is None else min(end, last + self.link.gap_s(nxt) + margin_s)
             data = self.port.read(deadline)
             if not data:
-                if time.monotonic() >= deadline:
+                if self.clock.now() >= deadline:
                     break
                 continue
-            last = time.monotonic()
+            last = self.clock.now()
             for packet in self.parser.feed(data):
                 if not echo_skipped and packet.encode() == sent:
                     echo_skipped = True
-                    continue
-                if packet.id in expect and packet.id not in got and len(packet.params) == expect[packet.id]:
+                elif not got and self._late(packet):
+                    self.stats.stray += 1
+                elif packet.id in expect and packet.id not in got and len(packet.params) == expect[packet.id]:
                     got[packet.id] = packet
+                    self.owed = []                      # late replies would have come before this one
                 else:
                     self.stats.stray += 1
         self.stats.bad_checksums += self.parser.bad_checksums - bad_before
         if len(got) < len(expect):
             self.stats.timeouts += 1
+            self.owed = [(d, n) for d, n in order if d not in got]
+            self.owed_until = end + self.link.tail_s
         return got
 
     def _transact(self, device: int, packet: bytes, n_params: int, retries: int | None = None) -> p.Packet | None:
@@ -103,8 +132,9 @@ class Bus:
         for attempt in range(tries):
             if attempt:
                 self.stats.retries += 1
+                self.settle()
             self._send(packet)
-            reply = self._collect(packet, {device: n_params}, self.latency_s).get(device)
+            reply = self._collect(packet, {device: n_params}, self.margin_s).get(device)
             if reply is None:
                 continue
             if reply.code & (p.CHECKSUM | p.INSTRUCTION):     # our packet arrived damaged: say it again
@@ -112,6 +142,12 @@ class Bus:
                 continue
             return reply
         return None
+
+    def settle(self) -> None:
+        """Wait until no late reply is owed any more (see the module docstring)."""
+        if self.owed:
+            self.clock.sleep_until(self.owed_until)
+            self.owed = []
 
     def ping(self, device: int, retries: int | None = None) -> p.Packet | None:
         """PING ``device``: its status packet (error byte in ``code``), or None if it does not answer."""
@@ -136,13 +172,13 @@ class Bus:
         if data:
             self._send(p.sync_write(address, length, data))
 
-    def bulk_read(self, spans: Iterable[tuple[int, int, int]], latency_s: float, until: float | None = None
+    def bulk_read(self, spans: Iterable[tuple[int, int, int]], margin_s: float, until: float | None = None
                   ) -> dict[int, p.Packet]:
         """One BULK_READ of ``spans`` (id, address, length); the status packets that came within the wait (at the
-        latest at the monotonic time ``until``), by id."""
+        latest at the time ``until`` on the bus's clock), by id."""
         spans = list(spans)
         if not spans:
             return {}
         packet = p.bulk_read(spans)
         self._send(packet)
-        return self._collect(packet, {device: length for device, _, length in spans}, latency_s, until)
+        return self._collect(packet, {device: length for device, _, length in spans}, margin_s, until)

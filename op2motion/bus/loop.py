@@ -4,17 +4,20 @@ planned motion, a Cartesian line) on the OP2, unchanged.
 
 Every :data:`~op2motion.robot.framework.CONTROL_PERIOD_S`, on an absolute clock:
 
-1. **one bulk read**: the board's 30 bytes from register 24 (power, buttons, gyro, accelerometer, voltage) and each
-   servo's present position; one servo in turn reads present position to temperature (8 bytes: speed, load,
-   voltage, temperature), so every servo's full state comes every 20 ticks at the cost of 6 bytes a tick. Devices
-   that did not answer are asked once more in the same tick if it is young enough (a reply lost on the way costs
-   a retry, not a blind tick); a device still silent keeps its last values (a missed read);
+1. **one bulk read** (:class:`~.link.ReadPlan`, from the link's budget): the board's 30 bytes from register 24
+   (power, buttons, gyro, accelerometer, voltage) and each servo's present position, or as many servos as the link
+   lets a tick read within :data:`~.link.READ_BUDGET_S` (their return delays, the USB adapter's tail), in turn;
+   one servo in turn reads present position to temperature (8 bytes: speed, load, voltage, temperature), so every
+   servo's full state comes every 20 ticks at the cost of 6 bytes a tick. Devices that did not answer are asked
+   once more in the same tick if the budget still holds that read (after any late reply can have come); a device
+   still silent keeps its last values (a missed read);
 2. the safety watch (:class:`~.safety.Watch`): missed reads in a row, error bits, temperature, a fall;
 3. the controller, as in physics (``start`` at 0, then ``step`` at the plan's ticks with the gyro, accelerometer
    and joint positions); the goals are clipped to the mechanical ranges;
 4. **one sync write** from register 26, 6 bytes a servo: D, I, P, 0, goal (the framework's own packet).
 
-The loop measures its period (tick start to tick start: p50, p99, max), counts late ticks and missed reads, and
+All time is the port's clock (:mod:`.clock`): the wall on a real robot, simulated time in lockstep with an emulated
+one. The loop measures its period (tick start to tick start: p50, p99, max), counts late ticks and missed reads, and
 ends when the plan's duration is over (or the controller is done, when asked to end then), on a fault
 (:mod:`.safety`'s policy) or on a stop request (Ctrl-C: a controller that can stop itself, a steered walk, is told
 to and ends done, within :data:`~.stopping.SOFT_STOP_MAX_S`; a planned walk first reaches its next double support,
@@ -26,13 +29,13 @@ from __future__ import annotations
 import inspect
 import math
 import threading
-import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
 
 from op2motion.bus import safety
+from op2motion.bus.link import READ_BUDGET_S, read_plan
 from op2motion.bus.realtime import LOOP_PRIORITY, realtime, steady
 from op2motion.bus.robot import OP2, angle_of
 from op2motion.bus.stopping import Stops
@@ -51,10 +54,7 @@ from op2motion.robot.imu import decode
 from op2motion.robot.joints import servo_to_ticks
 from op2motion.robot.spec import Spec
 
-READ_LATENCY_S = 0.003             # the bulk read's allowance beyond its wire time (USB adapter, devices' delay)
-READ_BUDGET_S = 0.005              # a tick's reads end this long after it starts (the controller and the write
-                                   # need the rest of the 8 ms)
-RETRY_LEFT_S = 0.0015              # devices that missed are asked again if this much of the budget is left
+READ_MARGIN_S = 0.0003            # the bulk read's allowance beyond the link's figures (the PC's scheduling)
 LATE_S = 0.020                     # a period longer than this is a late tick
 MAX_P_GAIN = 254
 
@@ -99,6 +99,7 @@ class LoopReport:
     tilt_max_rad: float = 0.0
     bus: dict[str, Any] = field(default_factory=dict)
     realtime: bool = False
+    plan: dict[str, Any] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready (angles in degrees)."""
@@ -111,7 +112,7 @@ class LoopReport:
                 "fault": None if self.fault is None else self.fault.as_dict(),
                 "yaw_deg": round(math.degrees(self.yaw_rad), 2),
                 "tilt_max_deg": round(math.degrees(self.tilt_max_rad), 1),
-                "bus": dict(self.bus), "realtime": self.realtime}
+                "bus": dict(self.bus), "realtime": self.realtime, "read_plan": dict(self.plan)}
 
     def describe(self) -> str:
         """One line of timing and reads."""
@@ -153,25 +154,30 @@ class _Run:
         self.report = LoopReport()
         self.answered: set[int] = set()
         self.got: dict[int, Any] = {}
-        self.rotating = self.ids[0]
+        self.rotating: int | None = self.ids[0]
         self.limits: np.ndarray | None = None          # torque limits a controller set (None: full)
+        self.plan = read_plan(robot.bus.link, self.ids)
+        self.report.plan = self.plan.as_dict()
+        self.asked: set[int] = set()
 
     def read(self, k: int, started: float) -> set[int]:
-        """One bulk read (and one retry for the silent devices); the devices that answered."""
-        rotating = self.ids[k % len(self.ids)]
-        board_address, board_length = BOARD_SPAN
-        state_address, state_length = SERVO_STATE_SPAN
-        position = MX28["present_position"].address
-        spans = [(CM730_ID, board_address, board_length)] + [
-            (d, state_address, state_length) if d == rotating else (d, position, 2) for d in self.ids]
+        """One bulk read (and one retry for the silent devices if the budget holds it); the devices that
+        answered."""
+        spans, rotating = self.plan.spans(k, self.ids)
         bus = self.robot.bus
         until = started + READ_BUDGET_S
-        got = bus.bulk_read(spans, READ_LATENCY_S, until)
-        if len(got) < len(spans) and until - time.monotonic() > RETRY_LEFT_S:
-            self.report.retried_ticks += 1
-            got.update(bus.bulk_read([s for s in spans if s[0] not in got], READ_LATENCY_S, until))
+        got = bus.bulk_read(spans, READ_MARGIN_S, until)
+        missing = [s for s in spans if s[0] not in got]
+        if missing:
+            resend = max(bus.clock.now(), bus.owed_until if bus.owed else 0.0)
+            if resend + bus.link.bulk_read_s(missing) + READ_MARGIN_S <= until:
+                self.report.retried_ticks += 1
+                bus.settle()
+                got.update(bus.bulk_read(missing, READ_MARGIN_S, until))
         self.report.missed_reads += len(spans) - len(got)
+        self.asked = {s[0] for s in spans}
         board = got.get(CM730_ID)
+        board_address = BOARD_SPAN[0]
         if board is not None:
             data = board.params
             self.words = {r: data[r - board_address] | (data[r - board_address + 1] << 8) for r in self.words}
@@ -189,7 +195,7 @@ class _Run:
         """The safety watch on this tick's reads."""
         if self.watch is None:
             return None
-        fault = self.watch.reads(answered)
+        fault = self.watch.reads(answered, self.asked)
         temperature_at = MX28["present_temperature"].address - SERVO_STATE_SPAN[0]
         for d, packet in self.got.items():
             if d == CM730_ID:
@@ -306,14 +312,15 @@ def _loop(run: _Run, duration: float, stop: threading.Event | None, on_tick: Cal
           until_done: bool = False) -> LoopReport:
     """The ticks of one run (see :func:`run_controller`)."""
     stops, report = Stops(), run.report
+    time = run.robot.bus.clock
     periods: list[float] = []
-    start = time.monotonic()
+    start = time.now()
     clock, last, k = start, None, 0
     while True:
-        now = time.monotonic()
+        now = time.now()
         if now < clock:
-            time.sleep(clock - now)
-            now = time.monotonic()
+            time.sleep_until(clock)
+            now = time.now()
         elif now - clock > CONTROL_PERIOD_S:            # far behind (a pause): resync, do not burst
             clock = now
         if last is not None:
@@ -328,7 +335,7 @@ def _loop(run: _Run, duration: float, stop: threading.Event | None, on_tick: Cal
         clock += CONTROL_PERIOD_S
         if stops.over(now, t, duration, lambda: k > 1 and bool(run.controller.done), until_done):
             break
-    report.ticks, report.seconds = k, time.monotonic() - start
+    report.ticks, report.seconds = k, time.now() - start
     report.period_p50_ms, report.period_p99_ms = _percentile(periods, 50), _percentile(periods, 99)
     report.period_max_ms = max(periods) * 1000.0 if periods else 0.0
     report.goals, report.positions = run.goals.copy(), run.positions.copy()

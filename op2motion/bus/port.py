@@ -7,7 +7,10 @@ character devices, a watchdog for one, has effects), and a port another program 
 files (the stock framework takes no lock) and then ``TIOCEXCL`` so that nobody else opens it while we drive the
 robot. A pseudo-terminal (an emulated robot) gets the lock only: its other side belongs to the emulator, which may
 well hold the terminal side open too. The port runs at
-1 Mbps, raw, with the FTDI's low-latency mode where the driver has it (a pseudo-terminal has none).
+1 Mbps, raw. A USB serial adapter's latency timer is set to 1 ms (:func:`low_latency`: ``ASYNC_LOW_LATENCY``, and
+the ``latency_timer`` file in sysfs where the driver has one and we may write it) and read back, so that what was
+achieved is known (:attr:`Port.latency_timer_ms`, :attr:`Port.low_latency`) rather than hoped for; a
+pseudo-terminal has none.
 
 :class:`Port` reads and writes with deadlines (``select``): nothing here blocks forever. A port that fails mid-run
 (the USB cable pulled) raises :class:`PortFailed` (a check that ran and failed: exit 1).
@@ -22,8 +25,9 @@ import select
 import stat
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
+from op2motion.bus.clock import REAL, Clock
 from op2motion.errors import CheckFailed, InputError
 
 BAUD = 1_000_000                   # the OP2's bus: Dynamixel baud number 1
@@ -31,10 +35,18 @@ WRITE_TIMEOUT_S = 0.05             # a write that cannot go out in this long mea
 READ_CHUNK = 4096
 TTY_DRIVERS = ("tty", "pts", "ttyS", "ttyUSB", "ttyACM", "ttyAMA", "usb/tty", "/dev/tty")
 PARAM = "port"
+SYSFS_TIMER = "/sys/bus/usb-serial/devices/{name}/latency_timer"
 
 
 class PortFailed(CheckFailed):
     """The port stopped working mid-run (unplugged, I/O error, stuck)."""
+
+
+def sysfs_timer_path(port_path: str) -> str:
+    """Where Linux's ftdi_sio shows the port's latency timer (for ``/dev/ttyUSB0``:
+    ``/sys/bus/usb-serial/devices/ttyUSB0/latency_timer``)."""
+    name = os.path.basename(os.path.realpath(port_path)) if port_path.startswith("/") else "ttyUSB0"
+    return SYSFS_TIMER.format(name=name if name.startswith("ttyUSB") else "ttyUSB0")
 
 
 def _drivers() -> dict[int, set[str]] | None:
@@ -112,12 +124,33 @@ def holders(device: os.stat_result, skip: int | None = None) -> list[tuple[int, 
     return found
 
 
+class PortLike(Protocol):
+    """What the client needs of a port: a real one (:class:`Port`) or an in-process emulated OP2's
+    (:class:`~op2motion.bus.emulator.lockstep.LockstepPort`). ``read`` takes a deadline on ``clock``."""
+
+    path: str
+    clock: Clock
+    latency_timer_ms: int | None
+    low_latency: str
+
+    def write(self, data: bytes) -> None: ...
+
+    def read(self, deadline: float) -> bytes: ...
+
+    def flush_input(self) -> bytes: ...
+
+    def close(self) -> None: ...
+
+
 class Port:
     """An open serial port: raw, exclusive, every call bounded by a deadline."""
 
-    def __init__(self, path: str, serial: Any):
+    clock: Clock = REAL
+
+    def __init__(self, path: str, serial: Any, latency_timer_ms: int | None = None, low_latency: str = ""):
         self.path, self.serial = path, serial
         self.fd: int = serial.fileno()
+        self.latency_timer_ms, self.low_latency = latency_timer_ms, low_latency
 
     def write(self, data: bytes) -> None:
         """Send ``data`` within :data:`WRITE_TIMEOUT_S`."""
@@ -153,20 +186,21 @@ class Port:
         except OSError as exc:
             raise PortFailed(f"reading from {self.path} failed: {exc.strerror or exc}", PARAM) from None
 
-    def flush_input(self) -> None:
-        """Throw away whatever waits to be read (late replies of an earlier request)."""
-        import termios
-
-        with contextlib.suppress(OSError):
-            termios.tcflush(self.fd, termios.TCIFLUSH)
+    def flush_input(self) -> bytes:
+        """Take whatever waits to be read (late replies of an earlier request) and return it, for the caller to
+        count and drop."""
+        held = bytearray()
         for _ in range(64):
             try:
-                if not os.read(self.fd, READ_CHUNK):
-                    break
+                chunk = os.read(self.fd, READ_CHUNK)
             except (BlockingIOError, InterruptedError):
                 break
-            except OSError:
+            except OSError as exc:
+                raise PortFailed(f"reading from {self.path} failed: {exc.strerror or exc}", PARAM) from None
+            if not chunk:
                 break
+            held += chunk
+        return bytes(held)
 
     def close(self) -> None:
         """Release the port (and its lock)."""
@@ -213,11 +247,40 @@ def open_port(path: str, baud: int = BAUD) -> Port:
                                  f"must not hold the port at the same time)", PARAM)
             with contextlib.suppress(OSError):
                 fcntl.ioctl(ser.fileno(), termios.TIOCEXCL)
-        with contextlib.suppress(Exception):
-            ser.set_low_latency_mode(True)           # FTDI: 1 ms latency timer instead of 16 ms
+        timer, how = (None, "not a USB serial adapter (a pseudo-terminal)") if is_pseudo_terminal(device) else \
+            low_latency(ser, path)
     except BaseException:
         ser.close()
         raise
-    port = Port(path, ser)
+    port = Port(path, ser, timer, how)
     port.flush_input()
     return port
+
+
+def low_latency(ser: Any, path: str) -> tuple[int | None, str]:
+    """Ask the driver for low latency (``ASYNC_LOW_LATENCY``: ftdi_sio then sets the latency timer to 1 ms) and,
+    where sysfs shows the timer and it is still above 1 ms, write 1 into it; (the timer read back [ms] or None where
+    there is none to read, what happened in words)."""
+    said = []
+    try:
+        ser.set_low_latency_mode(True)
+        said.append("ASYNC_LOW_LATENCY set")
+    except (OSError, ValueError, AttributeError, NotImplementedError) as exc:
+        said.append(f"ASYNC_LOW_LATENCY refused ({getattr(exc, 'strerror', None) or exc})")
+    sysfs = Path(sysfs_timer_path(path))
+    timer = _read_timer(sysfs)
+    if timer is not None and timer > 1:
+        try:
+            sysfs.write_text("1")
+            said.append(f"wrote 1 to {sysfs}")
+        except OSError as exc:
+            said.append(f"could not write {sysfs} ({exc.strerror or exc})")
+        timer = _read_timer(sysfs)
+    return timer, "; ".join(said)
+
+
+def _read_timer(sysfs: Path) -> int | None:
+    try:
+        return int(sysfs.read_text().strip())
+    except (OSError, ValueError):
+        return None

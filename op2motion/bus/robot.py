@@ -2,8 +2,8 @@
 MX-28 (torque, gains, goal, moving speed, torque limit, present position/speed/load/voltage/temperature, error bits by
 name), through a :class:`~.client.Bus`.
 
-:meth:`OP2.connect` finds the board (nothing at ID 200 is bad input naming ``--port``: exit 2) and switches the
-servos' power on as the framework does (write 1 to register 24, then wait :data:`POWER_ON_WAIT_S`; a servo is silent
+:meth:`OP2.connect` finds the board (nothing at ID 200 is bad input naming ``--port``: exit 2), measures the link
+(:func:`~.link.measure_link`: the ping round trip, the USB adapter's tail) and switches the servos' power on as the framework does (write 1 to register 24, then wait :data:`POWER_ON_WAIT_S`; a servo is silent
 until powered). :meth:`OP2.status` reads the board and every servo in full. :meth:`OP2.take_control` switches the
 torque on without a jump: every goal is first set to where the joint is.
 """
@@ -11,13 +11,14 @@ torque on without a jump: every goal is first set to where the joint is.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 import numpy as np
 
 from op2motion.bus.client import Bus
+from op2motion.bus.clock import sleep
+from op2motion.bus.link import LinkCheck, measure_link, return_delays
 from op2motion.bus.tables import (
     CM730,
     CM730_ID,
@@ -56,10 +57,12 @@ class BoardState:
     tilt_rad: float
     words: dict[int, int]
     errors: tuple[str, ...]
+    return_delay: int = 0
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready (angles in degrees)."""
         return {"id": CM730_ID, "model_number": self.model_number, "firmware": self.firmware, "power": self.power,
+                "return_delay_us": self.return_delay * 2,
                 "voltage_v": round(self.voltage_v, 1), "buttons": self.buttons,
                 "gyro_rad_s": [round(float(v), 4) for v in self.gyro_rad_s],
                 "accel_m_s2": [round(float(v), 3) for v in self.accel_m_s2],
@@ -91,6 +94,7 @@ class ServoState:
     voltage_v: float = 0.0
     temperature_c: int = 0
     errors: tuple[str, ...] = field(default=())
+    return_delay: int = 0
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready (angles in degrees)."""
@@ -98,7 +102,8 @@ class ServoState:
             return {"id": self.id, "joint": self.joint, "answers": False}
         return {"id": self.id, "joint": self.joint, "answers": True, "model_number": self.model_number,
                 "model": "MX-28" if self.model_number == MX28.model_number else f"model {self.model_number}",
-                "firmware": self.firmware, "position_deg": round(math.degrees(self.position_rad), 2),
+                "firmware": self.firmware, "return_delay_us": self.return_delay * 2,
+                "position_deg": round(math.degrees(self.position_rad), 2),
                 "goal_deg": round(math.degrees(self.goal_rad), 2),
                 "speed_deg_s": round(math.degrees(self.speed_rad_s), 1), "load": round(self.load, 3),
                 "voltage_v": round(self.voltage_v, 1), "temperature_c": self.temperature_c,
@@ -129,13 +134,16 @@ class OP2:
         self.joint_of = {j.id: j.name for j in spec.joints}
         self.return_level: dict[int, int] = {}
         self.gyro_centre: dict[int, float] | None = None
+        self.link: LinkCheck | None = None
 
     # --- the board -------------------------------------------------------------------------------------------
     def connect(self, power: bool = True) -> None:
         """Find the board at ID 200 and (with ``power``) switch the servos' power on."""
+        port = self.bus.port
         if self.bus.ping(CM730_ID) is None:
-            raise NoBoard(f"nothing answers at ID {CM730_ID} on {self.bus.port.path} (expected the OP2's CM-730 "
+            raise NoBoard(f"nothing answers at ID {CM730_ID} on {port.path} (expected the OP2's CM-730 "
                           f"sub-controller: is this the robot's port, and is the robot switched on?)", "port")
+        self.link = measure_link(self.bus, CM730_ID, port.latency_timer_ms, port.low_latency)
         if power:
             self.power_on()
 
@@ -158,9 +166,11 @@ class OP2:
         gyro, accel = decode_span(self.imu, data, start)
         pitch, roll, tilt = attitude(accel)
         words = {c.register: _u16(data, c.register, start) for c in (*self.imu.gyro, *self.imu.accel)}
+        delay = data[CM730["return_delay_time"].address]
+        return_delays(self.bus.link, {CM730_ID: delay})
         return BoardState(_u16(data, 0, start), data[2], data[CM730["dynamixel_power"].address] == 1,
                           data[CM730["voltage"].address] * VOLTS_PER_UNIT, data[CM730["button"].address], gyro, accel,
-                          pitch, roll, tilt, words, reply.errors)
+                          pitch, roll, tilt, words, reply.errors, delay)
 
     def calibrate_gyro(self, samples: int = GYRO_SAMPLES) -> dict[int, float] | None:
         """Measure the gyro's zero-rate counts while the robot is still (:func:`~.imu.gyro_centres`); kept in
@@ -185,6 +195,7 @@ class OP2:
             return ServoState(device, joint, False)
         d = reply.params
         self.return_level[device] = d[MX28["status_return_level"].address]
+        return_delays(self.bus.link, {device: d[MX28["return_delay_time"].address]})
         def byte(name: str) -> int:
             return d[MX28[name].address]
 
@@ -197,7 +208,8 @@ class OP2:
             angle_of(word("goal_position"), self.spec), word("moving_speed"), word("torque_limit"),
             angle_of(word("present_position"), self.spec),
             signed(word("present_speed")) * SPEED_RAD_S_PER_UNIT, signed(word("present_load")) / TORQUE_LIMIT_FULL,
-            byte("present_voltage") * VOLTS_PER_UNIT, byte("present_temperature"), reply.errors)
+            byte("present_voltage") * VOLTS_PER_UNIT, byte("present_temperature"), reply.errors,
+            byte("return_delay_time"))
 
     def servos(self) -> list[ServoState]:
         """Every servo of the spec, in ID order."""

@@ -132,9 +132,10 @@ class Watch:
     def _joint(self, device: int) -> str | None:
         return self.joints[self.ids.index(device)] if device in self.ids else None
 
-    def reads(self, answered: set[int]) -> Fault | None:
-        """Count the missed reads of this tick; a fault once a device has missed :data:`BLIND_TICKS` in a row."""
-        for device in self.missed:
+    def reads(self, answered: set[int], asked: set[int] | None = None) -> Fault | None:
+        """Count the missed reads of this tick (of the devices ``asked``, default all); a fault once a device has
+        missed :data:`BLIND_TICKS` reads in a row."""
+        for device in self.missed if asked is None else asked & self.missed.keys():
             self.missed[device] = 0 if device in answered else self.missed[device] + 1
         for device, n in self.missed.items():
             if n >= BLIND_TICKS:

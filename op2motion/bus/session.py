@@ -1,6 +1,9 @@
-"""One session with the robot: the port opened (:func:`~.port.open_port`), the board found and the servos powered
-(:meth:`~.robot.OP2.connect`), the whole robot read (:class:`RobotStatus`), and before a motion the preflight and
-the torque switched on without a jump (:meth:`Session.ready_for_motion`)."""
+"""One session with the robot: the port opened (:func:`~.port.open_port`; ``lockstep[:...]``: an emulated OP2 in
+this process, :mod:`.emulator.lockstep`), the board found, the link measured and the servos powered
+(:meth:`~.robot.OP2.connect`), the whole robot read (:class:`RobotStatus`: with the link and each servo's return
+delay), and before a motion the preflight, the tick's read plan from the link's budget (a link too slow for the
+8 ms loop is refused, naming the latency timer: exit 2, nothing moved) and the torque switched on without a jump
+(:meth:`Session.ready_for_motion`)."""
 
 from __future__ import annotations
 
@@ -11,11 +14,14 @@ from typing import Any
 import numpy as np
 
 from op2motion.bus.client import Bus
-from op2motion.bus.port import Port, open_port
+from op2motion.bus.link import LinkCheck, ReadPlan, read_plan, too_slow
+from op2motion.bus.port import PortLike, open_port
 from op2motion.bus.robot import OP2, BoardState, ServoState
 from op2motion.bus.safety import Fault, preflight, preflight_problems
-from op2motion.errors import CheckFailed
+from op2motion.errors import CheckFailed, InputError
 from op2motion.robot.spec import Spec
+
+MIN_SERVOS_PER_TICK = 4            # fewer a tick, and each servo is read less often than every 40 ms
 
 
 @dataclass(frozen=True)
@@ -26,6 +32,20 @@ class RobotStatus:
     servos: tuple[ServoState, ...]
     problems: tuple[Fault, ...]
     powered_now: bool
+    link: LinkCheck | None = None
+    plan: ReadPlan | None = None
+
+    @property
+    def warnings(self) -> list[str]:
+        """What is not a fault but costs the loop: servos whose return delay keeps the tick from reading them all."""
+        if self.plan is None or self.plan.servos_per_tick >= self.plan.count:
+            return []
+        slow = [s for s in self.servos if s.answers and s.return_delay > 0]
+        worst = max((s.return_delay for s in slow), default=0)
+        who = f"{len(slow)} servos have a return delay of up to {worst} ({worst * 2} µs each)" if slow else \
+            "the link's tail is long"
+        return [f"{who}: the 8 ms loop can read only {self.plan.servos_per_tick} of {self.plan.count} servos a "
+                f"tick; set it to 0 with 'op2motion robot setup --port PORT --return-delay 0'"]
 
     @property
     def servo_angles(self) -> np.ndarray:
@@ -40,14 +60,16 @@ class RobotStatus:
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready."""
         return {"ok": self.ok, "board": self.board.as_dict(), "servos": [s.as_dict() for s in self.servos],
-                "problems": [p.as_dict() for p in self.problems], "powered_now": self.powered_now}
+                "problems": [p.as_dict() for p in self.problems], "powered_now": self.powered_now,
+                "link": None if self.link is None else self.link.as_dict(),
+                "read_plan": None if self.plan is None else self.plan.as_dict(), "warnings": self.warnings}
 
     def lines(self) -> list[str]:
         """For people: the board, one line per servo, the problems."""
         b = self.board
         out = [f"CM-730 (ID 200): model {b.model_number:#06x}, firmware {b.firmware}, servos' power "
                f"{'on' if b.power else 'off'}{' (switched on now)' if self.powered_now else ''}, supply "
-               f"{b.voltage_v:.1f} V",
+               f"{b.voltage_v:.1f} V, return delay {b.return_delay * 2} µs",
                f"  IMU: gyro {', '.join(f'{v:+.3f}' for v in b.gyro_rad_s)} rad/s, accelerometer "
                f"{', '.join(f'{v:+.2f}' for v in b.accel_m_s2)} m/s² (x forward, y left, z up): tilt "
                f"{math.degrees(b.tilt_rad):.1f}° (pitch {math.degrees(b.pitch_rad):+.1f}°, roll "
@@ -58,23 +80,44 @@ class RobotStatus:
                 continue
             model = "MX-28" if s.model_number == 29 else f"model {s.model_number}"
             out.append(f"  {s.id:2d} {s.joint:12s} {model} fw {s.firmware}: {math.degrees(s.position_rad):+7.2f}°, "
-                       f"{s.temperature_c:3d} °C, {s.voltage_v:4.1f} V, torque {'on ' if s.torque_on else 'off'}"
+                       f"{s.temperature_c:3d} °C, {s.voltage_v:4.1f} V, torque {'on ' if s.torque_on else 'off'}, "
+                       f"return delay {s.return_delay * 2} µs{' (SLOW)' if s.return_delay and self.warnings else ''}"
                        f"{', ERRORS: ' + ', '.join(s.errors) if s.errors else ''}")
+        if self.link is not None:
+            out.insert(1, f"  {self.link.describe()}" + (
+                f"; the 8 ms loop's read: {self.plan.servos_per_tick} of {self.plan.count} servos a tick, "
+                f"{self.plan.tick_s * 1000:.2f} ms ({self.plan.wire_s * 1000:.2f} ms on the wire)"
+                if self.plan is not None else ""))
         out += [f"  problem: {p.describe()}" for p in self.problems]
+        out += [f"  warning: {w}" for w in self.warnings]
         return out
 
 
 class Session:
     """The robot on ``port`` for the length of a ``with`` block (see the module docstring)."""
 
-    def __init__(self, port: str, spec: Spec):
-        self.path, self.spec = port, spec
-        self.port: Port | None = None
+    def __init__(self, port: str | PortLike, spec: Spec):
+        self.spec = spec
+        self.given: PortLike | None = None if isinstance(port, str) else port
+        self.path = port if isinstance(port, str) else port.path
+        self.port: PortLike | None = None
         self.robot: OP2 = None  # type: ignore[assignment]
         self.powered_now = False
+        self.emulated: Any = None                       # an emulator this session made (``lockstep:``), or None
+
+    def _open(self) -> PortLike:
+        if self.given is not None:
+            return self.given
+        from op2motion.bus.emulator.lockstep import is_lockstep, lockstep_robot
+
+        if is_lockstep(self.path):
+            port = lockstep_robot(self.path, self.spec)
+            self.emulated = port.emulator
+            return port
+        return open_port(self.path)
 
     def __enter__(self) -> "Session":
-        self.port = open_port(self.path)
+        self.port = self._open()
         try:
             self.robot = OP2(Bus(self.port), self.spec)
             self.robot.connect(power=False)
@@ -85,8 +128,10 @@ class Session:
         return self
 
     def __exit__(self, *exc: object) -> None:
-        if self.port is not None:
+        if self.port is not None and self.given is None:
             self.port.close()
+        if self.emulated is not None:
+            self.emulated.close()
 
     def status(self) -> RobotStatus:
         """The board and every servo read in full, with the problems."""
@@ -94,10 +139,22 @@ class Session:
         if board is None:
             raise CheckFailed("the sub-controller (ID 200) stopped answering")
         servos = tuple(self.robot.servos())
-        return RobotStatus(board, servos, tuple(preflight_problems(board, servos, self.spec)), self.powered_now)
+        return RobotStatus(board, servos, tuple(preflight_problems(board, servos, self.spec)), self.powered_now,
+                           self.robot.link, read_plan(self.robot.bus.link, self.robot.ids))
 
     def preflight(self, status: RobotStatus) -> None:
-        """Refuse (exit 1) a robot unfit for a motion (:func:`~.safety.preflight`)."""
+        """Refuse (exit 1) a robot unfit for a motion (:func:`~.safety.preflight`), and (exit 2) a link too slow for
+        the 8 ms loop: not even the board fits a tick's read (the latency timer), or fewer than
+        :data:`MIN_SERVOS_PER_TICK` servos do (their return delay)."""
+        plan = status.plan or read_plan(self.robot.bus.link, self.robot.ids)
+        if plan.servos_per_tick == 0:
+            board = read_plan(self.robot.bus.link, ()).tick_s
+            raise too_slow(self.robot.link or LinkCheck(None, "", (), self.robot.bus.link.tail_s), board, self.path)
+        if plan.servos_per_tick < min(MIN_SERVOS_PER_TICK, plan.count):
+            raise InputError(f"the servos' return delay is too long for the 8 ms loop: it can read only "
+                             f"{plan.servos_per_tick} of {plan.count} servos a tick (at least {MIN_SERVOS_PER_TICK} "
+                             f"needed); {status.warnings[0].split(': ', 1)[1] if status.warnings else ''}",
+                             "port")
         preflight(status.board, status.servos, self.spec)
 
     def take_control(self, status: RobotStatus, p_gains: dict[int, int] | None = None) -> None:

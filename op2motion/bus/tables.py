@@ -1,10 +1,23 @@
 """The control tables of the OP2's devices as data: the MX-28 (Protocol 1.0, model number 29) and the CM-730
-sub-controller (ID 200), register by register: address, size [bytes], access, default, unit.
+sub-controller (ID 200), register by register: address, size [bytes], access, default, unit; and the values a write
+may give each writable register.
 
-Sources: ROBOTIS e-manual, MX-28 (Protocol 1.0) control table (emanual.robotis.com/docs/en/dxl/mx/mx-28); ROBOTIS
-DARwIn-OP framework v1.6.0 ``Framework/include/CM730.h`` and ``MX28.h`` (the CM-730's addresses, ``MAXNUM_ADDRESS``
-81); ``reference/bus_notes.md``. Multi-byte registers are little-endian words. The OP2's servos run at 1 Mbps
-(baud number 1) with a return delay of 0 (the framework's firmware installer sets both).
+Sources: ROBOTIS e-manual, MX-28 (Protocol 1.0) control table (emanual.robotis.com/docs/en/dxl/mx/mx-28; repository
+ROBOTIS-GIT/emanual); ROBOTIS DARwIn-OP / OP2 framework ``Framework/include/CM730.h`` and ``MX28.h`` (forks
+darwinop-ens/darwin-op, Yen60229/Robotis-OP2-WeightLifting); the CM-730 firmware ``CM_DXL_COM.c`` / ``CM_DXL_COM.h``
+(ROBOTIS 2010, model 0x7300, firmware 0x13); ``reference/bus_notes.md``. Multi-byte registers are little-endian
+words. The OP2's servos run at 1 Mbps (baud number 1) with a return delay of 0 (the framework's firmware installer
+sets both).
+
+* MX-28: the e-manual's registers, and the ones only the framework's ``MX28.h`` names (10 system data 2,
+  19 operating mode, 45 pause time, 50-67 reserved, potentiometer, PWM output and the PID terms): read-only here and
+  0 (what a real servo reports there is not documented). Byte 29 (``P_RESERVED``) is no register: the framework's
+  sync write of 26..31 writes it. Value limits: the e-manual's ranges.
+* CM-730: ``CM730.h`` names 0..80 (``MAXNUM_ADDRESS`` 81); the firmware build whose ``CM_DXL_COM.h`` has
+  ``CONTROL_TABLE_LEN`` 90 adds 81..89 (buzzer data, remote-control data, ZigBee ID), so the table runs to 89. Its
+  ``gbpParameterRange`` gives every byte's range: bytes of no register are read-only (range error), the LED panel
+  takes 0..7, the head and eye LEDs 15-bit colours, the power switch 0..1. Power-on LED colours from its
+  ``ProcessInit`` (head green, eye blue).
 
 Speed and load registers carry a magnitude in bits 0-9 and the direction in bit 10 (set: clockwise, i.e. the
 servo angle decreasing); :func:`signed` and :func:`magnitude` convert.
@@ -48,16 +61,24 @@ class Register:
 
 @dataclass(frozen=True)
 class ControlTable:
-    """A device's control table: its registers and size [bytes]."""
+    """A device's control table: its registers and size [bytes]; ``limits`` {name: (lowest, highest)} the values a
+    write may give a register (others: whatever fits its size); ``gaps_writable`` whether a write may cover bytes of
+    no register (they take what is written) or is refused with a range error."""
 
     device: str
     model_number: int
     size: int
     registers: tuple[Register, ...]
+    limits: dict[str, tuple[int, int]] = field(default_factory=dict, repr=False, compare=False)
+    gaps_writable: bool = True
     by_name: dict[str, Register] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "by_name", {r.name: r for r in self.registers})
+
+    def limits_of(self, register: Register) -> tuple[int, int]:
+        """The lowest and highest value a write may give ``register``."""
+        return self.limits.get(register.name, (0, (1 << (8 * register.size)) - 1))
 
     def __getitem__(self, name: str) -> Register:
         try:
@@ -87,6 +108,17 @@ def _r(name: str, address: int, size: int, access: str, default: int | None, uni
     return Register(name, address, size, access, default, unit, area)
 
 
+#: The e-manual's ranges of the MX-28's writable registers (Protocol 1.0).
+MX28_LIMITS = {
+    "id": (0, 253), "baud_rate": (0, 254), "return_delay_time": (0, 254), "cw_angle_limit": (0, 4095),
+    "ccw_angle_limit": (0, 4095), "temperature_limit": (0, 100), "min_voltage_limit": (50, 250),
+    "max_voltage_limit": (50, 250), "max_torque": (0, TORQUE_LIMIT_FULL), "status_return_level": (0, 2),
+    "alarm_led": (0, 127), "alarm_shutdown": (0, 127), "resolution_divider": (1, 4), "torque_enable": (0, 1),
+    "led": (0, 1), "d_gain": (0, 254), "i_gain": (0, 254), "p_gain": (0, 254), "goal_position": (0, 4095),
+    "moving_speed": (0, 1023), "torque_limit": (0, TORQUE_LIMIT_FULL), "lock": (0, 1), "punch": (0, 1023),
+    "goal_acceleration": (0, 254),
+}
+
 MX28 = ControlTable("MX-28", MX28_MODEL_NUMBER, 74, (
     _r("model_number", 0, 2, "R", MX28_MODEL_NUMBER, area="EEPROM"),
     _r("firmware_version", 2, 1, "R", 30, area="EEPROM"),
@@ -95,6 +127,7 @@ MX28 = ControlTable("MX-28", MX28_MODEL_NUMBER, 74, (
     _r("return_delay_time", 5, 1, "RW", 250, "2 µs", "EEPROM"),
     _r("cw_angle_limit", 6, 2, "RW", 0, "tick", "EEPROM"),
     _r("ccw_angle_limit", 8, 2, "RW", 4095, "tick", "EEPROM"),
+    _r("system_data2", 10, 1, "R", 0, "MX28.h only", "EEPROM"),
     _r("temperature_limit", 11, 1, "RW", 80, "°C", "EEPROM"),
     _r("min_voltage_limit", 12, 1, "RW", 60, "0.1 V", "EEPROM"),
     _r("max_voltage_limit", 13, 1, "RW", 160, "0.1 V", "EEPROM"),
@@ -102,6 +135,7 @@ MX28 = ControlTable("MX-28", MX28_MODEL_NUMBER, 74, (
     _r("status_return_level", 16, 1, "RW", 2, "0 ping only, 1 reads, 2 all", "EEPROM"),
     _r("alarm_led", 17, 1, "RW", 36, "error bits", "EEPROM"),
     _r("alarm_shutdown", 18, 1, "RW", 36, "error bits", "EEPROM"),
+    _r("operating_mode", 19, 1, "R", 0, "MX28.h only", "EEPROM"),
     _r("multi_turn_offset", 20, 2, "RW", 0, "tick", "EEPROM"),
     _r("resolution_divider", 22, 1, "RW", 1, "", "EEPROM"),
     _r("torque_enable", 24, 1, "RW", 0),
@@ -117,14 +151,35 @@ MX28 = ControlTable("MX-28", MX28_MODEL_NUMBER, 74, (
     _r("present_load", 40, 2, "R", None, "1/1023 of the most, bit 10 clockwise"),
     _r("present_voltage", 42, 1, "R", None, "0.1 V"),
     _r("present_temperature", 43, 1, "R", None, "°C"),
-    _r("registered", 44, 1, "R", 0),
+    _r("registered", 44, 1, "R", 0, "1: a REG_WRITE waits for ACTION"),
+    _r("pause_time", 45, 1, "R", 0, "MX28.h only"),
     _r("moving", 46, 1, "R", 0),
     _r("lock", 47, 1, "RW", 0),
     _r("punch", 48, 2, "RW", 0),
+    _r("reserved4", 50, 1, "R", 0, "MX28.h only"),
+    _r("reserved5", 51, 1, "R", 0, "MX28.h only"),
+    _r("pot", 52, 2, "R", 0, "MX28.h only"),
+    _r("pwm_out", 54, 2, "R", 0, "MX28.h only"),
+    _r("p_error", 56, 2, "R", 0, "MX28.h only"),
+    _r("i_error", 58, 2, "R", 0, "MX28.h only"),
+    _r("d_error", 60, 2, "R", 0, "MX28.h only"),
+    _r("p_error_out", 62, 2, "R", 0, "MX28.h only"),
+    _r("i_error_out", 64, 2, "R", 0, "MX28.h only"),
+    _r("d_error_out", 66, 2, "R", 0, "MX28.h only"),
     _r("goal_acceleration", 73, 1, "RW", 0, "8.583 °/s²"),
-))
+), MX28_LIMITS)
 
-CM730 = ControlTable("CM-730", CM730_MODEL_NUMBER, 81, (
+LED_COLOUR_MAX = 0x7FFF            # the head and eye LEDs: 5 bits each of red, green, blue (high byte at most 127)
+LED_HEAD_AT_POWER_ON = 0x03E0      # CM_DXL_COM.c ProcessInit: the head LED green ...
+LED_EYE_AT_POWER_ON = 0x7C00       # ... and the eye LED blue
+
+#: The CM-730 firmware's ranges (``gbpParameterRange`` of CM_DXL_COM.c).
+CM730_LIMITS = {
+    "id": (0, 253), "baud_rate": (1, 254), "return_delay_time": (0, 254), "status_return_level": (0, 2),
+    "dynamixel_power": (0, 1), "led_panel": (0, 7), "led_head": (0, LED_COLOUR_MAX), "led_eye": (0, LED_COLOUR_MAX),
+}
+
+CM730 = ControlTable("CM-730", CM730_MODEL_NUMBER, 90, (
     _r("model_number", 0, 2, "R", CM730_MODEL_NUMBER, area="EEPROM"),
     _r("firmware_version", 2, 1, "R", 0x0F, area="EEPROM"),
     _r("id", 3, 1, "RW", CM730_ID, area="EEPROM"),
@@ -132,9 +187,9 @@ CM730 = ControlTable("CM-730", CM730_MODEL_NUMBER, 81, (
     _r("return_delay_time", 5, 1, "RW", 0, "2 µs", "EEPROM"),
     _r("status_return_level", 16, 1, "RW", 2, "0 ping only, 1 reads, 2 all", "EEPROM"),
     _r("dynamixel_power", 24, 1, "RW", 0, "1: the servos' supply on"),
-    _r("led_panel", 25, 1, "RW", 0, "bits"),
-    _r("led_head", 26, 2, "RW", 0, "RGB 5:5:5"),
-    _r("led_eye", 28, 2, "RW", 0, "RGB 5:5:5"),
+    _r("led_panel", 25, 1, "RW", 0, "bits 0-2"),
+    _r("led_head", 26, 2, "RW", LED_HEAD_AT_POWER_ON, "RGB 5:5:5"),
+    _r("led_eye", 28, 2, "RW", LED_EYE_AT_POWER_ON, "RGB 5:5:5"),
     _r("button", 30, 1, "R", 0, "bit 0 mode, bit 1 start"),
     _r("gyro_z", 38, 2, "R", 512, "count, 512 = 0"),
     _r("gyro_y", 40, 2, "R", 512, "count, 512 = 0"),
@@ -149,7 +204,10 @@ CM730 = ControlTable("CM-730", CM730_MODEL_NUMBER, 81, (
     _r("right_mic", 67, 2, "R", 0),
     _r("adc10", 69, 2, "R", 0), _r("adc11", 71, 2, "R", 0), _r("adc12", 73, 2, "R", 0), _r("adc13", 75, 2, "R", 0),
     _r("adc14", 77, 2, "R", 0), _r("adc15", 79, 2, "R", 0),
-))
+    _r("buzzer_data0", 81, 1, "RW", 0), _r("buzzer_data1", 82, 1, "RW", 0),
+    _r("tx_remocon_data", 83, 2, "RW", 0), _r("rx_remocon_data", 85, 2, "R", 0),
+    _r("rx_remocon_data_arrived", 87, 1, "R", 0), _r("zigbee_id", 88, 2, "R", 0),
+), CM730_LIMITS, gaps_writable=False)
 
 #: The framework's per-tick read of the board: 30 bytes from the power register (24..53: power, LEDs, buttons,
 #: gyro, accelerometer, voltage).

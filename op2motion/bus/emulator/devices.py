@@ -1,12 +1,29 @@
 """The emulated devices' control tables, byte for byte: the CM-730 (ID 200) and one MX-28 per joint.
 
-A :class:`Device` holds its table (:mod:`..tables`) and answers the instructions one device answers: a read of a
-span, a write (a read-only byte, a value out of its register's range or a span beyond the table is a *range* error
-and nothing is written; bytes between registers take what is written, as the framework's sync write of register
-29 needs), the status error byte (the device's standing conditions plus the instruction's own error), and its status
-return level (0: only pings, 1: pings and reads, 2: everything). A servo (:class:`Servo`) adds what its firmware
-does with its registers: power-up defaults, the alarm shutdown (an error bit in ``alarm_shutdown`` switches the
-torque off), the latched overload, the input-voltage and overheating conditions against its EEPROM limits.
+A :class:`Device` holds its table (:mod:`..tables`) and answers what one device answers: a READ of a span (one
+beyond the table is a range error without data), a WRITE, its status error byte (the standing conditions before the
+instruction, plus the instruction's own error) and its status return level (0: only pings, 1: and reads, 2: all).
+
+A WRITE is checked as the CM-730 firmware checks it (``WriteControlTableRangeCheck`` of ``CM_DXL_COM.c``) before
+anything is written: a span beyond the table, one starting on the high byte of a word or ending on its low byte,
+a read-only register, or a value out of its register's range (:attr:`..tables.ControlTable.limits`) is a range
+error and nothing is written. Bytes of no register take what is written on the MX-28 (the framework's sync write
+covers its byte 29) and are refused on the CM-730 (its firmware's range table makes them read-only).
+
+The :class:`Board` (CM-730) switches the servos' power (register 24) and has no REG_WRITE (its firmware answers it,
+and ACTION, with the instruction error). A :class:`Servo` (MX-28) adds what its firmware does with its registers:
+power-up defaults, the alarm shutdown (an error bit in ``alarm_shutdown`` switches the torque off), the latched
+overload, the input-voltage and overheating conditions against its EEPROM limits, REG_WRITE and ACTION (Registered,
+address 44, is 1 while a write waits; ACTION without one is an instruction error: Protocol 1.0 e-manual), and the
+angle limits below.
+
+Angle limits (MX-28 e-manual: the CW / CCW angle limit is the smallest / largest goal position; a goal out of that
+range sets the angle-limit error bit and triggers the alarm as set in alarm LED / shutdown). In joint mode (the two
+limits not both 0 (wheel mode) nor both 4095 (multi-turn mode)) a goal out of the limits sets bit 1 (value 2) in the
+reply and is applied clipped to the nearest limit: the e-manual says the limits restrain the motion but not what the
+register then holds, and the CM-730 firmware, built on the servos' code, still applies a write whose check gave any
+error but the range error. The emulator keeps the clipped goal so that the body, which drives to the register, stops
+at the limit as the servo does.
 """
 
 from __future__ import annotations
@@ -14,18 +31,16 @@ from __future__ import annotations
 import struct
 
 from op2motion.bus import protocol as p
-from op2motion.bus.tables import CM730, CM730_ID, MX28, TORQUE_LIMIT_FULL, ControlTable
+from op2motion.bus.tables import CM730, CM730_ID, MX28, ControlTable, Register
 
 MIN_VOLTS, MAX_VOLTS = MX28["min_voltage_limit"].address, MX28["max_voltage_limit"].address
 TEMPERATURE_LIMIT, ALARM_SHUTDOWN = MX28["temperature_limit"].address, MX28["alarm_shutdown"].address
 TORQUE_ENABLE, MOVING, PRESENT = MX28["torque_enable"].address, MX28["moving"].address, MX28["present_position"].address
 PRESENT_LAYOUT = struct.Struct("<HHHBB")          # present position, speed, load, voltage, temperature (36..43)
-
-#: Largest value a writable register takes (others: what fits its size).
-RANGES = {"torque_enable": 1, "p_gain": 254, "i_gain": 254, "d_gain": 254, "goal_position": 4095,
-          "moving_speed": 1023, "torque_limit": TORQUE_LIMIT_FULL, "max_torque": TORQUE_LIMIT_FULL,
-          "dynamixel_power": 1, "status_return_level": 2, "temperature_limit": 150, "cw_angle_limit": 4095,
-          "ccw_angle_limit": 4095, "id": 253}
+GOAL, CW_LIMIT, CCW_LIMIT = MX28["goal_position"], MX28["cw_angle_limit"], MX28["ccw_angle_limit"]
+EEPROM_END = MX28["torque_enable"].address        # 24: the EEPROM area (kept over power cycles) ends
+WHEEL_MODE = (0, 0)                               # CW and CCW angle limits both 0
+MULTI_TURN_MODE = (4095, 4095)                    # ... both 4095
 
 
 class Device:
@@ -36,6 +51,9 @@ class Device:
         self.table = table.defaults()
         self.table[table["id"].address] = device_id
         self.span = {r.name: (r.address, r.end) for r in table.registers}     # looked up hundreds of times a tick
+        self.covers: list[Register | None] = [None] * table.size              # the register holding each byte
+        for r in table.registers:
+            self.covers[r.address:r.end] = [r] * r.size
 
     def u16(self, name: str) -> int:
         """A word register."""
@@ -67,31 +85,46 @@ class Device:
             return self.conditions() | p.RANGE, None
         return self.conditions(), bytes(self.table[address:address + length])
 
-    def write(self, address: int, data: bytes) -> int:
-        """Apply a WRITE; its error byte."""
+    def check(self, address: int, data: bytes) -> int:
+        """The range error a WRITE of ``data`` at ``address`` gets (0: none; see the module docstring)."""
         end = address + len(data)
         if not data or end > self.spec.size:
-            return self.conditions() | p.RANGE
-        changes: dict[str, int] = {}
-        for r in self.spec.registers:
-            if r.end <= address or r.address >= end:
+            return p.RANGE
+        a = address
+        while a < end:
+            r = self.covers[a]
+            if r is None:
+                if not self.spec.gaps_writable:
+                    return p.RANGE
+                a += 1
                 continue
-            if r.access != "RW":
-                return self.conditions() | p.RANGE
-            if r.address < address or r.end > end:                  # half a word: take the other half as it is
-                merged = bytearray(self.table[r.address:r.end])
-                for a in range(max(r.address, address), min(r.end, end)):
-                    merged[a - r.address] = data[a - address]
-                value = int.from_bytes(merged, "little")
-            else:
-                value = int.from_bytes(data[r.address - address:r.end - address], "little")
-            if value > RANGES.get(r.name, (1 << (8 * r.size)) - 1):
-                return self.conditions() | p.RANGE
-            changes[r.name] = value
-        self.table[address:end] = data
-        for name, value in changes.items():
-            self.changed(name, value)
-        return self.conditions()
+            if r.address < address or r.end > end or r.access != "RW":   # half a word, or read-only
+                return p.RANGE
+            low, high = self.spec.limits_of(r)
+            if not low <= int.from_bytes(data[r.address - address:r.end - address], "little") <= high:
+                return p.RANGE
+            a = r.end
+        return 0
+
+    def verdict(self, address: int, data: bytes) -> int:
+        """The error bits a WRITE of ``data`` at ``address`` gets, without writing (a plain device: the range)."""
+        return self.check(address, data)
+
+    def write(self, address: int, data: bytes) -> int:
+        """Apply a WRITE unless it is refused with a range error; its error byte (the conditions as it arrived)."""
+        standing = self.conditions()
+        error = self.verdict(address, data)
+        if not error & p.RANGE:
+            self.apply(address, data)
+        return standing | error
+
+    def apply(self, address: int, data: bytes) -> None:
+        """Write checked bytes; the firmware reacts to each register written."""
+        self.table[address:address + len(data)] = data
+        for a in range(address, address + len(data)):
+            r = self.covers[a]
+            if r is not None and r.address == a:
+                self.changed(r.name, self.get(r.name))
 
     def changed(self, name: str, value: int) -> None:
         """A register was written (the firmware's reaction)."""
@@ -108,6 +141,14 @@ class Board(Device):
         if name == "dynamixel_power":
             self.power_changed = True
 
+    def cold_start(self) -> None:
+        """The board just switched on: its writable RAM registers at their power-on values (the servos' power off,
+        the LEDs as the firmware's ``ProcessInit`` sets them); the sensors keep what they measure."""
+        for r in CM730.registers:
+            if r.area == "RAM" and r.access == "RW":
+                self.set(r.name, r.default or 0)
+        self.power_changed = False
+
 
 class Servo(Device):
     """One MX-28 (see the module docstring); the body (:mod:`.body`) fills its present-state registers."""
@@ -119,16 +160,25 @@ class Servo(Device):
         self.overloaded = False
         self.temperature_c = 0.0
         self.voltage_v = 0.0
+        self.waiting: tuple[int, bytes] | None = None              # a REG_WRITE's (address, data) until ACTION
 
     def power_up(self, present_ticks: int) -> None:
-        """RAM to its power-up values: torque off, goal where the joint is, torque limit = max torque."""
-        eeprom = bytes(self.table[:24])
+        """RAM to its power-up values: torque off, goal where the joint is, torque limit = max torque, nothing
+        registered."""
+        eeprom = bytes(self.table[:EEPROM_END])
         self.table[:] = MX28.defaults()
-        self.table[:24] = eeprom
+        self.table[:EEPROM_END] = eeprom
         self.set("goal_position", present_ticks)
         self.set("present_position", present_ticks)
         self.set("torque_limit", self.get("max_torque"))
         self.overloaded = False
+        self.waiting = None
+
+    def power_off(self) -> None:
+        """Its supply switched off: no torque, and a registered write is lost with the RAM."""
+        self.set("torque_enable", 0)
+        self.set("registered", 0)
+        self.waiting = None
 
     def conditions(self) -> int:
         error = 0
@@ -156,3 +206,52 @@ class Servo(Device):
         if name == "torque_enable" and value == 1:
             self.overloaded = False                                 # re-enabling clears the latched overload
             self.enforce_alarms()
+
+    def verdict(self, address: int, data: bytes) -> int:
+        """The range error, or the angle-limit error of a goal out of the limits as they will be after the write."""
+        error = self.check(address, data)
+        if error or not address <= GOAL.address < address + len(data):
+            return error
+        after = bytearray(self.table)
+        after[address:address + len(data)] = data
+        goal = int.from_bytes(after[GOAL.address:GOAL.end], "little")
+        return p.ANGLE_LIMIT if _clipped(after, goal) != goal else 0
+
+    def apply(self, address: int, data: bytes) -> None:
+        """Write; a goal out of the angle limits (joint mode) is clipped to the nearest one and raises the alarm."""
+        super().apply(address, data)
+        if not address <= GOAL.address < address + len(data):
+            return
+        goal = self.u16("goal_position")
+        clipped = _clipped(self.table, goal)
+        if clipped != goal:
+            self.set("goal_position", clipped)
+            if self.table[ALARM_SHUTDOWN] & p.ANGLE_LIMIT:
+                self.table[TORQUE_ENABLE] = 0
+
+    def reg_write(self, address: int, data: bytes) -> int:
+        """REG_WRITE: keep the write for ACTION (Registered = 1) unless it is refused; its error byte (the errors
+        the write will get)."""
+        standing = self.conditions()
+        error = self.verdict(address, data)
+        if not error & p.RANGE:
+            self.waiting = (address, bytes(data))
+            self.set("registered", 1)
+        return standing | error
+
+    def action(self) -> int:
+        """ACTION: apply the registered write and clear Registered; without one, the instruction error."""
+        if self.waiting is None:
+            return self.conditions() | p.INSTRUCTION
+        (address, data), self.waiting = self.waiting, None
+        self.set("registered", 0)
+        return self.write(address, data)
+
+
+def _clipped(table: bytearray, goal: int) -> int:
+    """``goal`` within the angle limits of ``table`` in joint mode (as it is in wheel and multi-turn mode)."""
+    cw = int.from_bytes(table[CW_LIMIT.address:CW_LIMIT.end], "little")
+    ccw = int.from_bytes(table[CCW_LIMIT.address:CCW_LIMIT.end], "little")
+    if (cw, ccw) in (WHEEL_MODE, MULTI_TURN_MODE):
+        return goal
+    return min(max(goal, cw), ccw)

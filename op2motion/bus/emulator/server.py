@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import math
 import os
 import select
 import threading
@@ -27,6 +28,7 @@ from typing import TYPE_CHECKING, Any
 from op2motion.bus.emulator.body import EmulatedBody
 from op2motion.bus.emulator.devices import Servo
 from op2motion.bus.emulator.faults import Faults
+from op2motion.bus.emulator.timing import TimedLink, WireTiming, return_delay_s
 from op2motion.bus.emulator.wire import BOOT_S, Wire
 from op2motion.bus.realtime import EMULATOR_PRIORITY, realtime, steady
 from op2motion.bus.tables import TORQUE_LIMIT_FULL
@@ -48,7 +50,7 @@ class Emulator:
     """An emulated OP2 (see the module docstring)."""
 
     def __init__(self, spec: Spec, engine: EngineName = "mujoco", start: str = "standing", faults: Faults | None = None,
-                 truth_path: str | Path | None = None):
+                 truth_path: str | Path | None = None, timing: WireTiming | None = None, return_delay: int | None = None):
         self.spec = spec
         self.truth_path = None if truth_path is None else Path(truth_path)
         self._truth_map: Any = None
@@ -58,6 +60,10 @@ class Emulator:
         self.body = EmulatedBody(spec, engine, start, supply)
         self.engine_name, self.start_kind = engine, start
         self.wire = Wire(spec, self.faults, self._now, self._present_ticks)
+        self.timing = timing or WireTiming()
+        self.timed_wire = TimedLink(self.timing, self._answer, self._delay_s, self._now())
+        self.outbox = bytearray()                  # bytes the wire delivered, for the host to read
+        self._next_trace = self._next_publish = 0.0
         self.board, self.servos, self.stats = self.wire.board, self.wire.servos, self.wire.stats
         self.master: int | None = None
         self.link: Path | None = None
@@ -69,6 +75,9 @@ class Emulator:
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
         self._powered_holding()
+        if return_delay is not None:
+            for servo in self.servos:
+                servo.set("return_delay_time", return_delay)
 
     # --- setup ---------------------------------------------------------------------------------------------------
     def _powered_holding(self) -> None:
@@ -185,7 +194,57 @@ class Emulator:
         """When the motion started (the first SYNC_WRITE) [simulated s]; None before."""
         return self.wire.motion_t0
 
-    # --- serving -------------------------------------------------------------------------------------------------
+    # --- time passing ------------------------------------------------------------------------------------------------
+    def receive(self, t: float, data: bytes) -> None:
+        """The host wrote ``data`` at simulated time ``t`` [s] (the wire model times what follows)."""
+        self.advance(t)
+        self.timed_wire.send(t, data)
+        self.outbox += b"".join(self.timed_wire.run_until(t))       # an instant wire answers at once
+
+    def advance(self, t: float) -> None:
+        """Step the body and the wire up to simulated time ``t`` [s]: the requests that reach the devices meanwhile
+        are answered from the body as it is then; what the USB adapter sends the host by ``t`` goes to
+        :attr:`outbox`."""
+        while True:
+            event = self.timed_wire.next_event()
+            upto = t if event is None or event > t else event
+            self._step_to(upto)
+            if event is None or event > t:
+                break
+            self.outbox += b"".join(self.timed_wire.run_until(event))
+        self.outbox += b"".join(self.timed_wire.run_until(t))
+
+    def _answer(self, t: float, request: bytes) -> list[bytes]:
+        """A request reaching the devices at ``t``: their replies."""
+        return self.wire.feed(request)
+
+    def _delay_s(self, device: int) -> float:
+        """Device ``device``'s return delay [s] (its register 5)."""
+        found = self.wire.by_id.get(device)
+        return 0.0 if found is None else return_delay_s(found.get("return_delay_time"))
+
+    def _step_to(self, t: float) -> None:
+        """Whole physics steps up to simulated time ``t`` [s] (in batches of :data:`BATCH_STEPS`, the timed faults
+        between them), then the registers from the body."""
+        steps = int(math.floor((t - self._now()) / self.body.dt + 1e-9))
+        if steps <= 0:
+            return
+        while steps > 0:
+            n = min(steps, BATCH_STEPS)
+            self._timed_faults()
+            self.body.step(n, self._limp_servos(), self.wire.powered())
+            steps -= n
+        self.body.sense(self.servos, self.board, self.temperature_overrides)
+        self._truth = self.body.truth()
+        self.torque_limit_min = min(self.torque_limit_min, *(s.u16("torque_limit") for s in self.servos))
+        if self._truth["t_s"] >= self._next_trace:
+            self.trace.append(self._truth)
+            self._next_trace = self._truth["t_s"] + TRACE_EVERY_S
+        if self._truth["t_s"] >= self._next_publish:
+            self._publish()
+            self._next_publish = self._truth["t_s"] + PUBLISH_EVERY_S
+
+    # --- serving on the pseudo-terminal --------------------------------------------------------------------------------
     def serve(self, stop: threading.Event | None = None) -> None:
         """Answer packets and step the body in real time until ``stop`` (or :meth:`stop`) is set (at real-time
         priority where the system allows it: :mod:`..realtime`)."""
@@ -201,41 +260,31 @@ class Emulator:
         return self.master
 
     def _serve(self, stop: threading.Event) -> None:
+        """Simulated time kept on the wall clock (``t0``: the wall time of simulated 0, moved on when the machine
+        falls behind by more than :data:`MAX_BEHIND_S`)."""
         master = self._master_fd()
-        dt = self.body.dt
-        t0 = time.monotonic()
-        done = 0
-        poller = select.poll()
-        poller.register(master, select.POLLIN)
-        next_trace = next_publish = 0.0
+        t0 = time.monotonic() - self._now()
         while not stop.is_set() and not self._stop.is_set():
-            now = time.monotonic()
-            wait = t0 + self.slipped_s + (done + BATCH_STEPS) * dt - now       # sleep until a batch is due
-            events = poller.poll(max(0.0, wait) * 1000.0)
-            if events:
-                if events[0][1] & select.POLLIN:
-                    self._receive()
-                else:                                               # no program holds the port
-                    time.sleep(min(max(wait, 0.0), HANGUP_SLEEP_S))
-            now = time.monotonic()
-            due = int((now - t0 - self.slipped_s) / dt) - done
-            if due * dt > MAX_BEHIND_S:
-                self.slipped_s += due * dt - MAX_BEHIND_S
-                due = int(MAX_BEHIND_S / dt)
-            if due > 0:
-                n = min(due, BATCH_STEPS)
-                self._timed_faults()
-                self.body.step(n, self._limp_servos(), self.wire.powered())
-                done += n
-                self.body.sense(self.servos, self.board, self.temperature_overrides)
-                self._truth = self.body.truth()
-                self.torque_limit_min = min(self.torque_limit_min, *(s.u16("torque_limit") for s in self.servos))
-                if self._truth["t_s"] >= next_trace:
-                    self.trace.append(self._truth)
-                    next_trace = self._truth["t_s"] + TRACE_EVERY_S
-                if self._truth["t_s"] >= next_publish:
-                    self._publish()
-                    next_publish = self._truth["t_s"] + PUBLISH_EVERY_S
+            event = self.timed_wire.next_event()
+            due = self._now() + BATCH_STEPS * self.body.dt
+            due = due if event is None else min(due, event)
+            wait = max(0.0, t0 + due - time.monotonic())
+            ready, _, _ = select.select([master], [], [], wait)
+            if ready and not self._receive(time.monotonic() - t0):           # no program holds the port
+                time.sleep(min(wait, HANGUP_SLEEP_S))
+            behind = time.monotonic() - t0 - self._now()
+            if behind > MAX_BEHIND_S:
+                self.slipped_s += behind - MAX_BEHIND_S
+                t0 += behind - MAX_BEHIND_S
+            self.advance(time.monotonic() - t0)
+            self._flush(master)
+
+    def _flush(self, master: int) -> None:
+        """Hand the host what the wire delivered."""
+        if self.outbox:
+            with contextlib.suppress(BlockingIOError, OSError):
+                os.write(master, bytes(self.outbox))
+            self.outbox.clear()
 
     def _limp_servos(self) -> list[Servo]:
         """The servos as the body sees them: a missing or unplugged servo has no torque."""
@@ -246,6 +295,10 @@ class Emulator:
 
     def _now(self) -> float:
         return self.body.steps * self.body.dt
+
+    def sim_time(self) -> float:
+        """The simulated time [s] the body has reached."""
+        return self._now()
 
     def _timed_faults(self) -> None:
         if self.motion_t0 is None:
@@ -259,17 +312,18 @@ class Emulator:
             if since >= at and device not in self.temperature_overrides:
                 self.temperature_overrides[device] = celsius
 
-    def _receive(self) -> None:
+    def _receive(self, t: float) -> bool:
+        """Read what the host wrote (at simulated time ``t``); False when no program holds the port."""
         master = self._master_fd()
         try:
             data = os.read(master, 4096)
         except BlockingIOError:
-            return
+            return True
         except OSError as exc:
             if exc.errno == errno.EIO:                              # the client closed the port
                 self.wire.parser.clear()
-                return
+                return False
             raise
-        for chunk in self.wire.feed(data):
-            with contextlib.suppress(BlockingIOError, OSError):
-                os.write(master, chunk)
+        if data:
+            self.receive(max(t, self._now()), data)
+        return True

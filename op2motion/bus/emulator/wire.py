@@ -1,13 +1,28 @@
 """The emulated OP2's bus: the devices on it (:mod:`.devices`: the CM-730 at ID 200 and one MX-28 per joint) and
 what each instruction packet makes them do and answer, byte for byte, with the faults of :mod:`.faults`.
 
-* the servos are silent until the board's power register is 1 and :data:`BOOT_S` has passed, and when missing or
-  unplugged; switching the power on brings them up with their RAM defaults (torque off, goal where they are);
-* a broadcast gets no reply; PING, READ, WRITE, REG_WRITE and ACTION as the e-manual says, each answered per the
-  device's status return level; RESET is refused with the instruction error (it would renumber the servo);
-* SYNC_WRITE writes each listed device; the first one marks the motion's start (fault times count from it);
-* BULK_READ is answered device by device in the order asked, the replies back to back in one write, and a silent
-  device silences the ones listed after it (MX firmware waits for the previous device's reply);
+Sources: the CM-730 firmware ``CM_DXL_COM.c`` (ROBOTIS 2010, model 0x7300, firmware 0x13: ``ProcessPackets``,
+``ProcessInstruction``, ``ReturnPacket``), the Protocol 1.0 and MX-28 e-manual (ROBOTIS-GIT/emanual
+``docs/en/dxl/protocol1.md``), the framework's ``CM730.cpp``; ``reference/bus_wire.md``.
+
+* power: the servos are silent until the board's power register (24) is 1 and :data:`BOOT_S` has passed, and when
+  missing or unplugged; switching the power on brings each up with its RAM defaults (torque off, goal where it is),
+  switching it off drops their torque. :meth:`Wire.cold_start` is the robot just switched on: power 0, servos silent.
+* packets are taken as the firmware takes them: header, ID, length, then that many bytes. One whose checksum does not
+  match is not executed; the device it names answers it with the checksum error (16), except a PING (the firmware
+  skips it) and a broadcast (its ``ReturnPacket`` never answers a broadcast but a PING, so a damaged broadcast gets no
+  reply from anyone). The firmware also drops the rest of what it has buffered; the emulator goes on with the bytes
+  after the packet (the servos behind the board still see them).
+* replies follow the status return level the device had when the packet arrived (the firmware answers a WRITE before
+  writing, so a write that sets level 1 is still answered); a broadcast is not answered, but a PING to it is by the
+  CM-730 (its firmware answers every PING; the servos do not answer broadcast). BULK_READ is a READ to each device
+  (level 1 or more), answered device by device in the order asked, back to back in one write; a silent device
+  silences the ones listed after it (each waits for the previous device's reply).
+* PING, READ, WRITE as the e-manual says; REG_WRITE and ACTION on the servos (:mod:`.devices`; the CM-730 answers
+  both with the instruction error); RESET: the CM-730 answers it with error 0 and does nothing (its firmware has the
+  reset commented out); a servo refuses it with the instruction error (the e-manual's factory reset would renumber it
+  to ID 1 at 57600 baud, off this bus: not emulated); other instructions: the instruction error.
+* SYNC_WRITE writes each listed device; the first one marks the motion's start (fault times count from it).
 * replies are lost or have a byte changed at the faults' rates (seeded).
 """
 
@@ -23,6 +38,59 @@ from op2motion.bus.tables import CM730_ID
 from op2motion.robot.spec import Spec
 
 BOOT_S = 0.1                       # the servos' silence after their power is switched on
+HEAD_BYTES = 4                     # FF FF ID LEN
+MIN_LENGTH = 2                     # LEN counts the instruction and the checksum
+PING_LEVEL, READ_LEVEL, ALL_LEVEL = 0, 1, 2   # the status return level an answer needs
+
+
+class FirmwareParser:
+    """Instruction packets out of the byte stream as a device's firmware reads them (``ProcessPackets``): after a
+    header (further FF before the ID are skipped) the ID, the length and that many bytes make one packet; each comes
+    out with whether its checksum matches. ``discarded`` counts bytes outside packets, ``bad_checksums`` the packets
+    whose checksum did not match."""
+
+    def __init__(self) -> None:
+        self.buffer = bytearray()
+        self.discarded = 0
+        self.bad_checksums = 0
+
+    def feed(self, data: bytes | bytearray) -> list[tuple[p.Packet, bool]]:
+        """Add ``data``; every complete packet now in the buffer, in order, with whether its checksum matches."""
+        buf = self.buffer
+        buf += data
+        out: list[tuple[p.Packet, bool]] = []
+        while True:
+            start = buf.find(p.HEADER)
+            if start < 0:
+                keep = 1 if buf[-1:] == b"\xff" else 0            # a lone FF may start the next header
+                self.discarded += len(buf) - keep
+                del buf[:len(buf) - keep]
+                return out
+            self.discarded += start
+            del buf[:start]
+            if len(buf) < HEAD_BYTES:
+                return out
+            if buf[2] == 0xFF:                                     # FF FF FF: the header starts one byte later
+                self.discarded += 1
+                del buf[:1]
+                continue
+            if buf[3] < MIN_LENGTH:
+                self.discarded += 2
+                del buf[:2]
+                continue
+            end = HEAD_BYTES + buf[3]
+            if len(buf) < end:
+                return out
+            body = bytes(buf[2:end - 1])
+            intact = p.checksum(body) == buf[end - 1]
+            if not intact:
+                self.bad_checksums += 1
+            out.append((p.Packet(body[0], body[2], body[3:]), intact))
+            del buf[:end]
+
+    def clear(self) -> None:
+        """Forget what is buffered."""
+        self.buffer.clear()
 
 
 class Wire:
@@ -37,13 +105,24 @@ class Wire:
         self.servos = [Servo(j.id) for j in spec.joints]
         self.by_id: dict[int, Any] = {s.id: s for s in self.servos}
         self.by_id[CM730_ID] = self.board
-        self.parser = p.StreamParser()
+        self.parser = FirmwareParser()
         self.powered_at: float | None = None
         self.motion_t0: float | None = None
         self.unplugged: set[int] = set()
-        self.pending: dict[int, tuple[int, bytes]] = {}
         self.stats = {"packets": 0, "replies": 0, "lost": 0, "corrupted": 0, "bad_packets": 0}
         self.out: list[bytes] = []
+
+    def cold_start(self) -> None:
+        """The robot just switched on: the board up with its power-on registers (the servos' power register 24 at
+        0, the LEDs as its firmware sets them), the servos unpowered and silent, nothing buffered. Writing 1 to
+        register 24 then powers them up, each with its torque off and its goal where its joint is (:meth:`write`).
+        The board's sensor registers keep what the body last put there; the fault clock (:attr:`motion_t0`) is
+        left alone."""
+        self.board.cold_start()
+        for servo in self.servos:
+            servo.power_off()
+        self.powered_at = None
+        self.parser.clear()
 
     def powered(self) -> bool:
         """Whether the servos' supply is on."""
@@ -67,18 +146,21 @@ class Wire:
     def feed(self, data: bytes) -> list[bytes]:
         """Bytes from the client in; the bytes to answer with out (one chunk per reply, a bulk read's together)."""
         self.out = []
-        bad = self.parser.bad_checksums
-        for packet in self.parser.feed(data):
-            self.stats["packets"] += 1
-            self._handle(packet)
-        self.stats["bad_packets"] += self.parser.bad_checksums - bad
+        for packet, intact in self.parser.feed(data):
+            if intact:
+                self.stats["packets"] += 1
+                self._handle(packet)
+            else:
+                self.stats["bad_packets"] += 1
+                self._damaged(packet)
         return self.out
 
-    def _reply(self, device: Any, error: int, params: bytes = b"", level: int = 2, out: bytearray | None = None
-               ) -> None:
-        """A status packet, if the device's status return level allows it; lost or corrupted at the fault rates;
-        sent on its own, or added to ``out`` (a bulk read's replies go out back to back)."""
-        if device.return_level < level:
+    def _reply(self, device: Any, error: int, params: bytes = b"", need: int = ALL_LEVEL, level: int | None = None,
+               out: bytearray | None = None) -> None:
+        """A status packet, if the device's status return level (``level`` if given: the one it had as the packet
+        arrived) is ``need`` or more; lost or corrupted at the fault rates; sent on its own, or added to ``out`` (a
+        bulk read's replies go out back to back)."""
+        if (device.return_level if level is None else level) < need:
             return
         packet = bytearray(p.status(device.id, error, params))
         if self.faults.lose and self.rng.random() < self.faults.lose:
@@ -97,7 +179,7 @@ class Wire:
     def write(self, device: Any, address: int, data: bytes) -> int:
         """A write to one device (the board's power switch powers the servos up or down); its error byte."""
         was_powered = self.powered()
-        error = device.write(address, data)
+        error: int = device.write(address, data)
         if device is self.board and self.board.power_changed:
             self.board.power_changed = False
             powered = self.powered()
@@ -107,8 +189,17 @@ class Wire:
                     servo.power_up(tick)
             elif was_powered and not powered:
                 for servo in self.servos:
-                    servo.set("torque_enable", 0)
+                    servo.power_off()
         return error
+
+    def _damaged(self, packet: p.Packet) -> None:
+        """A packet whose checksum does not match: the checksum error from the device it names (see the module
+        docstring)."""
+        if packet.id == p.BROADCAST_ID or packet.code == p.Instruction.PING:
+            return
+        device = self.present(packet.id)
+        if device is not None:
+            self._reply(device, device.conditions() | p.CHECKSUM)
 
     def _handle(self, packet: p.Packet) -> None:
         code, params = packet.code, packet.params
@@ -122,32 +213,33 @@ class Wire:
         for target in [d for d in self.by_id if self.present(d)] if broadcast else [packet.id]:
             device = self.present(target)
             if device is not None:
-                self._one(device, target, code, params, not broadcast)
+                self._one(device, code, params, broadcast)
 
-    def _one(self, device: Any, target: int, code: int, params: bytes, reply: bool) -> None:
-        """One instruction to one device."""
+    def _one(self, device: Any, code: int, params: bytes, broadcast: bool) -> None:
+        """One instruction to one device, answered unless broadcast (a PING to the board always)."""
+        level = device.return_level                        # the answer is made before a write is applied
+        error, data, need = self._execute(device, code, params)
+        if not broadcast or (code == p.Instruction.PING and device is self.board):
+            self._reply(device, error, data, need, level)
+
+    def _execute(self, device: Any, code: int, params: bytes) -> tuple[int, bytes, int]:
+        """Carry out one instruction on one device: (its error byte, the data to answer with, the status return
+        level the answer needs)."""
         if code == p.Instruction.PING:
-            if reply:
-                self._reply(device, device.conditions(), level=0)
-        elif code == p.Instruction.READ and len(params) == 2:
+            return device.conditions(), b"", PING_LEVEL
+        if code == p.Instruction.READ and len(params) == 2:
             error, data = device.read(params[0], params[1])
-            if reply:
-                self._reply(device, error, data or b"", level=1)
-        elif code == p.Instruction.WRITE and len(params) >= 2:
-            error = self.write(device, params[0], bytes(params[1:]))
-            if reply:
-                self._reply(device, error)
-        elif code == p.Instruction.REG_WRITE and len(params) >= 2:
-            self.pending[target] = (params[0], bytes(params[1:]))
-            if reply:
-                self._reply(device, device.conditions())
-        elif code == p.Instruction.ACTION and not params:
-            address, data = self.pending.pop(target, (0, b""))
-            error = self.write(device, address, data) if data else device.conditions()
-            if reply:
-                self._reply(device, error)
-        elif reply:                                # RESET is not emulated (it would renumber the servo), nor others
-            self._reply(device, device.conditions() | p.INSTRUCTION)
+            return error, data or b"", READ_LEVEL
+        if code == p.Instruction.WRITE and len(params) >= 2:
+            return self.write(device, params[0], bytes(params[1:])), b"", ALL_LEVEL
+        if isinstance(device, Servo):
+            if code == p.Instruction.REG_WRITE and len(params) >= 2:
+                return device.reg_write(params[0], bytes(params[1:])), b"", ALL_LEVEL
+            if code == p.Instruction.ACTION and not params:
+                return device.action(), b"", ALL_LEVEL
+        elif code == p.Instruction.RESET:                  # the CM-730: error 0, nothing done
+            return device.conditions(), b"", ALL_LEVEL
+        return device.conditions() | p.INSTRUCTION, b"", ALL_LEVEL
 
     def _sync_write(self, params: bytes) -> None:
         if len(params) < 2 or params[1] == 0 or (len(params) - 2) % (params[1] + 1):
@@ -169,9 +261,9 @@ class Wire:
         for k in range(1, len(params), 3):
             length, target, address = params[k], params[k + 1], params[k + 2]
             device = self.present(target)
-            if device is None:
+            if device is None or device.return_level < READ_LEVEL:
                 break                              # the devices listed after it wait for its reply in vain
             error, data = device.read(address, length)
-            self._reply(device, error, data or b"", level=0, out=out)
+            self._reply(device, error, data or b"", READ_LEVEL, out=out)
         if out:
             self.out.append(bytes(out))
