@@ -8,14 +8,17 @@ assumed). The wait for the first reply is its time on the wire plus the tail; on
 plus the next device's delay ends the wait (devices answer back to back: a longer pause means the rest were lost);
 the whole wait never exceeds all the replies' time plus the tail, nor a caller's cap.
 
-**Replies that come late** (after their wait ended) are never taken for a later request's: the devices a request
-still owed are kept, in order, for one more tail after the wait's end; a reply matching the first of them (by ID and length)
-before any reply to the new request is that late reply, dropped and counted (``stray_packets``), as is anything the
-port held before a request went out. A one-off command asks again only after that window (so a retry's reply is
-never mistaken for the late one). A reply counts only when it comes from a device asked and carries the length
-asked for; an echo of our own packet is skipped. A device that does not answer, answers garbage or reports a checksum
-or instruction error (our packet arrived damaged) is asked again, at most ``retries`` more times; then the
-transaction returns None and the caller decides.
+**Replies that come late** (after their wait ended) are never taken for a later request's: the devices a request still
+owed are kept, in order, until a reply to a later request comes (the bus and the USB adapter keep the order: nothing
+late can follow it). Before that, a reply matching one of them (by ID and length) is that late reply, dropped and
+counted (``stray_packets``), unless it is from the new request's first device and one more tail has passed since the old
+wait's end (a late reply would have come by then). A reply complete before the first reply could be (the request's and
+that reply's bytes at the baud rate, its return delay) is late whatever it is; anything the port held before a request
+went out is dropped and counted too. A one-off command asks again only after that window (so a retry's reply is never
+mistaken for the late one). A reply counts only when it comes from a device asked and carries the length asked for; an
+echo of our own packet is skipped. A device that does not answer, answers garbage or reports a checksum or instruction
+error (our packet arrived damaged) is asked again, at most ``retries`` more times; then the transaction returns None and
+the caller decides.
 
 :meth:`Bus.bulk_read` is one try by design: the 8 ms loop asks again for only the devices that did not answer
 (:mod:`.loop`).
@@ -32,6 +35,7 @@ from op2motion.bus.link import ASSUMED_TAIL_S, LinkBudget
 from op2motion.bus.port import PortLike
 
 RETRIES = 3                        # a one-off command is tried 1 + RETRIES times
+MAX_OWED = 64                      # late replies remembered at most
 COMMAND_MARGIN_S = 0.003           # one-off commands: beyond the wire's own figures (a loaded PC's scheduling)
 
 
@@ -67,24 +71,25 @@ class Bus:
         self.owed_until = 0.0                           # ... which can no longer come after this time
 
     def _send(self, packet: bytes) -> None:
-        for _ in self.parser.feed(self.port.flush_input()):
+        for held in self.parser.feed(self.port.flush_input()):
+            self._late(held, None)
             self.stats.stray += 1
         self.parser.clear()
         self.stats.requests += 1
         self.port.write(packet)
 
-    def _late(self, packet: p.Packet) -> bool:
-        """Whether ``packet`` is a reply an earlier request still owed (then it is dropped from what is owed)."""
-        if not self.owed:
+    def _late(self, packet: p.Packet, first: int | None) -> bool:
+        """Whether ``packet``, come before any reply to the request now waited for (whose first device is ``first``),
+        is a reply an earlier request still owed (then it is dropped from what is owed): a device the new request
+        does not ask first cannot be answering it yet; its first device can, once the late window is over."""
+        key = (packet.id, len(packet.params))
+        if key not in self.owed:
             return False
-        if self.clock.now() > self.owed_until:
+        if packet.id == first and self.clock.now() > self.owed_until:
             self.owed = []
             return False
-        key = (packet.id, len(packet.params))
-        if key in self.owed:
-            del self.owed[:self.owed.index(key) + 1]
-            return True
-        return False
+        del self.owed[:self.owed.index(key) + 1]
+        return True
 
     def _collect(self, sent: bytes, expect: Mapping[int, int], margin_s: float, cap: float | None = None
                  ) -> dict[int, p.Packet]:
@@ -92,6 +97,7 @@ class Bus:
         within the waits of the module docstring (``margin_s`` on top of each; never past the time ``cap``)."""
         now = self.clock.now()
         order = list(expect.items())
+        earliest = now + self.link.first_and_last(len(sent), order[:1])[0] - self.link.tail_s
         first, end = self.link.first_and_last(len(sent), order)
         first, end = now + first + margin_s, now + end + margin_s
         if cap is not None:
@@ -112,7 +118,7 @@ class Bus:
             for packet in self.parser.feed(data):
                 if not echo_skipped and packet.encode() == sent:
                     echo_skipped = True
-                elif not got and self._late(packet):
+                elif not got and (last < earliest or self._late(packet, order[0][0])):
                     self.stats.stray += 1
                 elif packet.id in expect and packet.id not in got and len(packet.params) == expect[packet.id]:
                     got[packet.id] = packet
@@ -122,7 +128,7 @@ class Bus:
         self.stats.bad_checksums += self.parser.bad_checksums - bad_before
         if len(got) < len(expect):
             self.stats.timeouts += 1
-            self.owed = [(d, n) for d, n in order if d not in got]
+            self.owed = (self.owed + [(d, n) for d, n in order if d not in got])[-MAX_OWED:]
             self.owed_until = end + self.link.tail_s
         return got
 

@@ -3,9 +3,10 @@ MX-28 (torque, gains, goal, moving speed, torque limit, present position/speed/l
 name), through a :class:`~.client.Bus`.
 
 :meth:`OP2.connect` finds the board (nothing at ID 200 is bad input naming ``--port``: exit 2), measures the link
-(:func:`~.link.measure_link`: the ping round trip, the USB adapter's tail) and switches the servos' power on as the framework does (write 1 to register 24, then wait :data:`POWER_ON_WAIT_S`; a servo is silent
-until powered). :meth:`OP2.status` reads the board and every servo in full. :meth:`OP2.take_control` switches the
-torque on without a jump: every goal is first set to where the joint is.
+(:func:`~.link.measure_link`: the ping round trip, the USB adapter's tail) and switches the servos' power on as the
+framework does (write 1 to register 24, then wait :data:`POWER_ON_WAIT_S`; a servo is silent until powered).
+:meth:`OP2.status` reads the board and every servo in full. :meth:`OP2.take_control` switches the torque on without a
+jump: every goal is first set to where the joint is.
 """
 
 from __future__ import annotations
@@ -153,7 +154,7 @@ class OP2:
         if reply is not None and reply.params[0] == 1:
             return False
         self.bus.write(CM730_ID, CM730["dynamixel_power"].address, b"\x01")
-        time.sleep(POWER_ON_WAIT_S)
+        sleep(self.bus.clock, POWER_ON_WAIT_S)
         return True
 
     def board(self) -> BoardState | None:

@@ -11,13 +11,15 @@ sets both).
 
 * MX-28: the e-manual's registers, and the ones only the framework's ``MX28.h`` names (10 system data 2,
   19 operating mode, 45 pause time, 50-67 reserved, potentiometer, PWM output and the PID terms): read-only here and
-  0 (what a real servo reports there is not documented). Byte 29 (``P_RESERVED``) is no register: the framework's
-  sync write of 26..31 writes it. Value limits: the e-manual's ranges.
-* CM-730: ``CM730.h`` names 0..80 (``MAXNUM_ADDRESS`` 81); the firmware build whose ``CM_DXL_COM.h`` has
-  ``CONTROL_TABLE_LEN`` 90 adds 81..89 (buzzer data, remote-control data, ZigBee ID), so the table runs to 89. Its
-  ``gbpParameterRange`` gives every byte's range: bytes of no register are read-only (range error), the LED panel
-  takes 0..7, the head and eye LEDs 15-bit colours, the power switch 0..1. Power-on LED colours from its
-  ``ProcessInit`` (head green, eye blue).
+  0 (what a real servo reports there is not documented; the e-manual's Realtime Tick at 50 comes with firmware 40,
+  and the table reports firmware 30). Byte 29 (``P_RESERVED``) is no register: the framework's sync write of 26..31
+  writes it. Value limits: the e-manual's ranges.
+* CM-730: 0..80 as ``CM730.h`` names them (``MAXNUM_ADDRESS`` 81; the firmware build with 81 bytes has the same
+  layout); the firmware build whose ``CM_DXL_COM.h`` has ``CONTROL_TABLE_LEN`` 90 adds 81..89 (buzzer data,
+  remote-control data, ZigBee ID; it orders its ADCs differently, and ``CM730.h`` is kept for 0..80), so the table
+  runs to 89. The firmware's ``gbpParameterRange`` gives every byte's range: bytes of no register are read-only
+  (range error), the LED panel takes 0..7, the head and eye LEDs 15-bit colours, the power switch 0..1. Power-on LED
+  colours from its ``ProcessInit`` (head green, eye blue).
 
 Speed and load registers carry a magnitude in bits 0-9 and the direction in bit 10 (set: clockwise, i.e. the
 servo angle decreasing); :func:`signed` and :func:`magnitude` convert.

@@ -1,8 +1,10 @@
 """The emulated devices' control tables, byte for byte: the CM-730 (ID 200) and one MX-28 per joint.
 
 A :class:`Device` holds its table (:mod:`..tables`) and answers what one device answers: a READ of a span (one
-beyond the table is a range error without data), a WRITE, its status error byte (the standing conditions before the
-instruction, plus the instruction's own error) and its status return level (0: only pings, 1: and reads, 2: all).
+beyond the table is a range error without data: the CM-730 firmware does not check a READ's span and sends whatever
+memory follows its table, which the emulator does not make up), a WRITE, its status error byte (the standing
+conditions as the instruction arrived, plus the instruction's own error) and its status return level (0: only
+pings, 1: and reads, 2: all).
 
 A WRITE is checked as the CM-730 firmware checks it (``WriteControlTableRangeCheck`` of ``CM_DXL_COM.c``) before
 anything is written: a span beyond the table, one starting on the high byte of a word or ending on its low byte,

@@ -1,5 +1,6 @@
-"""An emulated OP2 in this process, in lockstep: a port (:class:`LockstepPort`, what :func:`~op2motion.bus.port.open_port`
-gives for a real robot) whose clock is the emulator's simulated time (:class:`~op2motion.bus.clock.LockstepClock`).
+"""An emulated OP2 in this process, in lockstep: a port (:class:`LockstepPort`, what
+:func:`~op2motion.bus.port.open_port` gives for a real robot) whose clock is the emulator's simulated time
+(:class:`~op2motion.bus.clock.LockstepClock`).
 
 The client writes a request: the emulator takes it at the clock's time; the client waits for replies: the clock moves
 to the moment the wire model (:mod:`.timing`) delivers the next USB packet, or to the client's deadline, and the
@@ -14,7 +15,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from op2motion.bus.clock import LockstepClock
+from op2motion.bus.clock import Clock, LockstepClock
 from op2motion.bus.emulator.faults import Faults, parse_timed
 from op2motion.bus.emulator.timing import INSTANT, KERNEL_LATENCY_TIMER_MS, WireTiming
 from op2motion.errors import InputError
@@ -33,8 +34,9 @@ class LockstepPort:
 
     def __init__(self, emulator: Emulator, path: str = PREFIX):
         self.emulator, self.path = emulator, path
-        self.clock = LockstepClock(emulator.sim_time())
-        self.clock.listen(emulator.advance)
+        self.steps = LockstepClock(emulator.sim_time())
+        self.clock: Clock = self.steps
+        self.steps.listen(emulator.advance)
         self.latency_timer_ms: int | None = None      # not a USB adapter: nothing to read or set
         self.low_latency: str = "not a USB serial adapter (the emulated wire's timer is fixed)"
         self.closed = False

@@ -50,7 +50,8 @@ class Emulator:
     """An emulated OP2 (see the module docstring)."""
 
     def __init__(self, spec: Spec, engine: EngineName = "mujoco", start: str = "standing", faults: Faults | None = None,
-                 truth_path: str | Path | None = None, timing: WireTiming | None = None, return_delay: int | None = None):
+                 truth_path: str | Path | None = None, timing: WireTiming | None = None,
+                 return_delay: int | None = None):
         self.spec = spec
         self.truth_path = None if truth_path is None else Path(truth_path)
         self._truth_map: Any = None
@@ -244,7 +245,7 @@ class Emulator:
             self._publish()
             self._next_publish = self._truth["t_s"] + PUBLISH_EVERY_S
 
-    # --- serving on the pseudo-terminal --------------------------------------------------------------------------------
+    # --- serving on the pseudo-terminal -------------------------------------------------------------------------------
     def serve(self, stop: threading.Event | None = None) -> None:
         """Answer packets and step the body in real time until ``stop`` (or :meth:`stop`) is set (at real-time
         priority where the system allows it: :mod:`..realtime`)."""

@@ -76,7 +76,8 @@ INSTANT = WireTiming(instant=True)
 def packet_ends(stream: bytes | bytearray) -> list[int]:
     """The offsets just past each complete Protocol 1.0 packet in ``stream`` (bytes before a header belong to the
     packet after them), by the header and LEN only: the devices judge the checksum."""
-    ends, i, n = [], 0, len(stream)
+    ends: list[int] = []
+    i, n = 0, len(stream)
     while True:
         start = stream.find(b"\xff\xff", i)
         while 0 <= start < n - 2 and stream[start + 2] == 0xFF:
@@ -226,10 +227,10 @@ class TimedLink:
 
     def run_until(self, t: float) -> list[bytes]:
         """Everything that happens up to ``t`` [s]; the bytes the host receives by then, in USB packets."""
-        if self.timing.instant:
-            out, self.ready = self.ready, []
-            return out
         out: list[bytes] = []
+        if self.timing.instant:
+            out, self.ready = self.ready, out
+            return out
         while True:
             due = self.requests[0][0] if self.requests and self.requests[0][0] <= t else None
             event = self.ftdi.step(t if due is None else due)
@@ -256,13 +257,14 @@ class TimedLink:
 
 def _split(chunk: bytes) -> list[bytes]:
     """A chunk of back-to-back status packets as its packets (what cannot be split stays one)."""
-    out, i = [], 0
+    pieces: list[bytes] = []
+    i = 0
     for end in packet_ends(chunk):
-        out.append(chunk[i:end])
+        pieces.append(chunk[i:end])
         i = end
     if i < len(chunk):
-        out.append(chunk[i:])
-    return [o for o in out if o]
+        pieces.append(chunk[i:])
+    return [piece for piece in pieces if piece]
 
 
 def return_delay_s(register: int) -> float:
