@@ -6,7 +6,8 @@ each device's return delay, and the link's tail: what the USB adapter holds back
 system adds, as measured at connect (:func:`~.link.measure_link`; until then the kernel's default timer, 16 ms, is
 assumed). The wait for the first reply is its time on the wire plus the tail; once replies come, a pause of the tail
 plus the next device's delay ends the wait (devices answer back to back: a longer pause means the rest were lost);
-the whole wait never exceeds all the replies' time plus the tail, nor a caller's cap.
+the whole wait never exceeds all the replies' time plus the tail, nor a caller's cap. Every wait counts from when the
+request's first byte can go out: after the bytes written before it (the loop's sync write takes 1.5 ms).
 
 **Replies that come late** (after their wait ended) are never taken for a later request's: the devices a request still
 owed are kept, in order, until a reply to a later request comes (the bus and the USB adapter keep the order: nothing
@@ -69,6 +70,7 @@ class Bus:
         self.stats = BusStats()
         self.owed: list[tuple[int, int]] = []           # (id, parameter count) a request still owes, in order
         self.owed_until = 0.0                           # ... which can no longer come after this time
+        self.sent_at = self.tx_free = 0.0               # the last request's first byte goes out / the line is free
 
     def _send(self, packet: bytes) -> None:
         for held in self.parser.feed(self.port.flush_input()):
@@ -76,6 +78,8 @@ class Bus:
             self.stats.stray += 1
         self.parser.clear()
         self.stats.requests += 1
+        self.sent_at = max(self.clock.now(), self.tx_free)
+        self.tx_free = self.sent_at + len(packet) * self.link.byte_s
         self.port.write(packet)
 
     def _late(self, packet: p.Packet, first: int | None) -> bool:
@@ -95,7 +99,7 @@ class Bus:
                  ) -> dict[int, p.Packet]:
         """Replies to ``sent`` from the devices in ``expect`` ({id: parameter count}, in the order they answer),
         within the waits of the module docstring (``margin_s`` on top of each; never past the time ``cap``)."""
-        now = self.clock.now()
+        now = self.sent_at                              # after what we wrote before it (a sync write: 1.5 ms)
         order = list(expect.items())
         earliest = now + self.link.first_and_last(len(sent), order[:1])[0] - self.link.tail_s
         first, end = self.link.first_and_last(len(sent), order)

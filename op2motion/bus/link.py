@@ -32,8 +32,10 @@ BULK_READ_BYTES = 7                # a BULK_READ packet: FF FF FE LEN 92 00 ... 
 BULK_READ_SPAN_BYTES = 3
 PING_BYTES = 2 * MIN_PACKET_BYTES  # a ping and its reply
 RETURN_DELAY_UNIT_S = 2e-6         # Return Delay Time register: 2 µs a unit
-READ_BUDGET_S = 0.005             # a tick's reads end this long after it starts (the controller and the write need
-                                   # the rest of the 8 ms)
+READ_BUDGET_S = 0.005             # a tick's reads end this long after it starts, whatever came (the controller and
+                                   # the sync write, 1.5 ms on the wire, need the rest of the 8 ms)
+PLAN_BUDGET_S = 0.0035            # what a tick's read is planned to take: 1.5 ms of the above left for a late
+                                   # start (the last tick's write still going out) and the PC's scheduling
 PARAM = "port"
 
 
@@ -162,7 +164,7 @@ def tick_spans(servos: Sequence[int], rotating: int | None) -> list[tuple[int, i
                                         for d in servos]
 
 
-def read_plan(budget: LinkBudget, ids: Sequence[int], read_budget_s: float = READ_BUDGET_S) -> ReadPlan:
+def read_plan(budget: LinkBudget, ids: Sequence[int], read_budget_s: float = PLAN_BUDGET_S) -> ReadPlan:
     """The most servos a tick can read within ``read_budget_s`` [s] (see :class:`ReadPlan`), judged with the slowest
     servos' return delays."""
     slowest = sorted(ids, key=lambda d: -budget.delays_s.get(d, 0.0))
@@ -175,7 +177,7 @@ def read_plan(budget: LinkBudget, ids: Sequence[int], read_budget_s: float = REA
     return ReadPlan(best, len(ids), budget.bulk_read_s(spans), budget.wire_s(spans))
 
 
-def too_slow(check: LinkCheck, board_s: float, port_path: str, read_budget_s: float = READ_BUDGET_S) -> InputError:
+def too_slow(check: LinkCheck, board_s: float, port_path: str, read_budget_s: float = PLAN_BUDGET_S) -> InputError:
     """The refusal of a motion on a link that cannot hold the 8 ms loop: names the latency timer and the fix."""
     trips = sorted(check.round_trips_s)
     worst = f"{trips[-1] * 1000:.1f} ms" if trips else "no reply"

@@ -314,6 +314,7 @@ def _loop(run: _Run, duration: float, stop: threading.Event | None, on_tick: Cal
     stops, report = Stops(), run.report
     time = run.robot.bus.clock
     periods: list[float] = []
+    time.sleep_until(run.robot.bus.tx_free)             # what an earlier run wrote is out: the reads have the budget
     start = time.now()
     clock, last, k = start, None, 0
     while True:

@@ -21,6 +21,7 @@ from op2motion.bus.safety import Fault, preflight, preflight_problems
 from op2motion.errors import CheckFailed, InputError
 from op2motion.robot.spec import Spec
 
+HOLD_AFTER_S = 0.5                 # an emulated OP2 of the session's own holds its last goals this long at its end
 MIN_SERVOS_PER_TICK = 4            # fewer a tick, and each servo is read less often than every 40 ms
 
 
@@ -128,6 +129,8 @@ class Session:
         return self
 
     def __exit__(self, *exc: object) -> None:
+        if self.emulated is not None and self.port is not None:
+            self.port.clock.sleep_until(self.port.clock.now() + HOLD_AFTER_S)
         if self.port is not None and self.given is None:
             self.port.close()
         if self.emulated is not None:

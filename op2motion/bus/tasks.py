@@ -68,6 +68,13 @@ class MotionResult:
     notes: list[str] = field(default_factory=list)
     travel: dict[str, float] = field(default_factory=dict)
     checked: str = ""
+    emulator: Any = None
+
+    def emulated(self) -> dict[str, Any] | None:
+        """What the emulated OP2 the motion ran on did (an in-process one, ``--port lockstep``): its report once the
+        robot held its last goals :data:`~.session.HOLD_AFTER_S` more (the torso's position, heading and tilt, the
+        servos' goals and torque limits); None on a real robot."""
+        return None if self.emulator is None else self.emulator.report()
 
     @property
     def last(self) -> LoopReport | None:
@@ -99,7 +106,8 @@ class MotionResult:
         return {"what": self.what, "planned_s": round(self.planned_s, 3), "ended": self.ended,
                 "fault": None if self.fault is None else self.fault.as_dict(), "checked": self.checked,
                 "runs": {name: r.as_dict() for name, r in self.runs}, "notes": list(self.notes),
-                "target_error_deg": None if err is None else round(err, 3), "travel": dict(self.travel)}
+                "target_error_deg": None if err is None else round(err, 3), "travel": dict(self.travel),
+                "emulated": self.emulated()}
 
     def lines(self) -> list[str]:
         """For people."""
@@ -110,6 +118,11 @@ class MotionResult:
             out.append(f"  last goals within {err:.2f}° of the target pose")
         if self.travel:
             out.append("  leg odometry: " + ", ".join(f"{k} {v:+.3f}" for k, v in self.travel.items()))
+        emulated = self.emulated()
+        if emulated is not None:
+            truth = emulated["truth"]
+            out.append(f"  emulated OP2 (lockstep): torso at x {truth['x_m']:+.3f} m, y {truth['y_m']:+.3f} m, heading "
+                       f"{math.degrees(truth['yaw_rad']):+.1f}°, tilt {math.degrees(truth['tilt_rad']):.1f}°")
         if self.fault is not None:
             out.append(f"  STOPPED: {self.fault.describe()}")
         elif self.ended == "stopped":
@@ -213,7 +226,8 @@ def play(port: str, spec: Spec, path: str, page: int | None = None, options: Opt
             start = page_start(loaded, page, spec, current)
             trajectory = then(move(current, start, spec), page_trajectory(loaded, page, spec, start))
             what = f"page {page} ({loaded.page(page, spec).name})"
-        result = MotionResult(what, trajectory.duration_s, target=target, notes=list(trajectory.notes))
+        result = MotionResult(what, trajectory.duration_s, target=target, notes=list(trajectory.notes),
+                              emulator=session.emulated)
         result.checked = checked(trajectory, spec, state, options.force, what, options.on_progress)
         run_planned(session, state, trajectory, result, "motion", options)
         return result

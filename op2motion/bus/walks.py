@@ -96,7 +96,8 @@ def _on_robot(port: str, spec: Spec, controller: Any, what: str, options: Option
         first = Pose("walk_start", Support.DOUBLE, np.asarray(controller.plan.goals[0], dtype=float))
         approach = move(state.servo_angles, first, spec)
         planned = controller.plan.duration_s if duration_s is None else duration_s
-        result = MotionResult(what, approach.duration_s + planned, notes=list(approach.notes))
+        result = MotionResult(what, approach.duration_s + planned, notes=list(approach.notes),
+                              emulator=session.emulated)
         result.checked = checked(approach, spec, state, options.force, "the move to the walk's first pose",
                                  options.on_progress)
         if not run_planned(session, state, approach, result, "approach", options):
@@ -122,12 +123,12 @@ def getup(port: str, spec: Spec, action: Any = None, options: Options = Options(
         tilt = state.board.tilt_rad
         if tilt < FALL_TILT_RAD:
             result = MotionResult("get up", 0.0, notes=[f"the robot is up (tilted {math.degrees(tilt):.0f}°): "
-                                                        f"nothing to do"])
+                                                        f"nothing to do"], emulator=session.emulated)
             result.checked = "nothing to check"
             return result
         side = lying_side(state.board.accel_m_s2)
         controller = GetUp(spec, action)
-        result = MotionResult(f"get up from lying {side}", controller.plan.duration_s)
+        result = MotionResult(f"get up from lying {side}", controller.plan.duration_s, emulator=session.emulated)
         if options.force:
             result.checked = "not checked (forced)"
         else:

@@ -85,6 +85,7 @@ def _port(p: argparse.ArgumentParser) -> None:
 
 def _emulate_args(p: argparse.ArgumentParser) -> None:
     from op2motion.bus.emulator.body import STARTS
+    from op2motion.bus.emulator.timing import DEFAULT_LATENCY_TIMER_MS, KERNEL_LATENCY_TIMER_MS
     from op2motion.physics import ENGINES
 
     p.add_argument("--link", required=True, metavar="PATH", help="where to put the link to the emulated port")
@@ -105,6 +106,17 @@ def _emulate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--push", nargs="+", default=[], metavar="N@S",
                    help="push the robot forward with N newtons for 0.1 s, S seconds into the motion (e.g. 30@4)")
     p.add_argument("--seed", type=whole(0, 2 ** 31 - 1), default=0, help="seed of the lost and corrupted replies")
+    p.add_argument("--wire", choices=("real", "instant"), default="real",
+                   help="real (default): the bus's time as a real CM-730 behind its FTDI adapter keeps it (1 Mbps "
+                        "bytes, each servo's return delay, 62-byte USB packets, the latency timer); instant: as fast "
+                        "as a pseudo-terminal answers")
+    p.add_argument("--latency-timer-ms", type=whole(1, 255), default=DEFAULT_LATENCY_TIMER_MS, metavar="MS",
+                   help=f"with --wire real: the FTDI adapter's latency timer (default {DEFAULT_LATENCY_TIMER_MS}: what "
+                        f"op2motion sets at open; {KERNEL_LATENCY_TIMER_MS}: a current kernel's default, for a "
+                        f"program that does not)")
+    p.add_argument("--return-delay", type=whole(0, 254), default=None, metavar="N",
+                   help="every servo's Return Delay Time register (2 µs units; default 0 as the OP2 ships, 250 as "
+                        "an MX-28 from the factory)")
     p.add_argument("--seconds", type=number(0.0, 86400.0, "s"), default=None, metavar="S",
                    help="stop after S seconds (default: run until Ctrl-C)")
     p.add_argument("--truth", type=output_path, metavar="JSON",
@@ -248,17 +260,19 @@ def cmd_emulate(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot emulate``."""
     from op2motion.bus.emulator.faults import Faults, parse_timed
     from op2motion.bus.emulator.server import Emulator
+    from op2motion.bus.emulator.timing import INSTANT, WireTiming
     from op2motion.tasks.robot import emulated
 
     faults = Faults(set(args.missing), [parse_timed(u, "unplug")[:2] for u in args.unplug], args.lose, args.corrupt,
                     [parse_timed(o, "overheat", 85.0) for o in args.overheat], args.supply, args.seed,
                     [(float(n), t) for n, t, _ in (parse_timed(p, "push", first="N") for p in args.push)])
-    emulator = Emulator(spec, args.engine, args.start, faults, args.truth)
+    timing = INSTANT if args.wire == "instant" else WireTiming(latency_timer_s=args.latency_timer_ms / 1000.0)
+    emulator = Emulator(spec, args.engine, args.start, faults, args.truth, timing, args.return_delay)
     interrupted = False
     try:
         with stop_on_signals() as stop:
             pty = emulator.open(args.link)
-            print(f"op2motion: emulated OP2 on {args.link} -> {pty} ({args.engine}, {args.start}"
+            print(f"op2motion: emulated OP2 on {args.link} -> {pty} ({args.engine}, {args.start}, {timing.describe()}"
                   f"{', ' + ', '.join(faults.describe()) if faults.describe() else ''}); Ctrl-C stops it",
                   file=sys.stderr, flush=True)
             if args.seconds is not None:

@@ -65,6 +65,7 @@ def emulated(emulator: Any, link: str, engine: EngineName, start: str, faults: A
     """``robot emulate``'s report once the emulated OP2 stopped: its link, engine, start, faults, traffic and how
     far it fell behind the wall clock; ``interrupted``: it was stopped by Ctrl-C (not by ``--seconds``)."""
     data = {"link": link, "pty": emulator.pty_name, "engine": engine, "start": start, "faults": faults.describe(),
+            "wire": emulator.timing.describe(),
             "stats": dict(emulator.stats), "slipped_s": round(emulator.slipped_s, 3),
             "simulated_s": round(emulator.truth()["t_s"], 3), "truth": emulator.truth()}
     line = (f"emulated OP2 stopped after {data['simulated_s']:.1f} s simulated ({emulator.slipped_s:.2f} s behind "
