@@ -1,17 +1,21 @@
-"""What the bus tests share: an emulated OP2 in a process of its own (``op2motion robot emulate``, as it would run
-beside a client: a motion's 8 ms loop needs it answering on time, which a thread of the test's busy interpreter
-cannot promise) or, where no motion runs, served from this process; and the CLI run as a real subprocess."""
+"""What the bus tests share.
+
+Most run the emulated OP2 **in lockstep** in the test's own process (:func:`lockstep`, or ``--port lockstep:...`` on
+the command line): the client, the wire model (1 Mbps, return delays, the FTDI's packets and a 1 ms latency timer)
+and the physics advance together in simulated time, deterministically and faster than real time, whatever else the
+machine is doing. A few end-to-end tests run it in real time in a process of its own (:func:`emulator_process`,
+``op2motion robot emulate``) on a real pseudo-terminal, as a user would, with the CLI as a real subprocess
+(:func:`cli`).
+"""
 
 from __future__ import annotations
 
 import contextlib
-import fcntl
 import json
 import os
 import signal
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 from typing import Iterator
@@ -19,24 +23,33 @@ from typing import Iterator
 from helpers import ROOT
 
 from op2motion.bus.emulator.faults import Faults
+from op2motion.bus.emulator.lockstep import LockstepPort
 from op2motion.bus.emulator.server import Emulator
+from op2motion.bus.emulator.timing import WireTiming
 from op2motion.robot.spec import Spec
 
 CLI_TIMEOUT_S = 120.0
+WIRE_1MS = WireTiming(latency_timer_s=0.001)   # the real wire, the latency timer op2motion sets
 
 
 @contextlib.contextmanager
-def emulated(spec: Spec, folder: Path, engine: str = "mujoco", start: str = "standing",
-             faults: Faults | None = None) -> Iterator[tuple[Emulator, str]]:
-    """An emulated OP2 serving in a thread; yields it and the path of its port."""
-    emulator = Emulator(spec, engine, start, faults)
-    link = str(folder / f"op2-{engine}-{start}")
-    emulator.open(link)
-    emulator.start()
+def lockstep(spec: Spec, engine: str = "mujoco", start: str = "standing", faults: Faults | None = None,
+             timing: WireTiming = WIRE_1MS, return_delay: int | None = None) -> Iterator[tuple[Emulator, LockstepPort]]:
+    """An emulated OP2 in lockstep in this process; yields it and its port (pass the port where a path would go)."""
+    emulator = Emulator(spec, engine, start, faults, timing=timing, return_delay=return_delay)  # type: ignore[arg-type]
     try:
-        yield emulator, link
+        yield emulator, LockstepPort(emulator)
     finally:
         emulator.close()
+
+
+def robot_json(capsys, *argv: str) -> tuple[int, dict | None, str]:
+    """``op2motion ARGV --json`` in this process (an ``--port lockstep:...`` robot): (exit code, the JSON result or
+    None, stderr)."""
+    from helpers import run_cli
+
+    code, out, err = run_cli(capsys, *argv, "--json")
+    return code, json.loads(out) if out.strip() else None, err
 
 
 class EmulatorProcess:
@@ -76,39 +89,22 @@ class EmulatorProcess:
             self.process.communicate()
 
 
-#: One real-time bus at a time across the test workers: an emulator and a client loop both run at real-time priority,
-#: and two such pairs on a 2-core machine starve each other (a blind bus is then the right verdict, and the test fails).
-REALTIME_LOCK = Path(tempfile.gettempdir()) / "op2motion-tests-realtime-bus.lock"
-
-
-@contextlib.contextmanager
-def _one_realtime_bus() -> Iterator[None]:
-    with open(REALTIME_LOCK, "a") as lock:
-        fcntl.flock(lock.fileno(), fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(lock.fileno(), fcntl.LOCK_UN)
-
-
 @contextlib.contextmanager
 def emulator_process(folder: Path, engine: str = "mujoco", start: str = "standing", *flags: str
                      ) -> Iterator[EmulatorProcess]:
-    """An emulated OP2 in its own process, with the faults given as ``robot emulate`` flags (one at a time across
-    the test workers: :data:`REALTIME_LOCK`)."""
-    with _one_realtime_bus():
-        emulator = EmulatorProcess(folder, engine, start, flags)
-        try:
-            yield emulator
-        finally:
-            emulator.close()
+    """An emulated OP2 in real time in its own process, with ``robot emulate`` flags (its wire: real, 1 ms)."""
+    emulator = EmulatorProcess(folder, engine, start, flags)
+    try:
+        yield emulator
+    finally:
+        emulator.close()
 
 
-def cli(*argv: str, timeout: float = CLI_TIMEOUT_S) -> subprocess.Popen:
-    """``op2motion ARGV`` started as a subprocess (stdout and stderr piped)."""
+def cli(*argv: str) -> subprocess.Popen:
+    """``op2motion ARGV`` started as a subprocess (stdin, stdout and stderr piped)."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    return subprocess.Popen([sys.executable, "-m", "op2motion", *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, cwd=ROOT, env=env)
+    return subprocess.Popen([sys.executable, "-m", "op2motion", *argv], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT, env=env)
 
 
 def finish(process: subprocess.Popen, timeout: float = CLI_TIMEOUT_S) -> tuple[int, str, str]:
@@ -120,21 +116,6 @@ def finish(process: subprocess.Popen, timeout: float = CLI_TIMEOUT_S) -> tuple[i
 def run(*argv: str, timeout: float = CLI_TIMEOUT_S) -> tuple[int, str, str]:
     """``op2motion ARGV`` in a subprocess, to its end."""
     return finish(cli(*argv), timeout)
-
-
-#: The one outcome a motion test retries once: the whole bus silent for 40 ms. A pseudo-terminal's bytes are moved by
-#: a kernel worker thread at normal priority (the loop and the emulator run at real-time priority); on a machine
-#: loaded far beyond its cores that worker alone can stall the port that long, and the loop stops, as it must.
-BLIND_BUS = "the sub-controller (ID 200): not answering"
-
-
-def run_motion(*argv: str) -> tuple[int, str, str]:
-    """``op2motion ARGV`` (a motion expected to succeed), run again once if the whole bus went blind (see
-    :data:`BLIND_BUS`); a fault of any single servo, or a second blind bus, is reported as it came."""
-    code, out, err = run(*argv)
-    if code == 1 and BLIND_BUS in err:
-        code, out, err = run(*argv)
-    return code, out, err
 
 
 def interrupt_when_walked(process: subprocess.Popen, emulator: EmulatorProcess, x_m: float) -> float:

@@ -1,43 +1,36 @@
-"""Every ``op2motion robot`` command against the emulated OP2 on a real pseudo-terminal, and each injected fault's
-named outcome. The emulator runs in real time: the motions here are short."""
+"""Every ``op2motion robot`` command against the emulated OP2 in lockstep behind the real wire (1 Mbps, return
+delays, the FTDI's packets, a 1 ms latency timer): ``--port lockstep:...`` on the command line, or its port from
+Python, and each injected fault's named outcome; the link too slow for the loop refused by name. Lockstep runs are
+deterministic and faster than real time, so the walks here are whole ones."""
 
 from __future__ import annotations
 
-import json
 import math
 import os
-import signal
-import time
 
 import numpy as np
 import pytest
-from bus_support import cli, emulated, emulator_process, finish, interrupt_when_walked, run, run_motion
+from bus_support import lockstep, robot_json
 from helpers import POSES, STOCK, run_cli
 
 from op2motion.bus.emulator.faults import Faults
 from op2motion.bus.safety import FALL_TORQUE_LIMIT
+from op2motion.bus.tasks import Options, play, setup, teach
+from op2motion.bus.walks import walk
+from op2motion.errors import CheckFailed
 from op2motion.formats.posefile import read_pose, write_pose
 from op2motion.robot.pose import Pose
 
 GOAL_TOL_DEG = 1.5             # the acceptance's "every servo commanded within 1.5° of the pose"
 TICK_DEG = 360.0 / 4096        # one position tick
 STANDING_TILT_DEG = 15.0       # a torso tilted less than this still stands
-CTRL_C_EXIT_S = 3.0            # Ctrl-C mid-walk: exit 130 within this long
-WALKED_M = 0.2                 # ... sent once the robot has walked this far [m]
+WALKED_M = 0.2                 # a stop is asked for once the robot has walked this far [m]
+FAULT_AT_S = 4.0               # the overheating knee's moment, into the motion [s]
 
 
-@pytest.fixture()
-def robot(spec, tmp_path):
-    """A fresh emulated OP2, standing (one at a time: two emulators in one process would share its interpreter)."""
-    with emulated(spec, tmp_path) as (emulator, link):
-        yield emulator, link
-
-
-def _goals_deg(emulator, spec) -> np.ndarray:
-    """The servos' goals [deg], from an emulator in this process or one in its own (its report)."""
-    if hasattr(emulator, "servos"):
-        return np.array([(s.u16("goal_position") - spec.servo.center_tick) * TICK_DEG for s in emulator.servos])
-    return (np.array(emulator.report()["goal_ticks"]) - spec.servo.center_tick) * TICK_DEG
+def _goals_deg(report: dict, spec) -> np.ndarray:
+    """The servos' goals [deg] from an emulator's report."""
+    return (np.array(report["goal_ticks"]) - spec.servo.center_tick) * TICK_DEG
 
 
 def _one_line(err: str) -> str:
@@ -60,159 +53,191 @@ def test_status_ports_that_are_not_a_robot(tmp_path, capsys):
     finally:
         os.close(master)
         os.close(slave)
+    code, _, err = run_cli(capsys, "robot", "status", "--port", "lockstep:wire=fast")
+    assert code == 2 and "expected wire=real or wire=instant" in _one_line(err)
 
 
 @pytest.mark.physics
-def test_status_all_well(robot, capsys):
-    emulator, link = robot
-    code, out, _ = run_cli(capsys, "robot", "status", "--port", link, "--json")
-    status = json.loads(out)
-    assert code == 0 and status["ok"] and status["board"]["power"]
+def test_status_all_well_with_the_link_measured(capsys):
+    code, status, _ = robot_json(capsys, "robot", "status", "--port", "lockstep")
+    assert code == 0 and status["ok"] and status["board"]["power"] and not status["warnings"]
     assert [s["answers"] for s in status["servos"]] == [True] * 20
-    assert {s["model"] for s in status["servos"]} == {"MX-28"}
+    assert {s["model"] for s in status["servos"]} == {"MX-28"} and {s["return_delay_us"] for s in status["servos"]} \
+        == {0}
     assert status["board"]["tilt_deg"] < STANDING_TILT_DEG
+    assert status["link"]["ping_round_trip_ms"]["max"] == pytest.approx(1.0, abs=0.05)     # the 1 ms timer
+    plan = status["read_plan"]
+    assert 10 <= plan["servos_per_tick"] <= 20 and plan["bulk_read_ms"] <= 3.5   # its planned share of the tick
 
 
 @pytest.mark.physics
-def test_status_names_a_missing_servo(spec, tmp_path, capsys):
-    with emulated(spec, tmp_path, faults=Faults(missing={7})) as (_, link):
-        code, out, err = run_cli(capsys, "robot", "status", "--port", link, "--json")
+def test_a_return_delay_of_250_is_named_refused_and_set_to_0(capsys, spec):
+    code, status, err = robot_json(capsys, "robot", "status", "--port", "lockstep:return-delay=250")
+    assert code == 0 and {s["return_delay_us"] for s in status["servos"]} == {500}
+    assert status["read_plan"]["servos_per_tick"] < 20
+    assert "return delay of up to 250" in status["warnings"][0] and "robot setup" in status["warnings"][0]
+    code, _, err = run_cli(capsys, "robot", "walk", "--port", "lockstep:return-delay=250", "--steps", "4")
+    assert code == 2 and "return delay (up to 250" in _one_line(err) and "--return-delay 0" in err
+    code, _, err = run_cli(capsys, "robot", "setup", "--port", "lockstep:return-delay=250", "--return-delay", "0")
+    assert code == 2 and "expected --yes" in _one_line(err)                 # no terminal to ask on
+    with lockstep(spec, return_delay=250) as (emulator, port):
+        asked: list[str] = []
+        done = setup(port, spec, 0, lambda question: asked.append(question) or True)
+        assert len(done.written) == 20 and done.already == (200,) and not done.failed and "EEPROM" in asked[0]
+        assert {s.get("return_delay_time") for s in emulator.servos} == {0}
+        assert setup(port, spec, 0, lambda question: False).written == {}    # nothing to change: not asked
+        result = play(port, spec, str(POSES / "walkready.json"))
+    assert result.ended == "done" and result.runs[-1][1].plan["servos_per_tick"] >= 10
+
+
+@pytest.mark.physics
+def test_a_16_ms_latency_timer_is_refused_by_name(capsys):
+    code, status, _ = robot_json(capsys, "robot", "status", "--port", "lockstep:latency-timer-ms=16")
+    assert code == 0 and status["link"]["ping_round_trip_ms"]["max"] == pytest.approx(16.0, abs=0.5)
+    assert status["read_plan"]["servos_per_tick"] == 0 and "too slow" in status["warnings"][0]
+    code, result, err = robot_json(capsys, "robot", "walk", "--port", "lockstep:latency-timer-ms=16", "--steps", "4")
+    line = _one_line(err)
+    assert code == 2 and result is None
+    assert "latency timer" in line and "echo 1 | sudo tee /sys/bus/usb-serial/devices/" in line and "nothing moved" in line
+
+
+@pytest.mark.physics
+def test_status_names_a_missing_servo(capsys):
+    code, status, err = robot_json(capsys, "robot", "status", "--port", "lockstep:missing=7")
     assert code == 1 and "r_hip_yaw (ID 7): not answering" in _one_line(err)
-    assert [s["id"] for s in json.loads(out)["servos"] if not s["answers"]] == [7]
+    assert [s["id"] for s in status["servos"] if not s["answers"]] == [7]
 
 
 @pytest.mark.physics
-def test_read_writes_the_present_pose(robot, spec, tmp_path, capsys):
-    emulator, link = robot
-    code, _, _ = run_cli(capsys, "robot", "read", "--port", link, "--out", str(tmp_path / "here.json"))
+def test_read_writes_the_present_pose_and_limp_holds_what_it_read(spec):
+    with lockstep(spec) as (emulator, port):
+        pose, notes = teach(port, spec, "here")
+        assert pose.support == "double" and not notes
+        assert np.allclose(np.degrees(pose.servo), np.degrees(emulator.body.joint_angles()), atol=2 * TICK_DEG)
+    with lockstep(spec, start="lying_back") as (emulator, port):
+        waited = []
+        pose, _ = teach(port, spec, "limp", limp=True, wait=lambda: waited.append(port.clock.now()))
+        assert waited and all(s.get("torque_enable") == 1 for s in emulator.servos)    # the torque is back on
+        assert np.allclose(_goals_deg(emulator.report(), spec), np.degrees(pose.servo), atol=2 * TICK_DEG)
+
+
+@pytest.mark.physics
+def test_read_from_the_command_line(tmp_path, capsys, spec):
+    code, _, err = run_cli(capsys, "robot", "read", "--port", "lockstep", "--out", str(tmp_path / "here.json"))
     pose = read_pose(tmp_path / "here.json", spec)
-    assert code == 0 and pose.name == "here" and pose.support == "double"
-    assert np.allclose(np.degrees(pose.servo), np.degrees(emulator.body.joint_angles()), atol=2 * TICK_DEG)
+    assert code == 0 and pose.name == "here" and pose.support == "double", err
 
 
 @pytest.mark.physics
-def test_read_limp_then_holds_what_it_read(spec, tmp_path, capsys):
-    with emulated(spec, tmp_path, start="lying_back") as (emulator, link):
-        code, out, _ = run_cli(capsys, "robot", "read", "--port", link, "--out", str(tmp_path / "t.json"), "--limp",
-                               "--wait", "0.3", "--json")
-        assert code == 0 and json.loads(out)["limp"]
-        assert all(s.get("torque_enable") == 1 for s in emulator.servos)      # the torque is back on
-        pose = read_pose(tmp_path / "t.json", spec)
-        assert np.allclose(_goals_deg(emulator, spec), np.degrees(pose.servo), atol=2 * TICK_DEG)
-
-
-@pytest.mark.physics
-def test_play_a_pose_commands_every_servo(spec, tmp_path):
-    with emulator_process(tmp_path) as emulator:
-        code, out, err = run_motion("robot", "play", "--port", emulator.link, str(POSES / "walkready.json"),
-                                    "--json")
-        goals = _goals_deg(emulator, spec)
-    result = json.loads(out)
+def test_play_a_pose_commands_every_servo(spec, capsys):
+    code, result, err = robot_json(capsys, "robot", "play", "--port", "lockstep", str(POSES / "walkready.json"))
     target = np.degrees(read_pose(POSES / "walkready.json", spec).servo)
-    assert code == 0 and result["ended"] == "done" and result["checked"].startswith("checked in physics"), (err, out)
-    assert np.max(np.abs(goals - target)) <= GOAL_TOL_DEG
-    assert result["runs"]["motion"]["max_blind_ticks"] < 5
+    assert code == 0 and result["ended"] == "done" and result["checked"].startswith("checked in physics"), err
+    assert np.max(np.abs(_goals_deg(result["emulated"], spec) - target)) <= GOAL_TOL_DEG
+    assert result["runs"]["motion"]["max_blind_ticks"] == 0 and result["runs"]["motion"]["late_ticks"] == 0
 
 
 @pytest.mark.physics
-def test_play_an_action_page_and_refuse_a_file_without_page(tmp_path):
-    with emulator_process(tmp_path) as emulator:
-        code, _, err = run("robot", "play", "--port", emulator.link, str(STOCK))
-        assert code == 2 and "--page: " in _one_line(err)
-        code, out, err = run_motion("robot", "play", "--port", emulator.link, str(STOCK), "--page", "9", "--json")
-    result = json.loads(out)
+def test_play_an_action_page_and_refuse_a_file_without_page(capsys):
+    code, _, err = run_cli(capsys, "robot", "play", "--port", "lockstep", str(STOCK))
+    assert code == 2 and "--page: " in _one_line(err)
+    code, result, err = robot_json(capsys, "robot", "play", "--port", "lockstep", str(STOCK), "--page", "9")
     assert code == 0 and result["what"].startswith("page 9") and result["runs"]["motion"]["ticks"] > 100, err
+    assert math.degrees(result["emulated"]["truth"]["tilt_rad"]) < STANDING_TILT_DEG
 
 
 @pytest.mark.physics
-def test_refused_unless_forced_and_a_fall_lowers_the_torque(spec, tmp_path, capsys):
+def test_refused_unless_forced_and_a_fall_lowers_the_torque(spec, tmp_path):
     stand = read_pose(POSES / "standing.json", spec).servo.copy()
     for name, sign in (("r_ank_pitch", -1), ("l_ank_pitch", 1)):
         stand[spec.joint_names.index(name)] = math.radians(45.0) * sign        # toes far down: it tips over
     write_pose(Pose("tipping", "double", stand), tmp_path / "tipping.json", spec)
-    with emulator_process(tmp_path) as emulator:
-        before = _goals_deg(emulator, spec)
-        code, _, err = run_cli(capsys, "robot", "play", "--port", emulator.link, str(tmp_path / "tipping.json"))
-        assert code == 1 and "refused" in _one_line(err) and "--force" in err
-        assert np.array_equal(_goals_deg(emulator, spec), before)             # nothing moved
-        code, _, err = run("robot", "play", "--port", emulator.link, str(tmp_path / "tipping.json"), "--force")
-        time.sleep(0.3)
+    with lockstep(spec) as (emulator, port):
+        before = emulator.report()["goal_ticks"]
+        with pytest.raises(CheckFailed, match="refused.*--force"):
+            play(port, spec, str(tmp_path / "tipping.json"))
+        assert emulator.report()["goal_ticks"] == before                        # nothing moved
+        result = play(port, spec, str(tmp_path / "tipping.json"), options=Options(force=True))
+        port.clock.sleep_until(port.clock.now() + 0.3)
         report = emulator.report()
-    assert code == 1 and "fell" in _one_line(err)
+    assert result.fault is not None and result.fault.kind == "fell"
     assert report["torque_limit_min"] == FALL_TORQUE_LIMIT                    # lowered while it fell
     assert min(report["torque_limit"]) > FALL_TORQUE_LIMIT                    # ... and back up once it lay
 
 
 @pytest.mark.physics
-def test_ctrl_c_mid_walk_stops_standing(tmp_path):
-    with emulator_process(tmp_path) as emulator:
-        walk = cli("robot", "walk", "--port", emulator.link, "--steps", "20")
-        sent = interrupt_when_walked(walk, emulator, WALKED_M)
-        code, _, err = finish(walk)
-        took = time.monotonic() - sent
-        time.sleep(0.5)
+def test_a_stop_mid_walk_ends_standing(spec):
+    with lockstep(spec) as (emulator, port):
+        stop = __import__("threading").Event()
+        start = emulator.truth()["x_m"]
+
+        def on_tick(tick) -> None:
+            if emulator.truth()["x_m"] - start >= WALKED_M:
+                stop.set()
+
+        result = walk(port, spec, steps=20, options=Options(stop=stop, on_tick=on_tick))
+        port.clock.sleep_until(port.clock.now() + 0.5)
         truth = emulator.truth()
-    assert code == 130 and "stopped on request" in _one_line(err), err
-    assert took < CTRL_C_EXIT_S
-    assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and truth["x_m"] > WALKED_M   # walked, then stood
+    assert result.ended == "stopped" and result.fault is None
+    assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and WALKED_M < truth["x_m"] - start < 0.6
 
 
 @pytest.mark.physics
-def test_an_overheating_knee_stops_the_walk(tmp_path):
-    with emulator_process(tmp_path, "mujoco", "standing", "--overheat", "13@4:85") as emulator:
-        code, out, err = run("robot", "walk", "--port", emulator.link, "--steps", "6", "--json")
-    walk = json.loads(out)["runs"]["walk"]
+def test_an_overheating_knee_stops_the_walk(capsys):
+    code, result, err = robot_json(capsys, "robot", "walk", "--port", f"lockstep:overheat=13@{FAULT_AT_S:g}:85",
+                                   "--steps", "10")
+    walked = result["runs"]["walk"]
     assert code == 1 and "r_knee (ID 13): overheating" in _one_line(err)
-    assert walk["ended"] == "fault" and walk["fault"]["id"] == 13 and walk["seconds"] > 2.0     # mid-walk
+    assert walked["ended"] == "fault" and walked["fault"]["id"] == 13 and walked["seconds"] > FAULT_AT_S / 2
 
 
 @pytest.mark.physics
-def test_a_servo_unplugged_mid_motion_stops_it(tmp_path):
-    with emulator_process(tmp_path, "mujoco", "standing", "--unplug", "5@0.3") as emulator:
-        code, out, err = run("robot", "play", "--port", emulator.link, str(POSES / "walkready.json"), "--json")
+def test_a_servo_unplugged_mid_motion_stops_it(capsys):
+    code, result, err = robot_json(capsys, "robot", "play", "--port", "lockstep:unplug=5@0.3",
+                                   str(POSES / "walkready.json"))
     assert code == 1 and "r_el (ID 5): not answering" in _one_line(err)
-    assert json.loads(out)["runs"]["motion"]["max_blind_ticks"] >= 5
+    assert result["runs"]["motion"]["max_blind_ticks"] >= 5
 
 
 @pytest.mark.physics
-def test_lost_and_corrupted_replies_are_ridden_through(tmp_path):
-    flags = ("--lose", "0.02", "--corrupt", "0.01", "--seed", "3")
-    with emulator_process(tmp_path, "mujoco", "standing", *flags) as emulator:
-        code, out, err = run_motion("robot", "play", "--port", emulator.link, str(POSES / "walkready.json"),
-                                    "--json")
-        stats = emulator.report()["stats"]
-    motion = json.loads(out)["runs"]["motion"]
+def test_lost_and_corrupted_replies_are_ridden_through(capsys):
+    code, result, err = robot_json(capsys, "robot", "walk", "--port", "lockstep:lose=0.02,corrupt=0.01,seed=3",
+                                   "--steps", "20")
+    walked, stats = result["runs"]["walk"], result["emulated"]["stats"]
     assert code == 0, err
     assert stats["lost"] > 0 and stats["corrupted"] > 0
-    assert motion["retried_ticks"] > 0 and motion["max_blind_ticks"] < 5
+    assert walked["missed_reads"] > 0 and walked["max_blind_ticks"] < 5 and walked["bus"]["bad_checksums"] > 0
+    truth = result["emulated"]["truth"]
+    assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and truth["x_m"] > 0.8
+    assert abs(math.degrees(truth["yaw_rad"])) < 10.0
 
 
 @pytest.mark.physics
-def test_a_low_supply_refuses_to_start(spec, tmp_path, capsys):
-    with emulated(spec, tmp_path, faults=Faults(supply_v=9.5)) as (_, link):
-        code, _, err = run_cli(capsys, "robot", "play", "--port", link, str(POSES / "walkready.json"))
+def test_a_low_supply_refuses_to_start(spec, capsys):
+    code, _, err = run_cli(capsys, "robot", "play", "--port", "lockstep:supply=9.5", str(POSES / "walkready.json"))
     assert code == 1 and "refused to start" in err and "low supply" in _one_line(err)
 
 
 @pytest.mark.physics
-def test_a_lying_robot_is_not_played_unchecked(spec, tmp_path, capsys):
-    with emulated(spec, tmp_path, start="lying_front") as (_, link):
-        code, out, _ = run_cli(capsys, "robot", "status", "--port", link, "--json")
-        assert code == 0 and json.loads(out)["board"]["tilt_deg"] > 70.0
-        code, _, err = run_cli(capsys, "robot", "play", "--port", link, str(POSES / "walkready.json"))
+def test_a_lying_robot_is_not_played_unchecked(capsys):
+    code, status, _ = robot_json(capsys, "robot", "status", "--port", "lockstep:start=lying_front")
+    assert code == 0 and status["board"]["tilt_deg"] > 70.0
+    code, _, err = run_cli(capsys, "robot", "play", "--port", "lockstep:start=lying_front",
+                           str(POSES / "walkready.json"))
     assert code == 1 and "lies" in _one_line(err)
 
 
-@pytest.mark.physics
-def test_emulate_serves_until_ctrl_c_and_cleans_up(tmp_path):
-    link = tmp_path / "op2"
-    process = cli("robot", "emulate", "--link", str(link), "--engine", "mujoco")
-    deadline = time.monotonic() + 60
-    while not link.is_symlink() and time.monotonic() < deadline and process.poll() is None:
-        time.sleep(0.05)
-    code, out, _ = run("robot", "status", "--port", str(link), "--json")
-    assert code == 0 and json.loads(out)["ok"]
-    process.send_signal(signal.SIGINT)
-    code, _, err = finish(process, 10)
-    assert code == 130 and "link is removed" in _one_line(err)
-    assert not os.path.lexists(link)
+def test_faults_on_a_lockstep_port_are_checked(capsys):
+    code, _, err = run_cli(capsys, "robot", "status", "--port", "lockstep:lose=0.9")
+    assert code == 2 and "expected a share from 0 to 0.5" in _one_line(err)
+    code, _, err = run_cli(capsys, "robot", "status", "--port", "lockstep:speed=3")
+    assert code == 2 and "expected lockstep keys among" in _one_line(err)
+
+
+def test_lockstep_faults_parse(spec):
+    from op2motion.bus.emulator.lockstep import parse_lockstep
+
+    setup = parse_lockstep("lockstep:engine=pybullet,latency-timer-ms=16,return-delay=250,missing=3+4,"
+                           "unplug=5@0.3,overheat=13@4:85,push=30@2,supply=11,seed=7")
+    assert setup.engine == "pybullet" and setup.timing.latency_timer_s == 0.016 and setup.return_delay == 250
+    assert setup.faults == Faults({3, 4}, [(5, 0.3)], 0.0, 0.0, [(13, 4.0, 85.0)], 11.0, 7, [(30.0, 2.0)])

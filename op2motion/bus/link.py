@@ -184,7 +184,7 @@ def too_slow(check: LinkCheck, board_s: float, port_path: str, read_budget_s: fl
     timer = "at an unknown value" if check.latency_timer_ms is None else f"at {check.latency_timer_ms} ms"
     return InputError(
         f"the link is too slow for the 8 ms loop: a ping's round trip took up to {worst}, so reading the "
-        f"sub-controller alone would take {board_s * 1000:.1f} ms of the tick's {read_budget_s * 1000:.0f} ms; the "
+        f"sub-controller alone would take {board_s * 1000:.1f} ms of the tick's {read_budget_s * 1000:.1f} ms; the "
         f"FTDI USB adapter's latency timer is {timer} (current kernels leave it at 16 ms): set it to 1 ms with "
         f"'echo 1 | sudo tee {sysfs_timer_path(port_path)}' (to keep it, the udev rule in docs/robot.md); nothing "
         f"moved", PARAM)

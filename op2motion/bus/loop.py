@@ -36,6 +36,7 @@ import numpy as np
 
 from op2motion.bus import safety
 from op2motion.bus.link import READ_BUDGET_S, read_plan
+from op2motion.bus.port import PortLike
 from op2motion.bus.realtime import LOOP_PRIORITY, realtime, steady
 from op2motion.bus.robot import OP2, angle_of
 from op2motion.bus.stopping import Stops
@@ -282,18 +283,19 @@ def _step(run: _Run, stops: Stops, k: int, now: float, stop: threading.Event | N
     return t, row
 
 
-def run_controller(controller: Controller, port: str | OP2, spec: Spec | None = None, *,
+def run_controller(controller: Controller, port: str | PortLike | OP2, spec: Spec | None = None, *,
                    duration_s: float | None = None, stop: threading.Event | None = None,
                    on_tick: Callable[[Tick], None] | None = None, watch: bool = True,
                    until_done: bool = False) -> LoopReport:
-    """Run ``controller`` on the robot at ``port`` (a path: opened, connected, checked by
-    :func:`~.safety.preflight` and taken control of here; or an :class:`~.robot.OP2` already set up) every 8 ms
+    """Run ``controller`` on the robot at ``port`` (a path or an open port, e.g. an emulated OP2's in lockstep:
+    connected, checked by :func:`~.safety.preflight` and taken control of here; or an :class:`~.robot.OP2` already
+    set up) every 8 ms on the port's clock
     for ``duration_s`` (default: its plan's duration; with ``until_done`` also ending as soon as the controller is
     done, e.g. a steered walk standing still after its stop, a get-up standing), until ``stop`` is set or a fault
     stops it (see the module docstring). ``on_tick`` gets every :class:`Tick`. The servos keep holding the last
     goals afterwards. A controller with ``handles_falls`` (a :class:`~op2motion.motion.fall.Supervisor`) deals with
     falls itself: the watch does not stop it for one."""
-    if isinstance(port, str):
+    if not isinstance(port, OP2):
         from op2motion.bus.session import Session
         from op2motion.robot.specfile import default_spec
 

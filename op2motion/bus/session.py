@@ -38,15 +38,21 @@ class RobotStatus:
 
     @property
     def warnings(self) -> list[str]:
-        """What is not a fault but costs the loop: servos whose return delay keeps the tick from reading them all."""
-        if self.plan is None or self.plan.servos_per_tick >= self.plan.count:
+        """What is not a fault but costs the loop: a link too slow for it (the latency timer), servos whose return
+        delay keeps a tick from reading them all."""
+        if self.plan is None:
             return []
-        slow = [s for s in self.servos if s.answers and s.return_delay > 0]
-        worst = max((s.return_delay for s in slow), default=0)
-        who = f"{len(slow)} servos have a return delay of up to {worst} ({worst * 2} µs each)" if slow else \
-            "the link's tail is long"
-        return [f"{who}: the 8 ms loop can read only {self.plan.servos_per_tick} of {self.plan.count} servos a "
-                f"tick; set it to 0 with 'op2motion robot setup --port PORT --return-delay 0'"]
+        if self.plan.servos_per_tick == 0:
+            timer = self.link.latency_timer_ms if self.link is not None else None
+            return [f"the link is too slow for the 8 ms loop (a tick's read of the sub-controller alone takes "
+                    f"{self.plan.tick_s * 1000:.1f} ms): motions are refused; the FTDI adapter's latency timer is "
+                    f"{'unknown' if timer is None else f'{timer} ms'}: set it to 1 ms (docs/robot.md)"]
+        slow = [s.return_delay for s in self.servos if s.answers and s.return_delay > 0]
+        if self.plan.servos_per_tick >= self.plan.count or not slow:
+            return []
+        return [f"{len(slow)} servos have a return delay of up to {max(slow)} ({max(slow) * 2} µs each): the 8 ms "
+                f"loop can read only {self.plan.servos_per_tick} of {self.plan.count} servos a tick; set it to 0 with "
+                f"'op2motion robot setup --port PORT --return-delay 0'"]
 
     @property
     def servo_angles(self) -> np.ndarray:
@@ -154,10 +160,11 @@ class Session:
             board = read_plan(self.robot.bus.link, ()).tick_s
             raise too_slow(self.robot.link or LinkCheck(None, "", (), self.robot.bus.link.tail_s), board, self.path)
         if plan.servos_per_tick < min(MIN_SERVOS_PER_TICK, plan.count):
-            raise InputError(f"the servos' return delay is too long for the 8 ms loop: it can read only "
-                             f"{plan.servos_per_tick} of {plan.count} servos a tick (at least {MIN_SERVOS_PER_TICK} "
-                             f"needed); {status.warnings[0].split(': ', 1)[1] if status.warnings else ''}",
-                             "port")
+            worst = max(s.return_delay for s in status.servos)
+            raise InputError(f"the servos' return delay (up to {worst}: {worst * 2} µs a reply) is too long for the "
+                             f"8 ms loop: a tick can read only {plan.servos_per_tick} of {plan.count} servos (at least "
+                             f"{MIN_SERVOS_PER_TICK} needed); set it to 0 with 'op2motion robot setup --port "
+                             f"{self.path} --return-delay 0'; nothing moved", "port")
         preflight(status.board, status.servos, self.spec)
 
     def take_control(self, status: RobotStatus, p_gains: dict[int, int] | None = None) -> None:

@@ -1,5 +1,6 @@
-"""What the ``op2motion robot`` commands do, as library functions: :func:`status`, :func:`teach` (read a pose) and
-:func:`play` (a pose, a motion file or an action page); the walks and getting up: :mod:`.walks`.
+"""What the ``op2motion robot`` commands do, as library functions: :func:`status`, :func:`setup` (the servos' return
+delay), :func:`teach` (read a pose) and :func:`play` (a pose, a motion file or an action page); the walks and getting
+up: :mod:`.walks`.
 
 Each opens a :class:`~.session.Session` on the port, reads the whole robot, and (for a motion) refuses to start an
 unfit robot (:mod:`.safety`), builds the motion from where the robot is (:mod:`.plans`), refuses what fails
@@ -29,14 +30,17 @@ from op2motion.bus.plans import (
     robot_schedule,
     then,
 )
+from op2motion.bus.port import PortLike
 from op2motion.bus.safety import clip_goals, mechanical_bounds
 from op2motion.bus.session import RobotStatus, Session
+from op2motion.bus.tables import CM730_ID, MX28
 from op2motion.errors import CheckFailed, InputError
 from op2motion.robot.pose import Pose
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support, SupportName
 
 ACTION_FILE_BYTES = 256 * 512      # an action file: 256 pages of 512 bytes
+MAX_RETURN_DELAY = 254             # the Return Delay Time register's largest value (2 µs units)
 OnTick = Callable[[Tick], None]
 
 
@@ -130,13 +134,53 @@ class MotionResult:
         return out
 
 
-def status(port: str, spec: Spec) -> RobotStatus:
+def status(port: str | PortLike, spec: Spec) -> RobotStatus:
     """The board and every servo (switching the servos' power on if it was off)."""
     with Session(port, spec) as session:
         return session.status()
 
 
-def teach(port: str, spec: Spec, name: str, support: Support | SupportName = "double", limp: bool = False,
+@dataclass(frozen=True)
+class SetupResult:
+    """What ``robot setup`` changed: the register, the value asked for, the devices written {id: old value}, those
+    already right, and those that did not confirm."""
+
+    register: str
+    value: int
+    written: dict[int, int]
+    already: tuple[int, ...]
+    failed: tuple[int, ...]
+
+
+def setup(port: str | PortLike, spec: Spec, return_delay: int, confirm: Callable[[str], bool]) -> SetupResult:
+    """Set every device's Return Delay Time (register 5, EEPROM: kept over power cycles) to ``return_delay`` (2 µs
+    units), writing only where it differs, after ``confirm(question)`` says yes (a no is a refusal: exit 2, nothing
+    written); each write confirmed by the device and read back."""
+    if not 0 <= return_delay <= MAX_RETURN_DELAY:
+        raise InputError(f"expected a return delay of 0 to {MAX_RETURN_DELAY} (2 µs units), got {return_delay}",
+                         "return_delay")
+    with Session(port, spec) as session:
+        state = session.status()
+        missing = [f"{s.joint} (ID {s.id})" for s in state.servos if not s.answers]
+        if missing:
+            raise CheckFailed(f"cannot set every servo: {', '.join(missing)} not answering")
+        now = {CM730_ID: state.board.return_delay} | {s.id: s.return_delay for s in state.servos}
+        change = {d: v for d, v in now.items() if v != return_delay}
+        if change and not confirm(f"write Return Delay Time {return_delay} ({return_delay * 2} µs) into the EEPROM "
+                                  f"of {len(change)} device(s) (IDs {', '.join(map(str, sorted(change)))})?"):
+            raise InputError("not confirmed: nothing written (--yes confirms)", "yes")
+        address = MX28["return_delay_time"].address
+        failed = []
+        for device in sorted(change):
+            reply = session.robot.bus.write(device, address, bytes((return_delay,)))
+            back = session.robot.bus.read(device, address, 1)
+            if reply is None or back is None or back.params[0] != return_delay:
+                failed.append(device)
+        return SetupResult("return_delay_time", return_delay, change,
+                           tuple(sorted(set(now) - set(change))), tuple(failed))
+
+
+def teach(port: str | PortLike, spec: Spec, name: str, support: Support | SupportName = "double", limp: bool = False,
           wait: Callable[[], None] | None = None) -> tuple[Pose, list[str]]:
     """The robot's present joint angles as a pose. With ``limp`` the torque goes off, ``wait`` lets the user move the
     limbs, the angles are read, and the torque comes back on holding them. Angles beyond a joint's mechanical
@@ -162,7 +206,7 @@ def teach(port: str, spec: Spec, name: str, support: Support | SupportName = "do
         if limp:
             robot.take_control({s.id: q for s, q in zip(state.servos, angles)})
         pose = Pose(name, Support.of(support), angles, {},
-                    {"source": "robot", "port": port, "limp": limp, "tilt_deg": round(math.degrees(
+                    {"source": "robot", "port": session.path, "limp": limp, "tilt_deg": round(math.degrees(
                         state.board.tilt_rad), 1)})
         return pose.checked(spec), notes
 
@@ -201,7 +245,8 @@ def checked(trajectory: Any, spec: Spec, state: RobotStatus, force: bool, what: 
     return f"checked in physics ({CHECK_ENGINE}, the servo model, from the robot's present pose)"
 
 
-def play(port: str, spec: Spec, path: str, page: int | None = None, options: Options = Options()) -> MotionResult:
+def play(port: str | PortLike, spec: Spec, path: str, page: int | None = None,
+         options: Options = Options()) -> MotionResult:
     """A pose, a motion file or an action page on the robot: a planned move from where it is to the first pose,
     then the motion or the page tick for tick (see the module docstring)."""
     from op2motion.motion.pipeline import plan_motion

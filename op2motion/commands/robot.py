@@ -21,7 +21,7 @@ MAX_WAIT_S = 600.0
 
 
 def register(sub: Any) -> None:
-    """Add ``robot status|read|play|walk|getup|emulate``."""
+    """Add ``robot status|setup|read|play|walk|getup|emulate``."""
     from op2motion.commands.common import Parser
     from op2motion.formats.actionlayout import NUM_PAGES
 
@@ -30,10 +30,16 @@ def register(sub: Any) -> None:
                                      "1.0, the CM-730 at ID 200, 20 MX-28), safely; or run an emulated OP2 on a "
                                      "pseudo-terminal to develop without one.")
     inner = top.add_subparsers(dest="robot_command", metavar="ACTION", required=True, parser_class=Parser,
-                               help="status, read, play, walk, getup or emulate")
+                               help="status, setup, read, play, walk, getup or emulate")
     p = add_command(inner, "status", cmd_status, "the sub-controller, every servo and the IMU; exit 1 if a servo "
                                                  "is missing or reports an error")
     _port(p)
+    p = add_command(inner, "setup", cmd_setup, "set every servo's Return Delay Time (EEPROM) so the 8 ms loop can "
+                                               "read them all; written only where it differs")
+    _port(p)
+    p.add_argument("--return-delay", type=whole(0, 254), required=True, metavar="N",
+                   help="the value to set (2 µs units; 0: answer at once, as the OP2 ships)")
+    p.add_argument("--yes", action="store_true", help="do not ask: write it (the EEPROM keeps it over power cycles)")
     p = add_command(inner, "read", cmd_read, "the robot's present joint angles as a pose file (teach by hand with "
                                              "--limp)")
     _port(p)
@@ -80,7 +86,9 @@ def register(sub: Any) -> None:
 
 
 def _port(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--port", required=True, metavar="PORT", help="the robot's serial port, e.g. /dev/ttyUSB0")
+    p.add_argument("--port", required=True, metavar="PORT",
+                   help="the robot's serial port, e.g. /dev/ttyUSB0; or lockstep[:key=value,...]: an emulated OP2 in "
+                        "this process, in lockstep with the wire model (docs/robot.md)")
 
 
 def _emulate_args(p: argparse.ArgumentParser) -> None:
@@ -149,6 +157,21 @@ def cmd_status(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.tasks.robot import robot_status
 
     return deliver(args, robot_status(args.port, spec))
+
+
+def cmd_setup(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion robot setup``."""
+    from op2motion.tasks.robot import robot_setup
+
+    def confirm(question: str) -> bool:
+        if args.yes:
+            return True
+        if not sys.stdin.isatty():
+            raise InputError(f"expected --yes to {question.rstrip('?')} (no terminal to ask on)", "yes")
+        print(f"op2motion: {question} [y/N] ", end="", file=sys.stderr, flush=True)
+        return sys.stdin.readline().strip().lower() in ("y", "yes")
+
+    return deliver(args, robot_setup(args.port, spec, args.return_delay, confirm))
 
 
 def cmd_read(args: argparse.Namespace, spec: Spec) -> int:

@@ -27,7 +27,23 @@ def robot_status(port: str, spec: Spec) -> TaskResult:
     state = status(port, spec)
     problem = None if state.ok else state.problems[0].describe() + (
         f" (and {len(state.problems) - 1} more)" if len(state.problems) > 1 else "")
-    return TaskResult(problem is None, problem, None, {}, state.as_dict(), ("\n".join(state.lines()),), file_keys={})
+    return TaskResult(problem is None, problem, tuple(state.warnings), {}, state.as_dict(), ("\n".join(state.lines()),),
+                      file_keys={})
+
+
+def robot_setup(port: str, spec: Spec, return_delay: int, confirm: Callable[[str], bool]) -> TaskResult:
+    """``robot setup --return-delay N``: every device's Return Delay Time set to N where it differs (EEPROM), after
+    ``confirm``; a "no" when a device did not take it."""
+    from op2motion.bus.tasks import setup
+
+    done = setup(port, spec, return_delay, confirm)
+    data = {"register": done.register, "value": done.value, "written": {str(d): v for d, v in done.written.items()},
+            "already": list(done.already), "failed": list(done.failed)}
+    line = (f"return delay {done.value} ({done.value * 2} µs): written to {len(done.written)} device(s)"
+            f"{' (IDs ' + ', '.join(map(str, sorted(done.written))) + ')' if done.written else ''}, "
+            f"{len(done.already)} already had it")
+    problem = (f"IDs {', '.join(map(str, done.failed))} did not take the return delay" if done.failed else None)
+    return TaskResult(problem is None, problem, None, {}, data, (line,), file_keys={})
 
 
 def robot_read(port: str, spec: Spec, name: str, output: Path, support: Support | SupportName = "double",
