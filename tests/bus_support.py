@@ -34,11 +34,13 @@ WIRE_1MS = WireTiming(latency_timer_s=0.001)   # the real wire, the latency time
 
 @contextlib.contextmanager
 def lockstep(spec: Spec, engine: str = "mujoco", start: str = "standing", faults: Faults | None = None,
-             timing: WireTiming = WIRE_1MS, return_delay: int | None = None) -> Iterator[tuple[Emulator, LockstepPort]]:
-    """An emulated OP2 in lockstep in this process; yields it and its port (pass the port where a path would go)."""
+             timing: WireTiming = WIRE_1MS, return_delay: int | None = None, pace: float | None = None
+             ) -> Iterator[tuple[Emulator, LockstepPort]]:
+    """An emulated OP2 in lockstep in this process; yields it and its port (pass the port where a path would go;
+    ``pace``: held to that many simulated seconds a wall second, for tests that act by the wall clock)."""
     emulator = Emulator(spec, engine, start, faults, timing=timing, return_delay=return_delay)  # type: ignore[arg-type]
     try:
-        yield emulator, LockstepPort(emulator)
+        yield emulator, LockstepPort(emulator, pace=pace)
     finally:
         emulator.close()
 

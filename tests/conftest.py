@@ -4,6 +4,7 @@ where Python is told not to write bytecode (PYTHONDONTWRITEBYTECODE), and the te
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 
@@ -61,14 +62,23 @@ LONG_FIRST = ("test_lean_sweeps.py", "test_walk_robust.py", "test_bench.py", "te
 
 
 def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
-    """``-n auto``: one test process per core, and one more where the physics tests run: a real-time bus test runs
-    mostly asleep (one at a time across the processes), and with one process per core the cores idled a fifth of
-    the whole suite (334 s on 2 cores; 290 s with one more). In the fast lane (``-m "not physics"``) the extra
-    process cost more than it saved (69 s against 70 s). ``PYTEST_XDIST_AUTO_NUM_WORKERS`` decides where set."""
+    """``-n auto``: one test process per core (the bus tests run in lockstep: none waits on the wall clock).
+    ``PYTEST_XDIST_AUTO_NUM_WORKERS`` decides where set."""
     if os.environ.get("PYTEST_XDIST_AUTO_NUM_WORKERS"):
         return int(os.environ["PYTEST_XDIST_AUTO_NUM_WORKERS"])
-    cores = len(os.sched_getaffinity(0))
-    return cores if "not physics" in (config.getoption("markexpr") or "") else cores + 1
+    return len(os.sched_getaffinity(0))
+
+
+#: How much lower the test processes run than the system's own (``nice``): the one bus test that runs in real time
+#: on a pseudo-terminal needs the kernel's workers that move a pseudo-terminal's bytes, which the suite's busy
+#: processes at the same priority delay by milliseconds (a robot's PC runs no test suite beside its loop).
+WORKER_NICE = 10
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        with contextlib.suppress(OSError):
+            os.nice(WORKER_NICE)
 
 
 def pytest_sessionstart(session: pytest.Session) -> None:

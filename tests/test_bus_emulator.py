@@ -1,122 +1,157 @@
-"""The emulated OP2 itself: byte compatibility with ROBOTIS's own dynamixel-sdk, the power switch, the bulk read's
-order and silence, no reply to broadcast; and a 20-step walk through the bus in both engines behind it, against the
-same walk in ``walk --validate``."""
+"""The emulated OP2 itself: the power switch, the bulk read's order and silence, no reply to broadcast; a 20-step walk
+through the bus in lockstep behind the real wire in both engines, against the same walk in ``walk --validate``, and
+the same run twice giving the same rows; the studio's follower in lockstep; and one end-to-end run in real time on a
+real pseudo-terminal: ROBOTIS's dynamixel-sdk, ``robot status``, a walk stopped by Ctrl-C, and ``robot emulate``
+cleaning up."""
 
 from __future__ import annotations
 
 import json
 import math
+import os
+import signal
 import time
 
+import numpy as np
 import pytest
-from bus_support import BLIND_BUS, cli, emulator_process, finish, run
+from bus_support import WIRE_1MS, cli, emulator_process, finish, interrupt_when_walked, lockstep, robot_json, run
 
 from op2motion.bus import protocol as p
 from op2motion.bus.client import Bus
-from op2motion.bus.port import open_port
 from op2motion.bus.robot import POWER_ON_WAIT_S
+from op2motion.bus.tasks import Options
+from op2motion.bus.walks import walk
 
-SPEED_TOL = 0.10               # the walk through the bus: speed within 10 % of walk --validate's
+SPEED_TOL = 0.10               # the walk through the bus: distance within 10 % of walk --validate's
 HEADING_TOL_DEG = 5.0          # ... heading within 5°
 STEPS = 20
-FIRST_MOVE_S = 1.0             # the follower's first goals reach the servos within this, however loaded the machine [s]
+STANDING_TILT_DEG = 15.0       # a torso tilted less than this still stands
+CTRL_C_EXIT_S = 3.0            # Ctrl-C mid-walk: exit 130 within this long [s]
+WALKED_M = 0.2                 # ... sent once the robot has walked this far [m]
+FOLLOW_TOL_RAD = math.radians(0.2)   # the follower's goal ends on its target [rad]
 
 pytestmark = pytest.mark.physics
 
 
-def test_dynamixel_sdk_talks_to_it(tmp_path):
-    sdk = pytest.importorskip("dynamixel_sdk")
-    with emulator_process(tmp_path) as emulator:      # its own process: the SDK polls, holding this interpreter
-        port = sdk.PortHandler(emulator.link)
-        assert port.openPort() and port.setBaudRate(1_000_000)
-        try:
-            handler = sdk.PacketHandler(1.0)
-            model, result, error = handler.ping(port, 200)
-            assert (model, result, error) == (0x7300, sdk.COMM_SUCCESS, 0)
-            model, result, _ = handler.ping(port, 13)
-            assert (model, result) == (29, sdk.COMM_SUCCESS)
-            goal, result, _ = handler.read2ByteTxRx(port, 13, 30)
-            assert result == sdk.COMM_SUCCESS and goal == emulator.report()["goal_ticks"][12]
-            result, error = handler.write1ByteTxRx(port, 13, 25, 1)
-            assert (result, error) == (sdk.COMM_SUCCESS, 0)
-            assert handler.read1ByteTxRx(port, 13, 25)[:2] == (1, sdk.COMM_SUCCESS)
-            _, result, _ = handler.ping(port, 42)
-            assert result == sdk.COMM_RX_TIMEOUT
-        finally:
-            port.closePort()
+def test_power_switch_bulk_read_and_broadcast(spec):
+    from op2motion.bus.emulator.faults import Faults
 
-
-def test_power_switch_bulk_read_and_broadcast(tmp_path):
-    with emulator_process(tmp_path, "mujoco", "standing", "--missing", "5") as emulator:
-        with open_port(emulator.link) as port:
-            bus = Bus(port, retries=0, latency_s=0.02)
-            spans = [(200, 24, 30), (3, 36, 2), (4, 36, 2), (5, 36, 2), (6, 36, 2)]
-            got = bus.bulk_read(spans, 0.02)
-            assert sorted(got) == [3, 4, 200] and len(got[200].params) == 30   # 6 waits for 5's reply in vain
-            assert bus.write(200, 24, b"\x00") is not None                     # servos' power off
-            assert bus.ping(13) is None and bus.ping(200) is not None
-            assert bus.write(200, 24, b"\x01") is not None
-            time.sleep(POWER_ON_WAIT_S)
-            reply = bus.read(13, 24, 1)
-            assert reply is not None and reply.params == b"\x00"                 # powered up with its torque off
-            bus.write(p.BROADCAST_ID, 25, b"\x01")
-            assert bus._collect(p.write(p.BROADCAST_ID, 25, b"\x01"), {13: 0}, 0.05) == {}   # no reply to broadcast
-            assert all(bus.read(d, 25, 1).params == b"\x01" for d in (1, 4, 6, 13, 20))
+    with lockstep(spec, faults=Faults(missing={5})) as (_, port):
+        bus = Bus(port, retries=0)
+        spans = [(200, 24, 30), (3, 36, 2), (4, 36, 2), (5, 36, 2), (6, 36, 2)]
+        got = bus.bulk_read(spans, 0.0)
+        assert sorted(got) == [3, 4, 200] and len(got[200].params) == 30       # 6 waits for 5's reply in vain
+        assert bus.write(200, 24, b"\x00") is not None                         # servos' power off
+        assert bus.ping(13) is None and bus.ping(200) is not None
+        assert bus.write(200, 24, b"\x01") is not None
+        port.clock.sleep_until(port.clock.now() + POWER_ON_WAIT_S)
+        reply = bus.read(13, 24, 1)
+        assert reply is not None and reply.params == b"\x00"                     # powered up with its torque off
+        bus.write(p.BROADCAST_ID, 25, b"\x01")
+        assert bus._collect(p.write(p.BROADCAST_ID, 25, b"\x01"), {13: 0}, 0.05) == {}   # no reply to broadcast
+        assert all(bus.read(d, 25, 1).params == b"\x01" for d in (1, 4, 6, 13, 20))
 
 
 @pytest.mark.parametrize("engine", ["mujoco", "pybullet"])
-def test_twenty_steps_through_the_bus_walk_as_in_physics(spec, tmp_path, engine):
+def test_twenty_steps_through_the_bus_walk_as_in_physics(capsys, engine):
     validate = cli("walk", "--steps", str(STEPS), "--validate", "--engine", engine, "--json")   # meanwhile
-    with emulator_process(tmp_path, engine) as emulator:
-        for _ in range(2):                               # once more only if the whole bus went blind (BLIND_BUS)
-            before = emulator.truth()
-            code, out, err = run("robot", "walk", "--port", emulator.link, "--steps", str(STEPS), "--json")
-            if not (code == 1 and BLIND_BUS in err):
-                break
-        time.sleep(0.5)
-        after = emulator.truth()
+    code, result, err = robot_json(capsys, "robot", "walk", "--port", f"lockstep:engine={engine}", "--steps",
+                                   str(STEPS))
     done, physics, why = finish(validate)
     assert done == 0, why
     summary = json.loads(physics)["physics"]["engines"][engine]
     distance, heading = summary["distance_m"], summary["heading_error_deg"]
-    result = json.loads(out)
     assert code == 0, err
-    assert math.degrees(after["tilt_rad"]) < 15.0 and result["ended"] == "done"             # no fall, ends standing
-    travel = math.hypot(after["x_m"] - before["x_m"], after["y_m"] - before["y_m"])
-    assert abs(travel - distance) <= SPEED_TOL * distance, (travel, distance)             # same time: same speed
-    turned = math.degrees(math.remainder(after["yaw_rad"] - before["yaw_rad"], 2 * math.pi))
-    assert abs(turned - heading) <= HEADING_TOL_DEG, (turned, heading)
-    walk = result["runs"]["walk"]
-    assert walk["max_blind_ticks"] < 5 and walk["period_ms"]["p50"] == pytest.approx(8.0, abs=0.5)
-    assert abs(result["travel"]["distance_m"] - travel) <= SPEED_TOL * distance           # leg odometry
+    truth = result["emulated"]["truth"]
+    assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and result["ended"] == "done"   # ends standing
+    travel = math.hypot(truth["x_m"], truth["y_m"])
+    assert abs(travel - distance) <= SPEED_TOL * distance, (travel, distance)          # same time: same speed
+    assert abs(math.degrees(truth["yaw_rad"]) - heading) <= HEADING_TOL_DEG, (truth, heading)
+    walked = result["runs"]["walk"]
+    assert walked["max_blind_ticks"] < 5 and walked["period_ms"]["p99"] == pytest.approx(8.0, abs=0.01)
+    assert walked["late_ticks"] == 0 and walked["bus"]["stray_packets"] == 0
+    assert abs(result["travel"]["distance_m"] - travel) <= SPEED_TOL * distance          # leg odometry
 
 
-def test_the_robot_follows_a_target_at_a_capped_speed(spec, tmp_path):
+def _rows(spec, **faults) -> tuple[np.ndarray, dict]:
+    """Every tick's goals and readings of a 6-step walk in lockstep (with ``faults``), and the emulator's report."""
+    from op2motion.bus.emulator.faults import Faults
+
+    rows: list[np.ndarray] = []
+    with lockstep(spec, faults=Faults(**faults)) as (emulator, port):
+        walk(port, spec, steps=6, options=Options(on_tick=lambda tick: rows.append(
+            np.concatenate([[tick.t_s], tick.goals, tick.positions, tick.gyro_rad_s, tick.accel_m_s2]))))
+        return np.array(rows), emulator.report()
+
+
+def test_lockstep_runs_are_deterministic(spec):
+    first, report = _rows(spec, lose=0.02, corrupt=0.01, seed=5)
+    second, again = _rows(spec, lose=0.02, corrupt=0.01, seed=5)
+    assert first.shape == second.shape and len(first) > 500 and np.array_equal(first, second)
+    assert report["truth"] == again["truth"] and report["stats"] == again["stats"] and report["stats"]["lost"] > 0
+
+
+def test_the_robot_follows_a_target_at_a_capped_speed(spec):
     from op2motion.bus.follow import FOLLOW_SPEED_RAD_S, Follower
 
     joint = spec.joint_names.index("r_sho_pitch")        # an arm: a knee alone would tip the robot over
-    with emulator_process(tmp_path) as emulator:
-        follower = Follower(emulator.link, spec)
-        follower.start()
+    with lockstep(spec) as (emulator, port):
+        follower = Follower(port, spec)
+        seen: list[tuple[float, float]] = []
+        follower.start()                                 # the loop runs free in its thread, in simulated time
         try:
             start = follower.pose()
             target = start.copy()
             target[joint] += math.radians(30.0)
             follower.set_target(target)
-            t0 = time.monotonic()
-
-            def moved() -> float:
-                goal_rad = math.radians(abs((emulator.report()["goal_ticks"][joint] - 2048) * 360 / 4096))
-                return goal_rad - abs(start[joint])
-
-            while moved() <= 0.0 and time.monotonic() - t0 < FIRST_MOVE_S:     # a loaded machine: the first goals
-                time.sleep(0.02)                                              # may take a few periods to arrive
-            so_far, elapsed = moved(), time.monotonic() - t0
-            assert 0.0 < so_far <= FOLLOW_SPEED_RAD_S * elapsed + math.radians(2.0), (so_far, elapsed)  # capped
-            time.sleep(1.0)
-            goal_deg = (emulator.report()["goal_ticks"][joint] - 2048) * 360 / 4096
-            assert goal_deg == pytest.approx(math.degrees(target[joint]), abs=0.2)
-            assert follower.running()
+            deadline = time.monotonic() + 60.0
+            while time.monotonic() < deadline:
+                goal = (emulator.servos[joint].u16("goal_position") - 2048) * 2 * math.pi / 4096
+                seen.append((port.clock.now(), goal))
+                if abs(goal - target[joint]) < FOLLOW_TOL_RAD:
+                    break
+                time.sleep(0.005)
         finally:
             report = follower.close()
+    times, goals = np.array(seen).T
+    assert abs(goals[-1] - target[joint]) < FOLLOW_TOL_RAD and times[-1] - times[0] >= 0.45   # 30° at 1 rad/s
+    speeds = np.abs(np.diff(goals)) - FOLLOW_SPEED_RAD_S * np.diff(times)
+    assert speeds.max() <= FOLLOW_SPEED_RAD_S * 0.008 + 1e-3                   # capped between any two looks
     assert report.ended == "stopped" and report.fault is None
+
+
+def test_end_to_end_in_real_time_on_a_pseudo_terminal(tmp_path):
+    """One emulator in real time behind the real wire (1 ms timer), as a user runs it: the SDK, status, a walk
+    stopped by Ctrl-C, then ``robot emulate`` stopped by Ctrl-C."""
+    sdk = pytest.importorskip("dynamixel_sdk")
+    assert WIRE_1MS.latency_timer_s == 0.001
+    with emulator_process(tmp_path) as emulator:
+        port = sdk.PortHandler(emulator.link)
+        assert port.openPort() and port.setBaudRate(1_000_000)
+        try:
+            handler = sdk.PacketHandler(1.0)
+            assert handler.ping(port, 200) == (0x7300, sdk.COMM_SUCCESS, 0)
+            model, result, _ = handler.ping(port, 13)
+            assert (model, result) == (29, sdk.COMM_SUCCESS)
+            goal, result, _ = handler.read2ByteTxRx(port, 13, 30)
+            assert result == sdk.COMM_SUCCESS and goal == emulator.report()["goal_ticks"][12]
+            assert handler.write1ByteTxRx(port, 13, 25, 1) == (sdk.COMM_SUCCESS, 0)
+            assert handler.read1ByteTxRx(port, 13, 25)[:2] == (1, sdk.COMM_SUCCESS)
+            assert handler.ping(port, 42)[1] == sdk.COMM_RX_TIMEOUT
+        finally:
+            port.closePort()
+        code, out, err = run("robot", "status", "--port", emulator.link, "--json")
+        assert code == 0 and json.loads(out)["link"]["tail_ms"] < 3.5, err          # the 1 ms timer, and a margin
+        walking = cli("robot", "walk", "--port", emulator.link, "--steps", "20")
+        sent = interrupt_when_walked(walking, emulator, WALKED_M)
+        code, _, err = finish(walking)
+        took = time.monotonic() - sent
+        time.sleep(0.5)
+        truth = emulator.truth()
+        assert code == 130 and "stopped on request" in err, err
+        assert took < CTRL_C_EXIT_S
+        assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and truth["x_m"] > WALKED_M   # walked, stood
+        emulator.process.send_signal(signal.SIGINT)
+        code, _, err = finish(emulator.process, 10)
+    assert code == 130 and "link is removed" in err
+    assert not os.path.lexists(emulator.link)

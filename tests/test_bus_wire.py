@@ -104,8 +104,9 @@ def test_timer_values_outside_the_chip_are_refused():
 
 def test_read_plan_from_the_budget():
     fast = LinkBudget(tail_s=0.0015)
-    plan = read_plan(fast, IDS)
-    assert plan.servos_per_tick == 20 and plan.wire_s == pytest.approx(0.00272)
+    plan = read_plan(fast, IDS, 0.005)
+    assert plan.servos_per_tick == 20 and plan.wire_s == pytest.approx(0.00272)      # bus_wire.md's 2.7 ms
+    assert 10 <= read_plan(fast, IDS).servos_per_tick < 20                     # in its planned 3.5 ms: every 2 ticks
     slow = LinkBudget(tail_s=0.0015, delays_s={d: 250 * 2e-6 for d in IDS})
     reduced = read_plan(slow, IDS)
     assert 0 < reduced.servos_per_tick < 20 and reduced.tick_s <= 0.005
@@ -204,3 +205,16 @@ def test_lockstep_clock_runs_its_listeners_up_to_each_wait():
     clock.sleep_until(1.5)
     clock.sleep_until(1.2)                          # never backwards
     assert seen == [1.5] and clock.now() == 1.5
+
+
+def test_an_idle_adapter_reaches_any_time_in_bounded_steps():
+    from op2motion.bus.emulator.timing import Ftdi
+
+    for anchor in (0.1, 0.3, 1.7, 12.345):
+        ftdi = Ftdi(0.001, BYTE_S, anchor)
+        limit = anchor + 3 * 0.001                      # a firing exactly at the limit, in floating point
+        steps = 0
+        while ftdi.step(limit) is not None:
+            steps += 1
+            assert steps < 5
+        assert ftdi.anchor == pytest.approx(limit)

@@ -1,26 +1,27 @@
 """Steered walks and getting up on the robot (``robot walk --commands | --teleop``, ``robot getup``): the keys'
-commands, and each command against the emulated OP2 on a real pseudo-terminal (real time: short walks)."""
+commands, and each command against the emulated OP2 in lockstep behind the real wire (keys: held to the wall
+clock)."""
 
 from __future__ import annotations
 
 import json
 import math
-import os
-import subprocess
-import sys
-import time
+import threading
 
 import pytest
-from bus_support import CLI_TIMEOUT_S, ROOT, emulator_process, finish, interrupt_when_walked, run_motion
+from bus_support import cli, finish, lockstep, robot_json
+from helpers import run_cli
 
+from op2motion.bus.tasks import Options
 from op2motion.bus.teleop import VX_STEP_M_S, YAW_STEP_RAD_S, Teleop
+from op2motion.bus.walks import getup, steered_walk
 from op2motion.gait.envelope import STEER_ENVELOPE
 
 STANDING_TILT_DEG = 15.0       # a torso tilted less than this stands
 UPRIGHT_TILT_DEG = 25.0        # the issue's "upright" after getting up ...
 UPRIGHT_HEIGHT_M = 0.25        # ... with the torso above this [m]
 WALKED_M = 0.25                # a commanded forward walk gets at least this far [m]
-CTRL_C_EXIT_S = 3.0            # Ctrl-C mid-walk: exit 130 within this long [s]
+CTRL_C_EXIT_S = 3.0            # Ctrl-C mid-walk: ends within this long [s]
 TOL = 1e-12
 
 
@@ -66,80 +67,85 @@ def _steered_file(tmp_path) -> str:
 
 
 @pytest.mark.physics
-def test_robot_walk_by_a_command_timeline_ends_standing(tmp_path):
-    with emulator_process(tmp_path) as emulator:
-        start = emulator.truth()
-        code, out, err = run_motion("robot", "walk", "--port", emulator.link, "--commands", _steered_file(tmp_path),
-                                    "--json")
-        time.sleep(0.3)
-        truth = emulator.truth()
-    result = json.loads(out)
+def test_robot_walk_by_a_command_timeline_ends_standing(tmp_path, capsys):
+    code, result, err = robot_json(capsys, "robot", "walk", "--port", "lockstep", "--commands",
+                                   _steered_file(tmp_path))
     assert code == 0, err
     assert result["ended"] == "done" and result["runs"]["walk"]["ended"] == "done"
-    assert truth["x_m"] - start["x_m"] > WALKED_M                            # walked forward as commanded ...
+    truth = result["emulated"]["truth"]
+    assert truth["x_m"] > WALKED_M                                            # walked forward as commanded ...
     assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG               # ... and stands at the end
 
 
-def _teleop(link: str) -> subprocess.Popen:
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    return subprocess.Popen([sys.executable, "-m", "op2motion", "robot", "walk", "--port", link, "--teleop", "--json"],
-                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            cwd=ROOT, env=env)
+def _steered_by_keys(spec, keys_at: dict[str, float], stop_at_m: float | None = None):
+    """A steered walk in lockstep fed ``keys_at`` ({keys: once the torso has walked that far [m]}; 0: at once) as the
+    keyboard would feed them between ticks, and asked to stop (Ctrl-C) once it has walked ``stop_at_m``; the result,
+    the torso at the end and the simulated time from the stop to the end [s]."""
+    teleop = Teleop(STEER_ENVELOPE, lambda line: None)
+    stop = threading.Event()
+    with lockstep(spec) as (emulator, port):
+        start, asked = emulator.truth()["x_m"], []
+
+        def on_tick(tick) -> None:
+            walked = emulator.truth()["x_m"] - start
+            for keys, at in list(keys_at.items()):
+                if walked >= at:
+                    teleop.feed(keys)
+                    del keys_at[keys]
+            if stop_at_m is not None and walked >= stop_at_m and not stop.is_set():
+                stop.set()
+                asked.append(port.clock.now())
+
+        result = steered_walk(port, spec, teleop=teleop, options=Options(stop=stop, on_tick=on_tick))
+        took = port.clock.now() - asked[0] if asked else 0.0
+        port.clock.sleep_until(port.clock.now() + 0.5)
+        truth = emulator.truth()
+    truth["x_m"] -= start
+    return result, truth, took
 
 
 @pytest.mark.physics
-def test_robot_walk_by_keys_then_x_ends_it_standing(tmp_path):
-    with emulator_process(tmp_path) as emulator:
-        start = emulator.truth()
-        walk = _teleop(emulator.link)
-        assert walk.stdin is not None
-        walk.stdin.write("www")                                              # 0.15 m/s forward
-        walk.stdin.flush()
-        deadline = time.monotonic() + CLI_TIMEOUT_S
-        while emulator.truth()["x_m"] - start["x_m"] < WALKED_M / 2 and time.monotonic() < deadline:
-            time.sleep(0.05)
-        walk.stdin.write("x")
-        walk.stdin.flush()
-        code, out, err = finish(walk)
-        time.sleep(0.3)
-        truth = emulator.truth()
-    assert code == 0, err
-    assert "keys: w/s" in err and "walking: vx +0.15 m/s" in err
-    assert json.loads(out)["runs"]["walk"]["ended"] == "done"
-    assert truth["x_m"] - start["x_m"] > WALKED_M / 2 and math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG
+def test_robot_walk_by_keys_then_x_ends_it_standing(spec):
+    result, truth, _ = _steered_by_keys(spec, {"www": 0.0, "x": WALKED_M})       # 0.15 m/s forward, then end
+    assert result.ended == "done" and result.fault is None
+    assert truth["x_m"] > WALKED_M and math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG
 
 
 @pytest.mark.physics
-def test_ctrl_c_stops_a_steered_walk_on_its_feet(tmp_path):
-    with emulator_process(tmp_path) as emulator:
-        walk = _teleop(emulator.link)
-        assert walk.stdin is not None
-        walk.stdin.write("www")
-        walk.stdin.flush()
-        sent = interrupt_when_walked(walk, emulator, WALKED_M / 2)
-        code, _, err = finish(walk)
-        took = time.monotonic() - sent
-        time.sleep(0.5)
-        truth = emulator.truth()
-    assert code == 130 and "stopped on request" in err, err
-    assert took < CTRL_C_EXIT_S and math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG
+def test_ctrl_c_stops_a_steered_walk_on_its_feet(spec):
+    result, truth, took = _steered_by_keys(spec, {"www": 0.0}, stop_at_m=WALKED_M / 2)
+    assert result.ended == "stopped" and result.fault is None
+    assert took < CTRL_C_EXIT_S and math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and truth["x_m"] > WALKED_M / 2
 
 
 @pytest.mark.physics
-def test_robot_getup_from_lying_face_down(tmp_path):
-    with emulator_process(tmp_path, "mujoco", "lying_front") as emulator:
-        code, _, err = run_motion("robot", "walk", "--port", emulator.link, "--teleop")
-        assert code == 1 and "robot getup first" in err                      # a walk starts standing
-        code, out, err = run_motion("robot", "getup", "--port", emulator.link, "--json")
-        time.sleep(0.3)
-        truth = emulator.truth()
-        again, out_again, _ = run_motion("robot", "getup", "--port", emulator.link, "--json")
+def test_teleop_from_the_keyboard_of_the_command_line():
+    walk = cli("robot", "walk", "--port", "lockstep:pace=1", "--teleop", "--json")
+    assert walk.stdin is not None
+    walk.stdin.write("x")                                                # end at once: it stands
+    walk.stdin.flush()
+    code, out, err = finish(walk)
+    assert code == 0 and "keys: w/s" in err, err
     result = json.loads(out)
-    assert code == 0, err
-    assert "checked in physics" in result["checked"] and "lying front" in result["checked"]
-    assert any("stands" in n or "standing" in n for n in result["notes"]), result["notes"]
+    assert result["runs"]["walk"]["ended"] == "done"
+    assert math.degrees(result["emulated"]["truth"]["tilt_rad"]) < STANDING_TILT_DEG
+
+
+@pytest.mark.physics
+def test_robot_getup_from_lying_face_down(spec, capsys, tmp_path):
+    code, _, err = run_cli(capsys, "robot", "walk", "--port", "lockstep:start=lying_front", "--commands",
+                           _steered_file(tmp_path))
+    assert code == 1 and "robot getup first" in err                      # a walk starts standing
+    with lockstep(spec, start="lying_front") as (emulator, port):
+        result = getup(port, spec)
+        port.clock.sleep_until(port.clock.now() + 0.3)
+        truth = emulator.truth()
+        again = getup(port, spec)
+    assert result.ended == "done" and result.fault is None
+    assert "checked in physics" in result.checked and "lying front" in result.checked
+    assert any("stands" in n or "standing" in n for n in result.notes), result.notes
     assert math.degrees(truth["tilt_rad"]) < UPRIGHT_TILT_DEG and truth["z_m"] > UPRIGHT_HEIGHT_M
-    assert again == 0 and "nothing to do" in json.loads(out_again)["notes"][0]
+    assert "nothing to do" in again.notes[0]
 
 
 def test_steered_flags_are_checked_before_any_port(capsys, tmp_path):
@@ -155,16 +161,13 @@ PUSH = "60@3"                  # 60 N forward for 0.1 s, 3 s into the motion (th
 
 
 @pytest.mark.physics
-def test_a_pushed_robot_walk_gets_up_and_walks_on(tmp_path):
+def test_a_pushed_robot_walk_gets_up_and_walks_on(tmp_path, capsys):
     commands = tmp_path / "commands.csv"
     commands.write_text("t_s,vx_m_s,vy_m_s,yaw_rate_deg_s,event\n0,0,0,0,\n0.5,0.15,0,0,\n18,,,,stop\n")
-    with emulator_process(tmp_path, "mujoco", "standing", "--push", PUSH) as emulator:
-        code, out, err = run_motion("robot", "walk", "--port", emulator.link, "--commands", str(commands),
-                                    "--get-up", "--json")
-        time.sleep(0.3)
-        truth = emulator.truth()
-        report = emulator.report()
-    result = json.loads(out)
+    code, result, err = robot_json(capsys, "robot", "walk", "--port", f"lockstep:push={PUSH}", "--commands",
+                                   str(commands), "--get-up")
+    report = result["emulated"]
+    truth = report["truth"]
     events = [n.split(": ", 1)[1] for n in result["notes"] if ": " in n and n[0].isdigit()]
     assert code == 0 and result["runs"]["walk"]["ended"] == "done", err
     assert [e.split(" (")[0] for e in events[:4]] == ["fall detected", "still; getting up", "standing again",

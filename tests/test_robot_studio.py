@@ -3,9 +3,11 @@ the page reads the pose from the robot, and a tab that does not edit cannot move
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import pytest
-from bus_support import emulator_process
+from bus_support import lockstep
 from helpers import POSES, wait_for
 
 from op2motion.bus.follow import FOLLOW_SPEED_RAD_S, Follower
@@ -17,6 +19,7 @@ pytestmark = pytest.mark.physics
 TICK_DEG = 360.0 / 4096
 FOLLOWED_DEG = 1.0              # the robot's goal ends within this of the edited angle [deg]
 MOVE_DEG = 20.0                 # the edit: 20° at the left elbow
+SETTLE_S = 0.3                  # the joint reaches its goal this long after the goal does [s]
 
 
 def _goal_deg(emulator, spec, joint: str) -> float:
@@ -28,8 +31,8 @@ def test_the_robot_follows_the_studio_and_is_read_back(spec, tmp_path):
     pytest.importorskip("viser")
     from op2motion.studio.server import Studio
 
-    with emulator_process(tmp_path) as emulator:
-        follower = Follower(emulator.link, spec)
+    with lockstep(spec, pace=1.0) as (emulator, port):     # held to the wall clock, as the page is
+        follower = Follower(port, spec)
         follower.start()
         studio = Studio(spec, Session(spec, read_pose(POSES / "walkready.json", spec)), workspace=Workspace(tmp_path),
                         follower=follower)
@@ -42,6 +45,7 @@ def test_the_robot_follows_the_studio_and_is_read_back(spec, tmp_path):
             assert abs(_goal_deg(emulator, spec, joint) - target) > FOLLOWED_DEG      # capped: not there at once
             wait_for(lambda: abs(_goal_deg(emulator, spec, joint) - target) < FOLLOWED_DEG, "the robot following",
                      timeout_s=10 * MOVE_DEG / np.degrees(FOLLOW_SPEED_RAD_S))
+            time.sleep(SETTLE_S)                                   # the joint follows its goal (a P controller)
             studio.session.set_joint(joint, start)                 # the page's pose moves away from the robot's...
             studio._edit("robot", studio._read_robot)              # ...and reading the robot brings it back
             assert studio.session.servo[spec.joint_names.index(joint)] == pytest.approx(np.radians(target), abs=0.05)

@@ -6,7 +6,9 @@ each device's return delay, and the link's tail: what the USB adapter holds back
 system adds, as measured at connect (:func:`~.link.measure_link`; until then the kernel's default timer, 16 ms, is
 assumed). The wait for the first reply is its time on the wire plus the tail; once replies come, a pause of the tail
 plus the next device's delay ends the wait (devices answer back to back: a longer pause means the rest were lost);
-the whole wait never exceeds all the replies' time plus the tail, nor a caller's cap. Every wait counts from when the
+the whole wait never exceeds all the replies' time plus the tail. A caller with a budget (the 8 ms loop's read:
+``cap``) waits for every reply until the cap instead: the budget is the loop's anyway, and what the PC adds to a
+reply's way varies more than the wire does. Every wait counts from when the
 request's first byte can go out: after the bytes written before it (the loop's sync write takes 1.5 ms).
 
 **Replies that come late** (after their wait ended) are never taken for a later request's: the devices a request still
@@ -104,15 +106,16 @@ class Bus:
         earliest = now + self.link.first_and_last(len(sent), order[:1])[0] - self.link.tail_s
         first, end = self.link.first_and_last(len(sent), order)
         first, end = now + first + margin_s, now + end + margin_s
-        if cap is not None:
-            first, end = min(first, cap), min(end, cap)
+        if cap is not None:                             # a budget: use all of it (what the PC adds varies)
+            first = end = cap
         got: dict[int, p.Packet] = {}
         echo_skipped = False
         bad_before = self.parser.bad_checksums
         last: float | None = None
         while len(got) < len(expect):
             nxt = next((d for d, _ in order if d not in got), None)
-            deadline = first if last is None else min(end, last + self.link.gap_s(nxt) + margin_s)
+            deadline = first if last is None else end if cap is not None else \
+                min(end, last + self.link.gap_s(nxt) + margin_s)
             data = self.port.read(deadline)
             if not data:
                 if self.clock.now() >= deadline:

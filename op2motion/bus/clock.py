@@ -53,11 +53,15 @@ def sleep(clock: Clock, seconds: float) -> None:
 
 
 class LockstepClock:
-    """Simulated time advanced by the waits (see the module docstring). ``start_s`` is its first reading [s]."""
+    """Simulated time advanced by the waits (see the module docstring). ``start_s`` is its first reading [s];
+    ``pace`` (None: as fast as it computes) holds it to that many simulated seconds a wall second at most, for a
+    person or a program that acts by the wall clock (the studio following an edit)."""
 
-    def __init__(self, start_s: float = 0.0):
+    def __init__(self, start_s: float = 0.0, pace: float | None = None):
         self._now = float(start_s)
         self._listeners: list[Callable[[float], None]] = []
+        self.pace = pace
+        self._wall0, self._sim0 = time.monotonic(), float(start_s)
 
     def listen(self, advance: Callable[[float], None]) -> None:
         """Have ``advance(t)`` run before the time moves to ``t`` (an emulated robot stepping up to it)."""
@@ -74,3 +78,7 @@ class LockstepClock:
         for advance in self._listeners:
             advance(t)
         self._now = t
+        if self.pace:
+            left = self._wall0 + (t - self._sim0) / self.pace - time.monotonic()
+            if left > 0.0:
+                time.sleep(left)

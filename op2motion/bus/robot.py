@@ -20,6 +20,7 @@ import numpy as np
 from op2motion.bus.client import Bus
 from op2motion.bus.clock import sleep
 from op2motion.bus.link import LinkCheck, measure_link, return_delays
+from op2motion.bus.realtime import LOOP_PRIORITY, realtime
 from op2motion.bus.tables import (
     CM730,
     CM730_ID,
@@ -144,7 +145,8 @@ class OP2:
         if self.bus.ping(CM730_ID) is None:
             raise NoBoard(f"nothing answers at ID {CM730_ID} on {port.path} (expected the OP2's CM-730 "
                           f"sub-controller: is this the robot's port, and is the robot switched on?)", "port")
-        self.link = measure_link(self.bus, CM730_ID, port.latency_timer_ms, port.low_latency)
+        with realtime(LOOP_PRIORITY):                   # the loop's priority: the PC's load is not the link's
+            self.link = measure_link(self.bus, CM730_ID, port.latency_timer_ms, port.low_latency)
         if power:
             self.power_on()
 

@@ -25,16 +25,18 @@ if TYPE_CHECKING:
     from op2motion.bus.emulator.server import Emulator
 
 PREFIX = "lockstep"
+MAX_PACE = 100.0                   # simulated seconds a wall second, at most
 PARAM = "port"
 
 
 class LockstepPort:
     """The host's end of an in-process emulated OP2 (see the module docstring); the interface of
-    :class:`~op2motion.bus.port.Port`."""
+    :class:`~op2motion.bus.port.Port`. ``pace``: at most that many simulated seconds a wall second (None: as fast as
+    it computes)."""
 
-    def __init__(self, emulator: Emulator, path: str = PREFIX):
+    def __init__(self, emulator: Emulator, path: str = PREFIX, pace: float | None = None):
         self.emulator, self.path = emulator, path
-        self.steps = LockstepClock(emulator.sim_time())
+        self.steps = LockstepClock(emulator.sim_time(), pace)
         self.clock: Clock = self.steps
         self.steps.listen(emulator.advance)
         self.latency_timer_ms: int | None = None      # not a USB adapter: nothing to read or set
@@ -87,14 +89,15 @@ class LockstepPort:
 
 @dataclass(frozen=True)
 class LockstepSetup:
-    """What a ``lockstep:`` port text asks for: the engine, the start, the wire, the servos' return delay and the
-    faults."""
+    """What a ``lockstep:`` port text asks for: the engine, the start, the wire, the servos' return delay, the
+    faults and the pace (simulated seconds a wall second at most; None: as fast as it computes)."""
 
     engine: str = "mujoco"
     start: str = "standing"
     timing: WireTiming = WireTiming()
     return_delay: int | None = None
     faults: Faults = field(default_factory=Faults)
+    pace: float | None = None
 
 
 def is_lockstep(port: str) -> bool:
@@ -106,7 +109,8 @@ def parse_lockstep(text: str) -> LockstepSetup:
     """``lockstep[:key=value,...]`` with keys ``engine`` (mujoco, pybullet), ``start`` (standing, lying_front, ...),
     ``wire`` (real, instant), ``latency-timer-ms`` (1..255), ``return-delay`` (0..254, 2 µs units), ``lose``,
     ``corrupt`` (shares), ``seed``, ``missing`` (IDs joined by +), ``unplug`` / ``overheat`` / ``push``
-    (``ID@S[:C]`` joined by +), ``supply`` [V]."""
+    (``ID@S[:C]`` joined by +), ``supply`` [V], ``pace`` (simulated seconds a wall second at most, e.g. 1 to steer a
+    walk by keys; default as fast as it computes)."""
     from op2motion.bus.emulator.body import STARTS
 
     fields: dict[str, str] = {}
@@ -117,7 +121,7 @@ def parse_lockstep(text: str) -> LockstepSetup:
             raise InputError(f"expected key=value items after 'lockstep:', got {item!r}", PARAM)
         fields[key.strip()] = value.strip()
     known = {"engine", "start", "wire", "latency-timer-ms", "return-delay", "lose", "corrupt", "seed", "missing",
-             "unplug", "overheat", "push", "supply"}
+             "unplug", "overheat", "push", "supply", "pace"}
     unknown = sorted(set(fields) - known)
     if unknown:
         raise InputError(f"expected lockstep keys among {', '.join(sorted(known))}, got {unknown[0]!r}", PARAM)
@@ -125,7 +129,12 @@ def parse_lockstep(text: str) -> LockstepSetup:
     if engine not in ("mujoco", "pybullet") or start not in STARTS:
         raise InputError(f"expected engine mujoco or pybullet and start one of {', '.join(STARTS)}, got {engine!r}, "
                          f"{start!r}", PARAM)
-    return LockstepSetup(engine, start, _timing(fields), _whole(fields, "return-delay", 0, 254), _faults(fields))
+    pace = _number(fields, "pace", 0.0)
+    if not 0.0 <= pace <= MAX_PACE:
+        raise InputError(f"expected a pace of 0 (as fast as it computes) to {MAX_PACE:g}, got {fields['pace']!r}",
+                         PARAM)
+    return LockstepSetup(engine, start, _timing(fields), _whole(fields, "return-delay", 0, 254), _faults(fields),
+                         pace or None)
 
 
 def _number(fields: dict[str, str], key: str, default: float) -> float:
@@ -178,7 +187,7 @@ def lockstep_robot(text: str, spec: Spec) -> LockstepPort:
     setup = parse_lockstep(text)
     emulator = Emulator(spec, setup.engine, setup.start, setup.faults, timing=setup.timing,  # type: ignore[arg-type]
                         return_delay=setup.return_delay)
-    return LockstepPort(emulator, text)
+    return LockstepPort(emulator, text, setup.pace)
 
 
 __all__ = ["KERNEL_LATENCY_TIMER_MS", "LockstepPort", "LockstepSetup", "is_lockstep", "lockstep_robot",

@@ -117,7 +117,7 @@ class Ftdi:
         if self.idle():                              # skip whole idle periods at once
             if fire > limit_s or math.isinf(limit_s):
                 return None
-            periods = math.floor((limit_s - self.anchor) / self.timer_s)
+            periods = max(1, math.floor((limit_s - self.anchor) / self.timer_s + 1e-9))
             self.anchor += periods * self.timer_s
             return self.anchor, b""
         if self.incoming and self.incoming[0][0] <= min(fire, limit_s):
