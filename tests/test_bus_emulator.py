@@ -27,7 +27,7 @@ HEADING_TOL_DEG = 5.0          # ... heading within 5°
 STEPS = 20
 STANDING_TILT_DEG = 15.0       # a torso tilted less than this still stands
 CTRL_C_EXIT_S = 3.0            # Ctrl-C mid-walk: exit 130 within this long [s]
-WALKED_M = 0.2                 # ... sent once the robot has walked this far [m]
+WALKED_M = 0.1                 # ... sent once the robot has walked this far [m]
 FOLLOW_TOL_RAD = math.radians(0.2)   # the follower's goal ends on its target [rad]
 
 pytestmark = pytest.mark.physics
@@ -142,7 +142,7 @@ def test_end_to_end_in_real_time_on_a_pseudo_terminal(tmp_path):
             port.closePort()
         code, out, err = run("robot", "status", "--port", emulator.link, "--json")
         assert code == 0 and json.loads(out)["link"]["tail_ms"] < 3.5, err          # the 1 ms timer, and a margin
-        walking = cli("robot", "walk", "--port", emulator.link, "--steps", "20")
+        walking = cli("robot", "walk", "--port", emulator.link, "--steps", "8")
         sent = interrupt_when_walked(walking, emulator, WALKED_M)
         code, _, err = finish(walking)
         took = time.monotonic() - sent

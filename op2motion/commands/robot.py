@@ -34,12 +34,8 @@ def register(sub: Any) -> None:
     p = add_command(inner, "status", cmd_status, "the sub-controller, every servo and the IMU; exit 1 if a servo "
                                                  "is missing or reports an error")
     _port(p)
-    p = add_command(inner, "setup", cmd_setup, "set every servo's Return Delay Time (EEPROM) so the 8 ms loop can "
-                                               "read them all; written only where it differs")
-    _port(p)
-    p.add_argument("--return-delay", type=whole(0, 254), required=True, metavar="N",
-                   help="the value to set (2 µs units; 0: answer at once, as the OP2 ships)")
-    p.add_argument("--yes", action="store_true", help="do not ask: write it (the EEPROM keeps it over power cycles)")
+    _setup_args(add_command(inner, "setup", cmd_setup, "set every servo's Return Delay Time (EEPROM) so the 8 ms "
+                                                       "loop can read them all; written only where it differs"))
     p = add_command(inner, "read", cmd_read, "the robot's present joint angles as a pose file (teach by hand with "
                                              "--limp)")
     _port(p)
@@ -83,6 +79,13 @@ def register(sub: Any) -> None:
     _emulate_args(add_command(inner, "emulate", cmd_emulate,
                               "an emulated OP2 on a pseudo-terminal (a link at --link), byte for byte, physics "
                               "behind it in real time"))
+
+
+def _setup_args(p: argparse.ArgumentParser) -> None:
+    _port(p)
+    p.add_argument("--return-delay", type=whole(0, 254), required=True, metavar="N",
+                   help="the value to set (2 µs units; 0: answer at once, as the OP2 ships)")
+    p.add_argument("--yes", action="store_true", help="do not ask: write it (the EEPROM keeps it over power cycles)")
 
 
 def _port(p: argparse.ArgumentParser) -> None:

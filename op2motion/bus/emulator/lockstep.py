@@ -23,6 +23,7 @@ from op2motion.robot.spec import Spec
 
 if TYPE_CHECKING:
     from op2motion.bus.emulator.server import Emulator
+    from op2motion.physics import EngineName
 
 PREFIX = "lockstep"
 MAX_PACE = 100.0                   # simulated seconds a wall second, at most
@@ -92,7 +93,7 @@ class LockstepSetup:
     """What a ``lockstep:`` port text asks for: the engine, the start, the wire, the servos' return delay, the
     faults and the pace (simulated seconds a wall second at most; None: as fast as it computes)."""
 
-    engine: str = "mujoco"
+    engine: EngineName = "mujoco"
     start: str = "standing"
     timing: WireTiming = WireTiming()
     return_delay: int | None = None
@@ -112,6 +113,7 @@ def parse_lockstep(text: str) -> LockstepSetup:
     (``ID@S[:C]`` joined by +), ``supply`` [V], ``pace`` (simulated seconds a wall second at most, e.g. 1 to steer a
     walk by keys; default as fast as it computes)."""
     from op2motion.bus.emulator.body import STARTS
+    from op2motion.physics import ENGINES
 
     fields: dict[str, str] = {}
     rest = text[len(PREFIX) + 1:] if text.startswith(PREFIX + ":") else ""
@@ -126,15 +128,15 @@ def parse_lockstep(text: str) -> LockstepSetup:
     if unknown:
         raise InputError(f"expected lockstep keys among {', '.join(sorted(known))}, got {unknown[0]!r}", PARAM)
     engine, start = fields.get("engine", "mujoco"), fields.get("start", "standing")
-    if engine not in ("mujoco", "pybullet") or start not in STARTS:
+    if engine not in ENGINES or start not in STARTS:
         raise InputError(f"expected engine mujoco or pybullet and start one of {', '.join(STARTS)}, got {engine!r}, "
                          f"{start!r}", PARAM)
     pace = _number(fields, "pace", 0.0)
     if not 0.0 <= pace <= MAX_PACE:
         raise InputError(f"expected a pace of 0 (as fast as it computes) to {MAX_PACE:g}, got {fields['pace']!r}",
                          PARAM)
-    return LockstepSetup(engine, start, _timing(fields), _whole(fields, "return-delay", 0, 254), _faults(fields),
-                         pace or None)
+    return LockstepSetup(engine, start, _timing(fields), _whole(fields, "return-delay", 0, 254),
+                         _faults(fields), pace or None)
 
 
 def _number(fields: dict[str, str], key: str, default: float) -> float:
@@ -185,7 +187,7 @@ def lockstep_robot(text: str, spec: Spec) -> LockstepPort:
     from op2motion.bus.emulator.server import Emulator
 
     setup = parse_lockstep(text)
-    emulator = Emulator(spec, setup.engine, setup.start, setup.faults, timing=setup.timing,  # type: ignore[arg-type]
+    emulator = Emulator(spec, setup.engine, setup.start, setup.faults, timing=setup.timing,
                         return_delay=setup.return_delay)
     return LockstepPort(emulator, text, setup.pace)
 
