@@ -1,10 +1,15 @@
 """The bus's speed figures for ``op2motion bench``: the 8 ms loop and a full status read through the emulated OP2,
-which runs beside them in its own process (``op2motion robot emulate``), as it would on a robot's two cores.
+which runs beside them in its own process (``op2motion robot emulate``, the real wire: 1 Mbps, return delays, the
+FTDI's packets and a 1 ms latency timer), as it would on a robot's two cores; and the same loop in lockstep.
 
 * ``robot_loop_p99_ms`` (with p50 and max): the loop's period, tick start to tick start, holding the standing pose
   for :data:`LOOP_S` (one bulk read and one sync write a tick); the check: its missed reads;
+* ``robot_bulk_read_wire_ms`` and ``robot_bulk_read_ms``: a tick's bulk read as planned, its bytes and return delays
+  on the wire alone, and with the link's measured tail; ``robot_servos_per_tick`` and ``robot_ping_ms`` (the
+  board's round trip, median);
 * ``robot_status_ms``: the board and all 20 servos read in full (21 reads), best of :data:`STATUS_REPEAT`; the
-  check: every servo answered.
+  check: every servo answered;
+* ``robot_lockstep_speedup``: simulated seconds of the same loop in lockstep per wall second.
 """
 
 from __future__ import annotations
@@ -62,7 +67,32 @@ def robot_figures(spec: Spec, engine: EngineName = "mujoco") -> dict[str, Any]:
                 emulator.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 emulator.kill()
+    link = status.link.as_dict() if status.link is not None else {}
     return {"robot_loop_p50_ms": round(report.period_p50_ms, 3), "robot_loop_p99_ms": round(report.period_p99_ms, 3),
             "robot_loop_max_ms": round(report.period_max_ms, 3), "robot_loop_ticks": report.ticks,
             "robot_emulator_engine": engine, "robot_status_ms": round(best * 1000.0, 2),
+            "robot_bulk_read_wire_ms": report.plan.get("bulk_read_wire_ms"),
+            "robot_bulk_read_ms": report.plan.get("bulk_read_ms"),
+            "robot_servos_per_tick": report.plan.get("servos_per_tick"),
+            "robot_ping_ms": link.get("ping_round_trip_ms", {}).get("median"),
+            "robot_lockstep_speedup": _lockstep_speedup(spec, engine),
             "check_robot_loop_missed_reads": report.missed_reads, "check_robot_status_servos": answered}
+
+
+def _lockstep_speedup(spec: Spec, engine: EngineName) -> float:
+    """Simulated seconds per wall second of :data:`LOOP_S` of the standing hold in lockstep behind the real wire."""
+    from op2motion.bus.emulator.lockstep import LockstepPort
+    from op2motion.bus.emulator.server import Emulator
+    from op2motion.bus.loop import run_controller
+    from op2motion.physics import Schedule
+    from op2motion.robot.joints import BookAngles, book_to_servo
+
+    emulator = Emulator(spec, engine)
+    try:
+        stand = book_to_servo(BookAngles.standing("left"), spec)[0]
+        t0 = time.perf_counter()
+        report = run_controller(Schedule.hold(stand, "double", spec, LOOP_S + 1.0), LockstepPort(emulator), spec,
+                                duration_s=LOOP_S)
+        return round(report.seconds / (time.perf_counter() - t0), 2)
+    finally:
+        emulator.close()

@@ -41,6 +41,9 @@ def _lines(r: dict[str, Any]) -> list[str]:
                  f"{r['robot_loop_p99_ms']:.2f} ms, max {r['robot_loop_max_ms']:.2f} ms, "
                  f"{r['check_robot_loop_missed_reads']} missed reads; robot status (21 reads) "
                  f"{r['robot_status_ms']:.1f} ms")
+    lines.append(f"  the wire (1 Mbps, 1 ms FTDI latency timer): a tick reads {r['robot_servos_per_tick']} servos, "
+                 f"{r['robot_bulk_read_wire_ms']} ms on the wire, {r['robot_bulk_read_ms']} ms with the link's tail; "
+                 f"ping {r['robot_ping_ms']} ms; in lockstep the loop runs {r['robot_lockstep_speedup']} x real time")
     if "help_wall_s" in r:
         lines += [f"from the shell (median of {r['wall_runs']}): --help {r['help_wall_s']:.2f} s, optimize "
                   f"{r['optimize_wall_s']:.2f} s, optimize --validate {r['optimize_validate_wall_s']:.2f} s",
