@@ -67,14 +67,14 @@ def robot_figures(spec: Spec, engine: EngineName = "mujoco") -> dict[str, Any]:
                 emulator.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 emulator.kill()
-    link = status.link.as_dict() if status.link is not None else {}
+    measured = status.link.as_dict() if status.link is not None else {}
     return {"robot_loop_p50_ms": round(report.period_p50_ms, 3), "robot_loop_p99_ms": round(report.period_p99_ms, 3),
             "robot_loop_max_ms": round(report.period_max_ms, 3), "robot_loop_ticks": report.ticks,
             "robot_emulator_engine": engine, "robot_status_ms": round(best * 1000.0, 2),
             "robot_bulk_read_wire_ms": report.plan.get("bulk_read_wire_ms"),
             "robot_bulk_read_ms": report.plan.get("bulk_read_ms"),
             "robot_servos_per_tick": report.plan.get("servos_per_tick"),
-            "robot_ping_ms": link.get("ping_round_trip_ms", {}).get("median"),
+            "robot_ping_ms": measured.get("ping_round_trip_ms", {}).get("median"),
             "robot_lockstep_speedup": _lockstep_speedup(spec, engine),
             "check_robot_loop_missed_reads": report.missed_reads, "check_robot_status_servos": answered}
 
