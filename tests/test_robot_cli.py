@@ -76,8 +76,12 @@ def test_a_return_delay_of_250_is_named_refused_and_set_to_0(capsys, spec):
     assert code == 0 and {s["return_delay_us"] for s in status["servos"]} == {500}
     assert status["read_plan"]["servos_per_tick"] < 20
     assert "return delay of up to 250" in status["warnings"][0] and "robot setup" in status["warnings"][0]
-    code, _, err = run_cli(capsys, "robot", "walk", "--port", "lockstep:return-delay=250", "--steps", "4")
-    assert code == 2 and "return delay (up to 250" in _one_line(err) and "--return-delay 0" in err
+    code, walked, err = robot_json(capsys, "robot", "walk", "--port", "lockstep:return-delay=250", "--steps", "4")
+    assert code == 0 and 2 <= walked["runs"]["walk"]["read_plan"]["servos_per_tick"] < 10, err   # walks, reading less
+    assert walked["runs"]["walk"]["max_blind_ticks"] == 0 and walked["emulated"]["truth"]["x_m"] > 0.15
+    code, _, err = run_cli(capsys, "robot", "walk", "--port", "lockstep:return-delay=254,latency-timer-ms=2",
+                           "--steps", "4")
+    assert code == 2 and "return delay is up to 254" in _one_line(err) and "--return-delay 0" in err
     code, _, err = run_cli(capsys, "robot", "setup", "--port", "lockstep:return-delay=250", "--return-delay", "0")
     assert code == 2 and "expected --yes" in _one_line(err)                 # no terminal to ask on
     with lockstep(spec, return_delay=250) as (emulator, port):

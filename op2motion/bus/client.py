@@ -103,7 +103,7 @@ class Bus:
         within the waits of the module docstring (``margin_s`` on top of each; never past the time ``cap``)."""
         now = self.sent_at                              # after what we wrote before it (a sync write: 1.5 ms)
         order = list(expect.items())
-        earliest = now + self.link.first_and_last(len(sent), order[:1])[0] - self.link.tail_s
+        earliest = now + self.link.first_and_last(len(sent), order[:1])[0] - self.link.tail_s - self.link.byte_s
         first, end = self.link.first_and_last(len(sent), order)
         first, end = now + first + margin_s, now + end + margin_s
         if cap is not None:                             # a budget: use all of it (what the PC adds varies)

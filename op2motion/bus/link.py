@@ -1,6 +1,7 @@
 """The link to the robot in numbers: what a transaction costs (:class:`LinkBudget`), what the link was measured to
 add (:func:`measure_link`), how many servos the 8 ms loop can read a tick (:func:`read_plan`), and the refusal
-when it cannot hold its loop (:func:`too_slow`).
+when it cannot hold its loop (:func:`too_slow`). A plan is tried on the link before a motion (:func:`tried_plan`):
+what the registers and the pings do not show (a relay, a hub, a loaded PC) costs servos a tick, not missed reads.
 
 A transaction's time ([``../shared/reference/bus_wire.md``]): the request's bytes and each reply's bytes at 10 bits a
 byte (10 µs at 1 Mbps), each device's Return Delay Time (register 5, 2 µs a unit; the MX-28's factory value 250 is 0.5
@@ -37,8 +38,10 @@ PING_BYTES = 2 * MIN_PACKET_BYTES  # a ping and its reply
 RETURN_DELAY_UNIT_S = 2e-6         # Return Delay Time register: 2 µs a unit
 READ_BUDGET_S = 0.005             # a tick's reads end this long after it starts, whatever came (the controller and
                                    # the sync write, 1.5 ms on the wire, need the rest of the 8 ms)
+PLAN_TRIALS = 5                    # bulk reads that try a plan before a motion
 PLAN_BUDGET_S = 0.0035            # what a tick's read is planned to take: 1.5 ms of the above left for a late
                                    # start (the last tick's write still going out) and the PC's scheduling
+MIN_SERVOS_PER_TICK = 2            # fewer, and each servo's position comes less often than every 80 ms: refused
 PARAM = "port"
 
 
@@ -178,24 +181,55 @@ def tick_spans(servos: Sequence[int], rotating: int | None) -> list[tuple[int, i
 def read_plan(budget: LinkBudget, ids: Sequence[int], read_budget_s: float = PLAN_BUDGET_S) -> ReadPlan:
     """The most servos a tick can read within ``read_budget_s`` [s] (see :class:`ReadPlan`), judged with the slowest
     servos' return delays."""
-    slowest = sorted(ids, key=lambda d: -budget.delays_s.get(d, 0.0))
-    best = 0
     for m in range(len(ids), 0, -1):
-        if budget.bulk_read_s(tick_spans(slowest[:m], slowest[0])) <= read_budget_s:
-            best = m
-            break
-    spans = tick_spans(slowest[:best], slowest[0] if best else None)
-    return ReadPlan(best, len(ids), budget.bulk_read_s(spans), budget.wire_s(spans))
+        plan = plan_of(budget, ids, m)
+        if plan.tick_s <= read_budget_s:
+            return plan
+    return plan_of(budget, ids, 0)
 
 
-def too_slow(check: LinkCheck, board_s: float, port_path: str, read_budget_s: float = PLAN_BUDGET_S) -> InputError:
-    """The refusal of a motion on a link that cannot hold the 8 ms loop: names the latency timer and the fix."""
+def plan_of(budget: LinkBudget, ids: Sequence[int], m: int) -> ReadPlan:
+    """A tick reading ``m`` servos, its times judged with the slowest servos' return delays."""
+    slowest = sorted(ids, key=lambda d: -budget.delays_s.get(d, 0.0))
+    spans = tick_spans(slowest[:m], slowest[0] if m else None)
+    return ReadPlan(m, len(ids), budget.bulk_read_s(spans), budget.wire_s(spans))
+
+
+def tried_plan(bus: Any, ids: Sequence[int], plan: ReadPlan, read_budget_s: float = PLAN_BUDGET_S) -> ReadPlan:
+    """``plan`` as the link really answers: :data:`PLAN_TRIALS` bulk reads of its ticks on ``bus`` (a
+    :class:`~.client.Bus`); while the slowest but one takes longer than ``read_budget_s`` [s] (delays the registers
+    do not show: a relay, a hub, a loaded PC), one servo fewer a tick; a plan of 0 when not even the board fits."""
+    m = plan.servos_per_tick
+    while m > 0:
+        trial = plan_of(bus.link, ids, m)
+        took = []
+        for k in range(PLAN_TRIALS):
+            spans, _ = trial.spans(k, ids)
+            t0 = bus.clock.now()
+            got = bus.bulk_read(spans, 0.0, t0 + READ_BUDGET_S)
+            took.append(bus.clock.now() - t0 if len(got) == len(spans) else READ_BUDGET_S)
+        if sorted(took)[-2] <= read_budget_s:
+            return trial
+        m -= 1
+    return plan_of(bus.link, ids, 0)
+
+
+def too_slow(check: LinkCheck, board_s: float, port_path: str, servos: int = 0, return_delay: int = 0,
+             read_budget_s: float = PLAN_BUDGET_S) -> InputError:
+    """The refusal of a motion on a link that cannot hold the 8 ms loop (a tick reads ``servos`` servos beside the
+    board; ``return_delay``: the servos' largest register value): names the cause and its fix, the servos' return
+    delay where it is not 0, else the latency timer."""
     trips = sorted(check.round_trips_s)
     worst = f"{trips[-1] * 1000:.1f} ms" if trips else "no reply"
+    why = (f"the link is too slow for the 8 ms loop: a tick's read holds the sub-controller and {servos} servos "
+           f"(at least {MIN_SERVOS_PER_TICK} needed) in {read_budget_s * 1000:.1f} ms")
+    if return_delay > 0:
+        return InputError(f"{why}; the servos' return delay is up to {return_delay} ({return_delay * 2} µs a reply): "
+                          f"set it to 0 with 'op2motion robot setup --port {port_path} --return-delay 0'; nothing "
+                          f"moved", PARAM)
     timer = "at an unknown value" if check.latency_timer_ms is None else f"at {check.latency_timer_ms} ms"
     return InputError(
-        f"the link is too slow for the 8 ms loop: a ping's round trip took up to {worst}, so reading the "
-        f"sub-controller alone would take {board_s * 1000:.1f} ms of the tick's {read_budget_s * 1000:.1f} ms; the "
+        f"{why} (a ping's round trip took up to {worst}; the sub-controller's read alone {board_s * 1000:.1f} ms); the "
         f"FTDI USB adapter's latency timer is {timer} (current kernels leave it at 16 ms): set it to 1 ms with "
         f"'echo 1 | sudo tee {sysfs_timer_path(port_path)}' (to keep it, the udev rule in docs/robot.md); nothing "
         f"moved", PARAM)

@@ -157,7 +157,7 @@ class _Run:
         self.got: dict[int, Any] = {}
         self.rotating: int | None = self.ids[0]
         self.limits: np.ndarray | None = None          # torque limits a controller set (None: full)
-        self.plan = read_plan(robot.bus.link, self.ids)
+        self.plan = robot.plan or read_plan(robot.bus.link, self.ids)
         self.report.plan = self.plan.as_dict()
         self.asked: set[int] = set()
 

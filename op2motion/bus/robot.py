@@ -19,7 +19,7 @@ import numpy as np
 
 from op2motion.bus.client import Bus
 from op2motion.bus.clock import sleep
-from op2motion.bus.link import LinkCheck, measure_link, return_delays
+from op2motion.bus.link import LinkCheck, ReadPlan, measure_link, return_delays
 from op2motion.bus.realtime import LOOP_PRIORITY, realtime
 from op2motion.bus.tables import (
     CM730,
@@ -137,6 +137,7 @@ class OP2:
         self.return_level: dict[int, int] = {}
         self.gyro_centre: dict[int, float] | None = None
         self.link: LinkCheck | None = None
+        self.plan: ReadPlan | None = None               # what the loop reads a tick, as tried before a motion
 
     # --- the board -------------------------------------------------------------------------------------------
     def connect(self, power: bool = True) -> None:

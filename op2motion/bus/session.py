@@ -14,15 +14,14 @@ from typing import Any
 import numpy as np
 
 from op2motion.bus.client import Bus
-from op2motion.bus.link import LinkCheck, ReadPlan, read_plan, too_slow
+from op2motion.bus.link import MIN_SERVOS_PER_TICK, LinkCheck, ReadPlan, read_plan, too_slow, tried_plan
 from op2motion.bus.port import PortLike, open_port
 from op2motion.bus.robot import OP2, BoardState, ServoState
 from op2motion.bus.safety import Fault, preflight, preflight_problems
-from op2motion.errors import CheckFailed, InputError
+from op2motion.errors import CheckFailed
 from op2motion.robot.spec import Spec
 
 HOLD_AFTER_S = 0.5                 # an emulated OP2 of the session's own holds its last goals this long at its end
-MIN_SERVOS_PER_TICK = 4            # fewer a tick, and each servo is read less often than every 40 ms
 
 
 @dataclass(frozen=True)
@@ -152,19 +151,18 @@ class Session:
                            self.robot.link, read_plan(self.robot.bus.link, self.robot.ids))
 
     def preflight(self, status: RobotStatus) -> None:
-        """Refuse (exit 1) a robot unfit for a motion (:func:`~.safety.preflight`), and (exit 2) a link too slow for
-        the 8 ms loop: not even the board fits a tick's read (the latency timer), or fewer than
-        :data:`MIN_SERVOS_PER_TICK` servos do (their return delay)."""
+        """Refuse (exit 2) a link too slow for the 8 ms loop: a tick's read holds fewer than
+        :data:`~.link.MIN_SERVOS_PER_TICK` servos beside the board (the latency timer, the servos' return delay), as
+        planned from the link's figures and as tried on it (:func:`~.link.tried_plan`, whose plan the loop then
+        reads by); and (exit 1) a robot unfit for a motion (:func:`~.safety.preflight`)."""
         plan = status.plan or read_plan(self.robot.bus.link, self.robot.ids)
-        if plan.servos_per_tick == 0:
-            board = read_plan(self.robot.bus.link, ()).tick_s
-            raise too_slow(self.robot.link or LinkCheck(None, "", (), self.robot.bus.link.tail_s), board, self.path)
+        if plan.servos_per_tick:
+            plan = tried_plan(self.robot.bus, self.robot.ids, plan)
         if plan.servos_per_tick < min(MIN_SERVOS_PER_TICK, plan.count):
-            worst = max(s.return_delay for s in status.servos)
-            raise InputError(f"the servos' return delay (up to {worst}: {worst * 2} µs a reply) is too long for the "
-                             f"8 ms loop: a tick can read only {plan.servos_per_tick} of {plan.count} servos (at least "
-                             f"{MIN_SERVOS_PER_TICK} needed); set it to 0 with 'op2motion robot setup --port "
-                             f"{self.path} --return-delay 0'; nothing moved", "port")
+            board = read_plan(self.robot.bus.link, ()).tick_s
+            raise too_slow(self.robot.link or LinkCheck(None, "", (), self.robot.bus.link.tail_s), board, self.path,
+                           plan.servos_per_tick, max((s.return_delay for s in status.servos), default=0))
+        self.robot.plan = plan
         preflight(status.board, status.servos, self.spec)
 
     def take_control(self, status: RobotStatus, p_gains: dict[int, int] | None = None) -> None:
