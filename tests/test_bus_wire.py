@@ -218,3 +218,21 @@ def test_an_idle_adapter_reaches_any_time_in_bounded_steps():
             steps += 1
             assert steps < 5
         assert ftdi.anchor == pytest.approx(limit)
+
+
+def test_the_latency_timer_is_set_and_read_back_and_a_refusal_is_heard(tmp_path, monkeypatch):
+    from op2motion.bus import port as port_module
+
+    timer = tmp_path / "ttyUSB0" / "latency_timer"
+    timer.parent.mkdir()
+    timer.write_text("16\n")
+    monkeypatch.setattr(port_module, "SYSFS_TIMER", str(tmp_path / "{name}" / "latency_timer"))
+
+    class Refusing:
+        def set_low_latency_mode(self, on: bool) -> None:
+            raise OSError(25, "Inappropriate ioctl for device")
+
+    value, said = port_module.low_latency(Refusing(), "/dev/ttyUSB0")
+    assert value == 1 and timer.read_text() == "1"                       # written through sysfs, read back
+    assert "ASYNC_LOW_LATENCY refused (Inappropriate ioctl for device)" in said and "wrote 1" in said
+    assert port_module.sysfs_timer_path("/dev/ttyUSB3").endswith("/ttyUSB3/latency_timer")

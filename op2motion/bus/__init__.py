@@ -5,8 +5,12 @@ Layers inside the wing, lowest first:
 
 * :mod:`.protocol` (packets, checksums, instructions, error bits by name) and :mod:`.tables` (the MX-28's and the
   CM-730's control tables as data);
-* :mod:`.port` (a serial port opened safely: only a tty, held exclusively, 1 Mbps, bounded timeouts) and
-  :mod:`.client` (ping, read, write, sync write, bulk read with bounded retries);
+* :mod:`.clock` (the one clock the bus keeps its time by: the wall, or an emulated OP2's lockstep time);
+* :mod:`.port` (a serial port opened safely: only a tty, held exclusively, 1 Mbps, the USB adapter's latency timer
+  set to 1 ms and read back, bounded timeouts), :mod:`.link` (what a transaction costs: byte times, return delays,
+  the adapter's tail as measured; the tick's read plan; the refusal of a link too slow for the loop) and
+  :mod:`.client` (ping, read, write, sync write, bulk read with bounded waits and retries; late replies dropped and
+  counted);
 * :mod:`op2motion.robot.imu` (below the wing, shared with the stock gait's emulation: the board's register words
   <-> the torso's gyro [rad/s] and accelerometer [m/s²], by the spec's ``[imu]`` mapping), :mod:`.robot` (the OP2
   on the bus: power, status, torque, gains, present state),
@@ -19,7 +23,8 @@ Layers inside the wing, lowest first:
   ``op2motion robot`` commands do; the walks and getting up: :mod:`.walks`, keys steering a walk: :mod:`.teleop`),
   :mod:`.follow` (a target pose followed at a capped speed: the studio's), and
   :mod:`.bench` (the loop's and the status's speed through the emulator);
-* :mod:`.emulator` (the emulated OP2: the control tables byte for byte, physics and the servo model behind them).
+* :mod:`.emulator` (the emulated OP2: the control tables byte for byte, the wire's time, physics and the servo model
+  behind them; on a pseudo-terminal in real time, or in this process in lockstep).
 
 Nothing here is imported at package import time: each module imports what it needs.
 """

@@ -108,7 +108,8 @@ class LinkCheck:
         trips = sorted(self.round_trips_s)
         rtt = (f"ping round trip {trips[len(trips) // 2] * 1000:.2f} ms (max {trips[-1] * 1000:.2f} ms)"
                if trips else "no ping answered")
-        return f"link: FTDI latency timer {timer}; {rtt}"
+        how = f" ({self.low_latency})" if self.latency_timer_ms is not None and self.low_latency else ""
+        return f"link: FTDI latency timer {timer}{how}; {rtt}"
 
 
 def measure_link(bus: Any, device: int, latency_timer_ms: int | None, low_latency: str,

@@ -1,6 +1,8 @@
-"""The emulated OP2: the CM-730's and 20 MX-28's control tables on a pseudo-terminal, byte for byte, with a physics
-engine and the servo model behind them in real time (:class:`.server.Emulator`), and faults to inject
-(:class:`.faults.Faults`). ``op2motion robot emulate --link PATH`` runs one; from Python::
+"""The emulated OP2: the CM-730's and 20 MX-28's control tables, byte for byte, behind the wire's real timing
+(:mod:`.timing`: 1 Mbps bytes, return delays, the FTDI's packets and latency timer), with a physics engine and the
+servo model behind them (:class:`.server.Emulator`), and faults to inject (:class:`.faults.Faults`); served on a
+pseudo-terminal in real time, or in this process in lockstep (:mod:`.lockstep`, ``--port lockstep``).
+``op2motion robot emulate --link PATH`` runs one on a pseudo-terminal; from Python::
 
     from op2motion.bus.emulator.server import Emulator
     emulator = Emulator(spec, engine="mujoco")

@@ -2,11 +2,12 @@
 
 :meth:`Emulator.open` makes a pseudo-terminal and a symbolic link to its terminal side at the path asked for
 (pyserial and dynamixel-sdk open it like the real port). :meth:`Emulator.serve` is one thread doing two things in
-turn: answering packets the moment they arrive (:mod:`.wire`: the CM-730 at ID 200 and the 20 MX-28 of
-:mod:`.devices`, byte for byte) and stepping the body (:mod:`.body`) in batches of at most :data:`BATCH_STEPS`
-physics steps, kept on the wall clock. One thread, no locks: a reply waits at most for one
-batch (0.2 ms with MuJoCo, about 1 ms with PyBullet), never for the interpreter's thread switch. If the machine
-cannot keep up, simulated time slips behind the wall clock rather than running in bursts (``slipped_s``).
+turn: taking the host's bytes as they arrive and answering them when the wire would (:mod:`.timing`: the request's
+bytes on the wire, then the devices of :mod:`.wire` and :mod:`.devices` answering, each after its return delay, and
+the USB adapter's packets), and stepping the body (:mod:`.body`) in batches of at most :data:`BATCH_STEPS` physics
+steps, kept on the wall clock. One thread, no locks. If the machine cannot keep up, simulated time slips behind the
+wall clock rather than running in bursts (``slipped_s``). :meth:`Emulator.advance` (the body and the wire up to a
+simulated time) and :meth:`Emulator.receive` are the same steps for a lockstep port (:mod:`.lockstep`).
 
 Faults (:class:`.faults.Faults`) are injected as replies are made and as the body is stepped. :meth:`Emulator.close`
 removes the link and closes the pseudo-terminal.
