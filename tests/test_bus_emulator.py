@@ -1,8 +1,8 @@
 """The emulated OP2 itself: the power switch, the bulk read's order and silence, no reply to broadcast; a 20-step walk
 through the bus in lockstep behind the real wire, against the same walk in ``walk --validate``, and the same run
-twice giving the same rows (PyBullet behind it, with lost and damaged replies); the studio's follower in lockstep; and one end-to-end run in real time on a
-real pseudo-terminal: ROBOTIS's dynamixel-sdk, ``robot status``, a walk stopped by Ctrl-C, and ``robot emulate``
-cleaning up."""
+twice giving the same rows (PyBullet behind it, with lost and damaged replies); the studio's follower in lockstep;
+and one end-to-end run in real time on a real pseudo-terminal: ROBOTIS's dynamixel-sdk, ``robot status``, a walk
+stopped by Ctrl-C, and ``robot emulate`` cleaning up."""
 
 from __future__ import annotations
 
