@@ -1,6 +1,6 @@
 """The emulated OP2 itself: the power switch, the bulk read's order and silence, no reply to broadcast; a 20-step walk
 through the bus in lockstep behind the real wire, against the same walk in ``walk --validate``, and the same run
-twice giving the same rows (PyBullet behind it, with lost and damaged replies); the studio's follower in lockstep;
+twice giving the same rows (with lost and damaged replies); the studio's follower in lockstep;
 and one end-to-end run in real time on a real pseudo-terminal: ROBOTIS's dynamixel-sdk, ``robot status``, a walk
 stopped by Ctrl-C, and ``robot emulate`` cleaning up."""
 
@@ -73,12 +73,11 @@ def test_twenty_steps_through_the_bus_walk_as_in_physics(capsys, engine="mujoco"
 
 
 def _rows(spec, **faults) -> tuple[np.ndarray, dict]:
-    """Every tick's goals and readings of a 6-step walk in lockstep (PyBullet behind the emulator, with ``faults``),
-    and the emulator's report."""
+    """Every tick's goals and readings of a 6-step walk in lockstep (with ``faults``), and the emulator's report."""
     from op2motion.bus.emulator.faults import Faults
 
     rows: list[np.ndarray] = []
-    with lockstep(spec, "pybullet", faults=Faults(**faults)) as (emulator, port):
+    with lockstep(spec, faults=Faults(**faults)) as (emulator, port):
         walk(port, spec, steps=6, options=Options(on_tick=lambda tick: rows.append(
             np.concatenate([[tick.t_s], tick.goals, tick.positions, tick.gyro_rad_s, tick.accel_m_s2]))))
         return np.array(rows), emulator.report()

@@ -107,6 +107,14 @@ def test_a_16_ms_latency_timer_is_refused_by_name(capsys):
 
 
 @pytest.mark.physics
+def test_a_robot_just_switched_on_is_powered_without_a_move(capsys):
+    code, status, err = robot_json(capsys, "robot", "status", "--port", "lockstep:cold=1,start=lying_back")
+    assert code == 0 and status["powered_now"] and status["board"]["power"], err
+    assert [s["answers"] for s in status["servos"]] == [True] * 20
+    assert not any(s["torque_on"] for s in status["servos"])                  # powered up limp
+
+
+@pytest.mark.physics
 def test_status_names_a_missing_servo(capsys):
     code, status, err = robot_json(capsys, "robot", "status", "--port", "lockstep:missing=7")
     assert code == 1 and "r_hip_yaw (ID 7): not answering" in _one_line(err)

@@ -128,6 +128,9 @@ def _emulate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--return-delay", type=whole(0, 254), default=None, metavar="N",
                    help="every servo's Return Delay Time register (2 µs units; default 0 as the OP2 ships, 250 as "
                         "an MX-28 from the factory)")
+    p.add_argument("--cold", action="store_true",
+                   help="the robot just switched on: the servos unpowered (silent, limp) until a program sets the "
+                        "board's power register (default: powered and holding the start pose)")
     p.add_argument("--seconds", type=number(0.0, 86400.0, "s"), default=None, metavar="S",
                    help="stop after S seconds (default: run until Ctrl-C)")
     p.add_argument("--truth", type=output_path, metavar="JSON",
@@ -293,7 +296,7 @@ def cmd_emulate(args: argparse.Namespace, spec: Spec) -> int:
                     [parse_timed(o, "overheat", 85.0) for o in args.overheat], args.supply, args.seed,
                     [(float(n), t) for n, t, _ in (parse_timed(p, "push", first="N") for p in args.push)])
     timing = INSTANT if args.wire == "instant" else WireTiming(latency_timer_s=args.latency_timer_ms / 1000.0)
-    emulator = Emulator(spec, args.engine, args.start, faults, args.truth, timing, args.return_delay)
+    emulator = Emulator(spec, args.engine, args.start, faults, args.truth, timing, args.return_delay, args.cold)
     interrupted = False
     try:
         with stop_on_signals() as stop:

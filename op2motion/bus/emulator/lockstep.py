@@ -99,6 +99,7 @@ class LockstepSetup:
     return_delay: int | None = None
     faults: Faults = field(default_factory=Faults)
     pace: float | None = None
+    cold: bool = False
 
 
 def is_lockstep(port: str) -> bool:
@@ -110,8 +111,8 @@ def parse_lockstep(text: str) -> LockstepSetup:
     """``lockstep[:key=value,...]`` with keys ``engine`` (mujoco, pybullet), ``start`` (standing, lying_front, ...),
     ``wire`` (real, instant), ``latency-timer-ms`` (1..255), ``return-delay`` (0..254, 2 µs units), ``lose``,
     ``corrupt`` (shares), ``seed``, ``missing`` (IDs joined by +), ``unplug`` / ``overheat`` / ``push``
-    (``ID@S[:C]`` joined by +), ``supply`` [V], ``pace`` (simulated seconds a wall second at most, e.g. 1 to steer a
-    walk by keys; default as fast as it computes)."""
+    (``ID@S[:C]`` joined by +), ``supply`` [V], ``cold`` (1: just switched on, the servos unpowered), ``pace``
+    (simulated seconds a wall second at most, e.g. 1 to steer a walk by keys; default as fast as it computes)."""
     from op2motion.bus.emulator.body import STARTS
     from op2motion.physics import ENGINES
 
@@ -123,7 +124,7 @@ def parse_lockstep(text: str) -> LockstepSetup:
             raise InputError(f"expected key=value items after 'lockstep:', got {item!r}", PARAM)
         fields[key.strip()] = value.strip()
     known = {"engine", "start", "wire", "latency-timer-ms", "return-delay", "lose", "corrupt", "seed", "missing",
-             "unplug", "overheat", "push", "supply", "pace"}
+             "unplug", "overheat", "push", "supply", "pace", "cold"}
     unknown = sorted(set(fields) - known)
     if unknown:
         raise InputError(f"expected lockstep keys among {', '.join(sorted(known))}, got {unknown[0]!r}", PARAM)
@@ -136,7 +137,7 @@ def parse_lockstep(text: str) -> LockstepSetup:
         raise InputError(f"expected a pace of 0 (as fast as it computes) to {MAX_PACE:g}, got {fields['pace']!r}",
                          PARAM)
     return LockstepSetup(engine, start, _timing(fields), _whole(fields, "return-delay", 0, 254),
-                         _faults(fields), pace or None)
+                         _faults(fields), pace or None, bool(_whole(fields, "cold", 0, 1)))
 
 
 def _number(fields: dict[str, str], key: str, default: float) -> float:
@@ -188,7 +189,7 @@ def lockstep_robot(text: str, spec: Spec) -> LockstepPort:
 
     setup = parse_lockstep(text)
     emulator = Emulator(spec, setup.engine, setup.start, setup.faults, timing=setup.timing,
-                        return_delay=setup.return_delay)
+                        return_delay=setup.return_delay, cold=setup.cold)
     return LockstepPort(emulator, text, setup.pace)
 
 

@@ -48,11 +48,14 @@ TRUTH_BYTES = 16384                # the truth file's size (its JSON padded with
 
 
 class Emulator:
-    """An emulated OP2 (see the module docstring)."""
+    """An emulated OP2 (see the module docstring): ``timing`` its wire (default the real one, 1 ms latency timer),
+    ``return_delay`` every servo's Return Delay Time register (default 0, as the OP2 ships), ``cold``: the robot just
+    switched on (the servos unpowered until a program sets the board's power register; default: powered and holding
+    the start pose, as the stock framework leaves them)."""
 
     def __init__(self, spec: Spec, engine: EngineName = "mujoco", start: str = "standing", faults: Faults | None = None,
                  truth_path: str | Path | None = None, timing: WireTiming | None = None,
-                 return_delay: int | None = None):
+                 return_delay: int | None = None, cold: bool = False):
         self.spec = spec
         self.truth_path = None if truth_path is None else Path(truth_path)
         self._truth_map: Any = None
@@ -80,6 +83,8 @@ class Emulator:
         if return_delay is not None:
             for servo in self.servos:
                 servo.set("return_delay_time", return_delay)
+        if cold:                                   # just switched on: the servos unpowered, limp, silent
+            self.wire.cold_start()
 
     # --- setup ---------------------------------------------------------------------------------------------------
     def _powered_holding(self) -> None:
