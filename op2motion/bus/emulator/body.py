@@ -20,7 +20,7 @@ byte is served.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Sequence
+from typing import TYPE_CHECKING, NamedTuple, Sequence
 
 import numpy as np
 
@@ -31,6 +31,17 @@ from op2motion.robot.spec import Spec
 
 if TYPE_CHECKING:
     from op2motion.physics import EngineName
+
+class Drive(NamedTuple):
+    """What the servos' registers ask of the motors (20,) each: torque enabled, goal [rad], moving speed [rad/s]
+    (0: as fast as it can), stiffness [N·m/rad], torque limit [N·m]."""
+
+    enabled: np.ndarray
+    goal: np.ndarray
+    speed: np.ndarray
+    kp: np.ndarray
+    limit: np.ndarray
+
 
 STARTS = ("standing", "lying_front", "lying_back", "lying_left", "lying_right")
 AMBIENT_C = 30.0                   # the air inside the robot [°C]
@@ -90,9 +101,9 @@ class EmulatedBody:
             self.engine.step(self.model.active_torque(self.pose, q, kp))
         self.gyro, self.accel, _ = self.sensor.read(self.engine, self.engine.state()[0], 1.0)
 
-    def step(self, n: int, servos: Sequence[Servo], powered: bool) -> None:
-        """``n`` physics steps with the servos' registers as they are now."""
-        count = len(servos)
+    def drive(self, servos: Sequence[Servo], powered: bool) -> Drive:
+        """What the servos' registers ask of the motors now (good until a register is written): torque enabled, goal
+        [rad], moving speed [rad/s], stiffness, torque limit [N·m]."""
         enabled = np.array([powered and s.get("torque_enable") == 1 for s in servos], dtype=bool)
         goal = np.array([s.u16("goal_position") for s in servos], dtype=float)
         goal = (goal - self.spec.servo.center_tick) * self.spec.servo.rad_per_tick
@@ -100,7 +111,12 @@ class EmulatedBody:
         kp = self.model.kp_of(np.array([s.get("p_gain") for s in servos], dtype=float))
         share = np.array([s.u16("torque_limit") for s in servos], dtype=float) / TORQUE_LIMIT_FULL
         volts = min(1.0, self.supply_v / self.rated_v)
-        limit = self.model.torque_max * share * volts * enabled
+        return Drive(enabled, goal, speed, kp, self.model.torque_max * share * volts * enabled)
+
+    def step(self, n: int, servos: Sequence[Servo], drive: Drive) -> None:
+        """``n`` physics steps as ``drive`` (:meth:`drive`) asks; a servo held at its limit latches its overload."""
+        count = len(servos)
+        enabled, goal, speed, kp, limit = drive
         for _ in range(n):
             q, _ = self.engine.state()
             free = speed <= 0.0

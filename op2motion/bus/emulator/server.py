@@ -26,7 +26,7 @@ import tty
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from op2motion.bus.emulator.body import EmulatedBody
+from op2motion.bus.emulator.body import Drive, EmulatedBody
 from op2motion.bus.emulator.devices import Servo
 from op2motion.bus.emulator.faults import Faults
 from op2motion.bus.emulator.timing import TimedLink, WireTiming, return_delay_s
@@ -45,6 +45,8 @@ HANGUP_SLEEP_S = 0.002             # with no program on the port, look again thi
 TRACE_EVERY_S = 0.05               # the ground truth is recorded this often [simulated s]
 PUBLISH_EVERY_S = 0.1              # ... and written to the truth file this often
 TRUTH_BYTES = 16384                # the truth file's size (its JSON padded with spaces)
+REFRESH_S = 0.004                  # the registers follow the body at least this often [simulated s] (and at each
+                                   # request answered)
 
 
 class Emulator:
@@ -69,6 +71,8 @@ class Emulator:
         self.timed_wire = TimedLink(self.timing, self._answer, self._delay_s, self._now())
         self.outbox = bytearray()                  # bytes the wire delivered, for the host to read
         self._next_trace = self._next_publish = 0.0
+        self._drive: Drive | None = None            # what the registers ask of the motors, until one is written
+        self._stale, self._refreshed_at = False, 0.0
         self.board, self.servos, self.stats = self.wire.board, self.wire.servos, self.wire.stats
         self.master: int | None = None
         self.link: Path | None = None
@@ -128,6 +132,7 @@ class Emulator:
     def close(self) -> None:
         """Stop serving, remove the link, close the pseudo-terminal, release the engine."""
         self.stop()
+        self._refresh()
         self._publish()
         if self.link is not None:
             with contextlib.suppress(OSError):
@@ -191,10 +196,12 @@ class Emulator:
     def overheat(self, device: int, celsius: float) -> None:
         """Servo ``device``'s temperature jumps to ``celsius`` now."""
         self.temperature_overrides[device] = float(celsius)
+        self._stale = True
 
     def unplug(self, device: int) -> None:
         """Servo ``device`` goes silent and limp now."""
         self.wire.unplugged.add(device)
+        self._drive = None
 
     @property
     def motion_t0(self) -> float | None:
@@ -222,8 +229,11 @@ class Emulator:
         self.outbox += b"".join(self.timed_wire.run_until(t))
 
     def _answer(self, t: float, request: bytes) -> list[bytes]:
-        """A request reaching the devices at ``t``: their replies."""
-        return self.wire.feed(request)
+        """A request reaching the devices at ``t``: their replies, from the registers as the body is now."""
+        self._refresh()
+        replies = self.wire.feed(request)
+        self._drive = None                          # a register may have been written
+        return replies
 
     def _delay_s(self, device: int) -> float:
         """Device ``device``'s return delay [s] (its register 5)."""
@@ -232,16 +242,30 @@ class Emulator:
 
     def _step_to(self, t: float) -> None:
         """Whole physics steps up to simulated time ``t`` [s] (in batches of :data:`BATCH_STEPS`, the timed faults
-        between them), then the registers from the body."""
+        between them); the registers from the body at most every :data:`REFRESH_S` (and whenever a request is
+        answered: :meth:`_refresh`)."""
         steps = int(math.floor((t - self._now()) / self.body.dt + 1e-9))
         if steps <= 0:
             return
         while steps > 0:
             n = min(steps, BATCH_STEPS)
             self._timed_faults()
-            self.body.step(n, self._limp_servos(), self.wire.powered())
+            if self._drive is None:
+                self._drive = self.body.drive(self._limp_servos(), self.wire.powered())
+            self.body.step(n, self.servos, self._drive)
             steps -= n
+        self._stale = True
+        if self._now() - self._refreshed_at >= REFRESH_S:
+            self._refresh()
+
+    def _refresh(self) -> None:
+        """The present-state registers, the board's IMU and the ground truth from the body (its alarms may drop a
+        servo's torque), when the body has moved since."""
+        if not self._stale:
+            return
+        self._stale, self._refreshed_at = False, self._now()
         self.body.sense(self.servos, self.board, self.temperature_overrides)
+        self._drive = None
         self._truth = self.body.truth()
         self.torque_limit_min = min(self.torque_limit_min, *(s.u16("torque_limit") for s in self.servos))
         if self._truth["t_s"] >= self._next_trace:
@@ -313,11 +337,11 @@ class Emulator:
         since = self._now() - self.motion_t0
         self.body.push_n = self.faults.push_at(since)
         for device, at in self.faults.unplug:
-            if since >= at:
-                self.wire.unplugged.add(device)
+            if since >= at and device not in self.wire.unplugged:
+                self.unplug(device)
         for device, at, celsius in self.faults.overheat:
             if since >= at and device not in self.temperature_overrides:
-                self.temperature_overrides[device] = celsius
+                self.overheat(device, celsius)
 
     def _receive(self, t: float) -> bool:
         """Read what the host wrote (at simulated time ``t``); False when no program holds the port."""
