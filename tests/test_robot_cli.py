@@ -71,6 +71,16 @@ def test_status_all_well_with_the_link_measured(capsys):
 
 
 @pytest.mark.physics
+def test_an_emulator_faster_than_any_wire_is_read_as_well(capsys):
+    code, status, err = robot_json(capsys, "robot", "status", "--port", "lockstep:wire=instant")
+    assert code == 0 and [s["answers"] for s in status["servos"]] == [True] * 20, err   # replies at once: taken
+    assert status["read_plan"]["servos_per_tick"] == 20
+    code, result, err = robot_json(capsys, "robot", "play", "--port", "lockstep:wire=instant",
+                                   str(POSES / "walkready.json"))
+    assert code == 0 and result["runs"]["motion"]["missed_reads"] == 0, err
+
+
+@pytest.mark.physics
 def test_a_return_delay_of_250_is_named_refused_and_set_to_0(capsys, spec):
     code, status, err = robot_json(capsys, "robot", "status", "--port", "lockstep:return-delay=250")
     assert code == 0 and {s["return_delay_us"] for s in status["servos"]} == {500}

@@ -15,13 +15,13 @@ request's first byte can go out: after the bytes written before it (the loop's s
 owed are kept, in order, until a reply to a later request comes (the bus and the USB adapter keep the order: nothing
 late can follow it). Before that, a reply matching one of them (by ID and length) is that late reply, dropped and
 counted (``stray_packets``), unless it is from the new request's first device and one more tail has passed since the old
-wait's end (a late reply would have come by then). A reply complete before the first reply could be (the request's and
-that reply's bytes at the baud rate, its return delay) is late whatever it is; anything the port held before a request
-went out is dropped and counted too. A one-off command asks again only after that window (so a retry's reply is never
-mistaken for the late one). A reply counts only when it comes from a device asked and carries the length asked for; an
-echo of our own packet is skipped. A device that does not answer, answers garbage or reports a checksum or instruction
-error (our packet arrived damaged) is asked again, at most ``retries`` more times; then the transaction returns None and
-the caller decides.
+wait's end (a late reply would have come by then) and it could be the new reply (it is not complete before the request's
+and that reply's bytes at the baud rate and its return delay). A reply nothing owes is never late (an emulator without a
+wire model answers faster than a wire could); anything the port held before a request went out is dropped and counted
+too. A one-off command asks again only after that window (so a retry's reply is never mistaken for the late one). A
+reply counts only when it comes from a device asked and carries the length asked for; an echo of our own packet is
+skipped. A device that does not answer, answers garbage or reports a checksum or instruction error (our packet arrived
+damaged) is asked again, at most ``retries`` more times; then the transaction returns None and the caller decides.
 
 :meth:`Bus.bulk_read` is one try by design: the 8 ms loop asks again for only the devices that did not answer
 (:mod:`.loop`).
@@ -84,14 +84,16 @@ class Bus:
         self.tx_free = self.sent_at + len(packet) * self.link.byte_s
         self.port.write(packet)
 
-    def _late(self, packet: p.Packet, first: int | None) -> bool:
-        """Whether ``packet``, come before any reply to the request now waited for (whose first device is ``first``),
-        is a reply an earlier request still owed (then it is dropped from what is owed): a device the new request
-        does not ask first cannot be answering it yet; its first device can, once the late window is over."""
+    def _late(self, packet: p.Packet, first: int | None, earliest: float = 0.0) -> bool:
+        """Whether ``packet``, come before any reply to the request now waited for (whose first device is ``first``;
+        no reply to it can be complete before the time ``earliest``), is a reply an earlier request still owed (then
+        it is dropped from what is owed): one come before ``earliest`` is; a device the new request does not ask
+        first cannot be answering it yet; its first device can, once the late window is over. A packet nothing
+        owes is never late (an emulator without a wire model answers faster than a wire could)."""
         key = (packet.id, len(packet.params))
         if key not in self.owed:
             return False
-        if packet.id == first and self.clock.now() > self.owed_until:
+        if packet.id == first and self.clock.now() >= earliest and self.clock.now() > self.owed_until:
             self.owed = []
             return False
         del self.owed[:self.owed.index(key) + 1]
@@ -125,7 +127,7 @@ class Bus:
             for packet in self.parser.feed(data):
                 if not echo_skipped and packet.encode() == sent:
                     echo_skipped = True
-                elif not got and (last < earliest or self._late(packet, order[0][0])):
+                elif not got and self._late(packet, order[0][0], earliest):
                     self.stats.stray += 1
                 elif packet.id in expect and packet.id not in got and len(packet.params) == expect[packet.id]:
                     got[packet.id] = packet
