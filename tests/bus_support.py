@@ -118,16 +118,3 @@ def finish(process: subprocess.Popen, timeout: float = CLI_TIMEOUT_S) -> tuple[i
 def run(*argv: str, timeout: float = CLI_TIMEOUT_S) -> tuple[int, str, str]:
     """``op2motion ARGV`` in a subprocess, to its end."""
     return finish(cli(*argv), timeout)
-
-
-def interrupt_when_walked(process: subprocess.Popen, emulator: EmulatorProcess, x_m: float) -> float:
-    """Send Ctrl-C (SIGINT) once the emulated torso has walked ``x_m`` [m] forward (mid-walk); the wall time [s] it
-    was sent."""
-    start = emulator.truth()["x_m"]
-    deadline = time.monotonic() + CLI_TIMEOUT_S
-    while time.monotonic() < deadline and process.poll() is None:
-        if emulator.truth()["x_m"] - start >= x_m:
-            break
-        time.sleep(0.02)
-    process.send_signal(signal.SIGINT)
-    return time.monotonic()
