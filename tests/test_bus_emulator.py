@@ -92,7 +92,9 @@ def test_lockstep_runs_are_deterministic(spec):
 
 
 def test_the_robot_follows_a_target_at_a_capped_speed(spec):
-    from op2motion.bus.follow import FOLLOW_SPEED_RAD_S, Follower
+    """Once moved to a pose by a checked move, an edit within a jog step is followed at the capped speed."""
+    from op2motion.bus.follow import FOLLOW_SPEED_RAD_S, JOG_STEP_RAD, Follower
+    from op2motion.robot.pose import Pose
 
     joint = spec.joint_names.index("r_sho_pitch")        # an arm: a knee alone would tip the robot over
     with lockstep(spec) as (emulator, port):
@@ -101,20 +103,25 @@ def test_the_robot_follows_a_target_at_a_capped_speed(spec):
         follower.start()                                 # the loop runs free in its thread, in simulated time
         try:
             start = follower.pose()
-            target = start.copy()
-            target[joint] += math.radians(30.0)
-            follower.set_target(target)
+            follower.move_to(Pose("here", "double", start))
             deadline = time.monotonic() + 60.0
+            while follower.state != "following the pose" and time.monotonic() < deadline:
+                time.sleep(0.005)
+            target = start.copy()
+            target[joint] += JOG_STEP_RAD
+            follower.request(Pose("edited", "double", target))
             while time.monotonic() < deadline:
                 goal = (emulator.servos[joint].u16("goal_position") - 2048) * 2 * math.pi / 4096
                 seen.append((port.clock.now(), goal))
                 if abs(goal - target[joint]) < FOLLOW_TOL_RAD:
                     break
-                time.sleep(0.005)
+                time.sleep(0.001)
         finally:
             report = follower.close()
     times, goals = np.array(seen).T
-    assert abs(goals[-1] - target[joint]) < FOLLOW_TOL_RAD and times[-1] - times[0] >= 0.45   # 30° at 1 rad/s
+    assert follower.state == "following the pose"
+    assert abs(goals[-1] - target[joint]) < FOLLOW_TOL_RAD
+    assert times[-1] - times[0] >= (JOG_STEP_RAD - FOLLOW_TOL_RAD) / FOLLOW_SPEED_RAD_S - 0.016    # 5° at 1 rad/s
     speeds = np.abs(np.diff(goals)) - FOLLOW_SPEED_RAD_S * np.diff(times)
     assert speeds.max() <= FOLLOW_SPEED_RAD_S * 0.008 + 1e-3                   # capped between any two looks
     assert report.ended == "stopped" and report.fault is None

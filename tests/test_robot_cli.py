@@ -25,6 +25,7 @@ GOAL_TOL_DEG = 1.5             # the acceptance's "every servo commanded within 
 TICK_DEG = 360.0 / 4096        # one position tick
 STANDING_TILT_DEG = 15.0       # a torso tilted less than this still stands
 WALKED_M = 0.2                 # a stop is asked for once the robot has walked this far [m]
+HORN_OFF_TICKS = 1707          # head_pan reads tick 3755 (150°; its range ends at 119°), as in the audit [ticks]
 FAULT_AT_S = 4.0               # the overheating knee's moment, into the motion [s]
 
 
@@ -264,3 +265,16 @@ def test_lockstep_faults_parse(spec):
                            "unplug=5@0.3,overheat=13@4:85,push=30@2,supply=11,seed=7")
     assert setup.engine == "pybullet" and setup.timing.latency_timer_s == 0.016 and setup.return_delay == 250
     assert setup.faults == Faults({3, 4}, [(5, 0.3)], 0.0, 0.0, [(13, 4.0, 85.0)], 11.0, 7, [(30.0, 2.0)])
+
+
+def test_a_servo_reading_outside_its_range_is_named_and_nothing_moves(capsys):
+    """head_pan mounted 150° off (it reads tick 3755, its range ends at 3402): status names it, and a motion
+    is refused before the torque goes on (no goal outside the range, no jump), even forced."""
+    port = f"lockstep:horn=19:{HORN_OFF_TICKS}"
+    code, result, _ = robot_json(capsys, "robot", "status", "--port", port)
+    assert code == 1 and any(p["kind"] == "out of range" and p["id"] == 19 for p in result["problems"]), result
+    for argv in (("robot", "play", str(POSES / "walkready.json")), ("robot", "play", str(POSES / "walkready.json"),
+                                                                    "--force"), ("robot", "getup")):
+        code, out, err = run_cli(capsys, *argv, "--port", port)
+        assert code == 1 and "head_pan (ID 19): out of range" in err and "outside its mechanical range" in err, err
+        assert len(err.strip().splitlines()) == 1, err

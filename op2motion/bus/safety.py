@@ -41,6 +41,8 @@ STOP_ERRORS = ("overheating", "overload", "input voltage")
 TILT_TAU_S = 0.1                   # low-pass of the accelerometer before its tilt is taken (steps' impacts)
 FALL_TORQUE_LIMIT = 300            # every servo's torque limit while falling (of 1023)
 FALL_SETTLE_S = 1.0                # after a fall is seen, this long at the low limit before the goals relax
+RANGE_SLACK_RAD = math.radians(1.0)   # a reading this far beyond a joint's mechanical range is held at the range's
+                                      # end when the torque goes on (a tick or two of wear); further is refused
 HOLD = "hold"                      # the stop policy: hold the goals (a walk: on both feet)
 POLICIES = (HOLD,)
 
@@ -65,6 +67,16 @@ class Fault:
         """JSON-ready."""
         return {"kind": self.kind, "joint": self.joint, "id": self.id, "detail": self.detail,
                 "text": self.describe()}
+
+
+def after_fault(fault: Fault) -> str:
+    """What the robot does after ``fault`` stopped a motion (the policy, in words for the person watching)."""
+    if fault.kind == "fell":
+        return (f"the servos' torque limits went down to {FALL_TORQUE_LIMIT} of 1023 while it fell, then the servos "
+                f"hold the joints where it lies (torque on)")
+    if fault.kind == "not answering" and fault.id == 200:
+        return "the servos hold their last goals (torque on); the IMU is not read, so a fall would not be seen"
+    return "the servos hold their last goals (torque on; a walk first reached both feet)"
 
 
 class Refused(CheckFailed):
@@ -93,7 +105,25 @@ def preflight_problems(board: Any, servos: Sequence[Any], spec: Spec) -> list[Fa
             out.append(Fault("hot", s.joint, s.id, f"{s.temperature_c} °C, at or above {HOT_START_C} °C"))
         if s.voltage_v < low:
             out.append(Fault("low supply", s.joint, s.id, f"{s.voltage_v:.1f} V, below {low:g} V"))
+        beyond = out_of_range(s.joint, s.position_rad, spec)
+        if beyond:
+            out.append(Fault("out of range", s.joint, s.id, beyond))
     return out
+
+
+def out_of_range(joint: str, position_rad: float, spec: Spec) -> str:
+    """Why a servo reading ``position_rad`` [rad] must not get the torque on (beyond its joint's mechanical range by
+    more than :data:`RANGE_SLACK_RAD`: holding it there is a goal outside the range, and the first goal inside it a
+    jump), in words; "" if it may."""
+    names = spec.joint_names
+    if joint not in names:
+        return ""
+    lower, upper = joint_range(spec.joints[names.index(joint)], "mechanical")
+    if lower - RANGE_SLACK_RAD <= position_rad <= upper + RANGE_SLACK_RAD:
+        return ""
+    return (f"reads {math.degrees(position_rad):+.1f}°, outside its mechanical range {math.degrees(lower):+.1f}° to "
+            f"{math.degrees(upper):+.1f}°: the torque stays off there; bring the joint into range by hand (robot read "
+            f"--limp) or check the servo's horn and ID")
 
 
 def preflight(board: Any, servos: Sequence[Any], spec: Spec) -> None:

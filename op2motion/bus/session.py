@@ -17,7 +17,7 @@ from op2motion.bus.client import Bus
 from op2motion.bus.link import MIN_SERVOS_PER_TICK, LinkCheck, ReadPlan, read_plan, too_slow, tried_plan
 from op2motion.bus.port import PortLike, open_port
 from op2motion.bus.robot import OP2, BoardState, ServoState
-from op2motion.bus.safety import Fault, preflight, preflight_problems
+from op2motion.bus.safety import Fault, Refused, mechanical_bounds, out_of_range, preflight, preflight_problems
 from op2motion.errors import CheckFailed
 from op2motion.robot.spec import Spec
 
@@ -167,9 +167,19 @@ class Session:
 
     def take_control(self, status: RobotStatus, p_gains: dict[int, int] | None = None) -> None:
         """The gyro's zero-rate counts measured while the robot is still (as the framework does before it moves
-        anything), then every torque on with the goals where the joints are (as ``status`` read them)."""
+        anything), then every torque on with the goals where the joints are (as ``status`` read them), never outside
+        the mechanical ranges: a reading beyond one is refused (exit 1, naming the joint) unless within
+        :data:`~.safety.RANGE_SLACK_RAD`, where its goal is the range's end."""
+        beyond = [Fault("out of range", s.joint, s.id, why) for s in status.servos
+                  if (why := out_of_range(s.joint, s.position_rad, self.spec))]
+        if beyond:
+            raise Refused("refused to switch the torque on: " + beyond[0].describe())
+        lower, upper = mechanical_bounds(self.spec)
+        index = {n: i for i, n in enumerate(self.spec.joint_names)}
+        goals = {s.id: float(np.clip(s.position_rad, lower[index[s.joint]], upper[index[s.joint]]))
+                 if s.joint in index else s.position_rad for s in status.servos}
         self.robot.calibrate_gyro()
-        failed = self.robot.take_control({s.id: s.position_rad for s in status.servos}, p_gains)
+        failed = self.robot.take_control(goals, p_gains)
         if failed:
             names = ", ".join(f"{self.robot.joint_of[d]} (ID {d})" for d in failed)
             raise CheckFailed(f"the torque could not be switched on: {names} did not confirm")

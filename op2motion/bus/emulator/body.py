@@ -58,7 +58,8 @@ MOVING_RAD_S = 0.05                # ... and so does a joint this fast
 class EmulatedBody:
     """The simulated OP2 behind the tables (see the module docstring)."""
 
-    def __init__(self, spec: Spec, engine: EngineName, start: str, supply_v: float):
+    def __init__(self, spec: Spec, engine: EngineName, start: str, supply_v: float,
+                 horn: dict[int, int] | None = None):
         from op2motion.model.servo import ServoModel
         from op2motion.physics.engine import make_engine
         from op2motion.physics.sensors import Imu
@@ -76,6 +77,9 @@ class EmulatedBody:
         self.dt = self.engine.time_step
         self.pose = book_to_servo(BookAngles.standing("left"), spec)[0]
         n = len(spec.joints)
+        self.horn_ticks = np.zeros(n, dtype=int)       # a horn mounted off: the reading less the joint [ticks]
+        for device, ticks in (horn or {}).items():
+            self.horn_ticks[device - 1] = ticks
         self.command = self.pose.copy()
         self.saturated_s = np.zeros(n)
         self.temperature = np.full(n, START_TEMPERATURE_C)
@@ -106,7 +110,7 @@ class EmulatedBody:
         [rad], moving speed [rad/s], stiffness, torque limit [N·m]."""
         enabled = np.array([powered and s.get("torque_enable") == 1 for s in servos], dtype=bool)
         goal = np.array([s.u16("goal_position") for s in servos], dtype=float)
-        goal = (goal - self.spec.servo.center_tick) * self.spec.servo.rad_per_tick
+        goal = (goal - self.horn_ticks - self.spec.servo.center_tick) * self.spec.servo.rad_per_tick
         speed = np.array([s.u16("moving_speed") for s in servos], dtype=float) * SPEED_RAD_S_PER_UNIT
         kp = self.model.kp_of(np.array([s.get("p_gain") for s in servos], dtype=float))
         share = np.array([s.u16("torque_limit") for s in servos], dtype=float) / TORQUE_LIMIT_FULL
@@ -143,7 +147,8 @@ class EmulatedBody:
         temperatures {id: °C})."""
         q, dq = self.engine.state()
         s = self.spec.servo
-        ticks = np.clip(np.rint(q / s.rad_per_tick).astype(int) + s.center_tick, s.min_tick, s.max_tick).tolist()
+        ticks = np.clip(np.rint(q / s.rad_per_tick).astype(int) + s.center_tick + self.horn_ticks, s.min_tick,
+                        s.max_tick).tolist()
         speed = [magnitude(v) for v in (dq / SPEED_RAD_S_PER_UNIT).tolist()]
         load = [magnitude(v) for v in (self.torque / self.model.torque_max * TORQUE_LIMIT_FULL).tolist()]
         moving = ((np.abs(self.command - q) > MOVING_RAD) | (np.abs(dq) > MOVING_RAD_S)).tolist()

@@ -8,6 +8,8 @@
   its limit, 80 °C by default, it reports overheating and its alarm shutdown drops its torque);
 * ``supply_v``: the supply voltage [V] (below a servo's lowest voltage limit, 6 V, it reports an input-voltage
   error);
+* ``horn``: {id: ticks} a servo whose horn is mounted that many ticks off the joint (a spline off, 1 spline = 4096/25
+  ticks on the MX-28's 25-tooth horn): it reads the joint's angle plus that and drives its goal less that;
 * ``push``: (newtons, seconds) a push forward (+x of the world, the way the robot first faced) at the torso's centre
   of mass for :data:`PUSH_S`, that long into the motion.
 
@@ -40,13 +42,15 @@ class Faults:
     supply_v: float | None = None
     seed: int = 0
     push: list[tuple[float, float]] = field(default_factory=list)
+    horn: dict[int, int] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for name in ("lose", "corrupt"):
             value = getattr(self, name)
             if not 0.0 <= value <= MAX_RATE:
                 raise InputError(f"expected a share from 0 to {MAX_RATE:g}, got {value!r}", name)
-        for device in set(self.missing) | {d for d, _ in self.unplug} | {d for d, _, _ in self.overheat}:
+        for device in (set(self.missing) | {d for d, _ in self.unplug} | {d for d, _, _ in self.overheat}
+                       | set(self.horn)):
             if not 1 <= device <= 20:
                 raise InputError(f"expected a servo ID 1..20, got {device}", "missing")
         for newtons, _ in self.push:
@@ -67,6 +71,7 @@ class Faults:
         if self.supply_v is not None:
             out.append(f"supply {self.supply_v:g} V")
         out += [f"pushed forward {n:g} N at {t:g} s" for n, t in self.push]
+        out += [f"servo {d}'s horn {t:+d} ticks off" for d, t in sorted(self.horn.items())]
         return out
 
     def push_at(self, since_s: float) -> float:

@@ -111,7 +111,7 @@ def parse_lockstep(text: str) -> LockstepSetup:
     """``lockstep[:key=value,...]`` with keys ``engine`` (mujoco, pybullet), ``start`` (standing, lying_front, ...),
     ``wire`` (real, instant), ``latency-timer-ms`` (1..255), ``return-delay`` (0..254, 2 µs units), ``lose``,
     ``corrupt`` (shares), ``seed``, ``missing`` (IDs joined by +), ``unplug`` / ``overheat`` / ``push``
-    (``ID@S[:C]`` joined by +), ``supply`` [V], ``cold`` (1: just switched on, the servos unpowered), ``pace``
+    (``ID@S[:C]`` joined by +), ``horn`` (``ID:TICKS`` joined by +), ``supply`` [V], ``cold`` (1: just switched on, the servos unpowered), ``pace``
     (simulated seconds a wall second at most, e.g. 1 to steer a walk by keys; default as fast as it computes)."""
     from op2motion.bus.emulator.body import STARTS
     from op2motion.physics import ENGINES
@@ -124,7 +124,7 @@ def parse_lockstep(text: str) -> LockstepSetup:
             raise InputError(f"expected key=value items after 'lockstep:', got {item!r}", PARAM)
         fields[key.strip()] = value.strip()
     known = {"engine", "start", "wire", "latency-timer-ms", "return-delay", "lose", "corrupt", "seed", "missing",
-             "unplug", "overheat", "push", "supply", "pace", "cold"}
+             "unplug", "overheat", "push", "supply", "pace", "cold", "horn"}
     unknown = sorted(set(fields) - known)
     if unknown:
         raise InputError(f"expected lockstep keys among {', '.join(sorted(known))}, got {unknown[0]!r}", PARAM)
@@ -175,12 +175,18 @@ def _faults(fields: dict[str, str]) -> Faults:
         if not value.isdigit():
             raise InputError(f"expected servo IDs joined by + for lockstep key missing, got {value!r}", PARAM)
         missing.add(int(value))
+    horn = {}
+    for value in items("horn"):
+        device, _, ticks = value.partition(":")
+        if not device.isdigit() or not ticks.lstrip("+-").isdigit():
+            raise InputError(f"expected ID:TICKS joined by + for lockstep key horn, got {value!r}", PARAM)
+        horn[int(device)] = int(ticks)
     supply = _number(fields, "supply", -1.0)
     seed = _whole(fields, "seed", 0, 2 ** 31 - 1)
     return Faults(missing, [parse_timed(u, PARAM)[:2] for u in items("unplug")], _number(fields, "lose", 0.0),
                   _number(fields, "corrupt", 0.0), [parse_timed(o, PARAM, 85.0) for o in items("overheat")],
                   None if supply < 0 else supply, seed or 0,
-                  [(float(n), t) for n, t, _ in (parse_timed(p, PARAM, first="N") for p in items("push"))])
+                  [(float(n), t) for n, t, _ in (parse_timed(p, PARAM, first="N") for p in items("push"))], horn)
 
 
 def lockstep_robot(text: str, spec: Spec) -> LockstepPort:

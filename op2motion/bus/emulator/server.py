@@ -64,7 +64,7 @@ class Emulator:
         self.torque_limit_min = TORQUE_LIMIT_FULL
         self.faults = faults or Faults()
         supply = self.faults.supply_v if self.faults.supply_v is not None else spec.servo.supply_voltage_v
-        self.body = EmulatedBody(spec, engine, start, supply)
+        self.body = EmulatedBody(spec, engine, start, supply, self.faults.horn)
         self.engine_name, self.start_kind = engine, start
         self.wire = Wire(spec, self.faults, self._now, self._present_ticks)
         self.timing = timing or WireTiming()
@@ -99,13 +99,14 @@ class Emulator:
         for servo, tick in zip(self.servos, ticks):
             servo.power_up(tick)
             servo.set("goal_position", int(round(self.body.pose[servo.id - 1] / self.spec.servo.rad_per_tick))
-                      + self.spec.servo.center_tick)
+                      + self.spec.servo.center_tick + int(self.body.horn_ticks[servo.id - 1]))
             servo.set("torque_enable", 1)
         self.body.sense(self.servos, self.board, self.temperature_overrides)
 
     def _present_ticks(self) -> list[int]:
         s = self.spec.servo
-        return [int(round(q / s.rad_per_tick)) + s.center_tick for q in self.body.joint_angles()]
+        return [int(round(q / s.rad_per_tick)) + s.center_tick + int(h)
+                for q, h in zip(self.body.joint_angles(), self.body.horn_ticks)]
 
     def open(self, link: str | Path) -> str:
         """Make the pseudo-terminal and the link to it at ``link``; returns the terminal's own path."""
