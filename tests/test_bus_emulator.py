@@ -29,6 +29,8 @@ STANDING_TILT_DEG = 15.0       # a torso tilted less than this still stands
 CTRL_C_EXIT_S = 3.0            # Ctrl-C mid-walk: exit 130 within this long [s]
 WALK_BEFORE_CTRL_C_S = 6.0     # ... sent this long after the command started [s]
 FOLLOW_TOL_RAD = math.radians(0.2)   # the follower's goal ends on its target [rad]
+PYTHON_STEPS = 4               # the Python path's walk
+PYTHON_WALKED_M = 0.05         # ... goes forward at least this far [m]
 
 pytestmark = pytest.mark.physics
 
@@ -170,3 +172,25 @@ def test_end_to_end_in_real_time_on_a_pseudo_terminal(tmp_path):
         code, _, err = finish(emulator.process, 10)
     assert code == 130 and "link is removed" in err
     assert not os.path.lexists(emulator.link)
+
+
+def test_a_controller_from_python_starts_with_the_checked_approach_or_is_refused(spec):
+    """docs/robot.md's Python path: ``run_controller(walk, port)`` moves the robot to the walk's first pose by a
+    checked move first and walks; given an OP2 already taken control of, a controller whose first goals are far
+    from the joints is refused before any goal is sent (the first tick used to ask for 119° at the elbows)."""
+    from op2motion.bus.loop import run_controller
+    from op2motion.bus.session import Session
+    from op2motion.errors import CheckFailed
+    from op2motion.gait.controller import WalkController
+
+    with lockstep(spec) as (emulator, port):
+        report = run_controller(WalkController.from_preset("forward", steps=PYTHON_STEPS), port, spec)
+        truth = emulator.truth()
+    assert report.ended == "done" and report.fault is None
+    assert truth["x_m"] > PYTHON_WALKED_M and math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG, truth
+    with lockstep(spec) as (emulator, port), Session(port, spec) as session:
+        session.ready_for_motion()
+        held = list(emulator.report()["goal_ticks"])
+        with pytest.raises(CheckFailed, match="first goal for .* from where the joint is"):
+            run_controller(WalkController.from_preset("forward", steps=PYTHON_STEPS), session.robot)
+        assert emulator.report()["goal_ticks"] == held

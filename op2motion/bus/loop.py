@@ -48,7 +48,7 @@ from op2motion.bus.tables import (
     SYNC_SPAN,
     TORQUE_LIMIT_FULL,
 )
-from op2motion.errors import InputError
+from op2motion.errors import CheckFailed, InputError
 from op2motion.physics import Controller
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.imu import decode
@@ -56,6 +56,8 @@ from op2motion.robot.joints import servo_to_ticks
 from op2motion.robot.spec import Spec
 
 READ_MARGIN_S = 0.0003            # the bulk read's allowance beyond the link's figures (the PC's scheduling)
+START_JUMP_RAD = math.radians(8.0)   # a controller's first goals may be this far from where the joints are (a
+                                     # servo's sag under load); further needs a planned move first (refused here)
 LATE_S = 0.020                     # a period longer than this is a late tick
 MAX_P_GAIN = 254
 
@@ -148,7 +150,8 @@ class _Run:
         if feet is not None and feet.default is inspect.Parameter.empty:
             raise InputError("expected a controller that runs without foot forces (the OP2 does not measure them)",
                              "controller")
-        self.positions = np.zeros(len(self.names))
+        known = robot.positions()                        # a tick reads only some servos: start from all of them
+        self.positions = np.array([known.get(d, 0.0) for d in self.ids])
         self.words = {c.register: robot.imu.centre_count for c in (*robot.imu.gyro, *robot.imu.accel)}
         self.gyro, self.accel = np.zeros(3), np.zeros(3)
         self.goals = np.zeros(len(self.names))
@@ -272,6 +275,7 @@ def _step(run: _Run, stops: Stops, k: int, now: float, stop: threading.Event | N
     if k == 0:
         goals = controller.start(positions)
         run.goals = run.positions.copy()
+        jump(goals, run)
     elif not stops.frozen(row, now):
         goals = controller.step(t, run.gyro.copy(), run.accel.copy(), positions)
     if stops.fall_until is not None and now >= stops.fall_until:     # the fall is over: relax where it lies
@@ -283,26 +287,41 @@ def _step(run: _Run, stops: Stops, k: int, now: float, stop: threading.Event | N
     return t, row
 
 
+def jump(goals: Any, run: _Run) -> None:
+    """Refuse (before anything is sent) a controller whose first goals are more than :data:`START_JUMP_RAD` from
+    where the joints are."""
+    far = [(abs(float(v) - run.positions[run.index[n]]), n) for n, v in goals.items() if n in run.index]
+    worst, joint = max(far, default=(0.0, ""))
+    if worst > START_JUMP_RAD:
+        raise CheckFailed(f"refused: the controller's first goal for {joint} is {math.degrees(worst):.0f}° from where "
+                          f"the joint is (at most {math.degrees(START_JUMP_RAD):.0f}°): nothing was moved; start it with "
+                          f"a path or port (run_controller(controller, port), op2motion.bus.walks.run_on_robot), "
+                          f"which moves the robot there first, checked in physics")
+
+
 def run_controller(controller: Controller, port: str | PortLike | OP2, spec: Spec | None = None, *,
                    duration_s: float | None = None, stop: threading.Event | None = None,
                    on_tick: Callable[[Tick], None] | None = None, watch: bool = True,
                    until_done: bool = False) -> LoopReport:
     """Run ``controller`` on the robot at ``port`` (a path or an open port, e.g. an emulated OP2's in lockstep:
-    connected, checked by :func:`~.safety.preflight` and taken control of here; or an :class:`~.robot.OP2` already
-    set up) every 8 ms on the port's clock
+    started as every robot command starts one, :func:`~.walks.run_on_robot`: preflighted, a planned move checked in
+    physics to its first goals if they are not where the joints are, and the report of the controller's run
+    returned; or an :class:`~.robot.OP2` already set up, whose controller must start within :data:`START_JUMP_RAD`
+    of where the joints are: refused (:class:`~op2motion.errors.CheckFailed`, exit 1) before a goal is sent
+    otherwise) every 8 ms on the port's clock
     for ``duration_s`` (default: its plan's duration; with ``until_done`` also ending as soon as the controller is
     done, e.g. a steered walk standing still after its stop, a get-up standing), until ``stop`` is set or a fault
     stops it (see the module docstring). ``on_tick`` gets every :class:`Tick`. The servos keep holding the last
     goals afterwards. A controller with ``handles_falls`` (a :class:`~op2motion.motion.fall.Supervisor`) deals with
     falls itself: the watch does not stop it for one."""
     if not isinstance(port, OP2):
-        from op2motion.bus.session import Session
+        from op2motion.bus.tasks import Options
+        from op2motion.bus.walks import run_on_robot
         from op2motion.robot.specfile import default_spec
 
-        with Session(port, spec or default_spec()) as session:
-            session.ready_for_motion()
-            return run_controller(controller, session.robot, duration_s=duration_s, stop=stop, on_tick=on_tick,
-                                  watch=watch, until_done=until_done)
+        result = run_on_robot(port, spec or default_spec(), controller, options=Options(stop=stop, on_tick=on_tick),
+                              duration_s=duration_s)
+        return result.last or LoopReport(ended="stopped")
     with steady(), realtime(LOOP_PRIORITY) as report_realtime:        # the collection before the priority
         report = _loop(_Run(controller, port, watch), controller.plan.duration_s if duration_s is None else duration_s,
                        stop, on_tick, until_done)

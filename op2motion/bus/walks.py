@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from op2motion.bus.loop import LoopReport, run_controller
+from op2motion.bus.loop import START_JUMP_RAD, LoopReport, run_controller
 from op2motion.bus.plans import CHECK_ENGINE, LYING_TILT_RAD, move
 from op2motion.bus.port import PortLike
 from op2motion.bus.session import Session
@@ -46,7 +46,8 @@ def walk(port: str | PortLike, spec: Spec, preset: str | None = None, steps: int
     params = read_preset(preset_path(preset)).with_steps(steps)
     gait = gait_within_speed(params, spec, target)
     controller = WalkController(gait, spec)
-    result = _on_robot(port, spec, controller, f"walk '{params.name}' ({gait.params.steps} steps)", options)
+    result = run_on_robot(port, spec, controller, f"walk '{params.name}' ({gait.params.steps} steps)", options,
+                          name="walk")
     walked = dict(result.runs).get("walk")
     if walked is not None:
         result.travel = leg_travel(controller)
@@ -74,8 +75,8 @@ def steered_walk(port: str | PortLike, spec: Spec, preset: str | None = None, co
             teleop.apply(walker)
             if options.on_tick is not None:
                 options.on_tick(tick)
-    result = _on_robot(port, spec, controller, what, Options(options.force, options.stop, on_tick,
-                                                             options.on_progress), duration)
+    result = run_on_robot(port, spec, controller, what, Options(options.force, options.stop, on_tick,
+                                                                options.on_progress), duration, "walk")
     walked = dict(result.runs).get("walk")
     if walked is not None:
         result.travel = {"gyro_heading_deg": math.degrees(walked.yaw_rad)}
@@ -84,29 +85,44 @@ def steered_walk(port: str | PortLike, spec: Spec, preset: str | None = None, co
     return result
 
 
-def _on_robot(port: str | PortLike, spec: Spec, controller: Any, what: str, options: Options,
-              duration_s: float | None = None) -> MotionResult:
-    """A walk controller on the robot: refused lying, the move to its first pose checked and played, then the
-    walk until its plan is over (or ``duration_s``), or it is done."""
+def run_on_robot(port: str | PortLike, spec: Spec, controller: Any, what: str = "controller",
+                 options: Options = Options(), duration_s: float | None = None, name: str = "run") -> MotionResult:
+    """Any controller on the robot, the way every robot command starts one: the robot read and preflighted; if the
+    controller's first goals are more than :data:`~.loop.START_JUMP_RAD` from where the joints are, a planned move
+    there first (refused lying), checked in physics (refused if it fails, unless ``options.force``); then the
+    controller in the 8 ms loop (the run ``name`` of the result) until its plan is over (or ``duration_s``), or it
+    is done. The Python way to run a controller on the robot (``run_controller(controller, port)`` calls it)."""
     with Session(port, spec) as session:
         state = session.status()
         session.preflight(state)
-        if state.board.tilt_rad > LYING_TILT_RAD:
-            raise CheckFailed(f"refused: the robot lies (tilted {math.degrees(state.board.tilt_rad):.0f}°); a walk "
-                              f"starts standing (op2motion robot getup first)")
-        first = Pose("walk_start", Support.DOUBLE, np.asarray(controller.plan.goals[0], dtype=float))
-        approach = move(state.servo_angles, first, spec)
+        first = np.asarray(controller.plan.goals[0], dtype=float)
         planned = controller.plan.duration_s if duration_s is None else duration_s
-        result = MotionResult(what, approach.duration_s + planned, notes=list(approach.notes),
-                              emulator=session.emulated)
-        result.checked = checked(approach, spec, state, options.force, "the move to the walk's first pose",
-                                 options.on_progress)
-        if not run_planned(session, state, approach, result, "approach", options):
+        result = MotionResult(what, planned, emulator=session.emulated)
+        if float(np.max(np.abs(first - state.servo_angles))) <= START_JUMP_RAD:
+            result.checked = "no move needed first (the controller starts where the robot is)"
+            if options.stopped():
+                result.runs.append(("run", LoopReport(ended="stopped")))
+                return result
+            session.take_control(state)
+        elif not _approach(session, state, first, result, options):
             return result
         report = run_controller(controller, session.robot, duration_s=duration_s, stop=options.stop,
                                 on_tick=options.on_tick, until_done=True)
-        result.runs.append(("walk", report))
+        result.runs.append((name, report))
         return result
+
+
+def _approach(session: Session, state: Any, first: np.ndarray, result: MotionResult, options: Options) -> bool:
+    """The checked, planned move from where the robot is to a controller's first goals; whether it got there."""
+    if state.board.tilt_rad > LYING_TILT_RAD:
+        raise CheckFailed(f"refused: the robot lies (tilted {math.degrees(state.board.tilt_rad):.0f}°); a walk "
+                          f"starts standing (op2motion robot getup first)")
+    approach = move(state.servo_angles, Pose("start", Support.DOUBLE, first), session.spec)
+    result.planned_s += approach.duration_s
+    result.notes += list(approach.notes)
+    result.checked = checked(approach, session.spec, state, options.force, "the move to the first pose",
+                             options.on_progress)
+    return run_planned(session, state, approach, result, "approach", options)
 
 
 def getup(port: str | PortLike, spec: Spec, action: Any = None, options: Options = Options()) -> MotionResult:
