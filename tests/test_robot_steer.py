@@ -132,7 +132,21 @@ def test_teleop_from_the_keyboard_of_the_command_line():
 
 
 @pytest.mark.physics
-def test_robot_getup_from_lying_face_down(spec, capsys, tmp_path):
+def test_robot_getup_from_lying_face_down(spec, capsys, tmp_path, monkeypatch):
+    """Refused to walk lying; gets up, checked first; no way up is planned inside a tick of the 8 ms loop (the
+    planner ran in the loop's thread and held ticks 110-200 ms)."""
+    import threading
+
+    from op2motion.motion.ways import Ways
+
+    planned_in: list[str] = []
+    plan_way = Ways.way
+
+    def way(self, side, joints):
+        planned_in.append(threading.current_thread().name)
+        return plan_way(self, side, joints)
+
+    monkeypatch.setattr(Ways, "way", way)
     code, _, err = run_cli(capsys, "robot", "walk", "--port", "lockstep:start=lying_front", "--commands",
                            _steered_file(tmp_path))
     assert code == 1 and "robot getup first" in err                      # a walk starts standing
@@ -146,6 +160,7 @@ def test_robot_getup_from_lying_face_down(spec, capsys, tmp_path):
     assert any("stands" in n or "standing" in n for n in result.notes), result.notes
     assert math.degrees(truth["tilt_rad"]) < UPRIGHT_TILT_DEG and truth["z_m"] > UPRIGHT_HEIGHT_M
     assert "nothing to do" in again.notes[0]
+    assert planned_in and set(planned_in) == {"op2-getup-plan"}, planned_in     # the check's and the robot's
 
 
 def test_steered_flags_are_checked_before_any_port(capsys, tmp_path):
@@ -157,21 +172,27 @@ def test_steered_flags_are_checked_before_any_port(capsys, tmp_path):
     assert code == 2 and "--get-up only with --commands or --teleop" in err
 
 
+TIMELINE_S = 8.0               # the pushed walk's command timeline ends with a stop this long in [s]
 PUSH = "60@3"                  # 60 N forward for 0.1 s, 3 s into the motion (the walk's first steps): it falls
 
 
 @pytest.mark.physics
 def test_a_pushed_robot_walk_gets_up_and_walks_on(tmp_path, capsys):
     commands = tmp_path / "commands.csv"
-    commands.write_text("t_s,vx_m_s,vy_m_s,yaw_rate_deg_s,event\n0,0,0,0,\n0.5,0.15,0,0,\n18,,,,stop\n")
+    commands.write_text("t_s,vx_m_s,vy_m_s,yaw_rate_deg_s,event\n0,0,0,0,\n0.5,0.15,0,0,\n8,,,,stop\n")
     code, result, err = robot_json(capsys, "robot", "walk", "--port", f"lockstep:push={PUSH}", "--commands",
                                    str(commands), "--get-up")
     report = result["emulated"]
     truth = report["truth"]
     events = [n.split(": ", 1)[1] for n in result["notes"] if ": " in n and n[0].isdigit()]
     assert code == 0 and result["runs"]["walk"]["ended"] == "done", err
-    assert [e.split(" (")[0] for e in events[:4]] == ["fall detected", "still; getting up", "standing again",
-                                                       "resumed"], events
+    assert [e.split(" (")[0] for e in events[:5]] == ["fall detected", "still; getting up", "standing again",
+                                                       "its commands paused while it was down", "resumed"], events
+    times = [float(n.split(" s: ")[0]) for n in result["notes"] if n[0].isdigit()]
+    down_s = times[4] - times[0]                            # from the fall to walking again
+    assert result["runs"]["walk"]["seconds"] >= TIMELINE_S + down_s          # the timeline paused while it was down
+    said = [line for line in err.splitlines() if "fall detected" in line or "standing again" in line]
+    assert len(said) == 2 and all(line.startswith("op2motion: ") for line in said), err     # as they happened
     assert report["torque_limit_min"] < 1023                                  # lowered while it fell
     # up, having walked (0.59-0.63 m in five runs here, 0.19 m once in CI: the message shows the torso and the events)
     assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and truth["x_m"] > WALKED_M, (truth, events)

@@ -47,12 +47,14 @@ OnTick = Callable[[Tick], None]
 @dataclass(frozen=True)
 class Options:
     """How a motion runs: ``force`` (play what op2motion's checks refuse), the ``stop`` event (set on Ctrl-C), a
-    callback per loop tick (progress) and one for the physics check's progress (done, total)."""
+    callback per loop tick (progress), one for the physics check's progress (done, total) and one that hears what
+    happens as it happens, in words (a fall, getting up, standing again, resumed)."""
 
     force: bool = False
     stop: threading.Event | None = None
     on_tick: OnTick | None = None
     on_progress: Any = None
+    on_event: Callable[[str], None] | None = None
 
     def stopped(self) -> bool:
         """Whether a stop was asked for."""
@@ -117,6 +119,7 @@ class MotionResult:
         """For people."""
         out = [f"{self.what}: {self.planned_s:.2f} s planned; {self.checked}"]
         out += [f"  {name}: {r.describe()}" for name, r in self.runs]
+        out += [f"  note: {n}" for n in self.notes]
         err = self.target_error_deg()
         if err is not None:
             out.append(f"  last goals within {err:.2f}° of the target pose")

@@ -16,7 +16,8 @@ walk in the 8 ms loop (:func:`~.loop.run_controller`). Ctrl-C stops a steered wa
 from __future__ import annotations
 
 import math
-from typing import Any
+from dataclasses import replace
+from typing import Any, Callable
 
 import numpy as np
 
@@ -69,14 +70,15 @@ def steered_walk(port: str | PortLike, spec: Spec, preset: str | None = None, co
     source = " and ".join(n for n, v in (("a command timeline", commands), ("keys", teleop)) if v is not None)
     what = f"steered walk '{walker.params.name}' ({source or 'standing'}{', getting up after falls' if get_up else ''})"
     duration = MAX_TELEOP_S if teleop is not None else None
-    on_tick = options.on_tick
+    on_tick = announce(controller, options) if get_up else options.on_tick
     if teleop is not None:
-        def on_tick(tick: Any) -> None:            # noqa: F811  (the keys, then the caller's progress)
+        ticked = on_tick
+
+        def on_tick(tick: Any) -> None:            # (the keys, then the caller's progress)
             teleop.apply(walker)
-            if options.on_tick is not None:
-                options.on_tick(tick)
-    result = run_on_robot(port, spec, controller, what, Options(options.force, options.stop, on_tick,
-                                                                options.on_progress), duration, "walk")
+            if ticked is not None:
+                ticked(tick)
+    result = run_on_robot(port, spec, controller, what, replace(options, on_tick=on_tick), duration, "walk")
     walked = dict(result.runs).get("walk")
     if walked is not None:
         result.travel = {"gyro_heading_deg": math.degrees(walked.yaw_rad)}
@@ -160,13 +162,31 @@ def getup(port: str | PortLike, spec: Spec, action: Any = None, options: Options
             result.runs.append(("get up", LoopReport(ended="stopped")))
             return result
         session.take_control(state)
-        report = run_controller(controller, session.robot, stop=options.stop, on_tick=options.on_tick,
+        report = run_controller(controller, session.robot, stop=options.stop, on_tick=announce(controller, options),
                                 until_done=True)
         result.runs.append(("get up", report))
         result.notes += [f"{t_s:.2f} s: {event}" for t_s, event in controller.events]
         if report.ended == "done" and not controller.stood:
             result.notes.append("could not get up")
         return result
+
+
+def announce(controller: Any, options: Options) -> Callable[[Any], None] | None:
+    """``options.on_tick`` that also passes each new entry of ``controller.events`` ((t [s], what) pairs: a
+    supervisor's, a get-up's) to ``options.on_event`` as it happens."""
+    if options.on_event is None:
+        return options.on_tick
+    told = 0
+
+    def on_tick(tick: Any) -> None:
+        nonlocal told
+        events = controller.events
+        for t_s, what in events[told:]:
+            options.on_event(f"{t_s:.2f} s: {what}")             # type: ignore[misc]
+        told = len(events)
+        if options.on_tick is not None:
+            options.on_tick(tick)
+    return on_tick
 
 
 def leg_travel(controller: Any) -> dict[str, float]:

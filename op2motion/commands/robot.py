@@ -221,8 +221,16 @@ def _motion(args: argparse.Namespace, spec: Spec, run: Any) -> int:
         def on_tick(tick: Any) -> None:
             bar.update(0.008)
 
+        def on_event(text: str) -> None:                  # above the bar, as it happens
+            line = f"op2motion: {text}"
+            writer = getattr(bar, "write", None)
+            if writer is not None:
+                writer(line, file=sys.stderr)
+            else:
+                print(line, file=sys.stderr, flush=True)
+
         with progress(args, "check", "s") as on_progress:
-            result = robot_motion(run, Options(args.force, stop, on_tick, on_progress))
+            result = robot_motion(run, Options(args.force, stop, on_tick, on_progress, on_event))
     return deliver(args, result)
 
 

@@ -12,8 +12,9 @@ with the torso past :data:`FRAMEWORK_GUARD_DEG`):
 2. **wait** until the body has kept still (:mod:`.stillness`; at most :data:`WAIT_MAX_S`), then restore the torque;
 3. **get up** (:class:`.getup.GetUp`, or the one given);
 4. **resume**: blend from where the robot stands to the wrapped controller's first goals (:func:`.planner.blend`),
-   and run it again: ``resume(joint_positions, t_s)`` when it has one (a steered walk keeps its command and its
-   timeline's clock), else ``start(joint_positions)``. With ``resume=False``, or when getting up failed, it reports
+   and run it again: ``resume(joint_positions, t_s)`` when it has one, with its own clock at the fall (a steered
+   walk keeps its command, and its timeline goes on from where the fall stopped it: nothing commanded while it was
+   down is skipped), else ``start(joint_positions)``. With ``resume=False``, or when getting up failed, it reports
    instead: :attr:`Supervisor.done`, :attr:`Supervisor.events` says what happened and when.
 
 Its :attr:`plan` is the wrapped controller's, :data:`EXTRA_S` longer (a fall and a get-up take time). Check it in
@@ -108,6 +109,7 @@ class Supervisor:
         self.row = 0
         self.events: list[tuple[float, str]] = []
         self.falls = 0
+        self.paused_at = self.fell_at = 0.0            # the wrapped controller's clock, and ours, at the last fall
 
     @property
     def p_gains(self) -> Any:
@@ -157,6 +159,7 @@ class Supervisor:
             if not down:
                 return self.inner.step(t_s - self.offset, gyro_rad_s, accel_m_s2, joint_positions)
             self.falls += 1
+            self.paused_at, self.fell_at = t_s - self.offset, t_s
             self.events.append((t_s, f"fall detected (tilt {self.attitude.tilt_deg:.0f}°)"))
             self.phase, self.since, self.stillness = "falling", t_s, Stillness()
         if self.phase == "falling":
@@ -194,7 +197,10 @@ class Supervisor:
         from op2motion.motion.planner import blend
 
         again = getattr(self.inner, "resume", None)
-        first = again(joint_positions, t_s) if again is not None else self.inner.start(joint_positions)
+        first = again(joint_positions, self.paused_at) if again is not None else self.inner.start(joint_positions)
+        if again is not None:
+            self.events.append((t_s, f"its commands paused while it was down ({t_s - self.fell_at:.1f} s): they go on "
+                                     f"from where the fall stopped them"))
         target = np.array([first.get(n, joints[i]) for i, n in enumerate(self.spec.joint_names)])
         self.rows, self.row, self.hold = blend(joints, target, self.spec, RESUME_LEAST_S), 0, joints
         self.phase = "blend"

@@ -5,6 +5,9 @@ Every 8 ms it gets what every controller gets (:mod:`op2motion.physics.controlle
 1. **settle**: hold the joints where they were at the start until the body has kept still (:mod:`.stillness`, at
    least :data:`SETTLE_S`, at most :data:`SETTLE_MAX_S`), the accelerometer low-passed meanwhile;
 2. **decide** (:func:`.lying.lying_side`): face down, face up, on the left or right side, or upright;
+   the way up is planned beside the loop (a thread) while the robot holds still :data:`PLAN_S`, so no tick waits
+   for the planner (on the robot a tick must stay within 20 ms; in physics the plan is taken at the same
+   simulated moment whatever the machine, so runs stay deterministic);
 3. **play** the way up from that side (:mod:`.ways`: the stock pages 10/11 when the action file given has them,
    op2motion's own get-up motions otherwise; from a side, a roll onto the back first, after which it decides again);
 4. **check**: hold the last goal until still; upright (the torso within :data:`~.lying.UPRIGHT_TILT_DEG` of vertical
@@ -19,8 +22,9 @@ holds :data:`LYING_POSE_DEG` for :data:`GETUP_S`: check it with ``Setup(lying="f
 
 from __future__ import annotations
 
+import threading
 from pathlib import Path
-from typing import Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -38,6 +42,7 @@ SETTLE_MAX_S = 3.0          # ... or decide anyway after this long [s]
 CHECK_MAX_S = 2.0           # after a way, wait at most this long for the body to keep still [s]
 ACCEL_TAU_S = 0.1           # the accelerometer's low-pass [s]
 MAX_TRIES = 4               # ways tried (a roll counts) before giving up
+PLAN_S = 0.5                # the way up is planned beside the loop this long (the robot holds still) [s]
 GETUP_S = 20.0              # the plan's length for a physics check [s]
 #: The pose a run of :class:`GetUp` starts lying in: arms down by the sides, legs straight (servo degrees).
 LYING_POSE_DEG = {"r_sho_roll": -45.0, "l_sho_roll": 45.0, "r_el": -90.0, "l_el": 90.0}
@@ -65,6 +70,7 @@ class GetUp:
         self.rows: np.ndarray | None = None
         self.gains: np.ndarray | None = None
         self.row = 0
+        self.planning: _Planning | None = None
         self.accel: np.ndarray | None = None
         self.stillness = Stillness()
         self.events: list[tuple[float, str]] = []
@@ -97,6 +103,9 @@ class GetUp:
             waited = t_s - self.since
             if (waited >= SETTLE_S and self.stillness.still) or waited >= SETTLE_MAX_S:
                 self._decide(t_s, joints)
+        elif self.phase == "plan":
+            if t_s - self.since >= PLAN_S:
+                self._take_plan()
         elif self.phase == "play":
             if self.rows is None or self.gains is None:
                 raise Op2MotionError("GetUp plays a way it has not planned")
@@ -120,9 +129,17 @@ class GetUp:
         if side in ("upright", "head") or self.tries >= MAX_TRIES:
             self.phase, self.since = "check", t_s
             return
-        way = self.ways.way(side, joints)
         self.tries += 1
-        self.events.append((t_s, f"plays {way.name}"))
+        self.planning = _Planning(self.ways, side, joints)
+        self.phase, self.since = "plan", t_s
+
+    def _take_plan(self) -> None:
+        """The way planned beside the loop (waited for only if the planner took longer than :data:`PLAN_S`)."""
+        if self.planning is None:
+            raise Op2MotionError("GetUp plays a way it has not planned")
+        way = self.planning.result()
+        self.planning = None
+        self.events.append((self.since, f"plays {way.name}"))
         self.rows, self.gains, self.row, self.phase = way.goals, way.p_gains, 0, "play"
 
     def _checked(self, t_s: float) -> None:
@@ -138,3 +155,27 @@ class GetUp:
         else:
             self.phase, self.since = "settle", t_s
             self.stillness = Stillness()
+
+
+class _Planning:
+    """One way up planned in a thread of its own (:meth:`result` waits for it and raises what it raised)."""
+
+    def __init__(self, ways: Ways, side: str, joints: np.ndarray):
+        self.way: Any = None
+        self.error: BaseException | None = None
+        self.thread = threading.Thread(target=self._plan, args=(ways, side, joints.copy()), name="op2-getup-plan",
+                                       daemon=True)
+        self.thread.start()
+
+    def _plan(self, ways: Ways, side: str, joints: np.ndarray) -> None:
+        try:
+            self.way = ways.way(side, joints)
+        except BaseException as exc:          # noqa: BLE001 (raised again in the loop's thread by result())
+            self.error = exc
+
+    def result(self) -> Any:
+        """The planned way."""
+        self.thread.join()
+        if self.error is not None:
+            raise self.error
+        return self.way
