@@ -22,13 +22,25 @@ from op2motion.bus.safety import (
     FALL_TILT_RAD,
     HOT_START_C,
     HOT_STOP_C,
+    Refused,
     Watch,
+    WrongModel,
     clip_goals,
     mechanical_bounds,
     min_supply_v,
+    preflight,
     preflight_problems,
 )
-from op2motion.bus.tables import CM730, MX28, magnitude, signed
+from op2motion.bus.tables import (
+    CM730,
+    CM730_MODEL_NUMBER,
+    CM740_MODEL_NUMBER,
+    MX28,
+    MX28_MODEL_NUMBER,
+    magnitude,
+    model_name,
+    signed,
+)
 from op2motion.errors import InputError
 from op2motion.robot.imu import FallWatch, attitude, decode, encode, imu_of
 from op2motion.robot.spec import GRAVITY_M_S2
@@ -120,20 +132,52 @@ def test_attitude_from_gravity():
 
 class _State:
     def __init__(self, **kw):
-        self.__dict__.update(dict(answers=True, errors=(), temperature_c=40, voltage_v=12.0, joint="r_knee", id=13))
+        self.__dict__.update(dict(answers=True, errors=(), temperature_c=40, voltage_v=12.0, joint="r_knee", id=13,
+                                  model_number=MX28_MODEL_NUMBER, position_rad=0.0))
         self.__dict__.update(kw)
 
 
+def _board(**kw) -> _State:
+    return _State(**{"model_number": CM740_MODEL_NUMBER, **kw})
+
+
 def test_preflight_names_each_problem(spec):
-    board = _State(voltage_v=12.0)
+    board = _board(voltage_v=12.0)
     assert preflight_problems(board, [_State()], spec) == []
-    problems = preflight_problems(_State(voltage_v=9.5), [_State(answers=False, joint="l_knee", id=14),
+    problems = preflight_problems(_board(voltage_v=9.5), [_State(answers=False, joint="l_knee", id=14),
                                                           _State(temperature_c=HOT_START_C),
                                                           _State(errors=("overload",))], spec)
     kinds = [(f.kind, f.id) for f in problems]
     assert kinds == [("low supply", 200), ("not answering", 14), ("hot", 13), ("overload", 13)]
     assert min_supply_v(spec) == pytest.approx(10.0)
     assert "l_knee (ID 14): not answering" in problems[1].describe()
+
+
+def test_a_device_of_another_model_is_refused_by_name_whatever_else(spec):
+    """A CM-730 and a CM-740 both pass; a servo reporting the AX-12's model, or a board of another model, is refused
+    with the bad-input error (exit 2), naming ID, joint and the number it reported, ahead of every other problem."""
+    assert model_name(CM740_MODEL_NUMBER) == "CM-740" and CM740_MODEL_NUMBER == 0x7400      # e-manual: 0x00, 0x74
+    for board in (_board(model_number=CM730_MODEL_NUMBER), _board()):
+        preflight(board, [_State()], spec)                                  # no problem: nothing raised
+    ax12 = _State(model_number=12, joint="l_knee", id=14)
+    with pytest.raises(WrongModel) as caught:
+        preflight(_board(voltage_v=9.5), [_State(temperature_c=HOT_START_C), ax12], spec)
+    assert caught.value.exit_code == 2
+    assert str(caught.value) == "l_knee (ID 14) reports model 12 (AX-12?), expected the MX-28 (29)"
+    with pytest.raises(WrongModel, match=r"the sub-controller \(ID 200\) reports model 0x1234, expected the CM-730 "
+                                         r"\(0x7300\) or the CM-740 \(0x7400\) \(and 1 more\)"):
+        preflight(_board(model_number=0x1234), [ax12], spec)
+    kinds = [(f.kind, f.id) for f in preflight_problems(_board(voltage_v=9.5), [ax12, _State()], spec)]
+    assert kinds == [("wrong model", 14), ("low supply", 200)]    # nothing else read from another model's table
+
+
+def test_a_servo_reporting_error_bits_is_refused_naming_them(spec):
+    every = p.error_names(0x7F)
+    with pytest.raises(Refused) as caught:
+        preflight(_board(), [_State(errors=every, joint="l_knee", id=14)], spec)
+    assert caught.value.exit_code == 1
+    assert str(caught.value) == ("refused to start: l_knee (ID 14) reports errors: input voltage, angle limit, "
+                                 "overheating, range, checksum, overload, instruction")
 
 
 def test_watch_blind_errors_heat_and_falls(spec):

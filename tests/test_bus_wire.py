@@ -199,6 +199,34 @@ def test_a_retry_waits_out_the_late_window_so_its_reply_counts():
     assert reply is not None and reply.params == b"\x22\x22" and bus.stats.stray == 0 and bus.stats.retries == 1
 
 
+def test_a_reply_with_error_bits_is_an_answer_asked_again_once_at_most():
+    """A servo whose every reply carries all seven error bits is answered with them after one more try (the checksum
+    and instruction bits may mean our packet arrived damaged), not given up on as silent; a damaged request that
+    arrives whole the second time gets the clean reply; a call without retries takes the first reply as it is."""
+    every = 0x7F
+
+    def always(n: int, request: bytes):
+        return [(0.0002, p.status(13, every, b"\x22\x22"))]
+
+    port = ScriptedPort(always)
+    bus = Bus(port, retries=3)
+    reply = bus.read(13, 36, 2)
+    assert reply is not None and reply.code == every and reply.params == b"\x22\x22"
+    assert len(port.sent) == 2 and bus.stats.retries == 1 and bus.stats.device_errors == {13: 2}
+    assert reply.errors == ("input voltage", "angle limit", "overheating", "range", "checksum", "overload",
+                            "instruction")
+
+    def once(n: int, request: bytes):
+        return [(0.0002, p.status(13, p.CHECKSUM if n == 1 else 0, b"\x22\x22"))]
+
+    port = ScriptedPort(once)
+    reply = Bus(port, retries=3).read(13, 36, 2)
+    assert reply is not None and reply.code == 0 and len(port.sent) == 2
+    port = ScriptedPort(always)
+    reply = Bus(port, retries=0).read(13, 36, 2)
+    assert reply is not None and reply.code == every and len(port.sent) == 1
+
+
 def test_lockstep_clock_runs_its_listeners_up_to_each_wait():
     clock, seen = LockstepClock(1.0), []
     clock.listen(seen.append)

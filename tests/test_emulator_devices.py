@@ -7,9 +7,9 @@ import pytest
 
 from op2motion.bus import protocol as p
 from op2motion.bus.emulator.devices import Servo
-from op2motion.bus.emulator.faults import Faults
+from op2motion.bus.emulator.faults import Faults, with_board
 from op2motion.bus.emulator.wire import BOOT_S, Wire
-from op2motion.bus.tables import CM730, CM730_ID, LED_HEAD_AT_POWER_ON, MX28
+from op2motion.bus.tables import CM730, CM730_ID, CM730_MODEL_NUMBER, CM740_MODEL_NUMBER, LED_HEAD_AT_POWER_ON, MX28
 
 SERVO = 13                     # the servo most tests talk to
 JOINT_TICKS = 2048             # every joint's position (a powering-up servo's goal)
@@ -198,3 +198,28 @@ def test_a_silent_device_in_a_bulk_read_silences_the_ones_after_it(spec):
     assert [r.id for r in rig.send(p.bulk_read(spans))] == [CM730_ID, 3]
     assert rig.one(p.write(3, MX28["status_return_level"].address, b"\x00")).code == 0
     assert [r.id for r in rig.send(p.bulk_read(spans))] == [CM730_ID]       # level 0: no READ answered either
+
+
+# --- 13. the board played, a servo of another model, error bits -------------------------------------------------------
+def _model(rig: Rig, device: int) -> int:
+    return p.word(*rig.one(p.read(device, MX28["model_number"].address, 2)).params)
+
+
+def test_the_board_reports_a_cm730_or_a_cm740_and_a_servo_another_model(spec):
+    assert _model(Rig(spec), CM730_ID) == CM730_MODEL_NUMBER == 0x7300
+    rig = Rig(spec, Faults(models=with_board({14: 12}, "cm740", "board")))
+    assert (_model(rig, CM730_ID), _model(rig, 14), _model(rig, 13)) == (CM740_MODEL_NUMBER, 12, MX28.model_number)
+    rig.wire.cold_start()                                              # address 0 is EEPROM: kept over power cycles
+    rig.power_on()
+    assert _model(rig, 14) == 12
+    assert Rig(spec, Faults(models={200: 0x1234})).wire.board.get("model_number") == 0x1234
+
+
+def test_a_servo_given_error_bits_reports_them_in_every_reply(spec):
+    rig = Rig(spec, Faults(errors={SERVO: 0x7F}))
+    for request in (p.ping(SERVO), p.read(SERVO, MX28["present_position"].address, 2),
+                    p.write(SERVO, MX28["led"].address, b"\x01")):
+        assert rig.one(request).code == 0x7F
+    assert rig.servo().get("led") == 1                                 # only the byte reported changes
+    spans = [(CM730_ID, 24, 30), (12, 36, 2), (SERVO, 36, 2)]
+    assert [(r.id, r.code) for r in rig.send(p.bulk_read(spans))] == [(CM730_ID, 0), (12, 0), (SERVO, 0x7F)]

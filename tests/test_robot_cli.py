@@ -14,7 +14,7 @@ from bus_support import lockstep, robot_json
 from helpers import POSES, STOCK, run_cli
 
 from op2motion.bus.emulator.faults import Faults
-from op2motion.bus.safety import FALL_TORQUE_LIMIT
+from op2motion.bus.safety import FALL_TORQUE_LIMIT, WrongModel
 from op2motion.bus.tasks import Options, play, setup, teach
 from op2motion.bus.walks import walk
 from op2motion.errors import CheckFailed
@@ -27,6 +27,8 @@ STANDING_TILT_DEG = 15.0       # a torso tilted less than this still stands
 WALKED_M = 0.2                 # a stop is asked for once the robot has walked this far [m]
 HORN_OFF_TICKS = 1707          # head_pan reads tick 3755 (150°; its range ends at 119°), as in the audit [ticks]
 FAULT_AT_S = 4.0               # the overheating knee's moment, into the motion [s]
+AX12_AS_L_KNEE = "l_knee (ID 14) reports model 12 (AX-12?), expected the MX-28 (29)"
+EVERY_ERROR_BIT = "input voltage, angle limit, overheating, range, checksum, overload, instruction"
 
 
 def _goals_deg(report: dict, spec) -> np.ndarray:
@@ -278,3 +280,55 @@ def test_a_servo_reading_outside_its_range_is_named_and_nothing_moves(capsys):
         code, out, err = run_cli(capsys, *argv, "--port", port)
         assert code == 1 and "head_pan (ID 19): out of range" in err and "outside its mechanical range" in err, err
         assert len(err.strip().splitlines()) == 1, err
+
+
+@pytest.mark.physics
+def test_a_servo_of_another_model_is_named_and_nothing_moves_even_forced(spec, capsys):
+    code, status, err = robot_json(capsys, "robot", "status", "--port", "lockstep:model=14:12")
+    assert code == 2 and status is None and _one_line(err) == f"op2motion: error: {AX12_AS_L_KNEE}"
+    code, _, err = run_cli(capsys, "robot", "play", "--force", "--port", "lockstep:model=14:12",
+                           str(POSES / "walkready.json"))
+    assert code == 2 and AX12_AS_L_KNEE in _one_line(err)
+    with lockstep(spec, faults=Faults(models={14: 12})) as (emulator, port):
+        before = emulator.report()
+        with pytest.raises(WrongModel, match=r"l_knee \(ID 14\) reports model 12"):
+            play(port, spec, str(POSES / "walkready.json"), options=Options(force=True))
+        with pytest.raises(WrongModel):
+            teach(port, spec, "here", limp=True)
+        after = emulator.report()
+    assert after["motion_s"] is None                            # no SYNC_WRITE: not one goal sent
+    assert after["goal_ticks"] == before["goal_ticks"] and after["torque_enable"] == before["torque_enable"]
+
+
+@pytest.mark.physics
+def test_a_cm740_is_named_and_a_board_of_another_model_refused(capsys):
+    code, out, err = run_cli(capsys, "robot", "status", "--port", "lockstep:board=cm740")
+    assert code == 0 and out.startswith("CM-740 (ID 200): model 0x7400,"), err
+    code, status, err = robot_json(capsys, "robot", "status", "--port", "lockstep:model=200:0x1234")
+    assert code == 2 and status is None
+    assert ("the sub-controller (ID 200) reports model 0x1234, expected the CM-730 (0x7300) or the CM-740 (0x7400)"
+            in _one_line(err))
+
+
+@pytest.mark.physics
+def test_a_servo_reporting_every_error_bit_is_named_not_called_silent(capsys):
+    code, status, err = robot_json(capsys, "robot", "status", "--port", "lockstep:errors=14:all")
+    assert code == 1 and f"l_knee (ID 14) reports errors: {EVERY_ERROR_BIT}" in _one_line(err)
+    knee = status["servos"][13]
+    assert knee["answers"] and ", ".join(knee["errors"]) == EVERY_ERROR_BIT
+    code, _, err = run_cli(capsys, "robot", "play", "--force", "--port", "lockstep:errors=14:all",
+                           str(POSES / "walkready.json"))
+    assert code == 1 and f"refused to start: l_knee (ID 14) reports errors: {EVERY_ERROR_BIT}" in _one_line(err)
+
+
+def test_board_model_and_error_keys_parse_and_are_checked(capsys):
+    from op2motion.bus.emulator.lockstep import parse_lockstep
+
+    setup = parse_lockstep("lockstep:board=cm740,model=14:12,errors=13:all+3:0x24")
+    assert setup.faults.models == {14: 12, 200: 0x7400} and setup.faults.errors == {13: 0x7F, 3: 0x24}
+    for text, expected in (("board=cm530", "expected a board among cm730, cm740"),
+                           ("board=cm740,model=200:0x7300", "expected a board or a model number for ID 200"),
+                           ("model=14:all", "expected ID:VALUE"), ("model=21:12", "expected a servo ID 1..20"),
+                           ("errors=14:0", "expected a value 1..255")):
+        code, _, err = run_cli(capsys, "robot", "status", "--port", f"lockstep:{text}")
+        assert code == 2 and expected in _one_line(err), text

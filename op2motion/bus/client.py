@@ -20,8 +20,11 @@ and that reply's bytes at the baud rate and its return delay). A reply nothing o
 wire model answers faster than a wire could); anything the port held before a request went out is dropped and counted
 too. A one-off command asks again only after that window (so a retry's reply is never mistaken for the late one). A
 reply counts only when it comes from a device asked and carries the length asked for; an echo of our own packet is
-skipped. A device that does not answer, answers garbage or reports a checksum or instruction error (our packet arrived
-damaged) is asked again, at most ``retries`` more times; then the transaction returns None and the caller decides.
+skipped. A device that does not answer or answers garbage is asked again, at most ``retries`` more times; then the
+transaction returns None and the caller decides. A status packet is an answer, whatever its error bits: one with the
+checksum or instruction bit (our packet may have arrived damaged) is asked again :data:`DAMAGED_RETRIES` time(s)
+within those tries, and if the bits stay, that reply is returned, for the caller to name its bits (a device that
+reports them on every reply is not one that is silent).
 
 :meth:`Bus.bulk_read` is one try by design: the 8 ms loop asks again for only the devices that did not answer
 (:mod:`.loop`).
@@ -38,6 +41,8 @@ from op2motion.bus.link import ASSUMED_TAIL_S, LinkBudget
 from op2motion.bus.port import PortLike
 
 RETRIES = 3                        # a one-off command is tried 1 + RETRIES times
+DAMAGED_RETRIES = 1                # ... asked again this often when the reply says our packet arrived damaged
+DAMAGED = p.CHECKSUM | p.INSTRUCTION   # the error bits that say so
 MAX_OWED = 64                      # late replies remembered at most
 COMMAND_MARGIN_S = 0.003           # one-off commands: beyond the wire's own figures (a loaded PC's scheduling)
 
@@ -142,8 +147,11 @@ class Bus:
         return got
 
     def _transact(self, device: int, packet: bytes, n_params: int, retries: int | None = None) -> p.Packet | None:
-        """One request to one device, retried; its status packet, or None."""
+        """One request to one device, retried (see the module docstring); its status packet (error bits and all),
+        or None if it never answered."""
         tries = 1 + (self.retries if retries is None else retries)
+        damaged: p.Packet | None = None                 # the last reply that said our packet arrived damaged
+        said_again = 0
         for attempt in range(tries):
             if attempt:
                 self.stats.retries += 1
@@ -152,11 +160,14 @@ class Bus:
             reply = self._collect(packet, {device: n_params}, self.margin_s).get(device)
             if reply is None:
                 continue
-            if reply.code & (p.CHECKSUM | p.INSTRUCTION):     # our packet arrived damaged: say it again
+            if reply.code & DAMAGED:
                 self.stats.device_errors[device] = self.stats.device_errors.get(device, 0) + 1
-                continue
+                damaged = reply
+                if said_again < DAMAGED_RETRIES:        # perhaps it was: say it again, once
+                    said_again += 1
+                    continue
             return reply
-        return None
+        return damaged
 
     def settle(self) -> None:
         """Wait until no late reply is owed any more (see the module docstring)."""

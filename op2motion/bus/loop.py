@@ -293,10 +293,10 @@ def jump(goals: Any, run: _Run) -> None:
     far = [(abs(float(v) - run.positions[run.index[n]]), n) for n, v in goals.items() if n in run.index]
     worst, joint = max(far, default=(0.0, ""))
     if worst > START_JUMP_RAD:
-        raise CheckFailed(f"refused: the controller's first goal for {joint} is {math.degrees(worst):.0f}° from where "
-                          f"the joint is (at most {math.degrees(START_JUMP_RAD):.0f}°): nothing was moved; start it with "
-                          f"a path or port (run_controller(controller, port), op2motion.bus.walks.run_on_robot), "
-                          f"which moves the robot there first, checked in physics")
+        raise CheckFailed(f"refused: the controller's first goal for {joint} is {math.degrees(worst):.0f}° from "
+                          f"where the joint is (at most {math.degrees(START_JUMP_RAD):.0f}°): nothing was moved; start "
+                          f"it with a path or port (run_controller(controller, port), op2motion.bus.walks."
+                          f"run_on_robot), which moves the robot there first, checked in physics")
 
 
 def run_controller(controller: Controller, port: str | PortLike | OP2, spec: Spec | None = None, *,

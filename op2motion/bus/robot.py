@@ -2,7 +2,8 @@
 MX-28 (torque, gains, goal, moving speed, torque limit, present position/speed/load/voltage/temperature, error bits by
 name), through a :class:`~.client.Bus`.
 
-:meth:`OP2.connect` finds the board (nothing at ID 200 is bad input naming ``--port``: exit 2), measures the link
+:meth:`OP2.connect` finds the board (nothing at ID 200 is bad input naming ``--port``: exit 2), reads its model
+number (neither a CM-730's nor a CM-740's: :class:`~.safety.WrongModel`, exit 2, nothing written), measures the link
 (:func:`~.link.measure_link`: the ping round trip, the USB adapter's tail) and switches the servos' power on as the
 framework does (write 1 to register 24, then wait :data:`POWER_ON_WAIT_S`; a servo is silent until powered).
 :meth:`OP2.status` reads the board and every servo in full. :meth:`OP2.take_control` switches the torque on without a
@@ -17,10 +18,11 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from op2motion.bus.client import Bus
+from op2motion.bus.client import DAMAGED, Bus
 from op2motion.bus.clock import sleep
 from op2motion.bus.link import LinkCheck, ReadPlan, measure_link, return_delays
 from op2motion.bus.realtime import LOOP_PRIORITY, realtime
+from op2motion.bus.safety import WrongModel, board_model_problem
 from op2motion.bus.tables import (
     CM730,
     CM730_ID,
@@ -28,9 +30,10 @@ from op2motion.bus.tables import (
     SPEED_RAD_S_PER_UNIT,
     TORQUE_LIMIT_FULL,
     VOLTS_PER_UNIT,
+    model_name,
     signed,
 )
-from op2motion.errors import InputError
+from op2motion.errors import CheckFailed, InputError
 from op2motion.robot.framework import DEFAULT_P_GAIN
 from op2motion.robot.imu import GYRO_SAMPLES, attitude, decode_span, gyro_centres, imu_of
 from op2motion.robot.joints import servo_to_ticks, ticks_to_servo
@@ -63,7 +66,9 @@ class BoardState:
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready (angles in degrees)."""
-        return {"id": CM730_ID, "model_number": self.model_number, "firmware": self.firmware, "power": self.power,
+        return {"id": CM730_ID, "model_number": self.model_number,
+                "model": model_name(self.model_number) or f"model {self.model_number:#06x}",
+                "firmware": self.firmware, "power": self.power,
                 "return_delay_us": self.return_delay * 2,
                 "voltage_v": round(self.voltage_v, 1), "buttons": self.buttons,
                 "gyro_rad_s": [round(float(v), 4) for v in self.gyro_rad_s],
@@ -103,7 +108,7 @@ class ServoState:
         if not self.answers:
             return {"id": self.id, "joint": self.joint, "answers": False}
         return {"id": self.id, "joint": self.joint, "answers": True, "model_number": self.model_number,
-                "model": "MX-28" if self.model_number == MX28.model_number else f"model {self.model_number}",
+                "model": model_name(self.model_number) or f"model {self.model_number}",
                 "firmware": self.firmware, "return_delay_us": self.return_delay * 2,
                 "position_deg": round(math.degrees(self.position_rad), 2),
                 "goal_deg": round(math.degrees(self.goal_rad), 2),
@@ -146,10 +151,24 @@ class OP2:
         if self.bus.ping(CM730_ID) is None:
             raise NoBoard(f"nothing answers at ID {CM730_ID} on {port.path} (expected the OP2's CM-730 "
                           f"sub-controller: is this the robot's port, and is the robot switched on?)", "port")
+        self.check_board_model()
         with realtime(LOOP_PRIORITY):                   # the loop's priority: the PC's load is not the link's
             self.link = measure_link(self.bus, CM730_ID, port.latency_timer_ms, port.low_latency)
         if power:
             self.power_on()
+
+    def check_board_model(self) -> int:
+        """The board's model number, read before anything is written to it; refused (:class:`~.safety.WrongModel`,
+        exit 2) unless a CM-730's or a CM-740's."""
+        register = CM730["model_number"]
+        reply = self.bus.read(CM730_ID, register.address, register.size)
+        if reply is None:
+            raise CheckFailed(f"the sub-controller (ID {CM730_ID}) answers a ping but not a read of its model number")
+        model = _u16(reply.params, 0)
+        problem = board_model_problem(model)
+        if problem is not None:
+            raise WrongModel(problem.describe())
+        return model
 
     def power_on(self) -> bool:
         """Switch the servos' power on if it is off, and wait for them to boot; True if it was off."""
@@ -225,13 +244,13 @@ class OP2:
 
     def write_each(self, register: str, values: dict[int, int]) -> list[int]:
         """Write ``register`` of each servo {id: value}, confirmed where the servo answers writes; the IDs that did
-        not confirm."""
+        not confirm (no reply, or one saying the write arrived damaged: the firmware does not execute it)."""
         r = MX28[register]
         failed = []
         for device, value in values.items():
             reply = self.bus.write(device, r.address, value.to_bytes(r.size, "little"),
                                    reply=self.replies_to_writes(device))
-            if reply is None and self.replies_to_writes(device):
+            if self.replies_to_writes(device) and (reply is None or reply.code & DAMAGED):
                 failed.append(device)
         return failed
 

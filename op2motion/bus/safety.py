@@ -1,8 +1,14 @@
 """What the robot commands will not do, by name: the thresholds and the policy when something goes wrong.
 
-Before a motion (:func:`preflight`): every servo answers, none reports an error, none is at or above
-:data:`HOT_START_C`, and the supply (board and servos) is at least the MX-28's lowest rated voltage (the spec's
-``operating_voltage_v``, 10 V): otherwise the motion is refused, naming the joint and its ID (exit 1).
+Before anything is driven (:func:`refuse_other_models`): the board reports the model number of a CM-730 or a CM-740
+and every servo that of the MX-28; a device of another model is refused, naming its ID, its joint and what it
+reported (:class:`WrongModel`, exit 2, whatever ``--force`` says: op2motion's tables, ticks and limits are the
+MX-28's).
+
+Before a motion (:func:`preflight`): every servo answers, none reports an error (a status packet with error bits is
+an answer: the bits are named), none is at or above :data:`HOT_START_C`, and the supply (board and servos) is at
+least the MX-28's lowest rated voltage (the spec's ``operating_voltage_v``, 10 V): otherwise the motion is refused,
+naming the joint and its ID (exit 1).
 
 During a motion (:class:`Watch`, every 8 ms tick), a fault stops it:
 
@@ -29,7 +35,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from op2motion.errors import CheckFailed
+from op2motion.bus.tables import BOARD_MODELS, CM730_ID, MX28_MODEL_NUMBER, model_name
+from op2motion.errors import CheckFailed, InputError
 from op2motion.robot.imu import ARM_TILT_RAD, FALL_TILT_RAD, FallWatch, attitude
 from op2motion.robot.joints import joint_range
 from op2motion.robot.spec import ImuSpec, Spec
@@ -45,22 +52,28 @@ RANGE_SLACK_RAD = math.radians(1.0)   # a reading this far beyond a joint's mech
                                       # end when the torque goes on (a tick or two of wear); further is refused
 HOLD = "hold"                      # the stop policy: hold the goals (a walk: on both feet)
 POLICIES = (HOLD,)
+WRONG_MODEL = "wrong model"        # the kind of a fault for a device of another model
 
 
 @dataclass(frozen=True)
 class Fault:
-    """Why a motion stopped: ``kind`` (``not answering``, an error bit's name, ``hot``, ``fell``), the joint and
-    servo ID (None for the board or the whole robot), and the details in words."""
+    """Why a motion stopped or may not start: ``kind`` (``not answering``, an error bit's name or several joined,
+    ``hot``, ``fell``, :data:`WRONG_MODEL`), the joint and servo ID (None for the board or the whole robot), the
+    details in words, and ``reports``: what the device said of itself, when that is the fault (its error bits, its
+    model number), told as ``<who> reports <reports>``."""
 
     kind: str
     joint: str | None
     id: int | None
     detail: str
+    reports: str = ""
 
     def describe(self) -> str:
-        """``r_knee (ID 13): overheating (84 °C)``."""
-        who = f"{self.joint} (ID {self.id})" if self.joint else ("the sub-controller (ID 200)" if self.id else
+        """``r_knee (ID 13): overheating (84 °C)``; ``r_knee (ID 13) reports errors: overload, instruction``."""
+        who = f"{self.joint} (ID {self.id})" if self.joint else (f"the sub-controller (ID {self.id})" if self.id else
                                                                 "the robot")
+        if self.reports:
+            return f"{who} reports {self.reports}"
         return f"{who}: {self.kind}" + (f" ({self.detail})" if self.detail else "")
 
     def as_dict(self) -> dict[str, Any]:
@@ -83,14 +96,62 @@ class Refused(CheckFailed):
     """A motion refused before it started (preflight): exit 1."""
 
 
+class WrongModel(InputError):
+    """A device on the bus is not what an OP2 has there (a servo not an MX-28, a board neither a CM-730 nor a
+    CM-740): nothing is driven (exit 2)."""
+
+
+def _model(number: int, hex_digits: bool = False) -> str:
+    """``12 (AX-12?)``, ``0x7400 (CM-740)``, ``999``: a model number, with the device it may be."""
+    name = model_name(number)
+    text = f"{number:#06x}" if hex_digits else str(number)
+    return f"{text} ({name}?)" if name else text
+
+
+def board_model_problem(model_number: int) -> Fault | None:
+    """A fault if the sub-controller's model number is neither a CM-730's nor a CM-740's."""
+    if model_number in BOARD_MODELS:
+        return None
+    expected = " or ".join(f"the {name} ({number:#06x})" for number, name in BOARD_MODELS.items())
+    return Fault(WRONG_MODEL, None, CM730_ID, f"model {model_number:#06x}",
+                 f"model {_model(model_number, True)}, expected {expected}")
+
+
+def model_problems(board: Any, servos: Sequence[Any]) -> list[Fault]:
+    """Every device that answered with another model number than an OP2's (``board`` may be None: not read)."""
+    problem = None if board is None else board_model_problem(board.model_number)
+    out = [] if problem is None else [problem]
+    for s in servos:
+        if s.answers and s.model_number != MX28_MODEL_NUMBER:
+            out.append(Fault(WRONG_MODEL, s.joint, s.id, f"model {s.model_number}",
+                             f"model {_model(s.model_number)}, expected the MX-28 ({MX28_MODEL_NUMBER})"))
+    return out
+
+
+def refuse_other_models(board: Any, servos: Sequence[Any]) -> None:
+    """Refuse (:class:`WrongModel`, exit 2) a bus with a device of another model on it, naming the first and how
+    many more."""
+    wrong = model_problems(board, servos)
+    if wrong:
+        more = f" (and {len(wrong) - 1} more)" if len(wrong) > 1 else ""
+        raise WrongModel(wrong[0].describe() + more)
+
+
+def errors_fault(device: int, joint: str | None, errors: Sequence[str]) -> Fault:
+    """A device's status error bits, by name: ``r_knee (ID 14) reports errors: input voltage, overload``."""
+    return Fault(", ".join(errors), joint, device, "status error bits",
+                 f"error{'s' if len(errors) > 1 else ''}: {', '.join(errors)}")
+
+
 def min_supply_v(spec: Spec) -> float:
     """The lowest supply the MX-28 is rated to work at (the spec's ``operating_voltage_v``: 10 V) [V]."""
     return spec.servo.operating_voltage_v[0]
 
 
 def preflight_problems(board: Any, servos: Sequence[Any], spec: Spec) -> list[Fault]:
-    """Everything that forbids starting a motion (see the module docstring), worst first."""
-    out: list[Fault] = []
+    """Everything that forbids starting a motion (see the module docstring), worst first: devices of another model,
+    then the supply and each servo."""
+    out: list[Fault] = model_problems(board, servos)
     low = min_supply_v(spec)
     if board is not None and board.voltage_v < low:
         out.append(Fault("low supply", None, 200, f"{board.voltage_v:.1f} V, below the MX-28's lowest rating "
@@ -99,8 +160,10 @@ def preflight_problems(board: Any, servos: Sequence[Any], spec: Spec) -> list[Fa
         if not s.answers:
             out.append(Fault("not answering", s.joint, s.id, "no reply to a read"))
             continue
+        if s.model_number != MX28_MODEL_NUMBER:
+            continue                                    # its registers are not an MX-28's: nothing more to read
         if s.errors:
-            out.append(Fault(", ".join(s.errors), s.joint, s.id, "status error bits"))
+            out.append(errors_fault(s.id, s.joint, s.errors))
         if s.temperature_c >= HOT_START_C:
             out.append(Fault("hot", s.joint, s.id, f"{s.temperature_c} °C, at or above {HOT_START_C} °C"))
         if s.voltage_v < low:
@@ -127,7 +190,9 @@ def out_of_range(joint: str, position_rad: float, spec: Spec) -> str:
 
 
 def preflight(board: Any, servos: Sequence[Any], spec: Spec) -> None:
-    """Refuse (:class:`Refused`, exit 1) a motion the robot is not fit to start, naming every problem."""
+    """Refuse a motion the robot is not fit to start: a device of another model (:class:`WrongModel`, exit 2), else
+    any problem (:class:`Refused`, exit 1), naming the first and how many more."""
+    refuse_other_models(board, servos)
     problems = preflight_problems(board, servos, spec)
     if problems:
         more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""

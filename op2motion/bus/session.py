@@ -1,7 +1,8 @@
 """One session with the robot: the port opened (:func:`~.port.open_port`; ``lockstep[:...]``: an emulated OP2 in
 this process, :mod:`.emulator.lockstep`), the board found, the link measured and the servos powered
-(:meth:`~.robot.OP2.connect`), the whole robot read (:class:`RobotStatus`: with the link and each servo's return
-delay), and before a motion the preflight, the tick's read plan from the link's budget (a link too slow for the
+(:meth:`~.robot.OP2.connect`: a board of another model is refused there), the whole robot read (:class:`RobotStatus`:
+with the link and each servo's return delay; a servo of another model is refused, naming it: exit 2, nothing
+written to it), and before a motion the preflight, the tick's read plan from the link's budget (a link too slow for the
 8 ms loop is refused, naming the latency timer: exit 2, nothing moved) and the torque switched on without a jump
 (:meth:`Session.ready_for_motion`)."""
 
@@ -17,7 +18,16 @@ from op2motion.bus.client import Bus
 from op2motion.bus.link import MIN_SERVOS_PER_TICK, LinkCheck, ReadPlan, read_plan, too_slow, tried_plan
 from op2motion.bus.port import PortLike, open_port
 from op2motion.bus.robot import OP2, BoardState, ServoState
-from op2motion.bus.safety import Fault, Refused, mechanical_bounds, out_of_range, preflight, preflight_problems
+from op2motion.bus.safety import (
+    Fault,
+    Refused,
+    mechanical_bounds,
+    out_of_range,
+    preflight,
+    preflight_problems,
+    refuse_other_models,
+)
+from op2motion.bus.tables import CM730_ID, model_name
 from op2motion.errors import CheckFailed
 from op2motion.robot.spec import Spec
 
@@ -73,7 +83,8 @@ class RobotStatus:
     def lines(self) -> list[str]:
         """For people: the board, one line per servo, the problems."""
         b = self.board
-        out = [f"CM-730 (ID 200): model {b.model_number:#06x}, firmware {b.firmware}, servos' power "
+        out = [f"{model_name(b.model_number) or 'sub-controller'} (ID {CM730_ID}): model {b.model_number:#06x}, "
+               f"firmware {b.firmware}, servos' power "
                f"{'on' if b.power else 'off'}{' (switched on now)' if self.powered_now else ''}, supply "
                f"{b.voltage_v:.1f} V, return delay {b.return_delay * 2} µs",
                f"  IMU: gyro {', '.join(f'{v:+.3f}' for v in b.gyro_rad_s)} rad/s, accelerometer "
@@ -84,7 +95,7 @@ class RobotStatus:
             if not s.answers:
                 out.append(f"  {s.id:2d} {s.joint:12s} NOT ANSWERING")
                 continue
-            model = "MX-28" if s.model_number == 29 else f"model {s.model_number}"
+            model = model_name(s.model_number) or f"model {s.model_number}"
             out.append(f"  {s.id:2d} {s.joint:12s} {model} fw {s.firmware}: {math.degrees(s.position_rad):+7.2f}°, "
                        f"{s.temperature_c:3d} °C, {s.voltage_v:4.1f} V, torque {'on ' if s.torque_on else 'off'}, "
                        f"return delay {s.return_delay * 2} µs{' (SLOW)' if s.return_delay and self.warnings else ''}"
@@ -142,11 +153,13 @@ class Session:
             self.emulated.close()
 
     def status(self) -> RobotStatus:
-        """The board and every servo read in full, with the problems."""
+        """The board and every servo read in full, with the problems; a device of another model is refused
+        (:class:`~.safety.WrongModel`, exit 2) before anything is written to it."""
         board = self.robot.board()
         if board is None:
             raise CheckFailed("the sub-controller (ID 200) stopped answering")
         servos = tuple(self.robot.servos())
+        refuse_other_models(board, servos)
         return RobotStatus(board, servos, tuple(preflight_problems(board, servos, self.spec)), self.powered_now,
                            self.robot.link, read_plan(self.robot.bus.link, self.robot.ids))
 

@@ -1,6 +1,6 @@
 """The control tables of the OP2's devices as data: the MX-28 (Protocol 1.0, model number 29) and the CM-730
 sub-controller (ID 200), register by register: address, size [bytes], access, default, unit; and the values a write
-may give each writable register.
+may give each writable register. The model numbers op2motion accepts, and names for the ones it does not.
 
 Sources: ROBOTIS e-manual, MX-28 (Protocol 1.0) control table (emanual.robotis.com/docs/en/dxl/mx/mx-28; repository
 ROBOTIS-GIT/emanual); ROBOTIS DARwIn-OP / OP2 framework ``Framework/include/CM730.h`` and ``MX28.h`` (forks
@@ -21,6 +21,15 @@ sets both).
   (range error), the LED panel takes 0..7, the head and eye LEDs 15-bit colours, the power switch 0..1. Power-on LED
   colours from its ``ProcessInit`` (head green, eye blue).
 
+Model numbers (register 0, what a device reports it is): the MX-28 29; the sub-controller of a DARwIn-OP, the CM-730,
+0x7300 (its firmware above); the OP2's CM-740 **0x7400**: ROBOTIS e-manual, ROBOTIS OP2, "Sub Controller (CM-740)",
+EEPROM area: Model Number (L) 0 (0x00), Model Number (H) 116 (0x74) (emanual.robotis.com/docs/en/platform/op2/
+getting_started; repository ROBOTIS-GIT/emanual ``docs/en/platform/op2/getting_started.md``, commit 160f8a5). The
+same page gives the CM-740's control table (0..80) as the CM-730's, so one table serves both boards. Other
+Protocol 1.0 servos, only to name what a wrong one reports: the numbers of ROBOTIS's DynamixelWorkbench model list
+(``dynamixel_item.h``: AX-12 12, AX-18 18, AX-12W 300, RX-10 10, RX-24F 24, RX-28 28, RX-64 64, EX-106+ 107,
+MX-12W 360, MX-64 310, MX-106 320).
+
 Speed and load registers carry a magnitude in bits 0-9 and the direction in bit 10 (set: clockwise, i.e. the
 servo angle decreasing); :func:`signed` and :func:`magnitude` convert.
 """
@@ -32,6 +41,12 @@ from dataclasses import dataclass, field
 
 MX28_MODEL_NUMBER = 29
 CM730_MODEL_NUMBER = 0x7300        # what the CM-730 reports at address 0 (Bold Hearts' CM730 snapshot, 0x7300)
+CM740_MODEL_NUMBER = 0x7400        # ... the OP2's CM-740 (e-manual, OP2, CM-740 EEPROM area: 0x00, 0x74)
+#: The sub-controllers op2motion drives an OP2 through, by the model number they report.
+BOARD_MODELS = {CM730_MODEL_NUMBER: "CM-730", CM740_MODEL_NUMBER: "CM-740"}
+#: Other Protocol 1.0 servos by model number (module docstring): named when one stands where an MX-28 should.
+OTHER_SERVO_MODELS = {12: "AX-12", 18: "AX-18", 300: "AX-12W", 10: "RX-10", 24: "RX-24F", 28: "RX-28", 64: "RX-64",
+                      107: "EX-106+", 360: "MX-12W", 310: "MX-64", 320: "MX-106"}
 CM730_ID = 200                     # the sub-controller's Dynamixel ID (CM730.h ID_CM)
 BAUD_NUMBER_1MBPS = 1              # baud = 2 Mbps / (n + 1)
 SPEED_RPM_PER_UNIT = 0.114         # MX-28 moving / present speed unit [rpm]
@@ -219,6 +234,14 @@ SYNC_SPAN = (MX28["d_gain"].address, 6)
 #: A servo's status block read once per rotation: present position to present temperature (36..43).
 SERVO_STATE_SPAN = (MX28["present_position"].address,
                     MX28["present_temperature"].end - MX28["present_position"].address)
+
+
+def model_name(number: int) -> str | None:
+    """The device a model number belongs to (``MX-28``, ``CM-740``, ``AX-12``, ...); None for one op2motion does
+    not know."""
+    if number == MX28_MODEL_NUMBER:
+        return MX28.device
+    return BOARD_MODELS.get(number) or OTHER_SERVO_MODELS.get(number)
 
 
 def signed(value: int) -> int:

@@ -32,7 +32,7 @@ def register(sub: Any) -> None:
     inner = top.add_subparsers(dest="robot_command", metavar="ACTION", required=True, parser_class=Parser,
                                help="status, setup, read, play, walk, getup or emulate")
     p = add_command(inner, "status", cmd_status, "the sub-controller, every servo and the IMU; exit 1 if a servo "
-                                                 "is missing or reports an error")
+                                                 "is missing or reports an error, 2 if a device is of another model")
     _port(p)
     _setup_args(add_command(inner, "setup", cmd_setup, "set every servo's Return Delay Time (EEPROM) so the 8 ms "
                                                        "loop can read them all; written only where it differs"))
@@ -96,6 +96,7 @@ def _port(p: argparse.ArgumentParser) -> None:
 
 def _emulate_args(p: argparse.ArgumentParser) -> None:
     from op2motion.bus.emulator.body import STARTS
+    from op2motion.bus.emulator.faults import BOARDS
     from op2motion.bus.emulator.timing import DEFAULT_LATENCY_TIMER_MS, KERNEL_LATENCY_TIMER_MS
     from op2motion.physics import ENGINES
 
@@ -117,6 +118,14 @@ def _emulate_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--push", nargs="+", default=[], metavar="N@S",
                    help="push the robot forward with N newtons for 0.1 s, S seconds into the motion (e.g. 30@4)")
     p.add_argument("--seed", type=whole(0, 2 ** 31 - 1), default=0, help="seed of the lost and corrupted replies")
+    p.add_argument("--board", choices=tuple(BOARDS), default=None,
+                   help="the sub-controller it plays: cm730 (DARwIn-OP's, the default) or cm740 (the OP2's): the "
+                        "model number it reports")
+    p.add_argument("--model", nargs="+", default=[], metavar="ID:NUMBER",
+                   help="a device that reports another model number (e.g. 14:12, an AX-12 as r_knee; 200:... the "
+                        "board)")
+    p.add_argument("--errors", nargs="+", default=[], metavar="ID:BITS",
+                   help="a device whose every reply carries these status error bits (e.g. 14:all, 14:0x24)")
     p.add_argument("--wire", choices=("real", "instant"), default="real",
                    help="real (default): the bus's time as a real CM-730 behind its FTDI adapter keeps it (1 Mbps "
                         "bytes, each servo's return delay, 62-byte USB packets, the latency timer); instant: as fast "
@@ -295,14 +304,16 @@ def cmd_getup(args: argparse.Namespace, spec: Spec) -> int:
 
 def cmd_emulate(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot emulate``."""
-    from op2motion.bus.emulator.faults import Faults, parse_timed
+    from op2motion.bus.emulator.faults import ALL_ERRORS, Faults, parse_pair, parse_timed, with_board
     from op2motion.bus.emulator.server import Emulator
     from op2motion.bus.emulator.timing import INSTANT, WireTiming
     from op2motion.tasks.robot import emulated
 
     faults = Faults(set(args.missing), [parse_timed(u, "unplug")[:2] for u in args.unplug], args.lose, args.corrupt,
                     [parse_timed(o, "overheat", 85.0) for o in args.overheat], args.supply, args.seed,
-                    [(float(n), t) for n, t, _ in (parse_timed(p, "push", first="N") for p in args.push)])
+                    [(float(n), t) for n, t, _ in (parse_timed(p, "push", first="N") for p in args.push)],
+                    with_board(dict(parse_pair(m, "model") for m in args.model), args.board, "board"),
+                    dict(parse_pair(e, "errors", ALL_ERRORS) for e in args.errors))
     timing = INSTANT if args.wire == "instant" else WireTiming(latency_timer_s=args.latency_timer_ms / 1000.0)
     emulator = Emulator(spec, args.engine, args.start, faults, args.truth, timing, args.return_delay, args.cold)
     interrupted = False

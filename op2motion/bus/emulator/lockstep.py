@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from op2motion.bus.clock import Clock, LockstepClock
-from op2motion.bus.emulator.faults import Faults, parse_timed
+from op2motion.bus.emulator.faults import ALL_ERRORS, Faults, parse_pair, parse_timed, with_board
 from op2motion.bus.emulator.timing import INSTANT, KERNEL_LATENCY_TIMER_MS, WireTiming
 from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
@@ -91,7 +91,8 @@ class LockstepPort:
 @dataclass(frozen=True)
 class LockstepSetup:
     """What a ``lockstep:`` port text asks for: the engine, the start, the wire, the servos' return delay, the
-    faults and the pace (simulated seconds a wall second at most; None: as fast as it computes)."""
+    faults (the board it plays among them: the model number of ID 200), the pace (simulated seconds a wall second
+    at most; None: as fast as it computes) and whether it starts cold."""
 
     engine: EngineName = "mujoco"
     start: str = "standing"
@@ -111,8 +112,11 @@ def parse_lockstep(text: str) -> LockstepSetup:
     """``lockstep[:key=value,...]`` with keys ``engine`` (mujoco, pybullet), ``start`` (standing, lying_front, ...),
     ``wire`` (real, instant), ``latency-timer-ms`` (1..255), ``return-delay`` (0..254, 2 µs units), ``lose``,
     ``corrupt`` (shares), ``seed``, ``missing`` (IDs joined by +), ``unplug`` / ``overheat`` / ``push``
-    (``ID@S[:C]`` joined by +), ``horn`` (``ID:TICKS`` joined by +), ``supply`` [V], ``cold`` (1: just switched on, the servos unpowered), ``pace``
-    (simulated seconds a wall second at most, e.g. 1 to steer a walk by keys; default as fast as it computes)."""
+    (``ID@S[:C]`` joined by +), ``supply`` [V], ``cold`` (1: just switched on, the servos unpowered), ``pace``
+    (simulated seconds a wall second at most, e.g. 1 to steer a walk by keys; default as fast as it computes),
+    ``horn`` (``ID:TICKS`` joined by +: a servo's horn mounted off), ``board`` (cm730, cm740), ``model``
+    (``ID:NUMBER`` joined by +: devices reporting another model, e.g. 14:12)
+    and ``errors`` (``ID:BITS`` joined by +: devices reporting these error bits, e.g. 14:all or 14:0x24)."""
     from op2motion.bus.emulator.body import STARTS
     from op2motion.physics import ENGINES
 
@@ -124,7 +128,7 @@ def parse_lockstep(text: str) -> LockstepSetup:
             raise InputError(f"expected key=value items after 'lockstep:', got {item!r}", PARAM)
         fields[key.strip()] = value.strip()
     known = {"engine", "start", "wire", "latency-timer-ms", "return-delay", "lose", "corrupt", "seed", "missing",
-             "unplug", "overheat", "push", "supply", "pace", "cold", "horn"}
+             "unplug", "overheat", "push", "supply", "pace", "cold", "board", "model", "errors", "horn"}
     unknown = sorted(set(fields) - known)
     if unknown:
         raise InputError(f"expected lockstep keys among {', '.join(sorted(known))}, got {unknown[0]!r}", PARAM)
@@ -186,7 +190,9 @@ def _faults(fields: dict[str, str]) -> Faults:
     return Faults(missing, [parse_timed(u, PARAM)[:2] for u in items("unplug")], _number(fields, "lose", 0.0),
                   _number(fields, "corrupt", 0.0), [parse_timed(o, PARAM, 85.0) for o in items("overheat")],
                   None if supply < 0 else supply, seed or 0,
-                  [(float(n), t) for n, t, _ in (parse_timed(p, PARAM, first="N") for p in items("push"))], horn)
+                  [(float(n), t) for n, t, _ in (parse_timed(p, PARAM, first="N") for p in items("push"))],
+                  with_board(dict(parse_pair(m, PARAM) for m in items("model")), fields.get("board"), PARAM),
+                  dict(parse_pair(e, PARAM, ALL_ERRORS) for e in items("errors")), horn)
 
 
 def lockstep_robot(text: str, spec: Spec) -> LockstepPort:

@@ -53,7 +53,8 @@ class Emulator:
     """An emulated OP2 (see the module docstring): ``timing`` its wire (default the real one, 1 ms latency timer),
     ``return_delay`` every servo's Return Delay Time register (default 0, as the OP2 ships), ``cold``: the robot just
     switched on (the servos unpowered until a program sets the board's power register; default: powered and holding
-    the start pose, as the stock framework leaves them)."""
+    the start pose, as the stock framework leaves them). The board it plays (a CM-730, or a CM-740) is the model
+    number the faults give ID 200 (:func:`.faults.with_board`)."""
 
     def __init__(self, spec: Spec, engine: EngineName = "mujoco", start: str = "standing", faults: Faults | None = None,
                  truth_path: str | Path | None = None, timing: WireTiming | None = None,

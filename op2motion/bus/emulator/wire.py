@@ -23,7 +23,8 @@ Sources: the CM-730 firmware ``CM_DXL_COM.c`` (ROBOTIS 2010, model 0x7300, firmw
   reset commented out); a servo refuses it with the instruction error (the e-manual's factory reset would renumber it
   to ID 1 at 57600 baud, off this bus: not emulated); other instructions: the instruction error.
 * SYNC_WRITE writes each listed device; the first one marks the motion's start (fault times count from it).
-* replies are lost or have a byte changed at the faults' rates (seeded).
+* replies are lost or have a byte changed at the faults' rates (seeded); a device given error bits (``errors``)
+  reports them in every status packet, one given another model (``models``) reports it at address 0.
 """
 
 from __future__ import annotations
@@ -95,7 +96,8 @@ class FirmwareParser:
 
 class Wire:
     """The devices on the emulated bus (see the module docstring). ``now`` gives the simulated time [s],
-    ``present_ticks`` the joints' positions [tick] (a servo powering up takes its goal from them)."""
+    ``present_ticks`` the joints' positions [tick] (a servo powering up takes its goal from them). The board is a
+    CM-730 unless the faults give ID 200 another model (the CM-740's: :func:`.faults.with_board`)."""
 
     def __init__(self, spec: Spec, faults: Faults, now: Callable[[], float],
                  present_ticks: Callable[[], list[int]]):
@@ -105,6 +107,9 @@ class Wire:
         self.servos = [Servo(j.id) for j in spec.joints]
         self.by_id: dict[int, Any] = {s.id: s for s in self.servos}
         self.by_id[CM730_ID] = self.board
+        for device, model in faults.models.items():            # kept over power cycles: address 0 is EEPROM
+            if device in self.by_id:
+                self.by_id[device].set("model_number", model)
         self.parser = FirmwareParser()
         self.powered_at: float | None = None
         self.motion_t0: float | None = None
@@ -162,7 +167,7 @@ class Wire:
         bulk read's replies go out back to back)."""
         if (device.return_level if level is None else level) < need:
             return
-        packet = bytearray(p.status(device.id, error, params))
+        packet = bytearray(p.status(device.id, error | self.faults.errors.get(device.id, 0), params))
         if self.faults.lose and self.rng.random() < self.faults.lose:
             self.stats["lost"] += 1
             return
