@@ -10,12 +10,13 @@ own mode); the umask itself is never changed.
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
 import secrets
 import stat
 import threading
 from pathlib import Path
-from typing import Mapping, Type
+from typing import Iterator, Mapping, Type
 
 from op2motion.errors import InputError, Op2MotionError, OutputError
 from op2motion.processes.interrupts import signals_held
@@ -25,7 +26,7 @@ MAX_INPUT_BYTES = 16 * 2 ** 20    # every file op2motion reads is far smaller (a
 
 def _file_kind(mode: int) -> str:
     """What a non-regular file is, in words (for messages)."""
-    for test, kind in ((stat.S_ISDIR, "directory"), (stat.S_ISFIFO, "named pipe"), (stat.S_ISSOCK, "socket"),
+    for test, kind in ((stat.S_ISDIR, "directory"), (stat.S_ISFIFO, "named pipe (FIFO)"), (stat.S_ISSOCK, "socket"),
                        (stat.S_ISCHR, "character device"), (stat.S_ISBLK, "block device")):
         if test(mode):
             return kind
@@ -186,6 +187,45 @@ def write_atomic(path: str | Path, data: bytes | str) -> Path:
     finally:
         _done_with(tmp)
     return target
+
+
+@contextlib.contextmanager
+def new_file_beside(target: str | Path, param: str = "output") -> Iterator[Path]:
+    """A new file built in place by another library (a database), moved into place whole: yields a new, empty temp
+    file beside ``target`` (its folder made if missing); when the block ends without an error the temp file becomes
+    ``target``, which must still not exist (a file another run made meanwhile is never replaced:
+    :class:`OutputError`); otherwise it is removed. Recorded like :func:`write_atomic`'s (removed on an interrupt).
+    """
+    target = Path(target)
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = _temp_beside(target)
+        os.close(fd)
+    except OSError as exc:
+        raise OutputError(f"cannot write {target}: {exc.strerror or exc}", param) from None
+    try:
+        yield tmp
+        _link_new(tmp, target, param)
+    finally:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)               # moved: only the temp name goes; the target keeps the file
+        _done_with(tmp)
+
+
+def _link_new(tmp: Path, target: Path, param: str) -> None:
+    """``tmp`` also named ``target``, which must not exist: a hard link (atomic and never replacing), or a rename
+    where the file system has no hard links."""
+    try:
+        os.link(tmp, target)
+    except FileExistsError:
+        raise OutputError(f"expected no file there yet, but another run made it meanwhile: {target}", param) from None
+    except OSError as exc:
+        if target.exists() or exc.errno not in (errno.EPERM, errno.EOPNOTSUPP, errno.ENOTSUP, errno.EMLINK):
+            raise OutputError(f"cannot write {target}: {exc.strerror or exc}", param) from None
+        try:
+            os.rename(tmp, target)
+        except OSError as again:
+            raise OutputError(f"cannot write {target}: {again.strerror or again}", param) from None
 
 
 class OutputSet:

@@ -10,7 +10,7 @@ import time
 import pytest
 
 from op2motion.errors import OutputError
-from op2motion.fileio import OutputSet, check_output_path, remove_temps, write_atomic
+from op2motion.fileio import OutputSet, check_output_path, new_file_beside, remove_temps, write_atomic
 
 ROUNDS = 30
 SLOW_RENAME_S = 0.002
@@ -151,3 +151,30 @@ def test_a_held_signal_reaches_the_handler_there_before_once_the_moment_ends():
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+def test_a_file_built_beside_its_place_arrives_whole_or_not_at_all(tmp_path, monkeypatch):
+    import errno
+
+    target = tmp_path / "new" / "s.db"
+    with new_file_beside(target) as tmp:
+        assert tmp.parent == target.parent and tmp.exists() and not target.exists()
+        tmp.write_bytes(b"built")
+    assert target.read_bytes() == b"built" and [p.name for p in target.parent.iterdir()] == ["s.db"]
+    with pytest.raises(OutputError, match="another run made it meanwhile"):      # never replaced
+        with new_file_beside(target) as tmp:
+            tmp.write_bytes(b"second")
+    assert target.read_bytes() == b"built" and [p.name for p in target.parent.iterdir()] == ["s.db"]
+    with pytest.raises(RuntimeError):                                           # a failed build leaves nothing
+        with new_file_beside(tmp_path / "other.db") as tmp:
+            raise RuntimeError("build failed")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["new"]
+
+    def no_links(src, dst):
+        raise OSError(errno.EPERM, "Operation not permitted")
+
+    monkeypatch.setattr(os, "link", no_links)                                   # a file system without hard links
+    with new_file_beside(tmp_path / "renamed.db") as tmp:
+        tmp.write_bytes(b"moved")
+    assert (tmp_path / "renamed.db").read_bytes() == b"moved"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["new", "renamed.db"]

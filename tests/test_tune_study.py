@@ -102,7 +102,7 @@ def test_a_study_of_other_parameters_is_refused(tmp_path):
     study = open_study(tmp_path / "s.db", "toy", SPACE, SEED)
     run_study(study, SPACE, landscape, (), 2, InThread())
     other = SearchSpace((Param("step_s", 0.2, 0.5, "s"),))
-    with pytest.raises(InputError, match="another --study"):
+    with pytest.raises(InputError, match="use another study file"):
         open_study(tmp_path / "s.db", "toy", other, SEED)
     (tmp_path / "junk.db").write_text("not sqlite", encoding="utf-8")
     with pytest.raises(InputError, match="study"):

@@ -9,7 +9,6 @@ from pathlib import Path
 from typing import Any
 
 from op2motion.commands.common import add_command, output_path, png_path, progress, whole
-from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
 
 MAX_WORKERS = 64
@@ -68,8 +67,6 @@ def _tune(args: argparse.Namespace, task: Any, space: Any) -> int:
     from op2motion.fileio import OutputSet
     from op2motion.tasks.tune import TuneRequest, tune
 
-    if args.address is not None and args.executor != "ray":
-        raise InputError("expected --address only with --executor ray", "address")
     workers = args.workers or os.cpu_count() or 1
     space = space.narrowed(args.param, args.only)
     outputs = OutputSet({"out": args.out, "out_json": _beside(args.out, ".json"),

@@ -43,17 +43,44 @@ class TuneRequest:
     plot: str | None = None
 
 
+def check_request(request: TuneRequest) -> None:
+    """Everything the run needs, checked before any file is made or opened for writing, so that a run refused at
+    its start leaves the folder as it was: the outputs (each writable, none of them the study file), the budget,
+    the executor (:func:`~op2motion.tune.executor.check_executor`: the address a running Ray head, Ray installed)
+    and the study file (:func:`~op2motion.tune.study.check_study`: absent, or an op2motion study that this task,
+    spec and parameter set may resume; looked at read-only)."""
+    from op2motion.errors import OutputError, ref
+    from op2motion.fileio import check_output_path
+    from op2motion.tune.executor import check_executor
+    from op2motion.tune.study import check_budget, check_study
+    from op2motion.tune.trial import identity
+
+    study = Path(request.study_path).resolve()
+    outputs = {"out": (request.out, ref("out")), "out_json": (request.out_json, f"the JSON beside {ref('out')}"),
+               "plot": (request.plot, ref("plot"))}
+    for role, (path, what) in outputs.items():
+        if path is not None and check_output_path(path, role).resolve() == study:
+            raise OutputError(f"expected a study file other than an output ({what}), got {request.study_path}",
+                              "study")
+    check_budget(request.trials)
+    check_study(request.study_path, request.study_name, request.space, identity(request.task))
+    check_executor(request.executor, request.address)
+
+
 def _search(request: TuneRequest, progress: ProgressFor) -> TuneResult:
-    """Open (or resume) the study, search, verify."""
+    """Check the request, start the executor, then open (or make, or resume) the study, search, verify."""
     from op2motion.tune.executor import trials_on
     from op2motion.tune.run import Effort, search_and_verify
-    from op2motion.tune.study import check_budget, open_study
+    from op2motion.tune.study import open_study
+    from op2motion.tune.trial import identity
 
-    study = open_study(request.study_path, request.study_name, request.space, request.seed)
-    with trials_on(request.executor, request.workers, request.address) as trials, \
-            progress("trials", "trial") as on_trial, progress("verify", "body") as on_run:
-        result = search_and_verify(study, request.space, request.task,
-                                   Effort(check_budget(request.trials), request.verify), trials, on_trial, on_run)
+    check_request(request)
+    with trials_on(request.executor, request.workers, request.address) as trials:   # Ray refused: no study made
+        study = open_study(request.study_path, request.study_name, request.space, request.seed,
+                           identity(request.task))
+        with progress("trials", "trial") as on_trial, progress("verify", "body") as on_run:
+            result = search_and_verify(study, request.space, request.task, Effort(request.trials, request.verify),
+                                       trials, on_trial, on_run)
     result.executor = request.executor
     return result
 

@@ -103,6 +103,23 @@ class RayTrials:
                 self._ray.cancel(ref, force=True)
 
 
+def check_executor(kind: ExecutorName, address: str | None) -> None:
+    """Before anything is written: an ``address`` only for Ray; for Ray, the address a running Ray head
+    (:func:`~op2motion.library.cluster.check_address`: a closed port, a host that does not answer or a server that
+    is not Ray is bad input; checked first, it needs no Ray) and Ray installed."""
+    from op2motion.errors import InputError, ref
+
+    if kind != "ray":
+        if address is not None:
+            raise InputError(f"expected {ref('address')} only with {ref('executor')} ray", "address")
+        return
+    from op2motion.library.cluster import check_address, check_ray
+
+    if address is not None:
+        check_address(address)
+    check_ray(None)
+
+
 @contextlib.contextmanager
 def trials_on(kind: ExecutorName, workers: int, address: str | None = None) -> Iterator[ProcessTrials | RayTrials]:
     """Trials on ``kind`` ``process`` (a pool of ``workers``) or ``ray`` (``address``: a cluster; None: Ray on this

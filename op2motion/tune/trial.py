@@ -18,8 +18,10 @@ within 5° on the nominal one (:func:`stock_problem`; within :data:`STOCK_OTHER_
 
 from __future__ import annotations
 
+import hashlib
+import json
 import math
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, replace
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -75,6 +77,23 @@ def spec_of(path: str | None) -> Any:
     from op2motion.robot.specfile import default_spec, load_spec
 
     return default_spec() if path is None else load_spec(path)
+
+
+def identity(task: Task) -> dict[str, Any]:
+    """What a study of ``task`` is for, recorded in its mark and compared when it is resumed
+    (:func:`~op2motion.tune.study.study_mark`): the spec's fingerprint (SHA-256 of its file) and name, the task (kind
+    and direction), its runs (steps, bodies, engines, pushes) and the base settings' fingerprint (SHA-256 of their
+    values, the preset's name aside) and name."""
+    spec = spec_of(task.spec_path)
+    values = {k: v for k, v in asdict(task.base).items() if k != "name"}
+    base = hashlib.sha256(json.dumps(values, sort_keys=True, default=repr).encode("utf-8")).hexdigest()
+    bodies = ", ".join(task.members) if task.members is not None else "the search's bodies"
+    pushes = f", {task.push_n:g} N side pushes" if task.push_n else ""
+    settings_from = f"preset {task.base.name}" if task.kind == "walk" else "the stock Walking config"
+    return {"spec": {"sha256": spec.sha256, "name": task.spec_path or "the shipped specs/op2.toml"},
+            "task": f"{task.kind} {task.direction}",
+            "runs": f"{task.steps} steps on {bodies} in {' and '.join(task.engines)}{pushes}",
+            "base": {"sha256": base, "name": settings_from}}
 
 
 def members_of(task: Task) -> list[Any]:
