@@ -21,7 +21,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from op2motion.bus.loop import LoopReport, Tick, run_controller
-from op2motion.bus.port import PortLike
+from op2motion.bus.port import RobotPort
 from op2motion.bus.safety import clip_goals, mechanical_bounds
 from op2motion.bus.session import Session
 from op2motion.errors import InputError
@@ -72,7 +72,7 @@ class FollowController:
 class Follower:
     """The robot on ``port`` following a target pose (see the module docstring)."""
 
-    def __init__(self, port: str | PortLike, spec: Spec, speed: float = FOLLOW_SPEED_RAD_S):
+    def __init__(self, port: RobotPort, spec: Spec, speed: float = FOLLOW_SPEED_RAD_S):
         self.port, self.spec, self.speed = port, spec, speed
         self.stop = threading.Event()
         self.session: Session | None = None

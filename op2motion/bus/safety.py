@@ -9,6 +9,8 @@ During a motion (:class:`Watch`, every 8 ms tick), a fault stops it:
 * a servo that misses :data:`BLIND_TICKS` reads in a row (40 ms blind; each missed read holds its last value);
 * a status error bit of :data:`STOP_ERRORS` (overheating, overload, input voltage), or a temperature of
   :data:`HOT_STOP_C` or more (each servo's full state is read every 20 ticks, in turn);
+* the serial port failing (:class:`~op2motion.errors.PortFailed`: the USB cable pulled, a bridge that ended): the
+  run ends at once (:data:`PORT_FAILED`; nothing reaches the servos any more: they hold the last goals they got);
 * a fall: the torso tilted beyond :data:`FALL_TILT_RAD` (the accelerometer's gravity, low-passed over
   :data:`TILT_TAU_S`), or the framework's own test (the fore-aft count beyond FALLEN_F/B_LIMIT over 30 ticks);
   not for a controller that deals with falls itself (``handles_falls``: a supervisor lets the robot land with the
@@ -29,7 +31,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from op2motion.errors import CheckFailed
+from op2motion.errors import CheckFailed, PortFailed
 from op2motion.robot.imu import ARM_TILT_RAD, FALL_TILT_RAD, FallWatch, attitude
 from op2motion.robot.joints import joint_range
 from op2motion.robot.spec import ImuSpec, Spec
@@ -41,6 +43,7 @@ STOP_ERRORS = ("overheating", "overload", "input voltage")
 TILT_TAU_S = 0.1                   # low-pass of the accelerometer before its tilt is taken (steps' impacts)
 FALL_TORQUE_LIMIT = 300            # every servo's torque limit while falling (of 1023)
 FALL_SETTLE_S = 1.0                # after a fall is seen, this long at the low limit before the goals relax
+PORT_FAILED = "port failed"        # the fault of a run whose serial port failed
 HOLD = "hold"                      # the stop policy: hold the goals (a walk: on both feet)
 POLICIES = (HOLD,)
 
@@ -56,7 +59,9 @@ class Fault:
     detail: str
 
     def describe(self) -> str:
-        """``r_knee (ID 13): overheating (84 °C)``."""
+        """``r_knee (ID 13): overheating (84 °C)``; ``the serial port failed: writing to /dev/ttyUSB0 failed: ...``."""
+        if self.kind == PORT_FAILED:
+            return f"the serial port failed: {self.detail}"
         who = f"{self.joint} (ID {self.id})" if self.joint else ("the sub-controller (ID 200)" if self.id else
                                                                 "the robot")
         return f"{who}: {self.kind}" + (f" ({self.detail})" if self.detail else "")
@@ -65,6 +70,11 @@ class Fault:
         """JSON-ready."""
         return {"kind": self.kind, "joint": self.joint, "id": self.id, "detail": self.detail,
                 "text": self.describe()}
+
+
+def port_fault(error: PortFailed) -> Fault:
+    """The fault of a run that ``error`` ended (its message names the port)."""
+    return Fault(PORT_FAILED, None, None, error.message)
 
 
 class Refused(CheckFailed):
