@@ -1,8 +1,9 @@
 """The ``op2motion`` command line: thin subcommands, each calling library functions.
 
 Every subcommand takes ``--json`` (the result as JSON on stdout, nothing else there). Errors are one line on
-stderr, naming the flag the user typed; exit code 2 for bad input, 1 for a check that ran and failed, 0 for
-success, 130 when interrupted. Angles on the command line are degrees, lengths metres.
+stderr, naming the flag the user typed (a newline or another control character a message quotes is printed escaped:
+:func:`~op2motion.errors.one_line`); exit code 2 for bad input, 1 for a check that ran and failed, 0 for success, 130
+when interrupted. Angles on the command line are degrees, lengths metres.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import os
 import sys
 from typing import Sequence
 
-from op2motion.errors import Interrupted, Op2MotionError
+from op2motion.errors import Interrupted, Op2MotionError, one_line
 from op2motion.robot.specfile import load_spec
 from op2motion.version import __version__
 
@@ -60,7 +61,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Op2MotionError as exc:
         name_of = parser.flag_of if parser is not None else (lambda p: p)  # type: ignore[attr-defined]
         kind = "interrupted" if isinstance(exc, Interrupted) else "error"
-        print(f"op2motion: {kind}: {exc.render(name_of)}", file=sys.stderr)
+        print(f"op2motion: {kind}: {one_line(exc.render(name_of))}", file=sys.stderr)
         return exc.exit_code
     except KeyboardInterrupt:
         print("op2motion: interrupted", file=sys.stderr)
@@ -93,8 +94,8 @@ def _internal_error(exc: Exception) -> int:
     """A bug, not bad input: one line (``OP2MOTION_DEBUG=1`` re-raises it for the traceback); exit 1."""
     if os.environ.get("OP2MOTION_DEBUG"):
         raise exc
-    print(f"op2motion: internal error: {type(exc).__name__}: {exc} (set OP2MOTION_DEBUG=1 for details)",
-          file=sys.stderr)
+    print(f"op2motion: internal error: {type(exc).__name__}: {one_line(str(exc))} (set OP2MOTION_DEBUG=1 for "
+          f"details)", file=sys.stderr)
     return 1
 
 

@@ -25,6 +25,18 @@ def ref(param: str) -> str:
     return "{param:" + param + "}"
 
 
+def shown(text: str) -> str:
+    """``text`` (a path, a name the user typed) as a message quotes it: as it is when it prints on one line, else
+    quoted with Python's escapes (``'/dev/tty\\nUSB0'``) so that the message stays one line and shows what came."""
+    return text if text.isprintable() and text == text.strip() else repr(text)
+
+
+def one_line(text: str) -> str:
+    """``text`` with every character that would break or hide a line (newline, carriage return, other controls,
+    Unicode line separators) escaped as Python writes it: what the command line prints is always one line."""
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in text)
+
+
 def render_refs(text: str, name_of: Callable[[str], str] = lambda p: p) -> str:
     """``text`` with each :func:`ref` shown through ``name_of``."""
     return _REF.sub(lambda m: name_of(m.group(1)), text)
@@ -77,6 +89,10 @@ class CheckFailed(Op2MotionError):
     """A check ran and its verdict is negative (unstable pose, unreachable target): exit code 1."""
 
     exit_code = 1
+
+
+class PortFailed(CheckFailed):
+    """The robot's serial port stopped working (unplugged, hung up, an I/O or terminal error, stuck): exit code 1."""
 
 
 class Interrupted(Op2MotionError):

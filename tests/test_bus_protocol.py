@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import math
 import os
-import subprocess
-import sys
 import threading
 import time
 import tty
@@ -254,16 +252,7 @@ def test_port_refuses_what_is_not_a_free_serial_device(tmp_path):
                 open_port(name)
         finally:
             first.close()
-        open_port(name).close()                                   # free again
-        holder = subprocess.Popen([sys.executable, "-c", f"import time; f = open({name!r}, 'rb'); time.sleep(30)"])
-        try:
-            while not any(os.path.realpath(f"/proc/{holder.pid}/fd/{fd}") == name
-                          for fd in os.listdir(f"/proc/{holder.pid}/fd")):
-                time.sleep(0.01)
-            open_port(name).close()          # an emulator may hold its pseudo-terminal's other side: not "busy"
-        finally:
-            holder.kill()
-            holder.wait()
+        open_port(name).close()                                   # free again (other holders: test_bus_port.py)
     finally:
         os.close(master)
         os.close(slave)

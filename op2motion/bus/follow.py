@@ -31,7 +31,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from op2motion.bus.loop import LoopReport, Tick, run_controller
-from op2motion.bus.port import PortLike
+from op2motion.bus.port import RobotPort
 from op2motion.bus.safety import after_fault, clip_goals, mechanical_bounds
 from op2motion.bus.session import Session
 from op2motion.errors import InputError, Op2MotionError
@@ -108,7 +108,7 @@ class Follower:
     """The robot on ``port`` holding, moving to and following poses (see the module docstring); ``on_event`` hears
     each change of state in words."""
 
-    def __init__(self, port: str | PortLike, spec: Spec, speed: float = FOLLOW_SPEED_RAD_S,
+    def __init__(self, port: RobotPort, spec: Spec, speed: float = FOLLOW_SPEED_RAD_S,
                  on_event: Event | None = None):
         self.port, self.spec, self.speed = port, spec, speed
         self.on_event: Event = on_event or (lambda text: None)

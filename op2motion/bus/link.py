@@ -24,7 +24,7 @@ from typing import Any, Iterable, Sequence
 from op2motion.bus.port import BAUD, sysfs_timer_path
 from op2motion.bus.protocol import MIN_PACKET_BYTES
 from op2motion.bus.tables import BOARD_SPAN, CM730_ID, MX28, SERVO_STATE_SPAN
-from op2motion.errors import InputError
+from op2motion.errors import InputError, shown
 
 BYTE_S = 10.0 / BAUD               # one byte on the wire: start, 8 data, stop bits [s]
 ASSUMED_TAIL_S = 0.017             # before the link is measured: the kernel's 16 ms latency timer, and 1 ms more
@@ -226,11 +226,11 @@ def too_slow(check: LinkCheck, board_s: float, port_path: str, servos: int = 0, 
            f"(at least {MIN_SERVOS_PER_TICK} needed) in {read_budget_s * 1000:.1f} ms")
     if return_delay > 0:
         return InputError(f"{why}; the servos' return delay is up to {return_delay} ({return_delay * 2} µs a reply): "
-                          f"set it to 0 with 'op2motion robot setup --port {port_path} --return-delay 0'; nothing "
-                          f"moved", PARAM)
+                          f"set it to 0 with 'op2motion robot setup --port {shown(port_path)} --return-delay 0'; "
+                          f"nothing moved", PARAM)
     timer = "at an unknown value" if check.latency_timer_ms is None else f"at {check.latency_timer_ms} ms"
     return InputError(
         f"{why} (a ping's round trip took up to {worst}; the sub-controller's read alone {board_s * 1000:.1f} ms); the "
         f"FTDI USB adapter's latency timer is {timer} (current kernels leave it at 16 ms): set it to 1 ms with "
-        f"'echo 1 | sudo tee {sysfs_timer_path(port_path)}' (to keep it, the udev rule in docs/robot.md); nothing "
-        f"moved", PARAM)
+        f"'echo 1 | sudo tee {shown(sysfs_timer_path(port_path))}' (to keep it, the udev rule in docs/robot.md); "
+        f"nothing moved", PARAM)

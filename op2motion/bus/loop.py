@@ -19,9 +19,11 @@ Every :data:`~op2motion.robot.framework.CONTROL_PERIOD_S`, on an absolute clock:
 All time is the port's clock (:mod:`.clock`): the wall on a real robot, simulated time in lockstep with an emulated
 one. The loop measures its period (tick start to tick start: p50, p99, max), counts late ticks and missed reads, and
 ends when the plan's duration is over (or the controller is done, when asked to end then), on a fault
-(:mod:`.safety`'s policy) or on a stop request (Ctrl-C: a controller that can stop itself, a steered walk, is told
+(:mod:`.safety`'s policy), on a stop request (Ctrl-C: a controller that can stop itself, a steered walk, is told
 to and ends done, within :data:`~.stopping.SOFT_STOP_MAX_S`; a planned walk first reaches its next double support,
-so it stops on both feet, at most a step later). A controller's ``torque_limits`` are written when they change.
+so it stops on both feet, at most a step later), or at once when the port fails
+(:class:`~op2motion.errors.PortFailed`: the fault ``port failed``, the report still returned with what the run did
+until then). A controller's ``torque_limits`` are written when they change.
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ import numpy as np
 
 from op2motion.bus import safety
 from op2motion.bus.link import READ_BUDGET_S, read_plan
-from op2motion.bus.port import PortLike
+from op2motion.bus.port import RobotPort
 from op2motion.bus.realtime import LOOP_PRIORITY, realtime, steady
 from op2motion.bus.robot import OP2, angle_of
 from op2motion.bus.stopping import Stops
@@ -48,7 +50,7 @@ from op2motion.bus.tables import (
     SYNC_SPAN,
     TORQUE_LIMIT_FULL,
 )
-from op2motion.errors import CheckFailed, InputError
+from op2motion.errors import CheckFailed, InputError, PortFailed
 from op2motion.physics import Controller
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.imu import decode
@@ -299,7 +301,7 @@ def jump(goals: Any, run: _Run) -> None:
                           f"run_on_robot), which moves the robot there first, checked in physics")
 
 
-def run_controller(controller: Controller, port: str | PortLike | OP2, spec: Spec | None = None, *,
+def run_controller(controller: Controller, port: RobotPort | OP2, spec: Spec | None = None, *,
                    duration_s: float | None = None, stop: threading.Event | None = None,
                    on_tick: Callable[[Tick], None] | None = None, watch: bool = True,
                    until_done: bool = False) -> LoopReport:
@@ -349,8 +351,12 @@ def _loop(run: _Run, duration: float, stop: threading.Event | None, on_tick: Cal
             periods.append(now - last)
             report.late_ticks += (now - last) > LATE_S
         last = now
-        run.answered = run.read(k, now)
-        t, row = _step(run, stops, k, now, stop)
+        try:
+            run.answered = run.read(k, now)
+            t, row = _step(run, stops, k, now, stop)
+        except PortFailed as exc:                       # nothing reaches the robot any more: end the run, report it
+            report.fault, report.ended = safety.port_fault(exc), "fault"
+            break
         if on_tick is not None:
             on_tick(Tick(k, t, row, run.positions.copy(), run.gyro.copy(), run.accel.copy(), run.goals.copy()))
         k += 1

@@ -33,7 +33,7 @@ from op2motion.bus.tables import (
     model_name,
     signed,
 )
-from op2motion.errors import CheckFailed, InputError
+from op2motion.errors import CheckFailed, InputError, shown
 from op2motion.robot.framework import DEFAULT_P_GAIN
 from op2motion.robot.imu import GYRO_SAMPLES, attitude, decode_span, gyro_centres, imu_of
 from op2motion.robot.joints import servo_to_ticks, ticks_to_servo
@@ -149,7 +149,7 @@ class OP2:
         """Find the board at ID 200 and (with ``power``) switch the servos' power on."""
         port = self.bus.port
         if self.bus.ping(CM730_ID) is None:
-            raise NoBoard(f"nothing answers at ID {CM730_ID} on {port.path} (expected the OP2's CM-730 "
+            raise NoBoard(f"nothing answers at ID {CM730_ID} on {shown(port.path)} (expected the OP2's CM-730 "
                           f"sub-controller: is this the robot's port, and is the robot switched on?)", "port")
         self.check_board_model()
         with realtime(LOOP_PRIORITY):                   # the loop's priority: the PC's load is not the link's

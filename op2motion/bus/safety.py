@@ -15,6 +15,8 @@ During a motion (:class:`Watch`, every 8 ms tick), a fault stops it:
 * a servo that misses :data:`BLIND_TICKS` reads in a row (40 ms blind; each missed read holds its last value);
 * a status error bit of :data:`STOP_ERRORS` (overheating, overload, input voltage), or a temperature of
   :data:`HOT_STOP_C` or more (each servo's full state is read every 20 ticks, in turn);
+* the serial port failing (:class:`~op2motion.errors.PortFailed`: the USB cable pulled, a bridge that ended): the
+  run ends at once (:data:`PORT_FAILED`; nothing reaches the servos any more: they hold the last goals they got);
 * a fall: the torso tilted beyond :data:`FALL_TILT_RAD` (the accelerometer's gravity, low-passed over
   :data:`TILT_TAU_S`), or the framework's own test (the fore-aft count beyond FALLEN_F/B_LIMIT over 30 ticks);
   not for a controller that deals with falls itself (``handles_falls``: a supervisor lets the robot land with the
@@ -36,7 +38,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from op2motion.bus.tables import BOARD_MODELS, CM730_ID, MX28_MODEL_NUMBER, model_name
-from op2motion.errors import CheckFailed, InputError
+from op2motion.errors import CheckFailed, InputError, PortFailed
 from op2motion.robot.imu import ARM_TILT_RAD, FALL_TILT_RAD, FallWatch, attitude
 from op2motion.robot.joints import joint_range
 from op2motion.robot.spec import ImuSpec, Spec
@@ -50,6 +52,7 @@ FALL_TORQUE_LIMIT = 300            # every servo's torque limit while falling (o
 FALL_SETTLE_S = 1.0                # after a fall is seen, this long at the low limit before the goals relax
 RANGE_SLACK_RAD = math.radians(1.0)   # a reading this far beyond a joint's mechanical range is held at the range's
                                       # end when the torque goes on (a tick or two of wear); further is refused
+PORT_FAILED = "port failed"        # the fault of a run whose serial port failed
 HOLD = "hold"                      # the stop policy: hold the goals (a walk: on both feet)
 POLICIES = (HOLD,)
 WRONG_MODEL = "wrong model"        # the kind of a fault for a device of another model
@@ -69,7 +72,9 @@ class Fault:
     reports: str = ""
 
     def describe(self) -> str:
-        """``r_knee (ID 13): overheating (84 °C)``; ``r_knee (ID 13) reports errors: overload, instruction``."""
+        """``r_knee (ID 13): overheating (84 °C)``; ``r_knee (ID 13) reports errors: overload, instruction``; ``the serial port failed: ...``."""
+        if self.kind == PORT_FAILED:
+            return f"the serial port failed: {self.detail}"
         who = f"{self.joint} (ID {self.id})" if self.joint else (f"the sub-controller (ID {self.id})" if self.id else
                                                                 "the robot")
         if self.reports:
@@ -90,6 +95,11 @@ def after_fault(fault: Fault) -> str:
     if fault.kind == "not answering" and fault.id == 200:
         return "the servos hold their last goals (torque on); the IMU is not read, so a fall would not be seen"
     return "the servos hold their last goals (torque on; a walk first reached both feet)"
+
+
+def port_fault(error: PortFailed) -> Fault:
+    """The fault of a run that ``error`` ended (its message names the port)."""
+    return Fault(PORT_FAILED, None, None, error.message)
 
 
 class Refused(CheckFailed):

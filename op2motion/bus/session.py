@@ -16,7 +16,7 @@ import numpy as np
 
 from op2motion.bus.client import Bus
 from op2motion.bus.link import MIN_SERVOS_PER_TICK, LinkCheck, ReadPlan, read_plan, too_slow, tried_plan
-from op2motion.bus.port import PortLike, open_port
+from op2motion.bus.port import PortLike, PortRequest, RobotPort, open_port
 from op2motion.bus.robot import OP2, BoardState, ServoState
 from op2motion.bus.safety import (
     Fault,
@@ -111,11 +111,13 @@ class RobotStatus:
 
 
 class Session:
-    """The robot on ``port`` for the length of a ``with`` block (see the module docstring)."""
+    """The robot on ``port`` (a path, a :class:`~.port.PortRequest`: a path and how to open it, or an open port) for
+    the length of a ``with`` block (see the module docstring)."""
 
-    def __init__(self, port: str | PortLike, spec: Spec):
+    def __init__(self, port: RobotPort, spec: Spec):
         self.spec = spec
-        self.given: PortLike | None = None if isinstance(port, str) else port
+        self.request = PortRequest(port) if isinstance(port, str) else port if isinstance(port, PortRequest) else None
+        self.given: PortLike | None = None if isinstance(port, (str, PortRequest)) else port
         self.path = port if isinstance(port, str) else port.path
         self.port: PortLike | None = None
         self.robot: OP2 = None  # type: ignore[assignment]
@@ -127,11 +129,11 @@ class Session:
             return self.given
         from op2motion.bus.emulator.lockstep import is_lockstep, lockstep_robot
 
-        if is_lockstep(self.path):
+        if is_lockstep(self.path):               # nothing else can hold an emulator in this process: shared or not
             port = lockstep_robot(self.path, self.spec)
             self.emulated = port.emulator
             return port
-        return open_port(self.path)
+        return open_port(self.path, shared=self.request is not None and self.request.shared)
 
     def __enter__(self) -> "Session":
         self.port = self._open()

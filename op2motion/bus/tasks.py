@@ -6,7 +6,9 @@ Each opens a :class:`~.session.Session` on the port, reads the whole robot, and 
 unfit robot (:mod:`.safety`), builds the motion from where the robot is (:mod:`.plans`), refuses what fails
 op2motion's own checks unless forced, switches the torque on without a jump and runs the 8 ms loop
 (:func:`~.loop.run_controller`). A ``stop`` event (the commands set it on Ctrl-C) ends a motion safely: a walk on
-its next double support. The result is a :class:`MotionResult`; a fault is in it, not raised.
+its next double support. The result is a :class:`MotionResult`; a fault is in it, not raised: a port that fails once
+the motion is under way too (from the torque switched on: the run ends as the fault ``port failed``), while one that
+fails before (while the robot is read and checked) raises :class:`~op2motion.errors.PortFailed` (exit 1).
 """
 
 from __future__ import annotations
@@ -30,11 +32,11 @@ from op2motion.bus.plans import (
     robot_schedule,
     then,
 )
-from op2motion.bus.port import PortLike
-from op2motion.bus.safety import clip_goals, mechanical_bounds
+from op2motion.bus.port import RobotPort
+from op2motion.bus.safety import clip_goals, mechanical_bounds, port_fault
 from op2motion.bus.session import RobotStatus, Session
 from op2motion.bus.tables import CM730_ID, MX28
-from op2motion.errors import CheckFailed, InputError
+from op2motion.errors import CheckFailed, InputError, PortFailed
 from op2motion.robot.pose import Pose
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support, SupportName
@@ -137,7 +139,7 @@ class MotionResult:
         return out
 
 
-def status(port: str | PortLike, spec: Spec) -> RobotStatus:
+def status(port: RobotPort, spec: Spec) -> RobotStatus:
     """The board and every servo (switching the servos' power on if it was off)."""
     with Session(port, spec) as session:
         return session.status()
@@ -155,7 +157,7 @@ class SetupResult:
     failed: tuple[int, ...]
 
 
-def setup(port: str | PortLike, spec: Spec, return_delay: int, confirm: Callable[[str], bool]) -> SetupResult:
+def setup(port: RobotPort, spec: Spec, return_delay: int, confirm: Callable[[str], bool]) -> SetupResult:
     """Set every device's Return Delay Time (register 5, EEPROM: kept over power cycles) to ``return_delay`` (2 µs
     units), writing only where it differs, after ``confirm(question)`` says yes (a no is a refusal: exit 2, nothing
     written); each write confirmed by the device and read back."""
@@ -183,7 +185,7 @@ def setup(port: str | PortLike, spec: Spec, return_delay: int, confirm: Callable
                            tuple(sorted(set(now) - set(change))), tuple(failed))
 
 
-def teach(port: str | PortLike, spec: Spec, name: str, support: Support | SupportName = "double", limp: bool = False,
+def teach(port: RobotPort, spec: Spec, name: str, support: Support | SupportName = "double", limp: bool = False,
           wait: Callable[[], None] | None = None) -> tuple[Pose, list[str]]:
     """The robot's present joint angles as a pose. With ``limp`` the torque goes off, ``wait`` lets the user move the
     limbs, the angles are read, and the torque comes back on holding them. Angles beyond a joint's mechanical
@@ -248,7 +250,7 @@ def checked(trajectory: Any, spec: Spec, state: RobotStatus, force: bool, what: 
     return f"checked in physics ({CHECK_ENGINE}, the servo model, from the robot's present pose)"
 
 
-def play(port: str | PortLike, spec: Spec, path: str, page: int | None = None,
+def play(port: RobotPort, spec: Spec, path: str, page: int | None = None,
          options: Options = Options()) -> MotionResult:
     """A pose, a motion file or an action page on the robot: a planned move from where it is to the first pose,
     then the motion or the page tick for tick (see the module docstring)."""
@@ -288,8 +290,20 @@ def run_planned(session: Session, state: RobotStatus, trajectory: Any, result: M
     if options.stopped():
         result.runs.append((name, LoopReport(ended="stopped")))
         return False
-    session.take_control(state)
+    if not take_control(session, state, result, name):
+        return False
     report = run_controller(robot_schedule(trajectory, session.robot.spec), session.robot, stop=options.stop,
                             on_tick=options.on_tick)
     result.runs.append((name, report))
     return report.ended == "done"
+
+
+def take_control(session: Session, state: RobotStatus, result: MotionResult, name: str) -> bool:
+    """:meth:`~.session.Session.take_control` as the run ``name`` of ``result`` begins; whether it did (a port that
+    fails there ends the run as the fault ``port failed``, in ``result``)."""
+    try:
+        session.take_control(state)
+    except PortFailed as exc:
+        result.runs.append((name, LoopReport(ended="fault", fault=port_fault(exc))))
+        return False
+    return True

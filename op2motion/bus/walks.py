@@ -23,9 +23,9 @@ import numpy as np
 
 from op2motion.bus.loop import START_JUMP_RAD, LoopReport, run_controller
 from op2motion.bus.plans import CHECK_ENGINE, LYING_TILT_RAD, move
-from op2motion.bus.port import PortLike
+from op2motion.bus.port import RobotPort
 from op2motion.bus.session import Session
-from op2motion.bus.tasks import MotionResult, Options, checked, run_planned
+from op2motion.bus.tasks import MotionResult, Options, checked, run_planned, take_control
 from op2motion.errors import CheckFailed
 from op2motion.robot.imu import FALL_TILT_RAD
 from op2motion.robot.pose import Pose
@@ -35,7 +35,7 @@ from op2motion.robot.support import Support
 MAX_TELEOP_S = 3600.0          # a walk steered by keys ends after this long at the latest [s]
 
 
-def walk(port: str | PortLike, spec: Spec, preset: str | None = None, steps: int | None = None,
+def walk(port: RobotPort, spec: Spec, preset: str | None = None, steps: int | None = None,
          target: tuple[float, float, float] | None = None, options: Options = Options()) -> MotionResult:
     """A walk on the robot: the preset's gait planned within the servos' speed (``steps`` steps, or to ``target``
     (x [m], y [m], heading [rad])), a planned move to its first pose, then :class:`~op2motion.gait.controller.
@@ -56,7 +56,7 @@ def walk(port: str | PortLike, spec: Spec, preset: str | None = None, steps: int
     return result
 
 
-def steered_walk(port: str | PortLike, spec: Spec, preset: str | None = None, commands: Any = None, teleop: Any = None,
+def steered_walk(port: RobotPort, spec: Spec, preset: str | None = None, commands: Any = None, teleop: Any = None,
                  action: Any = None, get_up: bool = False, options: Options = Options()) -> MotionResult:
     """A steered walk on the robot: ``commands`` (a :class:`~op2motion.gait.commands.CommandTimeline`) feed it on
     its clock, ``teleop`` (a :class:`~.teleop.Teleop`) from the keys between ticks; the kicks are ``action``'s stock
@@ -87,7 +87,7 @@ def steered_walk(port: str | PortLike, spec: Spec, preset: str | None = None, co
     return result
 
 
-def run_on_robot(port: str | PortLike, spec: Spec, controller: Any, what: str = "controller",
+def run_on_robot(port: RobotPort, spec: Spec, controller: Any, what: str = "controller",
                  options: Options = Options(), duration_s: float | None = None, name: str = "run") -> MotionResult:
     """Any controller on the robot, the way every robot command starts one: the robot read and preflighted; if the
     controller's first goals are more than :data:`~.loop.START_JUMP_RAD` from where the joints are, a planned move
@@ -105,7 +105,8 @@ def run_on_robot(port: str | PortLike, spec: Spec, controller: Any, what: str = 
             if options.stopped():
                 result.runs.append(("run", LoopReport(ended="stopped")))
                 return result
-            session.take_control(state)
+            if not take_control(session, state, result, name):
+                return result
         elif not _approach(session, state, first, result, options):
             return result
         report = run_controller(controller, session.robot, duration_s=duration_s, stop=options.stop,
@@ -127,7 +128,7 @@ def _approach(session: Session, state: Any, first: np.ndarray, result: MotionRes
     return run_planned(session, state, approach, result, "approach", options)
 
 
-def getup(port: str | PortLike, spec: Spec, action: Any = None, options: Options = Options()) -> MotionResult:
+def getup(port: RobotPort, spec: Spec, action: Any = None, options: Options = Options()) -> MotionResult:
     """Get the robot up from where it lies (:class:`~op2motion.motion.getup.GetUp`: the stock pages 10/11 when
     ``action`` has them, op2motion's own motions otherwise). Checked first in physics from the side it lies on
     (refused, exit 1, if it does not stand there, unless forced); runs until it stands (or gives up). A robot
@@ -161,7 +162,8 @@ def getup(port: str | PortLike, spec: Spec, action: Any = None, options: Options
         if options.stopped():
             result.runs.append(("get up", LoopReport(ended="stopped")))
             return result
-        session.take_control(state)
+        if not take_control(session, state, result, "get up"):
+            return result
         report = run_controller(controller, session.robot, stop=options.stop, on_tick=announce(controller, options),
                                 until_done=True)
         result.runs.append(("get up", report))

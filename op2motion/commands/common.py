@@ -15,7 +15,7 @@ import re
 import sys
 from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
 
-from op2motion.errors import InputError, OutputError, ref, render_refs
+from op2motion.errors import InputError, OutputError, one_line, ref, render_refs
 from op2motion.robot.spec import Spec
 
 if TYPE_CHECKING:
@@ -67,7 +67,7 @@ def warn(args: argparse.Namespace, result: dict[str, Any], warnings: Sequence[st
     warnings = [render_refs(w, args.parser.flag_of) for w in warnings]
     result["warnings"] = warnings
     for w in warnings:
-        print(f"op2motion: warning: {w}", file=sys.stderr)
+        print(f"op2motion: warning: {one_line(w)}", file=sys.stderr)
 
 
 PLAIN_EVERY_S = 10.0      # where stderr is not a terminal (a log, CI), progress is a plain line this often at most

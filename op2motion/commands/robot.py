@@ -10,14 +10,20 @@ import signal
 import sys
 import threading
 import time
-from typing import Any, Iterator
+from typing import TYPE_CHECKING, Any, Iterator
 
 from op2motion.commands.common import add_command, number, output_path, pose_name, ticker, whole
 from op2motion.commands.deliver import deliver
 from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
 
+if TYPE_CHECKING:
+    from op2motion.bus.port import PortRequest
+
 MAX_WAIT_S = 600.0
+SHARED_PORT_HELP = ("open the port even though another process holds it open: the bridge that serves it (socat's "
+                    "pty, which keeps the terminal side open itself; docs/robot.md). Without it such a port is "
+                    "refused, naming the process")
 
 
 def register(sub: Any) -> None:
@@ -92,6 +98,20 @@ def _port(p: argparse.ArgumentParser) -> None:
     p.add_argument("--port", required=True, metavar="PORT",
                    help="the robot's serial port, e.g. /dev/ttyUSB0; or lockstep[:key=value,...]: an emulated OP2 in "
                         "this process, in lockstep with the wire model (docs/robot.md)")
+    p.add_argument("--shared-port", action="store_true", help=SHARED_PORT_HELP)
+
+
+def port_of(path: str, shared: bool) -> str | PortRequest:
+    """The robot's port as the tasks take it: its path, or with ``shared`` (``--shared-port``) a request to open it
+    although another process holds it."""
+    from op2motion.bus.port import PortRequest
+
+    return PortRequest(path, shared=True) if shared else path
+
+
+def _robot(args: argparse.Namespace) -> str | PortRequest:
+    """The ``robot`` command's port (``--port``, ``--shared-port``)."""
+    return port_of(args.port, args.shared_port)
 
 
 def _emulate_args(p: argparse.ArgumentParser) -> None:
@@ -171,7 +191,7 @@ def cmd_status(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot status``."""
     from op2motion.tasks.robot import robot_status
 
-    return deliver(args, robot_status(args.port, spec))
+    return deliver(args, robot_status(_robot(args), spec))
 
 
 def cmd_setup(args: argparse.Namespace, spec: Spec) -> int:
@@ -186,7 +206,7 @@ def cmd_setup(args: argparse.Namespace, spec: Spec) -> int:
         print(f"op2motion: {question} [y/N] ", end="", file=sys.stderr, flush=True)
         return sys.stdin.readline().strip().lower() in ("y", "yes")
 
-    return deliver(args, robot_setup(args.port, spec, args.return_delay, confirm))
+    return deliver(args, robot_setup(_robot(args), spec, args.return_delay, confirm))
 
 
 def cmd_read(args: argparse.Namespace, spec: Spec) -> int:
@@ -209,7 +229,7 @@ def cmd_read(args: argparse.Namespace, spec: Spec) -> int:
             print("op2motion: the robot is limp: move its limbs, then press Enter", file=sys.stderr)
             sys.stdin.readline()
 
-    result = robot_read(args.port, spec, name, outputs.paths["out"], args.support, args.limp, wait)
+    result = robot_read(_robot(args), spec, name, outputs.paths["out"], args.support, args.limp, wait)
     return deliver(args, result, outputs, "none")
 
 
@@ -247,7 +267,7 @@ def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot play``."""
     from op2motion.bus.tasks import play
 
-    return _motion(args, spec, lambda options: play(args.port, spec, args.file, args.page, options))
+    return _motion(args, spec, lambda options: play(_robot(args), spec, args.file, args.page, options))
 
 
 def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
@@ -267,7 +287,7 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
         if not all(math.isfinite(v) for v in args.target):
             raise InputError(f"expected finite numbers, got {args.target}", "target")
         target = (args.target[0], args.target[1], math.radians(args.target[2]))
-    return _motion(args, spec, lambda options: walk(args.port, spec, args.preset, args.steps, target, options))
+    return _motion(args, spec, lambda options: walk(_robot(args), spec, args.preset, args.steps, target, options))
 
 
 def _steered(args: argparse.Namespace, spec: Spec) -> int:
@@ -284,12 +304,12 @@ def _steered(args: argparse.Namespace, spec: Spec) -> int:
     commands = read_commands(args.commands) if args.commands is not None else None
     action = ActionFile.read(args.action) if args.action is not None else None
     if not args.teleop:
-        return _motion(args, spec, lambda options: steered_walk(args.port, spec, args.preset, commands, None, action,
+        return _motion(args, spec, lambda options: steered_walk(_robot(args), spec, args.preset, commands, None, action,
                                                                 args.get_up, options))
     teleop = Teleop(STEER_ENVELOPE, lambda line: print(f"op2motion: {line}", file=sys.stderr, flush=True))
     print(f"op2motion: {HELP}", file=sys.stderr, flush=True)
     with read_keys(sys.stdin.fileno(), teleop):
-        return _motion(args, spec, lambda options: steered_walk(args.port, spec, args.preset, commands, teleop,
+        return _motion(args, spec, lambda options: steered_walk(_robot(args), spec, args.preset, commands, teleop,
                                                                 action, args.get_up, options))
 
 
@@ -299,7 +319,7 @@ def cmd_getup(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.formats.action import ActionFile
 
     action = ActionFile.read(args.action) if args.action is not None else None
-    return _motion(args, spec, lambda options: getup(args.port, spec, action, options))
+    return _motion(args, spec, lambda options: getup(_robot(args), spec, action, options))
 
 
 def cmd_emulate(args: argparse.Namespace, spec: Spec) -> int:

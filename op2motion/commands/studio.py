@@ -13,7 +13,8 @@ from pathlib import Path
 from typing import Any
 
 from op2motion.commands.common import add_command, whole
-from op2motion.errors import InputError, Interrupted
+from op2motion.commands.robot import SHARED_PORT_HELP
+from op2motion.errors import InputError, Interrupted, Op2MotionError
 from op2motion.robot.spec import Spec
 
 RESOLVE_TIMEOUT_S = 5.0      # a host name that does not resolve in this long is refused [s]
@@ -37,6 +38,7 @@ def register(sub: Any) -> None:
     p.add_argument("--robot", metavar="PORT",
                    help="an OP2 on this serial port (or an emulated one, op2motion robot emulate) follows the pose at "
                         "a capped speed; the page can read the pose from it (docs/robot.md)")
+    p.add_argument("--shared-port", action="store_true", help=f"with --robot: {SHARED_PORT_HELP}")
     p.add_argument("--workdir", metavar="DIR",
                    help="the one folder the page may open and save files in (default: the folder of POSE, or the "
                         "current folder)")
@@ -105,6 +107,8 @@ def cmd_studio(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.studio.guard import is_loopback
     from op2motion.studio.session import Session
 
+    if args.shared_port and args.robot is None:
+        raise InputError("expected --robot with --shared-port (it opens the robot's port)", "shared_port")
     action = args.pose is not None and args.pose.lower().endswith(".bin")
     if action:
         from op2motion.formats.action import ActionFile
@@ -122,7 +126,7 @@ def cmd_studio(args: argparse.Namespace, spec: Spec) -> int:
     session = Session(spec, pose)
     if action:
         session.open_action(args.pose)
-    follower = _follower(args.robot, spec)
+    follower = _follower(args.robot, args.shared_port, spec)
     try:
         studio = Studio(spec, session, args.host, args.port, action_path=args.pose if action else "",
                         workspace=workspace, pose_path="" if action or not args.pose else args.pose,
@@ -144,14 +148,21 @@ def cmd_studio(args: argparse.Namespace, spec: Spec) -> int:
         _stop(studio)
 
 
-def _follower(port: str | None, spec: Spec) -> Any:
-    """The robot on ``port`` following the pose (started: torque on where its joints are), or None."""
+def _follower(port: str | None, shared: bool, spec: Spec) -> Any:
+    """The robot on ``port`` (``shared``: although another process holds it) following the pose (started: torque on
+    where its joints are), or None. An error about the robot's port names ``--robot`` (``--port`` is the page's)."""
     if port is None:
         return None
     from op2motion.bus.follow import Follower
+    from op2motion.commands.robot import port_of
 
-    follower = Follower(port, spec)
-    follower.start()
+    follower = Follower(port_of(port, shared), spec)
+    try:
+        follower.start()
+    except Op2MotionError as exc:
+        if exc.param == "port":
+            exc.param = "robot"
+        raise
     return follower
 
 

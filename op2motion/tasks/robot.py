@@ -14,12 +14,13 @@ from op2motion.robot.spec import Spec
 from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
+    from op2motion.bus.port import RobotPort
     from op2motion.bus.tasks import MotionResult, Options
     from op2motion.physics import EngineName
     from op2motion.robot.support import Support, SupportName
 
 
-def robot_status(port: str, spec: Spec) -> TaskResult:
+def robot_status(port: RobotPort, spec: Spec) -> TaskResult:
     """``robot status``: the board, the IMU and every servo; a "no" when a servo is missing, reports an error, is hot
     or the supply is low (the first problem named, and how many more)."""
     from op2motion.bus.tasks import status
@@ -31,7 +32,7 @@ def robot_status(port: str, spec: Spec) -> TaskResult:
                       file_keys={})
 
 
-def robot_setup(port: str, spec: Spec, return_delay: int, confirm: Callable[[str], bool]) -> TaskResult:
+def robot_setup(port: RobotPort, spec: Spec, return_delay: int, confirm: Callable[[str], bool]) -> TaskResult:
     """``robot setup --return-delay N``: every device's Return Delay Time set to N where it differs (EEPROM), after
     ``confirm``; a "no" when a device did not take it."""
     from op2motion.bus.tasks import setup
@@ -46,7 +47,7 @@ def robot_setup(port: str, spec: Spec, return_delay: int, confirm: Callable[[str
     return TaskResult(problem is None, problem, None, {}, data, (line,), file_keys={})
 
 
-def robot_read(port: str, spec: Spec, name: str, output: Path, support: Support | SupportName = "double",
+def robot_read(port: RobotPort, spec: Spec, name: str, output: Path, support: Support | SupportName = "double",
                limp: bool = False, wait: Callable[[], None] | None = None) -> TaskResult:
     """``robot read``: the present joint angles as pose ``name`` on ``support``, for ``output`` (``limp``: the
     torque off while ``wait`` lets the user move the limbs, then on again holding them)."""
