@@ -87,7 +87,8 @@ def steered_walk(port: str | PortLike, spec: Spec, preset: str | None = None, co
 def _on_robot(port: str | PortLike, spec: Spec, controller: Any, what: str, options: Options,
               duration_s: float | None = None) -> MotionResult:
     """A walk controller on the robot: refused lying, the move to its first pose checked and played, then the
-    walk until its plan is over (or ``duration_s``), or it is done."""
+    walk until its plan is over, or it is done (``duration_s``: a walk without a plan's end, steered by keys, runs
+    until it is stopped, at most that long)."""
     with Session(port, spec) as session:
         state = session.status()
         session.preflight(state)
@@ -98,7 +99,7 @@ def _on_robot(port: str | PortLike, spec: Spec, controller: Any, what: str, opti
         approach = move(state.servo_angles, first, spec)
         planned = controller.plan.duration_s if duration_s is None else duration_s
         result = MotionResult(what, approach.duration_s + planned, notes=list(approach.notes),
-                              emulator=session.emulated)
+                              emulator=session.emulated, until_stopped_s=duration_s)
         result.checked = checked(approach, spec, state, options.force, "the move to the walk's first pose",
                                  options.on_progress)
         if not run_planned(session, state, approach, result, "approach", options):
