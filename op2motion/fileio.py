@@ -24,9 +24,10 @@ from op2motion.processes.interrupts import signals_held
 MAX_INPUT_BYTES = 16 * 2 ** 20    # every file op2motion reads is far smaller (an action file: 128 KiB)
 
 
-def _file_kind(mode: int) -> str:
-    """What a non-regular file is, in words (for messages)."""
-    for test, kind in ((stat.S_ISDIR, "directory"), (stat.S_ISFIFO, "named pipe (FIFO)"), (stat.S_ISSOCK, "socket"),
+def file_kind(mode: int) -> str:
+    """What a file of ``mode`` (``os.stat``'s ``st_mode``) is, in words (for messages)."""
+    for test, kind in ((stat.S_ISREG, "regular file"), (stat.S_ISDIR, "directory"),
+                       (stat.S_ISFIFO, "named pipe (FIFO)"), (stat.S_ISSOCK, "socket"),
                        (stat.S_ISCHR, "character device"), (stat.S_ISBLK, "block device")):
         if test(mode):
             return kind
@@ -43,7 +44,7 @@ def read_bytes(path: str | Path, what: str, error: Type[Op2MotionError] = InputE
     try:
         mode = os.stat(p).st_mode                  # a socket cannot even be opened: tell what it is first
         if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
-            raise error(f"expected a {what} (a regular file), got a {_file_kind(mode)}", str(p))
+            raise error(f"expected a {what} (a regular file), got a {file_kind(mode)}", str(p))
         fd = os.open(p, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOCTTY", 0))
     except FileNotFoundError:
         raise error(f"no such {what}", str(p)) from None
@@ -54,7 +55,7 @@ def read_bytes(path: str | Path, what: str, error: Type[Op2MotionError] = InputE
     try:
         info = os.fstat(fd)
         if not stat.S_ISREG(info.st_mode):
-            kind = _file_kind(info.st_mode)
+            kind = file_kind(info.st_mode)
             raise error(f"expected a {what} (a regular file), got a {kind}", str(p))
         if info.st_size > MAX_INPUT_BYTES:
             raise error(f"expected at most {MAX_INPUT_BYTES // 2 ** 20} MiB ({what}), got {info.st_size} bytes",
@@ -104,7 +105,7 @@ def check_output_path(path: str | Path, param: str = "output") -> Path:
     if target.exists():
         mode = target.stat().st_mode
         if not stat.S_ISREG(mode):          # written by rename: a device such as /dev/null would be replaced
-            raise OutputError(f"expected a regular file to write, got a {_file_kind(mode)}: {text}", param)
+            raise OutputError(f"expected a regular file to write, got a {file_kind(mode)}: {text}", param)
         if not os.access(target, os.W_OK):
             raise OutputError(f"cannot write {text}: the file is read-only", param)
     return target

@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -102,11 +103,26 @@ def emulator_process(folder: Path, engine: str = "mujoco", start: str = "standin
         emulator.close()
 
 
-def cli(*argv: str) -> subprocess.Popen:
-    """``op2motion ARGV`` started as a subprocess (stdin, stdout and stderr piped)."""
+def cli(*argv: str, stdin: int = subprocess.PIPE) -> subprocess.Popen:
+    """``op2motion ARGV`` started as a subprocess (stdout and stderr piped; stdin piped unless given, e.g. the
+    terminal end of a pseudo-terminal)."""
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    return subprocess.Popen([sys.executable, "-m", "op2motion", *argv], stdin=subprocess.PIPE,
+    return subprocess.Popen([sys.executable, "-m", "op2motion", *argv], stdin=stdin,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=ROOT, env=env)
+
+
+def stderr_until(process: subprocess.Popen, text: str, timeout: float = CLI_TIMEOUT_S) -> str:
+    """What a CLI subprocess printed on stderr up to and including ``text`` (read as it comes; the rest is left for
+    :func:`finish`)."""
+    assert process.stderr is not None
+    fd, got = process.stderr.fileno(), b""
+    deadline = time.monotonic() + timeout
+    while text.encode() not in got:
+        chunk = os.read(fd, 4096) if select.select([fd], [], [], 0.05)[0] else None
+        if chunk == b"" or time.monotonic() > deadline:                   # ended, or still silent
+            raise RuntimeError(f"expected {text!r} on stderr, got {got.decode(errors='replace')!r}")
+        got += chunk or b""
+    return got.decode(errors="replace")
 
 
 def finish(process: subprocess.Popen, timeout: float = CLI_TIMEOUT_S) -> tuple[int, str, str]:

@@ -5,8 +5,10 @@ deterministic and faster than real time, so the walks here are whole ones."""
 
 from __future__ import annotations
 
+import io
 import math
 import os
+import sys
 
 import numpy as np
 import pytest
@@ -15,10 +17,12 @@ from helpers import POSES, STOCK, run_cli
 
 from op2motion.bus.emulator.faults import Faults
 from op2motion.bus.safety import FALL_TORQUE_LIMIT, WrongModel
-from op2motion.bus.tasks import Options, play, setup, teach
+from op2motion.bus.tasks import Limp, Options, limp_question, play, setup, teach
 from op2motion.bus.walks import walk
-from op2motion.errors import CheckFailed
+from op2motion.errors import CheckFailed, InputError
 from op2motion.formats.posefile import read_pose, write_pose
+from op2motion.robot.imu import FALL_TILT_RAD
+from op2motion.robot.limbs import limb_groups, select_joints
 from op2motion.robot.pose import Pose
 
 GOAL_TOL_DEG = 1.5             # the acceptance's "every servo commanded within 1.5° of the pose"
@@ -29,6 +33,9 @@ HORN_OFF_TICKS = 1707          # head_pan reads tick 3755 (150°; its range ends
 FAULT_AT_S = 4.0               # the overheating knee's moment, into the motion [s]
 AX12_AS_L_KNEE = "l_knee (ID 14) reports model 12 (AX-12?), expected the MX-28 (29)"
 EVERY_ERROR_BIT = "input voltage, angle limit, overheating, range, checksum, overload, instruction"
+LIMP_WAIT_S = 1.5              # joints limp this long [s, simulated]: legs let go, a standing robot is down by then
+FALL_TILT_DEG = math.degrees(FALL_TILT_RAD)
+FALLEN_Z_M = 0.15              # a torso below this lies (standing: 0.34 m) [m]
 
 
 def _goals_deg(report: dict, spec) -> np.ndarray:
@@ -138,13 +145,113 @@ def test_status_names_a_missing_servo(capsys):
 def test_read_writes_the_present_pose_and_limp_holds_what_it_read(spec):
     with lockstep(spec) as (emulator, port):
         pose, notes = teach(port, spec, "here")
-        assert pose.support == "double" and not notes
+        assert pose.support == "double" and not notes and not pose.provenance["fallen"]
         assert np.allclose(np.degrees(pose.servo), np.degrees(emulator.body.joint_angles()), atol=2 * TICK_DEG)
     with lockstep(spec, start="lying_back") as (emulator, port):
+        with pytest.raises(CheckFailed, match="the robot lies.*--force"):         # a fallen robot's pose: refused
+            teach(port, spec, "lying")
         waited = []
-        pose, _ = teach(port, spec, "limp", limp=True, wait=lambda: waited.append(port.clock.now()))
+        limp = Limp(spec.joint_names, lambda question: True, lambda: waited.append(port.clock.now()))
+        pose, notes = teach(port, spec, "limp", limp=limp, force=True)
         assert waited and all(s.get("torque_enable") == 1 for s in emulator.servos)    # the torque is back on
         assert np.allclose(_goals_deg(emulator.report(), spec), np.degrees(pose.servo), atol=2 * TICK_DEG)
+    assert pose.provenance["fallen"] and pose.provenance["tilt_deg"] > FALL_TILT_DEG and "fallen" in notes[0]
+
+
+def test_limbs_are_the_spec_joints_by_name(spec):
+    names = spec.joint_names
+    groups = limb_groups(names)
+    limbs = [joint for limb in ("head", "left_arm", "right_arm", "left_leg", "right_leg") for joint in groups[limb]]
+    assert sorted(limbs) == sorted(names)                                         # each joint in one limb
+    assert [len(groups[g]) for g in ("head", "left_arm", "arms", "right_leg", "legs", "all")] == [2, 3, 6, 6, 12, 20]
+    assert set(groups["arms"]) == set(groups["left_arm"] + groups["right_arm"]) and "r_knee" in groups["right_leg"]
+    assert select_joints("left_arm, head", names) == ("l_sho_pitch", "l_sho_roll", "l_el", "head_pan", "head_tilt")
+    assert select_joints("r_knee", names) == ("r_knee",) and select_joints("all", names) == names
+    assert select_joints("legs,left_leg,r_el", names) == ("r_el", *groups["legs"])
+    with pytest.raises(InputError, match="got 'arm'"):
+        select_joints("arm", names)
+    standing, lying = math.radians(2.0), math.radians(90.0)
+    for joints, tilt, falls in ((("r_knee",), standing, True), (groups["legs"], standing, True),
+                                (groups["arms"], standing, False), (groups["legs"], lying, False)):
+        assert ("sag and fall" in limp_question(spec, joints, tilt)) == falls, (joints, tilt)
+
+
+class Terminal(io.StringIO):
+    """Standard input that is a terminal, with what the user types."""
+
+    def isatty(self) -> bool:
+        return True
+
+
+def test_limp_without_a_way_to_confirm_does_nothing(tmp_path, capsys, monkeypatch):
+    out, port = tmp_path / "pose.json", str(tmp_path / "ttyUSB9")     # no such port: refused before opening it
+    monkeypatch.setattr(sys, "stdin", io.StringIO(""))
+    for flags, expected in ((["--limp", "legs", "--wait", "1"], "--yes: expected --yes to switch the torque off in "
+                                                                "legs (12 joints)"),
+                            (["--limp", "--wait", "1"], "--yes: expected --yes to switch the torque off in all (20"),
+                            (["--limp", "arms", "--yes"], "--wait: expected --wait S with --limp"),
+                            (["--yes"], "--yes: expected --limp with --yes"),
+                            (["--wait", "0"], "--wait: expected --limp with --wait"),
+                            (["--limp", "arm", "--yes", "--wait", "1"], "--limp: expected comma-separated limbs")):
+        code, _, err = run_cli(capsys, "robot", "read", "--port", port, "--out", str(out), *flags)
+        assert code == 2 and expected in _one_line(err) and not out.exists(), err
+
+
+@pytest.mark.physics
+def test_limp_asks_on_the_terminal_and_a_no_does_nothing(spec, tmp_path, capsys, monkeypatch):
+    out = tmp_path / "pose.json"
+    monkeypatch.setattr(sys, "stdin", Terminal("n\n"))
+    code, _, err = run_cli(capsys, "robot", "read", "--port", "lockstep", "--out", str(out), "--limp", "legs")
+    assert code == 2 and err.endswith("op2motion: error: --yes: not confirmed: nothing done (--yes confirms)\n")
+    assert not out.exists()
+    assert "legs (12 joints), though the robot stands" in err and "it will sag and fall" in err and "[y/N]" in err
+    monkeypatch.setattr(sys, "stdin", Terminal("y\n\n"))                  # yes, then Enter once they are moved
+    code, _, err = run_cli(capsys, "robot", "read", "--port", "lockstep", "--out", str(out), "--limp", "head")
+    assert code == 0 and "press Enter" in err and read_pose(out, spec).provenance["limp_joints"] == ["head_pan",
+                                                                                                   "head_tilt"]
+    with lockstep(spec) as (emulator, port):
+        before = emulator.report()
+        with pytest.raises(InputError, match="not confirmed"):
+            teach(port, spec, "no", limp=Limp(("r_knee",), lambda question: False))
+        after = emulator.report()
+    assert after["torque_enable"] == before["torque_enable"] == [1] * 20          # nothing went limp ...
+    assert after["goal_ticks"] == before["goal_ticks"]                            # ... and nothing moved
+
+
+@pytest.mark.physics
+def test_only_the_chosen_joints_go_limp_and_then_hold(spec):
+    chosen = select_joints("left_arm,head", spec.joint_names)
+    with lockstep(spec) as (emulator, port):
+        asked, during = [], []
+        limp = Limp(chosen, lambda question: asked.append(question) or True,
+                    lambda: during.append(emulator.report()["torque_enable"]), LIMP_WAIT_S)
+        pose, notes = teach(port, spec, "arm", limp=limp)
+        after = emulator.report()
+    off = {name for name, on in zip(spec.joint_names, during[0]) if not on}
+    assert off == set(chosen) and after["torque_enable"] == [1] * 20             # the others held throughout
+    assert "head, left_arm (5 joints) (they go limp" in asked[0] and "fall" not in asked[0]
+    assert math.degrees(after["truth"]["tilt_rad"]) < STANDING_TILT_DEG and not pose.provenance["fallen"]
+    assert pose.provenance["limp_joints"] == list(chosen) and not notes
+
+
+@pytest.mark.physics
+def test_legs_limp_drop_a_standing_robot_whose_pose_is_refused_unless_forced(spec, tmp_path, capsys):
+    out = tmp_path / "dropped.json"
+    argv = ("robot", "read", "--port", "lockstep", "--out", str(out), "--limp", "legs", "--yes", "--wait",
+            str(LIMP_WAIT_S))
+    code, _, err = run_cli(capsys, *argv)
+    assert code == 1 and "refused: the robot fell while limp" in _one_line(err) and not out.exists()
+    assert "its legs give way and it will sag and fall unless you hold it up? yes (--yes)" in err   # it was told
+    code, result, err = robot_json(capsys, *argv, "--force")
+    assert code == 0 and result["fallen"] and result["tilt_deg"] > FALL_TILT_DEG, err
+    provenance = read_pose(out, spec).provenance
+    assert provenance["fallen"] and provenance["limp_joints"] == list(limb_groups(spec.joint_names)["legs"])
+    with lockstep(spec) as (emulator, port):                   # the emulated OP2 really falls, then its legs hold
+        teach(port, spec, "dropped", limp=Limp(select_joints("legs", spec.joint_names), lambda question: True,
+                                               None, LIMP_WAIT_S), force=True)
+        report = emulator.report()
+    assert math.degrees(report["truth"]["tilt_rad"]) > FALL_TILT_DEG and report["truth"]["z_m"] < FALLEN_Z_M
+    assert report["torque_enable"] == [1] * 20
 
 
 @pytest.mark.physics

@@ -6,15 +6,17 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import sys
 import threading
 
 import pytest
-from bus_support import cli, finish, lockstep, robot_json
+from bus_support import cli, finish, lockstep, robot_json, stderr_until
 from helpers import run_cli
 
 from op2motion.bus.tasks import Options
-from op2motion.bus.teleop import VX_STEP_M_S, YAW_STEP_RAD_S, Teleop
-from op2motion.bus.walks import getup, steered_walk
+from op2motion.bus.teleop import VX_STEP_M_S, YAW_STEP_RAD_S, Teleop, signed
+from op2motion.bus.walks import MAX_TELEOP_S, getup, steered_walk
 from op2motion.gait.envelope import STEER_ENVELOPE
 
 STANDING_TILT_DEG = 15.0       # a torso tilted less than this stands
@@ -109,6 +111,8 @@ def test_robot_walk_by_keys_then_x_ends_it_standing(spec):
     result, truth, _ = _steered_by_keys(spec, {"www": 0.0, "x": WALKED_M})       # 0.15 m/s forward, then end
     assert result.ended == "done" and result.fault is None
     assert truth["x_m"] > WALKED_M and math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG
+    head = result.lines()[0]                                                     # no hour "planned" for keys
+    assert "s to its first pose, then until stopped (at most 60 min)" in head and "3600" not in head, head
 
 
 @pytest.mark.physics
@@ -120,15 +124,65 @@ def test_ctrl_c_stops_a_steered_walk_on_its_feet(spec):
 
 @pytest.mark.physics
 def test_teleop_from_the_keyboard_of_the_command_line():
-    walk = cli("robot", "walk", "--port", "lockstep:pace=1", "--teleop", "--json")
-    assert walk.stdin is not None
-    walk.stdin.write("x")                                                # end at once: it stands
-    walk.stdin.flush()
-    code, out, err = finish(walk)
-    assert code == 0 and "keys: w/s" in err, err
+    terminal, keyboard = os.openpty()                    # the keys come from a terminal, as a user's do
+    try:
+        walk = cli("robot", "walk", "--port", "lockstep:pace=1", "--teleop", "--json", stdin=keyboard)
+        shown = stderr_until(walk, "keys: w/s")           # printed once the terminal reads single keys
+        os.write(terminal, b"x")                          # end at once: it stands
+        code, out, err = finish(walk)
+    finally:
+        os.close(terminal)
+        os.close(keyboard)
+    assert code == 0 and "ending" in shown + err, shown + err
     result = json.loads(out)
-    assert result["runs"]["walk"]["ended"] == "done"
+    assert result["runs"]["walk"]["ended"] == "done" and result["until_stopped_s"] == MAX_TELEOP_S
     assert math.degrees(result["emulated"]["truth"]["tilt_rad"]) < STANDING_TILT_DEG
+
+
+def test_teleop_refuses_keys_that_are_not_typed(tmp_path, capsys, monkeypatch):
+    keys = tmp_path / "keys.txt"
+    keys.write_text("ww")                                # a file of keys: it could neither steer nor end the walk
+    read_end, write_end = os.pipe()
+    os.close(write_end)
+    port = str(tmp_path / "ttyUSB9")                     # no such port: the refusal comes before it is opened
+    for stdin, kind in ((open(keys), "a regular file"), (open(os.devnull), "a character device"),
+                        (os.fdopen(read_end), "a named pipe")):
+        with stdin:
+            monkeypatch.setattr(sys, "stdin", stdin)
+            code, _, err = run_cli(capsys, "robot", "walk", "--port", port, "--teleop")
+        lines = err.strip().splitlines()
+        assert code == 2 and len(lines) == 1, err
+        assert "--teleop: expected a terminal on standard input" in lines[0] and f"got {kind}" in lines[0]
+
+
+def test_keys_that_cancel_command_an_exact_zero_and_read_so():
+    teleop = Teleop(STEER_ENVELOPE)
+    teleop.feed("sssa")                                  # backward and left: the envelope scales the two down ...
+    assert teleop.command[1] < STEER_ENVELOPE.sideways_m_s - TOL
+    teleop.feed("d")                                     # ... and d takes back what a asked: no sideways drift left
+    assert teleop.command == (-STEER_ENVELOPE.backward_m_s, 0.0, 0.0)
+    assert teleop.describe() == "walking: vx -0.15 m/s, vy +0.00 m/s, turn +0 °/s"
+    teleop.feed("qqewwwe")                               # every step taken back (-0.15 + 3 x 0.05 is 7e-18): zeros
+    assert teleop.command == (0.0, 0.0, 0.0) and "-0" not in teleop.describe()
+    assert signed(-1e-17, 2) == "+0.00" and signed(-0.4, 0) == "+0" and signed(-0.6, 0) == "-1"
+
+
+def test_lines_said_during_a_run_are_not_drawn_over_by_its_bar(capsys, monkeypatch):
+    import argparse
+
+    from op2motion.commands import common
+
+    monkeypatch.setattr(common, "progress_enabled", lambda args: True)     # as on a terminal
+    args = argparse.Namespace(json=False)
+    with common.ticker(args, "robot", "s", bar_format="{desc}: {n:.2f} {unit}") as bar:
+        bar.update(0.008)
+        bar.refresh()
+        common.say(args, "walking: vx +0.05 m/s")
+        bar.update(0.008)
+    err = capsys.readouterr().err
+    before, after = err.split("op2motion: walking: vx +0.05 m/s", 1)
+    assert before.endswith(("\r", "\x1b[A")) and after.startswith("\n"), repr(err)   # the bar cleared first
+    assert "\rrobot: 0.01 s" in after                                       # and drawn again below the line
 
 
 @pytest.mark.physics

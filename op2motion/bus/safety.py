@@ -72,7 +72,8 @@ class Fault:
     reports: str = ""
 
     def describe(self) -> str:
-        """``r_knee (ID 13): overheating (84 °C)``; ``r_knee (ID 13) reports errors: overload, instruction``; ``the serial port failed: ...``."""
+        """``r_knee (ID 13): overheating (84 °C)``; ``r_knee (ID 13) reports errors: overload, instruction``;
+        ``the serial port failed: ...``."""
         if self.kind == PORT_FAILED:
             return f"the serial port failed: {self.detail}"
         who = f"{self.joint} (ID {self.id})" if self.joint else (f"the sub-controller (ID {self.id})" if self.id else

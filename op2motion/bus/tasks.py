@@ -1,6 +1,6 @@
 """What the ``op2motion robot`` commands do, as library functions: :func:`status`, :func:`setup` (the servos' return
-delay), :func:`teach` (read a pose) and :func:`play` (a pose, a motion file or an action page); the walks and getting
-up: :mod:`.walks`.
+delay), :func:`teach` (read a pose; chosen joints limp first, after a confirmation) and :func:`play` (a pose, a
+motion file or an action page); the walks and getting up: :mod:`.walks`.
 
 Each opens a :class:`~.session.Session` on the port, reads the whole robot, and (for a motion) refuses to start an
 unfit robot (:mod:`.safety`), builds the motion from where the robot is (:mod:`.plans`), refuses what fails
@@ -21,6 +21,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from op2motion.bus.clock import sleep
 from op2motion.bus.loop import LoopReport, Tick, run_controller
 from op2motion.bus.plans import (
     CHECK_ENGINE,
@@ -36,7 +37,10 @@ from op2motion.bus.port import RobotPort
 from op2motion.bus.safety import clip_goals, mechanical_bounds, port_fault
 from op2motion.bus.session import RobotStatus, Session
 from op2motion.bus.tables import CM730_ID, MX28
+from op2motion.bus.teleop import signed
 from op2motion.errors import CheckFailed, InputError, PortFailed
+from op2motion.robot.imu import FALL_TILT_RAD
+from op2motion.robot.limbs import describe_joints, limb_groups
 from op2motion.robot.pose import Pose
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support, SupportName
@@ -67,7 +71,8 @@ class Options:
 class MotionResult:
     """A motion on the robot: what it was, its planned length [s], each run of the loop (the move to the first pose,
     then the motion), the pose it was to end in (20,) [rad] if any, notes, and where the feet took the robot
-    (walks: leg odometry)."""
+    (walks: leg odometry). A motion that runs until it is stopped (a walk steered by keys) has ``until_stopped_s``,
+    the most it may run after its move to the first pose [s] (then ``planned_s`` is the longest it may last)."""
 
     what: str
     planned_s: float
@@ -77,6 +82,7 @@ class MotionResult:
     travel: dict[str, float] = field(default_factory=dict)
     checked: str = ""
     emulator: Any = None
+    until_stopped_s: float | None = None
 
     def emulated(self) -> dict[str, Any] | None:
         """What the emulated OP2 the motion ran on did (an in-process one, ``--port lockstep``): its report once the
@@ -115,27 +121,41 @@ class MotionResult:
                 "fault": None if self.fault is None else self.fault.as_dict(), "checked": self.checked,
                 "runs": {name: r.as_dict() for name, r in self.runs}, "notes": list(self.notes),
                 "target_error_deg": None if err is None else round(err, 3), "travel": dict(self.travel),
-                "emulated": self.emulated()}
+                "until_stopped_s": self.until_stopped_s, "emulated": self.emulated()}
 
     def lines(self) -> list[str]:
         """For people."""
-        out = [f"{self.what}: {self.planned_s:.2f} s planned; {self.checked}"]
+        if self.until_stopped_s is None:
+            plan = f"{self.planned_s:.2f} s planned"
+        else:
+            plan = (f"{self.planned_s - self.until_stopped_s:.2f} s to its first pose, then until stopped (at most "
+                    f"{self.until_stopped_s / 60:g} min)")
+        out = [f"{self.what}: {plan}; {self.checked}"]
         out += [f"  {name}: {r.describe()}" for name, r in self.runs]
         out += [f"  note: {n}" for n in self.notes]
         err = self.target_error_deg()
         if err is not None:
             out.append(f"  last goals within {err:.2f}° of the target pose")
-        if self.travel:
-            out.append("  leg odometry: " + ", ".join(f"{k} {v:+.3f}" for k, v in self.travel.items()))
+        out += self._travel_lines()
         emulated = self.emulated()
         if emulated is not None:
             truth = emulated["truth"]
-            out.append(f"  emulated OP2 (lockstep): torso at x {truth['x_m']:+.3f} m, y {truth['y_m']:+.3f} m, heading "
-                       f"{math.degrees(truth['yaw_rad']):+.1f}°, tilt {math.degrees(truth['tilt_rad']):.1f}°")
+            out.append(f"  emulated OP2 (lockstep): torso at x {signed(truth['x_m'], 3)} m, y "
+                       f"{signed(truth['y_m'], 3)} m, heading {signed(math.degrees(truth['yaw_rad']), 1)}°, tilt "
+                       f"{math.degrees(truth['tilt_rad']):.1f}°")
         if self.fault is not None:
             out.append(f"  STOPPED: {self.fault.describe()}")
         elif self.ended == "stopped":
             out.append("  stopped on request, standing")
+        return out
+
+    def _travel_lines(self) -> list[str]:
+        """Where the feet took it (leg odometry, planned walks) and the gyro's heading, for people."""
+        t, out = self.travel, []
+        if "distance_m" in t:
+            out.append(f"  leg odometry: x {t['x_m']:+.3f} m, y {t['y_m']:+.3f} m, {t['distance_m']:.3f} m in all")
+        if "gyro_heading_deg" in t:
+            out.append(f"  heading by the gyro: {signed(t['gyro_heading_deg'], 1)}°")
         return out
 
 
@@ -185,35 +205,100 @@ def setup(port: RobotPort, spec: Spec, return_delay: int, confirm: Callable[[str
                            tuple(sorted(set(now) - set(change))), tuple(failed))
 
 
-def teach(port: RobotPort, spec: Spec, name: str, support: Support | SupportName = "double", limp: bool = False,
-          wait: Callable[[], None] | None = None) -> tuple[Pose, list[str]]:
-    """The robot's present joint angles as a pose. With ``limp`` the torque goes off, ``wait`` lets the user move the
-    limbs, the angles are read, and the torque comes back on holding them. Angles beyond a joint's mechanical
-    range are clipped to it (a note says so)."""
+@dataclass(frozen=True)
+class Limp:
+    """What :func:`teach` lets go limp: ``joints`` (official names, e.g. from
+    :func:`~op2motion.robot.limbs.select_joints`); ``confirm(question)``, which must say yes before any torque goes off
+    (the question names the joints and, for a standing robot's legs, that it will sag and fall); and the time to
+    move them by hand: once they are limp, ``wait()`` (e.g. until Enter), then ``wait_s`` seconds on the robot's clock
+    (simulated time on an emulated robot in lockstep)."""
+
+    joints: tuple[str, ...]
+    confirm: Callable[[str], bool]
+    wait: Callable[[], None] | None = None
+    wait_s: float | None = None
+
+
+def limp_question(spec: Spec, joints: tuple[str, ...], tilt_rad: float) -> str:
+    """What :func:`teach` asks before ``joints`` go limp on a robot tilted ``tilt_rad``: a standing robot (tilted
+    less than :data:`~op2motion.robot.imu.FALL_TILT_RAD`) whose legs are among them is told it will sag and fall."""
+    what = describe_joints(joints, spec.joint_names)
+    if set(joints) & set(limb_groups(spec.joint_names)["legs"]) and tilt_rad < FALL_TILT_RAD:
+        return (f"switch the torque off in {what}, though the robot stands (tilted {math.degrees(tilt_rad):.0f}°): "
+                f"its legs give way and it will sag and fall unless you hold it up?")
+    return f"switch the torque off in {what} (they go limp: hold them)?"
+
+
+def teach(port: RobotPort, spec: Spec, name: str, support: Support | SupportName = "double",
+          limp: Limp | None = None, force: bool = False) -> tuple[Pose, list[str]]:
+    """The robot's present joint angles as a pose. With ``limp`` (:class:`Limp`), once it confirms, its joints'
+    torque goes off while every other joint holds, the user moves them, the angles are read, and the limp joints hold
+    where they were left (:func:`_read_limp`). A robot found fallen (tilted beyond
+    :data:`~op2motion.robot.imu.FALL_TILT_RAD`), before going limp or at the read, is refused (exit 1, before
+    anything moved or with nothing to write) unless ``force``: then its pose says ``fallen`` in its provenance and a
+    note says so. Angles beyond a joint's mechanical range are clipped to it (a note says so)."""
     with Session(port, spec) as session:
-        robot = session.robot
-        state = session.status()
-        missing = [f"{s.joint} (ID {s.id})" for s in state.servos if not s.answers]
-        if missing:
-            raise CheckFailed(f"cannot read a whole pose: {', '.join(missing)} not answering")
-        if limp:
-            robot.torque(False)
-            if wait is not None:
-                wait()
-            state = session.status()
-            missing = [f"{s.joint} (ID {s.id})" for s in state.servos if not s.answers]
-            if missing:
-                raise CheckFailed(f"cannot read a whole pose: {', '.join(missing)} not answering")
+        state = _whole(session)
+        start_rad = state.board.tilt_rad
+        if start_rad > FALL_TILT_RAD and not force:
+            raise CheckFailed(f"refused: the robot lies (tilted {math.degrees(start_rad):.0f}°): a pose read from it "
+                              f"is a fallen robot's; --force reads it, marked fallen")
+        joints = limp.joints if limp is not None else ()
+        if limp is not None and joints:
+            state = _read_limp(session, state, limp)
+        tilt_rad = state.board.tilt_rad
+        fallen = tilt_rad > FALL_TILT_RAD
+        if fallen and not force:
+            raise CheckFailed(f"refused: the robot fell while limp (tilted {math.degrees(tilt_rad):.0f}°, from "
+                              f"{math.degrees(start_rad):.0f}°): nothing written; its joints hold where it lies; "
+                              f"--force writes a fallen robot's pose, marked fallen")
         lower, upper = mechanical_bounds(spec)
         angles, clipped = clip_goals(state.servo_angles, lower, upper)
         notes = [f"{spec.joint_names[i]} read {math.degrees(state.servo_angles[i]):.1f}°, beyond its mechanical "
                  f"range: clipped to {math.degrees(angles[i]):.1f}°" for i in np.flatnonzero(clipped)]
-        if limp:
-            robot.take_control({s.id: q for s, q in zip(state.servos, angles)})
+        if fallen:
+            notes.insert(0, f"the robot lies (tilted {math.degrees(tilt_rad):.0f}°): a fallen robot's pose, marked "
+                            f"fallen in the file (--force)")
         pose = Pose(name, Support.of(support), angles, {},
-                    {"source": "robot", "port": session.path, "limp": limp, "tilt_deg": round(math.degrees(
-                        state.board.tilt_rad), 1)})
+                    {"source": "robot", "port": session.path, "limp": bool(joints), "limp_joints": list(joints),
+                     "tilt_deg": round(math.degrees(tilt_rad), 1), "fallen": fallen})
         return pose.checked(spec), notes
+
+
+def _whole(session: Session) -> RobotStatus:
+    """The whole robot read; a servo that does not answer is refused (exit 1): a pose needs every joint."""
+    state = session.status()
+    missing = [f"{s.joint} (ID {s.id})" for s in state.servos if not s.answers]
+    if missing:
+        raise CheckFailed(f"cannot read a whole pose: {', '.join(missing)} not answering")
+    return state
+
+
+def _read_limp(session: Session, state: RobotStatus, limp: Limp) -> RobotStatus:
+    """Ask ``limp.confirm`` (a no: exit 2, nothing done); hold every other joint (a servo whose torque is off, as on
+    a robot just powered, switched on where it is); switch the torque off in ``limp.joints``; wait; read the whole
+    robot; and, however the wait ends (Ctrl-C too), switch those joints on again where they are, so nothing jumps."""
+    robot, spec = session.robot, session.spec
+    if not limp.confirm(limp_question(spec, limp.joints, state.board.tilt_rad)):
+        raise InputError("not confirmed: nothing done (--yes confirms)", "yes")
+    others = {s.id: s.position_rad for s in state.servos if s.joint not in limp.joints and not s.torque_on}
+    if others:
+        robot.take_control(others)
+    devices = [s.id for s in state.servos if s.joint in limp.joints]
+    robot.torque(False, devices)
+    held: dict[int, float] | None = None
+    try:
+        if limp.wait is not None:
+            limp.wait()
+        if limp.wait_s is not None and session.port is not None:
+            sleep(session.port.clock, limp.wait_s)      # the robot's clock: simulated time moves on in lockstep
+        after = _whole(session)
+        held = {s.id: s.position_rad for s in after.servos if s.id in devices}     # held as read: as in the pose
+        return after
+    finally:
+        held = robot.positions(devices) if held is None else held
+        if held:
+            robot.take_control(held)
 
 
 def load_motion(path: str, page: int | None, spec: Spec) -> tuple[str, Any]:

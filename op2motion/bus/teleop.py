@@ -5,8 +5,10 @@ Keys (:data:`HELP`): ``w``/``s`` (or the up/down arrows) faster forward/backward
 sideways left/right by :data:`VY_STEP_M_S`, ``q``/``e`` (or the left/right arrows) turn left/right by
 :data:`YAW_STEP_RAD_S`, space stands (a zero command: the walk slows down and closes its feet), ``z``/``c`` kick with
 the left/right foot (stop, kick, walk on), ``x`` ends the walk (it stops within two steps, on both feet, and the
-command exits 0 once the robot stands still). Ctrl-C stops as it does for every walk. The command is kept within
-the walk's measured envelope (:mod:`op2motion.gait.envelope`), so holding a key cannot ask for more.
+command exits 0 once the robot stands still). Ctrl-C stops as it does for every walk. The keys add up what they ask,
+each axis within its own limit, and the walk is told that within its measured envelope
+(:mod:`op2motion.gait.envelope`): holding a key cannot ask for more, and a key and its opposite cancel exactly.
+The command line reads keys only from a terminal (``robot walk --teleop``).
 
 Keys arrive on another thread (:func:`read_keys`); the loop applies them between ticks (:meth:`Teleop.apply`), so the
 walk's planner only ever runs on the loop's thread.
@@ -25,6 +27,7 @@ VX_STEP_M_S = 0.05                      # one w/s press [m/s]
 VY_STEP_M_S = 0.02                      # one a/d press [m/s]
 YAW_STEP_RAD_S = math.radians(5.0)      # one q/e press [rad/s]
 POLL_S = 0.1                            # the key reader looks for a stop this often [s]
+ZERO = 1e-9                             # a command component this small is a zero left by rounding [m/s, rad/s]
 ARROWS = {"\x1b[A": "w", "\x1b[B": "s", "\x1b[C": "e", "\x1b[D": "q"}
 HELP = ("keys: w/s (up/down) forward/backward, a/d sideways, q/e (left/right) turn, space stand, z/c kick left/right, "
         "x end the walk, Ctrl-C stop")
@@ -38,6 +41,7 @@ class Teleop:
     def __init__(self, envelope: Any, on_change: Callable[[str], None] | None = None):
         self.envelope, self.on_change = envelope, on_change
         self.command = (0.0, 0.0, 0.0)
+        self.wanted = (0.0, 0.0, 0.0)       # the keys' sum, each axis within its own limit (command: the envelope's)
         self.ended = False
         self.pending: list[tuple[str, Any]] = []
         self.keys = 0
@@ -61,11 +65,14 @@ class Teleop:
             if self.ended:
                 return
             if key in steps:
-                wanted = [c + d for c, d in zip(self.command, steps[key])]
-                self.command = tuple(float(v) for v in self.envelope.clamp(*wanted))  # type: ignore[assignment]
+                # keys add to what was asked, not to the envelope's scaled command: a then d is back where it was
+                # (adding to a command scaled down for a combined walk left vy at -0.002 m/s: a slow sideways drift)
+                self.wanted = tuple(self._alone(axis, c + d)  # type: ignore[assignment]
+                                    for axis, (c, d) in enumerate(zip(self.wanted, steps[key])))
+                self.command = _exact(self.envelope.clamp(*self.wanted))  # type: ignore[assignment]
                 self.pending.append(("command", self.command))
             elif key == " ":
-                self.command = (0.0, 0.0, 0.0)
+                self.command = self.wanted = (0.0, 0.0, 0.0)
                 self.pending.append(("command", self.command))
             elif key in ("z", "c"):
                 self.pending.append(("kick", "left" if key == "z" else "right"))
@@ -77,6 +84,12 @@ class Teleop:
             self.keys += 1
         if self.on_change is not None:
             self.on_change(self.describe())
+
+    def _alone(self, axis: int, value: float) -> float:
+        """``value`` on ``axis`` (0 vx, 1 vy, 2 yaw rate) within the envelope's limit for that axis alone."""
+        command = [0.0, 0.0, 0.0]
+        command[axis] = value
+        return _exact((self.envelope.clamp(*command)[axis],))[0]
 
     def apply(self, walk: Any) -> None:
         """Tell ``walk`` (a steered walk) what the keys asked since the last call, in order."""
@@ -94,7 +107,18 @@ class Teleop:
         """The command for people: vx, vy [m/s], yaw rate [deg/s]."""
         vx, vy, yaw = self.command
         state = "ending" if self.ended else "walking"
-        return f"{state}: vx {vx:+.2f} m/s, vy {vy:+.2f} m/s, turn {math.degrees(yaw):+.0f} °/s"
+        return f"{state}: vx {signed(vx, 2)} m/s, vy {signed(vy, 2)} m/s, turn {signed(math.degrees(yaw), 0)} °/s"
+
+
+def _exact(values: Any) -> tuple[float, ...]:
+    """``values`` as floats, a residue of steps that cancel (0.05 * 3 - 0.05 * 3) an exact zero."""
+    return tuple(0.0 if abs(v) < ZERO else float(v) for v in values)
+
+
+def signed(value: float, digits: int) -> str:
+    """``value`` with its sign and ``digits`` decimals, never a negative zero (a command whose keys cancelled to
+    -1e-17, or a heading of -0.01° shown to a degree, reads ``+0``)."""
+    return f"{round(value, digits) + 0.0:+.{digits}f}"
 
 
 @contextlib.contextmanager

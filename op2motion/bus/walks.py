@@ -99,7 +99,7 @@ def run_on_robot(port: RobotPort, spec: Spec, controller: Any, what: str = "cont
         session.preflight(state)
         first = np.asarray(controller.plan.goals[0], dtype=float)
         planned = controller.plan.duration_s if duration_s is None else duration_s
-        result = MotionResult(what, planned, emulator=session.emulated)
+        result = MotionResult(what, planned, emulator=session.emulated, until_stopped_s=duration_s)
         if float(np.max(np.abs(first - state.servo_angles))) <= START_JUMP_RAD:
             result.checked = "no move needed first (the controller starts where the robot is)"
             if options.stopped():

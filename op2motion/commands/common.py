@@ -105,6 +105,9 @@ class PlainTicker:
         """Shown after the count (e.g. the best cost)."""
         self._postfix = "; " + ", ".join(f"{k} {v}" for k, v in values.items())
 
+    def close(self) -> None:
+        """Nothing to clear (as tqdm's ``close``)."""
+
     def __enter__(self) -> "PlainTicker":
         return self
 
@@ -112,13 +115,26 @@ class PlainTicker:
         return None
 
 
-def ticker(args: argparse.Namespace, desc: str, unit: str, total: float | None = None, leave: bool = False) -> Any:
-    """A tqdm bar on a terminal, else a :class:`PlainTicker` (JSON output keeps stdout clean either way)."""
+def ticker(args: argparse.Namespace, desc: str, unit: str, total: float | None = None, leave: bool = False,
+           bar_format: str | None = None) -> Any:
+    """A tqdm bar on a terminal (``bar_format``: tqdm's, e.g. for a count that is not whole), else a
+    :class:`PlainTicker` (JSON output keeps stdout clean either way)."""
     if progress_enabled(args):
         from tqdm import tqdm
 
-        return tqdm(total=total, desc=desc, unit=unit, leave=leave)
+        return tqdm(total=total, desc=desc, unit=unit, leave=leave, bar_format=bar_format)
     return PlainTicker(desc, unit, total)
+
+
+def say(args: argparse.Namespace, line: str) -> None:
+    """``op2motion: LINE`` on stderr while a command runs (from any thread): on a terminal through tqdm, which clears
+    its bars, prints the line and draws them again below it, so that neither overwrites the other."""
+    if progress_enabled(args):
+        from tqdm import tqdm
+
+        tqdm.write(f"op2motion: {line}", file=sys.stderr)
+    else:
+        print(f"op2motion: {line}", file=sys.stderr, flush=True)
 
 
 @contextlib.contextmanager

@@ -9,10 +9,9 @@ import math
 import signal
 import sys
 import threading
-import time
-from typing import TYPE_CHECKING, Any, Iterator
+from typing import TYPE_CHECKING, Any, Callable, Iterator
 
-from op2motion.commands.common import add_command, number, output_path, pose_name, ticker, whole
+from op2motion.commands.common import add_command, number, output_path, pose_name, say, ticker, whole
 from op2motion.commands.deliver import deliver
 from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
@@ -24,6 +23,7 @@ MAX_WAIT_S = 600.0
 SHARED_PORT_HELP = ("open the port even though another process holds it open: the bridge that serves it (socat's "
                     "pty, which keeps the terminal side open itself; docs/robot.md). Without it such a port is "
                     "refused, naming the process")
+ROBOT_BAR = "{desc}: {n:.2f} {unit} [{elapsed}]"     # the loop's time in 8 ms ticks: not a whole count
 
 
 def register(sub: Any) -> None:
@@ -42,18 +42,8 @@ def register(sub: Any) -> None:
     _port(p)
     _setup_args(add_command(inner, "setup", cmd_setup, "set every servo's Return Delay Time (EEPROM) so the 8 ms "
                                                        "loop can read them all; written only where it differs"))
-    p = add_command(inner, "read", cmd_read, "the robot's present joint angles as a pose file (teach by hand with "
-                                             "--limp)")
-    _port(p)
-    p.add_argument("--out", type=output_path, required=True, metavar="POSE", help="pose file to write (atomically)")
-    p.add_argument("--name", type=pose_name, help="pose name (default: the file's stem)")
-    p.add_argument("--support", choices=("left", "right", "double"), default="double",
-                   help="the support the pose stands on (default double)")
-    p.add_argument("--limp", action="store_true",
-                   help="switch the torque off first so you can move the limbs by hand (hold the robot!); the "
-                        "angles are read when you press Enter (or after --wait), then the torque holds them")
-    p.add_argument("--wait", type=number(0.0, MAX_WAIT_S, "s"), default=None, metavar="S",
-                   help="with --limp: read after S seconds instead of waiting for Enter")
+    _read_args(add_command(inner, "read", cmd_read, "the robot's present joint angles as a pose file (teach by hand "
+                                                    "with --limp)"))
     p = add_command(inner, "play", cmd_play, "a pose, a motion file or an action page on the robot, from where it "
                                              "is")
     _port(p)
@@ -71,7 +61,8 @@ def register(sub: Any) -> None:
                    help="steer the walk by a command timeline (CSV or JSON, as walk --commands); ends standing "
                         "after its stop")
     p.add_argument("--teleop", action="store_true",
-                   help="steer the walk from the keyboard (w/s a/d q/e, space stands, z/c kick, x ends)")
+                   help="steer the walk from the keyboard (w/s a/d q/e, space stands, z/c kick, x ends); standard "
+                        "input must be the terminal")
     p.add_argument("--action", metavar="FILE", help="steered walks: an action file whose kick pages the kicks play")
     p.add_argument("--get-up", action="store_true",
                    help="steered walks: a fall lowers the torque, the robot gets up and walks on (otherwise a fall "
@@ -85,6 +76,27 @@ def register(sub: Any) -> None:
     _emulate_args(add_command(inner, "emulate", cmd_emulate,
                               "an emulated OP2 on a pseudo-terminal (a link at --link), byte for byte, physics "
                               "behind it in real time"))
+
+
+def _read_args(p: argparse.ArgumentParser) -> None:
+    """``robot read``'s flags."""
+    _port(p)
+    p.add_argument("--out", type=output_path, required=True, metavar="POSE", help="pose file to write (atomically)")
+    p.add_argument("--name", type=pose_name, help="pose name (default: the file's stem)")
+    p.add_argument("--support", choices=("left", "right", "double"), default="double",
+                   help="the support the pose stands on (default double)")
+    p.add_argument("--limp", nargs="?", const="all", default=None, metavar="JOINTS",
+                   help="switch the torque off in these joints first so you can move them by hand: limbs (all, head, "
+                        "arms, left_arm, right_arm, legs, left_leg, right_leg) or joint names, comma-separated (bare "
+                        "--limp: all); it asks first (--yes); the other joints hold; the angles are read when you "
+                        "press Enter (or after --wait), then the torque holds them")
+    p.add_argument("--wait", type=number(0.0, MAX_WAIT_S, "s"), default=None, metavar="S",
+                   help="with --limp: read after S seconds instead of waiting for Enter")
+    p.add_argument("--yes", action="store_true",
+                   help="with --limp: do not ask (a standing robot whose legs go limp sags and falls: hold it)")
+    p.add_argument("--force", action="store_true",
+                   help="write the pose of a robot found fallen (tilted beyond 45°), marked fallen in the file "
+                        "(otherwise refused, nothing written)")
 
 
 def _setup_args(p: argparse.ArgumentParser) -> None:
@@ -194,43 +206,75 @@ def cmd_status(args: argparse.Namespace, spec: Spec) -> int:
     return deliver(args, robot_status(_robot(args), spec))
 
 
-def cmd_setup(args: argparse.Namespace, spec: Spec) -> int:
-    """``op2motion robot setup``."""
-    from op2motion.tasks.robot import robot_setup
-
+def confirmer(args: argparse.Namespace) -> Callable[[str], bool]:
+    """How a command confirms what it is about to do (``--yes``; else a question on the terminal, answered y or n;
+    with no terminal to ask on, bad input naming ``--yes``)."""
     def confirm(question: str) -> bool:
         if args.yes:
+            print(f"op2motion: {question} yes (--yes)", file=sys.stderr, flush=True)
             return True
-        if not sys.stdin.isatty():
+        if not stdin_is_terminal():
             raise InputError(f"expected --yes to {question.rstrip('?')} (no terminal to ask on)", "yes")
         print(f"op2motion: {question} [y/N] ", end="", file=sys.stderr, flush=True)
         return sys.stdin.readline().strip().lower() in ("y", "yes")
 
-    return deliver(args, robot_setup(_robot(args), spec, args.return_delay, confirm))
+    return confirm
+
+
+def stdin_is_terminal() -> bool:
+    """Whether standard input is a terminal (closed or missing: no)."""
+    try:
+        return sys.stdin is not None and sys.stdin.isatty()
+    except (ValueError, OSError):
+        return False
+
+
+def cmd_setup(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion robot setup``."""
+    from op2motion.tasks.robot import robot_setup
+
+    return deliver(args, robot_setup(_robot(args), spec, args.return_delay, confirmer(args)))
 
 
 def cmd_read(args: argparse.Namespace, spec: Spec) -> int:
-    """``op2motion robot read``."""
+    """``op2motion robot read``: the flags checked before the port is opened (a limp without a way to confirm it or
+    to wait for the user: exit 2, nothing done)."""
     from pathlib import Path
 
+    from op2motion.bus.tasks import Limp
     from op2motion.fileio import OutputSet
+    from op2motion.robot.limbs import describe_joints, select_joints
     from op2motion.tasks.robot import robot_read
 
-    if args.wait is not None and not args.limp:
-        raise InputError("expected --limp with --wait (it is the time to move the limbs)", "wait")
+    if args.limp is None and args.wait is not None:
+        raise InputError("expected --limp with --wait (it is the time to move the limp joints)", "wait")
+    if args.limp is None and args.yes:
+        raise InputError("expected --limp with --yes (it confirms the limp)", "yes")
+    limp = None
+    if args.limp is not None:
+        joints = select_joints(args.limp, spec.joint_names)
+        if not args.yes and not stdin_is_terminal():
+            raise InputError(f"expected --yes to switch the torque off in {describe_joints(joints, spec.joint_names)}"
+                             f" (no terminal to ask on; nothing done)", "yes")
+        if args.wait is None and not stdin_is_terminal():
+            raise InputError("expected --wait S with --limp (no terminal: no Enter to wait for)", "wait")
+        limp = Limp(joints, confirmer(args), _wait_for_enter if args.wait is None else _announce(args.wait), args.wait)
     outputs = OutputSet({"out": args.out})
     name = args.name or pose_name_of(Path(args.out).stem)
-
-    def wait() -> None:
-        if args.wait is not None:
-            print(f"op2motion: the robot is limp: move its limbs; reading in {args.wait:g} s", file=sys.stderr)
-            time.sleep(args.wait)
-        elif sys.stdin.isatty():
-            print("op2motion: the robot is limp: move its limbs, then press Enter", file=sys.stderr)
-            sys.stdin.readline()
-
-    result = robot_read(_robot(args), spec, name, outputs.paths["out"], args.support, args.limp, wait)
+    result = robot_read(_robot(args), spec, name, outputs.paths["out"], args.support, limp, args.force)
     return deliver(args, result, outputs, "none")
+
+
+def _announce(wait_s: float) -> Callable[[], None]:
+    """``robot read --limp --wait S``: a line once the joints are limp (the wait itself is the robot's clock's)."""
+    return lambda: print(f"op2motion: the chosen joints are limp: move them; reading in {wait_s:g} s", file=sys.stderr,
+                         flush=True)
+
+
+def _wait_for_enter() -> None:
+    """``robot read --limp`` on a terminal: until the user presses Enter."""
+    print("op2motion: the chosen joints are limp: move them, then press Enter", file=sys.stderr, flush=True)
+    sys.stdin.readline()
 
 
 def pose_name_of(stem: str) -> str:
@@ -243,23 +287,20 @@ def pose_name_of(stem: str) -> str:
 def _motion(args: argparse.Namespace, spec: Spec, run: Any) -> int:
     """Run a motion task with Ctrl-C handling and progress; print; the exit code."""
     from op2motion.bus.tasks import Options
-    from op2motion.commands.common import progress
     from op2motion.tasks.robot import robot_motion
 
-    with stop_on_signals() as stop, ticker(args, "robot", "s") as bar:
+    with stop_on_signals() as stop, ticker(args, "robot", "s", bar_format=ROBOT_BAR) as bar, \
+            ticker(args, "check", "s") as check:
+        def on_progress(done: float, total: float) -> None:
+            check.total = total
+            check.update(done - check.n)
+
         def on_tick(tick: Any) -> None:
+            check.close()              # the physics check is over once the loop runs: its bar goes (not left stale)
             bar.update(0.008)
 
-        def on_event(text: str) -> None:                  # above the bar, as it happens
-            line = f"op2motion: {text}"
-            writer = getattr(bar, "write", None)
-            if writer is not None:
-                writer(line, file=sys.stderr)
-            else:
-                print(line, file=sys.stderr, flush=True)
-
-        with progress(args, "check", "s") as on_progress:
-            result = robot_motion(run, Options(args.force, stop, on_tick, on_progress, on_event))
+        result = robot_motion(run, Options(args.force, stop, on_tick, on_progress,
+                                                lambda text: say(args, text)))
     return deliver(args, result)
 
 
@@ -301,16 +342,33 @@ def _steered(args: argparse.Namespace, spec: Spec) -> int:
     for flag in ("steps", "target"):
         if getattr(args, flag) is not None:
             raise InputError(f"expected --{flag} only with a planned walk, not with --commands or --teleop", flag)
+    if args.teleop and not stdin_is_terminal():
+        # keys from a file or a pipe could neither steer nor end the walk once they ran out (it would walk on for
+        # up to an hour): refused before anything moves; a file of commands is what --commands takes
+        raise InputError(f"expected a terminal on standard input to steer by keys, got {_stdin_kind()} (the walk "
+                         f"could not be steered or ended); --commands FILE steers from a file", "teleop")
     commands = read_commands(args.commands) if args.commands is not None else None
     action = ActionFile.read(args.action) if args.action is not None else None
     if not args.teleop:
         return _motion(args, spec, lambda options: steered_walk(_robot(args), spec, args.preset, commands, None, action,
                                                                 args.get_up, options))
-    teleop = Teleop(STEER_ENVELOPE, lambda line: print(f"op2motion: {line}", file=sys.stderr, flush=True))
-    print(f"op2motion: {HELP}", file=sys.stderr, flush=True)
+    teleop = Teleop(STEER_ENVELOPE, lambda line: say(args, line))
     with read_keys(sys.stdin.fileno(), teleop):
+        say(args, HELP)
         return _motion(args, spec, lambda options: steered_walk(_robot(args), spec, args.preset, commands, teleop,
                                                                 action, args.get_up, options))
+
+
+def _stdin_kind() -> str:
+    """What standard input is, in words (``a regular file``, ``a named pipe``, ``a character device``, ...)."""
+    import os
+
+    from op2motion.fileio import file_kind
+
+    try:
+        return f"a {file_kind(os.fstat(sys.stdin.fileno()).st_mode)}"
+    except (AttributeError, ValueError, OSError):
+        return "none (closed)"
 
 
 def cmd_getup(args: argparse.Namespace, spec: Spec) -> int:

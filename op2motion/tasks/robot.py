@@ -15,7 +15,7 @@ from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
     from op2motion.bus.port import RobotPort
-    from op2motion.bus.tasks import MotionResult, Options
+    from op2motion.bus.tasks import Limp, MotionResult, Options
     from op2motion.physics import EngineName
     from op2motion.robot.support import Support, SupportName
 
@@ -48,17 +48,21 @@ def robot_setup(port: RobotPort, spec: Spec, return_delay: int, confirm: Callabl
 
 
 def robot_read(port: RobotPort, spec: Spec, name: str, output: Path, support: Support | SupportName = "double",
-               limp: bool = False, wait: Callable[[], None] | None = None) -> TaskResult:
-    """``robot read``: the present joint angles as pose ``name`` on ``support``, for ``output`` (``limp``: the
-    torque off while ``wait`` lets the user move the limbs, then on again holding them)."""
+               limp: Limp | None = None, force: bool = False) -> TaskResult:
+    """``robot read``: the present joint angles as pose ``name`` on ``support``, for ``output`` (``limp``: the chosen
+    joints limp after its confirmation while the user moves them, then holding them; a robot found fallen is refused
+    unless ``force``: see :func:`~op2motion.bus.tasks.teach`)."""
     from op2motion.bus.tasks import teach
     from op2motion.formats.posefile import pose_to_json
 
-    pose, notes = teach(port, spec, name, support, limp, wait)
+    pose, notes = teach(port, spec, name, support, limp, force)
+    joints = list(pose.provenance["limp_joints"])
     data = {"pose": name, "support": support, "servo_deg": {n: round(math.degrees(q), 3) for n, q in
                                                             zip(spec.joint_names, pose.servo)},
-            "notes": notes, "path": str(output), "limp": limp}
-    lines = "\n".join([f"wrote {output}: pose {name} ({support})"] + [f"  {n}" for n in notes])
+            "notes": notes, "path": str(output), "limp": bool(joints), "limp_joints": joints,
+            "tilt_deg": pose.provenance["tilt_deg"], "fallen": pose.provenance["fallen"]}
+    lines = "\n".join([f"wrote {output}: pose {name} ({support}){' of a FALLEN robot' if data['fallen'] else ''}"]
+                      + [f"  {n}" for n in notes])
     return TaskResult(True, None, None, {"out": Output(str(output), pose_to_json(pose, spec))}, data, (lines,),
                       file_keys={})
 
