@@ -175,17 +175,20 @@ def test_end_to_end_in_real_time_on_a_pseudo_terminal(tmp_path):
 
 
 def test_a_controller_from_python_starts_with_the_checked_approach_or_is_refused(spec):
-    """docs/robot.md's Python path: ``run_controller(walk, port)`` moves the robot to the walk's first pose by a
+    """docs/robot.md's Python path: ``run_on_robot(port, spec, walk)`` moves the robot to the walk's first pose by a
     checked move first and walks; given an OP2 already taken control of, a controller whose first goals are far
     from the joints is refused before any goal is sent (the first tick used to ask for 119° at the elbows)."""
     from op2motion.bus.loop import run_controller
     from op2motion.bus.session import Session
+    from op2motion.bus.walks import run_on_robot
     from op2motion.errors import CheckFailed
     from op2motion.gait.controller import WalkController
 
     with lockstep(spec) as (emulator, port):
-        report = run_controller(WalkController.from_preset("forward", steps=PYTHON_STEPS), port, spec)
+        result = run_on_robot(port, spec, WalkController.from_preset("forward", steps=PYTHON_STEPS))
         truth = emulator.truth()
+    assert [name for name, _ in result.runs] == ["approach", "run"] and "checked in physics" in result.checked
+    report = result.last
     assert report.ended == "done" and report.fault is None
     assert truth["x_m"] > PYTHON_WALKED_M and math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG, truth
     with lockstep(spec) as (emulator, port), Session(port, spec) as session:

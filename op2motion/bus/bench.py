@@ -83,7 +83,7 @@ def _lockstep_speedup(spec: Spec, engine: EngineName) -> float:
     """Simulated seconds per wall second of :data:`LOOP_S` of the standing hold in lockstep behind the real wire."""
     from op2motion.bus.emulator.lockstep import LockstepPort
     from op2motion.bus.emulator.server import Emulator
-    from op2motion.bus.loop import run_controller
+    from op2motion.bus.walks import run_on_robot
     from op2motion.physics import Schedule
     from op2motion.robot.joints import BookAngles, book_to_servo
 
@@ -91,8 +91,9 @@ def _lockstep_speedup(spec: Spec, engine: EngineName) -> float:
     try:
         stand = book_to_servo(BookAngles.standing("left"), spec)[0]
         t0 = time.perf_counter()
-        report = run_controller(Schedule.hold(stand, "double", spec, LOOP_S + 1.0), LockstepPort(emulator), spec,
-                                duration_s=LOOP_S)
-        return round(report.seconds / (time.perf_counter() - t0), 2)
+        result = run_on_robot(LockstepPort(emulator), spec, Schedule.hold(stand, "double", spec, LOOP_S + 1.0),
+                              duration_s=LOOP_S)
+        seconds = result.last.seconds if result.last is not None else 0.0
+        return round(seconds / (time.perf_counter() - t0), 2)
     finally:
         emulator.close()

@@ -305,25 +305,20 @@ def run_controller(controller: Controller, port: RobotPort | OP2, spec: Spec | N
                    duration_s: float | None = None, stop: threading.Event | None = None,
                    on_tick: Callable[[Tick], None] | None = None, watch: bool = True,
                    until_done: bool = False) -> LoopReport:
-    """Run ``controller`` on the robot at ``port`` (a path or an open port, e.g. an emulated OP2's in lockstep:
-    started as every robot command starts one, :func:`~.walks.run_on_robot`: preflighted, a planned move checked in
-    physics to its first goals if they are not where the joints are, and the report of the controller's run
-    returned; or an :class:`~.robot.OP2` already set up, whose controller must start within :data:`START_JUMP_RAD`
-    of where the joints are: refused (:class:`~op2motion.errors.CheckFailed`, exit 1) before a goal is sent
-    otherwise) every 8 ms on the port's clock
+    """Run ``controller`` on ``port``, an :class:`~.robot.OP2` already taken control of (a session's; a controller
+    on a path or an open port starts with :func:`~.walks.run_on_robot`, as every robot command starts one: read,
+    preflighted, moved to the controller's first goals first by a planned move checked in physics); a controller
+    whose first goals are more than :data:`START_JUMP_RAD` from where the joints are is refused
+    (:class:`~op2motion.errors.CheckFailed`, exit 1) before a goal is sent. Every 8 ms on the port's clock
     for ``duration_s`` (default: its plan's duration; with ``until_done`` also ending as soon as the controller is
     done, e.g. a steered walk standing still after its stop, a get-up standing), until ``stop`` is set or a fault
     stops it (see the module docstring). ``on_tick`` gets every :class:`Tick`. The servos keep holding the last
     goals afterwards. A controller with ``handles_falls`` (a :class:`~op2motion.motion.fall.Supervisor`) deals with
     falls itself: the watch does not stop it for one."""
     if not isinstance(port, OP2):
-        from op2motion.bus.tasks import Options
-        from op2motion.bus.walks import run_on_robot
-        from op2motion.robot.specfile import default_spec
-
-        result = run_on_robot(port, spec or default_spec(), controller, options=Options(stop=stop, on_tick=on_tick),
-                              duration_s=duration_s)
-        return result.last or LoopReport(ended="stopped")
+        raise InputError(f"expected an OP2 already taken control of, got {type(port).__name__}: a controller on a "
+                         f"port starts with op2motion.bus.walks.run_on_robot(port, spec, controller), which moves the "
+                         f"robot to its first goals first, checked in physics", "port")
     with steady(), realtime(LOOP_PRIORITY) as report_realtime:        # the collection before the priority
         report = _loop(_Run(controller, port, watch), controller.plan.duration_s if duration_s is None else duration_s,
                        stop, on_tick, until_done)
