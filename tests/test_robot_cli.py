@@ -17,7 +17,8 @@ from helpers import POSES, STOCK, run_cli
 
 from op2motion.bus.emulator.faults import Faults
 from op2motion.bus.safety import FALL_TORQUE_LIMIT, WrongModel
-from op2motion.bus.tasks import Limp, Options, limp_question, play, setup, teach
+from op2motion.bus.stand import play
+from op2motion.bus.tasks import Limp, Options, limp_question, setup, teach
 from op2motion.bus.walks import walk
 from op2motion.errors import CheckFailed, InputError
 from op2motion.formats.posefile import read_pose, write_pose
@@ -29,6 +30,7 @@ GOAL_TOL_DEG = 1.5             # the acceptance's "every servo commanded within 
 TICK_DEG = 360.0 / 4096        # one position tick
 STANDING_TILT_DEG = 15.0       # a torso tilted less than this still stands
 WALKED_M = 0.2                 # a stop is asked for once the robot has walked this far [m]
+ODOMETRY_TOL_M = 0.05          # a stopped walk's leg odometry within this of where the emulated torso went [m]
 HORN_OFF_TICKS = 1707          # head_pan reads tick 3755 (150°; its range ends at 119°), as in the audit [ticks]
 FAULT_AT_S = 4.0               # the overheating knee's moment, into the motion [s]
 AX12_AS_L_KNEE = "l_knee (ID 14) reports model 12 (AX-12?), expected the MX-28 (29)"
@@ -299,7 +301,10 @@ def test_refused_unless_forced_and_a_fall_lowers_the_torque(spec, tmp_path):
 
 
 @pytest.mark.physics
-def test_a_stop_mid_walk_ends_standing(spec):
+def test_a_stop_mid_walk_ends_standing_and_the_next_motion_closes_the_feet_unforced(spec):
+    """Stopped mid-walk, the robot stands with one foot ahead; its leg odometry says how far it walked (not the whole
+    plan); the next motion, not forced, starts with the step that closes the feet (checked in physics) and plays
+    (it was refused: "slip: a supporting sole slid 19 mm")."""
     with lockstep(spec) as (emulator, port):
         stop = __import__("threading").Event()
         start = emulator.truth()["x_m"]
@@ -311,8 +316,13 @@ def test_a_stop_mid_walk_ends_standing(spec):
         result = walk(port, spec, steps=20, options=Options(stop=stop, on_tick=on_tick))
         port.clock.sleep_until(port.clock.now() + 0.5)
         truth = emulator.truth()
+        again = play(port, spec, str(POSES / "walkready.json"))      # from the feet apart, not forced
+        after = emulator.truth()
     assert result.ended == "stopped" and result.fault is None
     assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and WALKED_M < truth["x_m"] - start < 0.6
+    assert abs(result.travel["x_m"] - (truth["x_m"] - start)) < ODOMETRY_TOL_M, (result.travel, truth)
+    assert again.ended == "done" and [name for name, _ in again.runs] == ["close the feet", "motion"], again.runs
+    assert "checked in physics" in again.checked and math.degrees(after["tilt_rad"]) < STANDING_TILT_DEG
 
 
 @pytest.mark.physics
@@ -439,3 +449,11 @@ def test_board_model_and_error_keys_parse_and_are_checked(capsys):
                            ("errors=14:0", "expected a value 1..255")):
         code, _, err = run_cli(capsys, "robot", "status", "--port", f"lockstep:{text}")
         assert code == 2 and expected in _one_line(err), text
+
+
+def test_robot_stand_goes_to_walk_ready_checked_and_refuses_lying(capsys):
+    code, result, err = robot_json(capsys, "robot", "stand", "--port", "lockstep")
+    assert code == 0 and result["ended"] == "done" and "checked in physics" in result["checked"], err
+    assert result["target_error_deg"] < GOAL_TOL_DEG and "close the feet" not in result["runs"]   # side by side
+    code, _, err = run_cli(capsys, "robot", "stand", "--port", "lockstep:start=lying_back")
+    assert code == 1 and "getup first" in err and len(err.strip().splitlines()) == 1, err

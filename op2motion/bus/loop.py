@@ -84,7 +84,8 @@ class LoopReport:
     :data:`LATE_S`), missed reads (device reads that held their last values), ticks that needed a second read,
     the longest run of missed reads of one device, clipped goals per joint, how it ended (``done``, ``stopped``,
     ``fault``), the fault, the last goals and positions (20,) [rad], the integrated gyro yaw [rad], the largest
-    tilt [rad], the bus's counters, and whether the loop ran at real-time priority (:mod:`.realtime`)."""
+    tilt [rad], the bus's counters, whether the loop ran at real-time priority (:mod:`.realtime`), and the last
+    plan row it played (a stop's frozen row)."""
 
     ticks: int = 0
     seconds: float = 0.0
@@ -105,6 +106,7 @@ class LoopReport:
     bus: dict[str, Any] = field(default_factory=dict)
     realtime: bool = False
     plan: dict[str, Any] = field(default_factory=dict)
+    last_row: int = -1
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready (angles in degrees)."""
@@ -359,6 +361,7 @@ def _loop(run: _Run, duration: float, stop: threading.Event | None, on_tick: Cal
         if stops.over(now, t, duration, lambda: k > 1 and bool(run.controller.done), until_done):
             break
     report.ticks, report.seconds = k, time.now() - start
+    report.last_row = stops.frozen_at if stops.frozen_at is not None else row
     report.period_p50_ms, report.period_p99_ms = _percentile(periods, 50), _percentile(periods, 99)
     report.period_max_ms = max(periods) * 1000.0 if periods else 0.0
     report.goals, report.positions = run.goals.copy(), run.positions.copy()

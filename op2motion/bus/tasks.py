@@ -1,6 +1,7 @@
 """What the ``op2motion robot`` commands do, as library functions: :func:`status`, :func:`setup` (the servos' return
-delay), :func:`teach` (read a pose; chosen joints limp first, after a confirmation) and :func:`play` (a pose, a
-motion file or an action page); the walks and getting up: :mod:`.walks`.
+delay), :func:`teach` (read a pose; chosen joints limp first, after a confirmation), and what every motion shares
+(:class:`MotionResult`, :class:`Options`, :func:`checked`, :func:`run_planned`); playing a pose, a motion file or an
+action page and standing: :mod:`.stand`; the walks and getting up: :mod:`.walks`.
 
 Each opens a :class:`~.session.Session` on the port, reads the whole robot, and (for a motion) refuses to start an
 unfit robot (:mod:`.safety`), builds the motion from where the robot is (:mod:`.plans`), refuses what fails
@@ -16,7 +17,6 @@ from __future__ import annotations
 import math
 import threading
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
@@ -26,12 +26,8 @@ from op2motion.bus.loop import LoopReport, Tick, run_controller
 from op2motion.bus.plans import (
     CHECK_ENGINE,
     LYING_TILT_RAD,
-    move,
-    page_start,
-    page_trajectory,
     physics_problem,
     robot_schedule,
-    then,
 )
 from op2motion.bus.port import RobotPort
 from op2motion.bus.safety import clip_goals, mechanical_bounds, port_fault
@@ -301,22 +297,6 @@ def _read_limp(session: Session, state: RobotStatus, limp: Limp) -> RobotStatus:
             robot.take_control(held)
 
 
-def load_motion(path: str, page: int | None, spec: Spec) -> tuple[str, Any]:
-    """What ``robot play`` was given: ("pose", Pose), ("motion", Motion) or ("page", ActionFile)."""
-    from op2motion.formats.action import ActionFile
-    from op2motion.formats.motionfile import is_motion_file, read_motion
-    from op2motion.formats.posefile import read_pose
-
-    p = Path(path)
-    if page is not None:
-        return "page", ActionFile.read(path)
-    if p.is_file() and p.stat().st_size == ACTION_FILE_BYTES:
-        raise InputError(f"{path} is an action file: expected --page N (the page to play)", "page")
-    if is_motion_file(path):
-        return "motion", read_motion(path, spec)
-    return "pose", read_pose(path, spec)
-
-
 def checked(trajectory: Any, spec: Spec, state: RobotStatus, force: bool, what: str,
              on_progress: Any = None) -> str:
     """Refuse (exit 1) what physics says fails, or a start op2motion cannot check (lying), unless ``force``."""
@@ -333,39 +313,6 @@ def checked(trajectory: Any, spec: Spec, state: RobotStatus, force: bool, what: 
         raise CheckFailed(f"refused: {what} {problem} in physics ({CHECK_ENGINE}, the servo model, from the robot's "
                           f"present pose); --force plays it anyway")
     return f"checked in physics ({CHECK_ENGINE}, the servo model, from the robot's present pose)"
-
-
-def play(port: RobotPort, spec: Spec, path: str, page: int | None = None,
-         options: Options = Options()) -> MotionResult:
-    """A pose, a motion file or an action page on the robot: a planned move from where it is to the first pose,
-    then the motion or the page tick for tick (see the module docstring)."""
-    from op2motion.motion.pipeline import plan_motion
-
-    kind, loaded = load_motion(path, page, spec)
-    with Session(port, spec) as session:
-        state = session.status()
-        session.preflight(state)
-        current = state.servo_angles
-        target = None
-        if kind == "pose":
-            trajectory = move(current, loaded, spec)
-            what, target = f"pose {loaded.name}", loaded.servo
-        elif kind == "motion":
-            motion = plan_motion(loaded, spec)
-            first = loaded.steps[0].pose
-            trajectory = then(move(current, first, spec), motion)
-            what = f"motion {loaded.name}"
-        else:
-            if page is None:
-                raise InputError(f"{path} is an action file: expected --page N (the page to play)", "page")
-            start = page_start(loaded, page, spec, current)
-            trajectory = then(move(current, start, spec), page_trajectory(loaded, page, spec, start))
-            what = f"page {page} ({loaded.page(page, spec).name})"
-        result = MotionResult(what, trajectory.duration_s, target=target, notes=list(trajectory.notes),
-                              emulator=session.emulated)
-        result.checked = checked(trajectory, spec, state, options.force, what, options.on_progress)
-        run_planned(session, state, trajectory, result, "motion", options)
-        return result
 
 
 def run_planned(session: Session, state: RobotStatus, trajectory: Any, result: MotionResult, name: str,

@@ -25,6 +25,7 @@ from op2motion.bus.loop import START_JUMP_RAD, LoopReport, run_controller
 from op2motion.bus.plans import CHECK_ENGINE, LYING_TILT_RAD, move
 from op2motion.bus.port import RobotPort
 from op2motion.bus.session import Session
+from op2motion.bus.stand import close_feet
 from op2motion.bus.tasks import MotionResult, Options, checked, run_planned, take_control
 from op2motion.errors import CheckFailed
 from op2motion.robot.imu import FALL_TILT_RAD
@@ -51,7 +52,7 @@ def walk(port: RobotPort, spec: Spec, preset: str | None = None, steps: int | No
                           name="walk")
     walked = dict(result.runs).get("walk")
     if walked is not None:
-        result.travel = leg_travel(controller)
+        result.travel = leg_travel(controller, walked.last_row - controller.lead)
         result.travel["gyro_heading_deg"] = math.degrees(walked.yaw_rad)
     return result
 
@@ -90,9 +91,9 @@ def steered_walk(port: RobotPort, spec: Spec, preset: str | None = None, command
 def run_on_robot(port: RobotPort, spec: Spec, controller: Any, what: str = "controller",
                  options: Options = Options(), duration_s: float | None = None, name: str = "run") -> MotionResult:
     """Any controller on the robot, the way every robot command starts one: the robot read and preflighted; if the
-    controller's first goals are more than :data:`~.loop.START_JUMP_RAD` from where the joints are, a planned move
-    there first (refused lying), checked in physics (refused if it fails, unless ``options.force``); then the
-    controller in the 8 ms loop (the run ``name`` of the result) until its plan is over (or ``duration_s``), or it
+    controller's first goals are more than :data:`~.loop.START_JUMP_RAD` from where the joints are, the feet
+    closed if they stand apart (:func:`~.stand.close_feet`) and a planned move there first (refused lying), each
+    checked in physics (refused if it fails, unless ``options.force``); then the controller in the 8 ms loop (the run ``name`` of the result) until its plan is over (or ``duration_s``), or it
     is done. The Python way to run a controller on the robot (docs/robot.md)."""
     with Session(port, spec) as session:
         state = session.status()
@@ -107,8 +108,10 @@ def run_on_robot(port: RobotPort, spec: Spec, controller: Any, what: str = "cont
                 return result
             if not take_control(session, state, result, name):
                 return result
-        elif not _approach(session, state, first, result, options):
-            return result
+        else:
+            closed = close_feet(session, state, result, options)
+            if closed is None or not _approach(session, closed, first, result, options):
+                return result
         report = run_controller(controller, session.robot, duration_s=duration_s, stop=options.stop,
                                 on_tick=options.on_tick, until_done=True)
         result.runs.append((name, report))
@@ -191,11 +194,14 @@ def announce(controller: Any, options: Options) -> Callable[[Any], None] | None:
     return on_tick
 
 
-def leg_travel(controller: Any) -> dict[str, float]:
-    """Where the feet took the robot, by leg odometry: the plan's travel of the feet's midpoint plus the placement
-    error the controller measured at each landing from the joint angles (plan frame: x forward, y left) [m]."""
+def leg_travel(controller: Any, row: int = -1) -> dict[str, float]:
+    """Where the feet took the robot, by leg odometry: the plan's travel of the feet's midpoint up to gait row
+    ``row`` (where the walk ended: its last, or the row a stop froze it at) plus the placement error the controller
+    measured at each landing from the joint angles (plan frame: x forward, y left) [m]."""
     feet = controller.gait.timeline.feet
+    last = len(feet["left"]) - 1
+    at = last if row < 0 else min(row, last)
     start = np.mean([feet[side][0, :2] for side in ("left", "right")], axis=0)
-    end = np.mean([feet[side][-1, :2] for side in ("left", "right")], axis=0)
+    end = np.mean([feet[side][at, :2] for side in ("left", "right")], axis=0)
     travel = end - start + np.asarray(controller.odometry.error, dtype=float)
     return {"x_m": float(travel[0]), "y_m": float(travel[1]), "distance_m": float(np.hypot(*travel))}

@@ -27,16 +27,17 @@ ROBOT_BAR = "{desc}: {n:.2f} {unit} [{elapsed}]"     # the loop's time in 8 ms t
 
 
 def register(sub: Any) -> None:
-    """Add ``robot status|setup|read|play|walk|getup|emulate``."""
+    """Add ``robot status|setup|read|play|walk|stand|getup|emulate``."""
     from op2motion.commands.common import Parser
     from op2motion.formats.actionlayout import NUM_PAGES
 
-    top = sub.add_parser("robot", help="the real OP2 on its bus (status, read, play, walk, getup) and an emulated one",
+    top = sub.add_parser("robot", help="the real OP2 on its bus (status, read, play, walk, stand, getup) and an "
+                                       "emulated one",
                          description="Drive the real OP2 from Python over its USB serial bus (Dynamixel Protocol "
                                      "1.0, the CM-730 at ID 200, 20 MX-28), safely; or run an emulated OP2 on a "
                                      "pseudo-terminal to develop without one.")
     inner = top.add_subparsers(dest="robot_command", metavar="ACTION", required=True, parser_class=Parser,
-                               help="status, setup, read, play, walk, getup or emulate")
+                               help="status, setup, read, play, walk, stand, getup or emulate")
     p = add_command(inner, "status", cmd_status, "the sub-controller, every servo and the IMU; exit 1 if a servo "
                                                  "is missing or reports an error, 2 if a device is of another model")
     _port(p)
@@ -73,6 +74,11 @@ def register(sub: Any) -> None:
     _port(p)
     p.add_argument("--action", metavar="FILE", help="an action file: its stock pages 10/11 get up when it has them")
     p.add_argument("--force", action="store_true", help="play it even if the physics check says it does not stand")
+    p = add_command(inner, "stand", cmd_stand, "stand on both feet side by side in the walk-ready pose: a step "
+                                               "closes feet that stand apart (a stopped walk), then a planned move; "
+                                               "each checked in physics first")
+    _port(p)
+    p.add_argument("--force", action="store_true", help="play it even if the physics check says it fails")
     _emulate_args(add_command(inner, "emulate", cmd_emulate,
                               "an emulated OP2 on a pseudo-terminal (a link at --link), byte for byte, physics "
                               "behind it in real time"))
@@ -306,7 +312,7 @@ def _motion(args: argparse.Namespace, spec: Spec, run: Any) -> int:
 
 def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot play``."""
-    from op2motion.bus.tasks import play
+    from op2motion.bus.stand import play
 
     return _motion(args, spec, lambda options: play(_robot(args), spec, args.file, args.page, options))
 
@@ -369,6 +375,13 @@ def _stdin_kind() -> str:
         return f"a {file_kind(os.fstat(sys.stdin.fileno()).st_mode)}"
     except (AttributeError, ValueError, OSError):
         return "none (closed)"
+
+
+def cmd_stand(args: argparse.Namespace, spec: Spec) -> int:
+    """``op2motion robot stand``."""
+    from op2motion.bus.stand import stand
+
+    return _motion(args, spec, lambda options: stand(_robot(args), spec, options))
 
 
 def cmd_getup(args: argparse.Namespace, spec: Spec) -> int:

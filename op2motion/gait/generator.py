@@ -218,10 +218,11 @@ def standing_height(params: GaitParams, spec: Spec) -> float:
 
 
 def generate_gait(params: GaitParams, spec: Spec, target: tuple[float, float, float] | None = None,
-              on_progress: Callable[[float, float], Any] | None = None) -> Gait:
+              on_progress: Callable[[float, float], Any] | None = None, footsteps: Footsteps | None = None) -> Gait:
     """Plan a walk (see the module docstring); ``target`` (x [m], y [m], yaw [rad]) walks there instead of
-    ``params.steps`` steps; ``on_progress(done, total)`` gets the planning passes done."""
-    footsteps = place_footsteps(params, spec, target)
+    ``params.steps`` steps, ``footsteps`` walks those (e.g. one step closing feet that stand apart);
+    ``on_progress(done, total)`` gets the planning passes done."""
+    footsteps = footsteps or place_footsteps(params, spec, target)
     timeline = build_timeline(params, footsteps)
     body = _Body(spec, timeline)
     feet = timeline.feet
