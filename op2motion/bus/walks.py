@@ -94,7 +94,8 @@ def run_on_robot(port: RobotPort, spec: Spec, controller: Any, what: str = "cont
     controller's first goals are more than :data:`~.loop.START_JUMP_RAD` from where the joints are, the feet
     closed if they stand apart (:func:`~.stand.close_feet`) and a planned move there first (refused lying), each
     checked in physics (refused if it fails, unless ``options.force``); then the controller in the 8 ms loop (the
-    run ``name`` of the result) until its plan is over (or ``duration_s``), or it is done. The Python way to run a controller on the robot (docs/robot.md)."""
+    run ``name`` of the result) until its plan is over (or ``duration_s``), or it is done. The Python way to run a
+    controller on the robot (docs/robot.md)."""
     with Session(port, spec) as session:
         state = session.status()
         session.preflight(state)
