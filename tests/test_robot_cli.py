@@ -457,3 +457,10 @@ def test_robot_stand_goes_to_walk_ready_checked_and_refuses_lying(capsys):
     assert result["target_error_deg"] < GOAL_TOL_DEG and "close the feet" not in result["runs"]   # side by side
     code, _, err = run_cli(capsys, "robot", "stand", "--port", "lockstep:start=lying_back")
     assert code == 1 and "getup first" in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_a_refused_motion_still_prints_its_result_as_json(capsys):
+    """cli.md: exit 1 is a check that ran and failed, and its result is still printed (it printed nothing)."""
+    code, result, err = robot_json(capsys, "robot", "walk", "--port", "lockstep:start=lying_front", "--steps", "4")
+    assert code == 1 and result["ended"] == "refused" and "robot getup first" in result["refused"], (result, err)
+    assert len(err.strip().splitlines()) == 1

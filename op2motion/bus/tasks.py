@@ -67,8 +67,9 @@ class Options:
 class MotionResult:
     """A motion on the robot: what it was, its planned length [s], each run of the loop (the move to the first pose,
     then the motion), the pose it was to end in (20,) [rad] if any, notes, and where the feet took the robot
-    (walks: leg odometry). A motion that runs until it is stopped (a walk steered by keys) has ``until_stopped_s``,
-    the most it may run after its move to the first pose [s] (then ``planned_s`` is the longest it may last)."""
+    (walks: leg odometry). A motion that runs until it is stopped (a walk steered by keys), or until something
+    happens (``ends_when``: a get-up until it stands), has ``until_stopped_s``, the most it may run after its move
+    to the first pose [s] (then ``planned_s`` is the longest it may last)."""
 
     what: str
     planned_s: float
@@ -79,6 +80,7 @@ class MotionResult:
     checked: str = ""
     emulator: Any = None
     until_stopped_s: float | None = None
+    ends_when: str = "stopped"
 
     def emulated(self) -> dict[str, Any] | None:
         """What the emulated OP2 the motion ran on did (an in-process one, ``--port lockstep``): its report once the
@@ -124,8 +126,11 @@ class MotionResult:
         if self.until_stopped_s is None:
             plan = f"{self.planned_s:.2f} s planned"
         else:
-            plan = (f"{self.planned_s - self.until_stopped_s:.2f} s to its first pose, then until stopped (at most "
-                    f"{self.until_stopped_s / 60:g} min)")
+            most = (f"{self.until_stopped_s / 60:g} min" if self.until_stopped_s >= 60.0 else
+                    f"{self.until_stopped_s:g} s")
+            first = self.planned_s - self.until_stopped_s
+            plan = (f"{f'{first:.2f} s to its first pose, then ' if first > 0.0 else ''}until {self.ends_when} "
+                    f"(at most {most})")
         out = [f"{self.what}: {plan}; {self.checked}"]
         out += [f"  {name}: {r.describe()}" for name, r in self.runs]
         out += [f"  note: {n}" for n in self.notes]

@@ -152,7 +152,8 @@ def getup(port: RobotPort, spec: Spec, action: Any = None, options: Options = Op
             return result
         side = lying_side(state.board.accel_m_s2)
         controller = GetUp(spec, action)
-        result = MotionResult(f"get up from lying {side}", controller.plan.duration_s, emulator=session.emulated)
+        result = MotionResult(f"get up from lying {side}", controller.plan.duration_s, emulator=session.emulated,
+                              until_stopped_s=controller.plan.duration_s, ends_when="it stands")
         if options.force:
             result.checked = "not checked (forced)"
         else:

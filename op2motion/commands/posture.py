@@ -97,7 +97,12 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     request = Reach(problem, settings, name, str(out), str(png), str(cost), args.restarts, not args.no_refine,
                     Validate(args.seconds, args.engine) if args.validate else None, command)
     with Renderers(2) as renderers:          # they load matplotlib while the swarm searches
-        with ticker(args, "PSO", "it", settings.iterations * (1 + args.restarts)) as bar:
-            result = reach(request, spec, renderers,
-                           lambda best: (bar.update(), bar.set_postfix(cost=f"{best:.4f}")))
+        with ticker(args, "PSO", "it", settings.iterations) as bar:
+            def seen(best: float) -> None:
+                if bar.n >= bar.total:              # a restart on the next seed (only when the hand missed): more
+                    bar.total += settings.iterations
+                bar.update()
+                bar.set_postfix(cost=f"{best:.4f}")
+
+            result = reach(request, spec, renderers, seen)
     return deliver(args, result, outputs, "one")

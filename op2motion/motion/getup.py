@@ -105,7 +105,7 @@ class GetUp:
                 self._decide(t_s, joints)
         elif self.phase == "plan":
             if t_s - self.since >= PLAN_S:
-                self._take_plan()
+                self._take_plan(t_s)
         elif self.phase == "play":
             if self.rows is None or self.gains is None:
                 raise Op2MotionError("GetUp plays a way it has not planned")
@@ -133,13 +133,13 @@ class GetUp:
         self.planning = _Planning(self.ways, side, joints)
         self.phase, self.since = "plan", t_s
 
-    def _take_plan(self) -> None:
+    def _take_plan(self, t_s: float) -> None:
         """The way planned beside the loop (waited for only if the planner took longer than :data:`PLAN_S`)."""
         if self.planning is None:
             raise Op2MotionError("GetUp plays a way it has not planned")
         way = self.planning.result()
         self.planning = None
-        self.events.append((self.since, f"plays {way.name}"))
+        self.events.append((t_s, f"plays {way.name}"))
         self.rows, self.gains, self.row, self.phase = way.goals, way.p_gains, 0, "play"
 
     def _checked(self, t_s: float) -> None:

@@ -70,8 +70,17 @@ def robot_read(port: RobotPort, spec: Spec, name: str, output: Path, support: Su
 def robot_motion(run: Callable[[Options], MotionResult], options: Options) -> TaskResult:
     """A motion on the robot (``run``: a :mod:`op2motion.bus` motion, e.g. ``lambda o: play(port, spec, file,
     page, o)``) with ``options``: a fault that stopped it is a "no"; a stop asked for (``options.stop``) an
-    interrupted one."""
-    result = run(options)
+    interrupted one; a motion refused before it started (a check that ran and failed: the physics check, the
+    preflight, a lying robot) a "no" too, its result saying so (``ended``: ``refused``)."""
+    from op2motion.errors import CheckFailed, PortFailed
+
+    try:
+        result = run(options)
+    except PortFailed:
+        raise
+    except CheckFailed as exc:
+        refused = {"ended": "refused", "refused": exc.message, "runs": {}, "fault": None}
+        return TaskResult(False, exc.message, None, {}, refused, (f"refused: {exc.message}",), file_keys={})
     data, lines = result.as_dict(), ("\n".join(result.lines()),)
     if result.fault is not None:
         return TaskResult(False, f"{result.what} stopped: {result.fault.describe()}", None, {}, data, lines,

@@ -47,8 +47,8 @@ def walk_line(engine: EngineName, s: dict[str, Any]) -> str:
     w = s["worst_torque"]
     line = (f"  {engine}: {'FELL' if s['fell'] else 'walked'}"
             f"{' (' + ', '.join(s['reasons']) + ')' if s['reasons'] else ''}, {s['distance_m']:.3f} m, "
-            f"{s['mean_speed_mps']:.3f} m/s steady, drift {s['lateral_drift_m'] * 1000:.0f} mm, heading "
-            f"{s['heading_error_deg']:+.1f}°, turn {s['turn_rate_deg_s']:.1f}°/s, CoP inside "
+            f"{s['mean_speed_mps']:.3f} m/s steady, drift {s['lateral_drift_m'] * 1000:.0f} mm, heading off "
+            f"the plan's by {s['heading_error_deg']:+.1f}°, turn {s['turn_rate_deg_s']:.1f}°/s, CoP inside "
             f"{s['cop_inside_fraction']:.1%}, worst torque {w['torque_nm']:.2f} N·m at {w['joint']} "
             f"({w['ratio']:.0%} of {w['available_nm']:.2f})")
     if s["pushes"]:
