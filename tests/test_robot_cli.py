@@ -30,6 +30,7 @@ GOAL_TOL_DEG = 1.5             # the acceptance's "every servo commanded within 
 TICK_DEG = 360.0 / 4096        # one position tick
 STANDING_TILT_DEG = 15.0       # a torso tilted less than this still stands
 WALKED_M = 0.2                 # a stop is asked for once the robot has walked this far [m]
+BEYOND_PAGE, BEYOND_TICK = 9, 4000   # the stock walk-ready page, its head_pan beyond its range (ends at 3402)
 ODOMETRY_TOL_M = 0.05          # a stopped walk's leg odometry within this of where the emulated torso went [m]
 HORN_OFF_TICKS = 1707          # head_pan reads tick 3755 (150°; its range ends at 119°), as in the audit [ticks]
 FAULT_AT_S = 4.0               # the overheating knee's moment, into the motion [s]
@@ -464,3 +465,23 @@ def test_a_refused_motion_still_prints_its_result_as_json(capsys):
     code, result, err = robot_json(capsys, "robot", "walk", "--port", "lockstep:start=lying_front", "--steps", "4")
     assert code == 1 and result["ended"] == "refused" and "robot getup first" in result["refused"], (result, err)
     assert len(err.strip().splitlines()) == 1
+
+
+def test_a_page_goal_beyond_its_range_is_refused_or_played_clipped_saying_so(capsys, tmp_path):
+    """A page whose head_pan goal is beyond its range: refused as bad input (as import-action refuses it); forced,
+    it plays clipped and the result says so (it was clipped silently)."""
+    from op2motion.formats import actionlayout as layout
+
+    data = bytearray(STOCK.read_bytes())
+    off = BEYOND_PAGE * layout.PAGE_SIZE
+    page = bytearray(data[off:off + layout.PAGE_SIZE])
+    base = layout.step_offset(0)
+    page[base + 2 * 19:base + 2 * 19 + 2] = BEYOND_TICK.to_bytes(2, "little")     # head_pan, ID 19
+    data[off:off + layout.PAGE_SIZE] = layout.with_checksum(page)
+    path = tmp_path / "beyond.bin"
+    path.write_bytes(bytes(data))
+    code, _, err = run_cli(capsys, "robot", "play", "--port", "lockstep", str(path), "--page", str(BEYOND_PAGE))
+    assert code == 2 and "head_pan tick 4000" in err and "--force plays them clipped" in err, err
+    code, result, err = robot_json(capsys, "robot", "play", "--port", "lockstep", str(path), "--page",
+                                   str(BEYOND_PAGE), "--force")
+    assert code == 0 and any("clipped" in n and "head_pan" in n for n in result["notes"]), (result, err)

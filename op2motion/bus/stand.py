@@ -125,6 +125,12 @@ def play(port: RobotPort, spec: Spec, path: str, page: int | None = None,
         else:
             if page is None:
                 raise InputError(f"{path} is an action file: expected --page N (the page to play)", "page")
+            beyond = page_beyond_ranges(loaded, page, spec)
+            if beyond and not options.force:
+                raise InputError(f"expected page {page}'s angles within the joints' mechanical ranges, got "
+                                 f"{beyond[0]}{f' (and {len(beyond) - 1} more)' if len(beyond) > 1 else ''}: "
+                                 f"--force plays them clipped to the ranges", "page")
+            result.notes += [f"played clipped to its mechanical range: {b}" for b in beyond]
             start = page_start(loaded, page, spec, current)
             trajectory = then(move(current, start, spec), page_trajectory(loaded, page, spec, start))
             what = f"page {page} ({loaded.page(page, spec).name})"
@@ -136,3 +142,24 @@ def play(port: RobotPort, spec: Spec, path: str, page: int | None = None,
         return result
 
 
+
+
+def page_beyond_ranges(action: Any, page: int, spec: Spec) -> list[str]:
+    """Each goal of action page ``page`` beyond its joint's mechanical range, in words (``step 3: r_sho_pitch tick
+    4000 (+171.6°), its range ends at +150.0°``): the loop would clip them, so they are refused unless forced."""
+    from op2motion.bus.robot import angle_of
+    from op2motion.bus.safety import mechanical_bounds
+
+    lower, upper = mechanical_bounds(spec)
+    out = []
+    for k, step in enumerate(action.page(page, spec).steps, start=1):
+        for i, joint in enumerate(spec.joints):
+            tick = step.ticks.get(joint.id)
+            if tick is None:
+                continue
+            angle = angle_of(tick, spec)
+            if not lower[i] <= angle <= upper[i]:
+                end = lower[i] if angle < lower[i] else upper[i]
+                out.append(f"step {k}: {joint.name} tick {tick} ({math.degrees(angle):+.1f}°), its range ends at "
+                           f"{math.degrees(end):+.1f}°")
+    return out
