@@ -79,7 +79,8 @@ def closing_gait(servo: np.ndarray, spec: Spec, params: GaitParams) -> Gait | No
     if behind <= CLOSED_M and turned <= CLOSED_RAD:
         return None
     at = placements(servo, spec)
-    start = {side: Footstep(side, float(p[0]), float(p[1]), float(p[2])) for side, p in at.items()}
+    start: dict[str, Footstep] = {side: Footstep(side, float(p[0]), float(p[1]), float(p[2]))
+                                  for side, p in at.items()}
     back: Side = "right" if front == "left" else "left"
     centre = moved(at[front], 0.0, -width / 2.0 if front == "left" else width / 2.0, 0.0)
     step = foot_at(back, centre, width)

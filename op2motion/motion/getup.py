@@ -158,18 +158,19 @@ class GetUp:
 
 
 class _Planning:
-    """One way up planned in a thread of its own (:meth:`result` waits for it and raises what it raised)."""
+    """One way up from lying ``lying`` (front, back, left, right) planned in a thread of its own (:meth:`result` waits
+    for it and raises what it raised)."""
 
-    def __init__(self, ways: Ways, side: str, joints: np.ndarray):
+    def __init__(self, ways: Ways, lying: str, joints: np.ndarray):
         self.way: Any = None
         self.error: BaseException | None = None
-        self.thread = threading.Thread(target=self._plan, args=(ways, side, joints.copy()), name="op2-getup-plan",
+        self.thread = threading.Thread(target=self._plan, args=(ways, lying, joints.copy()), name="op2-getup-plan",
                                        daemon=True)
         self.thread.start()
 
-    def _plan(self, ways: Ways, side: str, joints: np.ndarray) -> None:
+    def _plan(self, ways: Ways, lying: str, joints: np.ndarray) -> None:
         try:
-            self.way = ways.way(side, joints)
+            self.way = ways.way(lying, joints)
         except BaseException as exc:          # noqa: BLE001 (raised again in the loop's thread by result())
             self.error = exc
 

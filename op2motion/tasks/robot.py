@@ -79,7 +79,7 @@ def robot_motion(run: Callable[[Options], MotionResult], options: Options) -> Ta
     except PortFailed:
         raise
     except CheckFailed as exc:
-        refused = {"ended": "refused", "refused": exc.message, "runs": {}, "fault": None}
+        refused: dict[str, Any] = {"ended": "refused", "refused": exc.message, "runs": {}, "fault": None}
         return TaskResult(False, exc.message, None, {}, refused, (f"refused: {exc.message}",), file_keys={})
     data, lines = result.as_dict(), ("\n".join(result.lines()),)
     if result.fault is not None:
