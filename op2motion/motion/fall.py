@@ -110,6 +110,7 @@ class Supervisor:
         self.events: list[tuple[float, str]] = []
         self.falls = 0
         self.paused_at = self.fell_at = 0.0            # the wrapped controller's clock, and ours, at the last fall
+        self.paused: str | None = None                 # what resuming says of the wrapped controller's commands
 
     @property
     def p_gains(self) -> Any:
@@ -182,6 +183,8 @@ class Supervisor:
             if self.row >= len(self.rows):
                 self.phase, self.offset = "run", t_s
                 self.events.append((t_s, "resumed"))
+                if self.paused:
+                    self.events.append((t_s, self.paused))
         return dict(zip(self.spec.joint_names, self.hold.tolist()))
 
     def _got_up(self, t_s: float, joint_positions: Mapping[str, float], joints: np.ndarray) -> None:
@@ -198,9 +201,8 @@ class Supervisor:
 
         again = getattr(self.inner, "resume", None)
         first = again(joint_positions, self.paused_at) if again is not None else self.inner.start(joint_positions)
-        if again is not None:
-            self.events.append((t_s, f"its commands paused while it was down ({t_s - self.fell_at:.1f} s): they go on "
-                                     f"from where the fall stopped them"))
+        self.paused = (f"its commands were paused while it was down ({t_s - self.fell_at:.1f} s): they go on from "
+                       f"where the fall stopped them" if again is not None else None)
         target = np.array([first.get(n, joints[i]) for i, n in enumerate(self.spec.joint_names)])
         self.rows, self.row, self.hold = blend(joints, target, self.spec, RESUME_LEAST_S), 0, joints
         self.phase = "blend"
