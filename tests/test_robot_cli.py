@@ -302,9 +302,9 @@ def test_refused_unless_forced_and_a_fall_lowers_the_torque(spec, tmp_path):
 
 
 @pytest.mark.physics
-def test_a_stop_mid_walk_ends_standing_and_the_next_motion_closes_the_feet_unforced(spec):
+def test_a_stop_mid_walk_ends_standing_and_the_next_walk_closes_the_feet_unforced(spec):
     """Stopped mid-walk, the robot stands with one foot ahead; its leg odometry says how far it walked (not the whole
-    plan); the next motion, not forced, starts with the step that closes the feet (checked in physics) and plays
+    plan; the next walk, not forced, starts with the step that closes the feet (checked in physics) and walks
     (it was refused: "slip: a supporting sole slid 19 mm")."""
     with lockstep(spec) as (emulator, port):
         stop = __import__("threading").Event()
@@ -317,12 +317,13 @@ def test_a_stop_mid_walk_ends_standing_and_the_next_motion_closes_the_feet_unfor
         result = walk(port, spec, steps=20, options=Options(stop=stop, on_tick=on_tick))
         port.clock.sleep_until(port.clock.now() + 0.5)
         truth = emulator.truth()
-        again = play(port, spec, str(POSES / "walkready.json"))      # from the feet apart, not forced
+        again = walk(port, spec, steps=4)                             # from the feet apart, not forced
         after = emulator.truth()
     assert result.ended == "stopped" and result.fault is None
     assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and WALKED_M < truth["x_m"] - start < 0.6
     assert abs(result.travel["x_m"] - (truth["x_m"] - start)) < ODOMETRY_TOL_M, (result.travel, truth)
-    assert again.ended == "done" and [name for name, _ in again.runs] == ["close the feet", "motion"], again.runs
+    assert again.ended == "done" and [name for name, _ in again.runs] == ["close the feet", "approach", "walk"], (
+        again.runs)
     assert "checked in physics" in again.checked and math.degrees(after["tilt_rad"]) < STANDING_TILT_DEG
 
 
