@@ -388,6 +388,7 @@ def test_lockstep_faults_parse(spec):
     assert setup.faults == Faults({3, 4}, [(5, 0.3)], 0.0, 0.0, [(13, 4.0, 85.0)], 11.0, 7, [(30.0, 2.0)])
 
 
+@pytest.mark.physics
 def test_a_servo_reading_outside_its_range_is_named_and_nothing_moves(capsys):
     """head_pan mounted 150° off (it reads tick 3755, its range ends at 3402): status names it, and a motion
     is refused before the torque goes on (no goal outside the range, no jump), even forced."""
@@ -453,6 +454,7 @@ def test_board_model_and_error_keys_parse_and_are_checked(capsys):
         assert code == 2 and expected in _one_line(err), text
 
 
+@pytest.mark.physics
 def test_robot_stand_goes_to_walk_ready_checked_and_refuses_lying(capsys):
     code, result, err = robot_json(capsys, "robot", "stand", "--port", "lockstep")
     assert code == 0 and result["ended"] == "done" and "checked in physics" in result["checked"], err
@@ -461,6 +463,7 @@ def test_robot_stand_goes_to_walk_ready_checked_and_refuses_lying(capsys):
     assert code == 1 and "getup first" in err and len(err.strip().splitlines()) == 1, err
 
 
+@pytest.mark.physics
 def test_a_refused_motion_still_prints_its_result_as_json(capsys):
     """cli.md: exit 1 is a check that ran and failed, and its result is still printed (it printed nothing)."""
     code, result, err = robot_json(capsys, "robot", "walk", "--port", "lockstep:start=lying_front", "--steps", "4")
@@ -468,6 +471,7 @@ def test_a_refused_motion_still_prints_its_result_as_json(capsys):
     assert len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.physics
 def test_a_page_goal_beyond_its_range_is_refused_or_played_clipped_saying_so(capsys, tmp_path):
     """A page whose head_pan goal is beyond its range: refused as bad input (as import-action refuses it); forced,
     it plays clipped and the result says so (it was clipped silently)."""
