@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Mapping, Sequence
 
 import numpy as np
 
@@ -80,11 +81,16 @@ def step_width(params: GaitParams, spec: Spec) -> float:
     return params.step_width_m or 2.0 * spec.geometry.hip_half_width
 
 
+def leading_side(dy: float, dyaw: float) -> Side:
+    """The foot that swings first towards a move of ``dy`` [m] sideways and ``dyaw`` [rad] of turn: the one on the
+    side of the turn, or of the side step (left for a walk straight ahead or back), so the leading foot opens the gap
+    and the feet never cross."""
+    return "right" if dyaw < 0.0 or (dyaw == 0.0 and dy < 0.0) else "left"
+
+
 def first_side(params: GaitParams) -> Side:
     """The foot that swings first (see the module docstring)."""
-    if params.turn_deg < 0.0 or (params.turn_deg == 0.0 and params.step_side_m < 0.0):
-        return "right"
-    return "left"
+    return leading_side(params.step_side_m, params.turn_rad)
 
 
 def place_footsteps(params: GaitParams, spec: Spec, target: tuple[float, float, float] | None = None) -> Footsteps:
@@ -96,7 +102,7 @@ def place_footsteps(params: GaitParams, spec: Spec, target: tuple[float, float, 
     start = {side: foot_at(side, centre, width) for side in ("left", "right")}
     moves = _target_moves(params, target) if target is not None else (
         [(params.step_length_m, params.step_side_m, params.turn_rad)] * (params.steps - 1))
-    side = first_side(params) if target is None else _target_side(moves)
+    side = first_side(params) if target is None else leading_side(moves[0][1], moves[0][2])
     steps = []
     for dx, dy, dyaw in list(moves) + [(0.0, 0.0, 0.0)]:
         centre = moved(centre, dx, dy, dyaw)
@@ -134,9 +140,18 @@ def _target_moves(params: GaitParams, target: tuple[float, float, float]) -> lis
     return moves
 
 
-def _target_side(moves: list[tuple[float, float, float]]) -> Side:
-    dx, dy, dyaw = moves[0]
-    return "right" if dyaw < 0.0 or (dyaw == 0.0 and dy < 0.0) else "left"
+def zmp_margins(zmp: np.ndarray, contacts: Sequence[str], feet: Mapping[str, np.ndarray], spec: Spec) -> np.ndarray:
+    """Margin [m] of each row's ZMP (K, 2) to the sole(s) of its contact (K,) on the floor (positive inside); the
+    feet (x, y, z, yaw) (K, 4) per side."""
+    from op2motion.robot.balance import polygon_margin
+    from op2motion.robot.support import Support
+
+    out = np.empty(len(zmp))
+    for i, contact in enumerate(contacts):
+        support = Support.of(contact)
+        corners = {side: sole_rectangle(spec, Footstep(side, *feet[side][i, [0, 1, 3]])) for side in support.feet}
+        out[i] = polygon_margin(zmp[i], support.polygon(corners))[0]
+    return out
 
 
 def sole_rectangle(spec: Spec, step: Footstep, grow: float = 0.0) -> np.ndarray:

@@ -24,7 +24,7 @@ from typing import Any, Callable
 import numpy as np
 
 from op2motion.errors import InputError
-from op2motion.gait.footsteps import Footstep, Footsteps, place_footsteps, sole_rectangle
+from op2motion.gait.footsteps import Footsteps, place_footsteps, zmp_margins
 from op2motion.gait.params import GaitParams
 from op2motion.gait.preview import preview_gains, track_reference
 from op2motion.gait.timeline import Timeline, build_timeline
@@ -32,10 +32,9 @@ from op2motion.kinematics.leg_ik import leg_ik, leg_of, rot_y, rot_z, within_rea
 from op2motion.model.dynamics import dynamics_for
 from op2motion.model.servo import ServoModel
 from op2motion.motion.checks import SMOOTH_ROWS, contact_torques, multibody_zmp, smoothed
-from op2motion.robot.balance import polygon_margin
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import Support, SupportName
+from op2motion.robot.support import SupportName
 
 FRICTION_SMOOTH_RAD_S = 0.05   # the friction feed-forward's sign is smoothed over this speed
 REST_PAD = 4            # rows of rest around the walk when differentiating (the robot stands before and after)
@@ -249,19 +248,8 @@ def generate_gait(params: GaitParams, spec: Spec, target: tuple[float, float, fl
         if p < params.zmp_passes:
             fix = track_reference(gains, timeline.zmp_ref - zmp, start=np.zeros(2))
             target_com = target_com + fix.com
-    margin = zmp_margins(zmp, timeline, footsteps, spec)
+    margin = zmp_margins(zmp, timeline.contact, timeline.feet, spec)
     p_gains = np.full_like(goals, float(params.p_gain))
     servo_goals = goals + body.feedforward(p_gains) if params.servo_feedforward else goals
     return Gait(params, footsteps, timeline, com_height, pos, rot, goals, servo_goals, p_gains, com, cart.com, zmp,
                 margin)
-
-
-def zmp_margins(zmp: np.ndarray, timeline: Timeline, footsteps: Footsteps, spec: Spec) -> np.ndarray:
-    """Margin [m] of each row's ZMP to the sole(s) on the floor (positive inside)."""
-    out = np.empty(len(zmp))
-    for i, contact in enumerate(timeline.contact):
-        support = Support.of(contact)
-        corners = {side: sole_rectangle(spec, Footstep(side, *timeline.feet[side][i, [0, 1, 3]]))
-                   for side in support.feet}
-        out[i] = polygon_margin(zmp[i], support.polygon(corners))[0]
-    return out

@@ -27,7 +27,7 @@ from typing import Mapping
 import numpy as np
 
 from op2motion.gait.envelope import Envelope, Stride
-from op2motion.gait.footsteps import Footstep, foot_at, moved, step_width, swing_clear
+from op2motion.gait.footsteps import Footstep, foot_at, leading_side, moved, step_width, swing_clear
 from op2motion.gait.params import GaitParams
 from op2motion.gait.timeline import LEAD_S, landing, quintic_blend, swing_path, ticks, zmp_point
 from op2motion.robot.spec import Spec
@@ -119,12 +119,6 @@ def _middle(state: WalkState) -> np.ndarray:
     return 0.5 * np.array([state.left.x + state.right.x, state.left.y + state.right.y])
 
 
-def first_side(stride: Stride) -> Side:
-    """The foot that swings first towards ``stride``: the one on the side of a turn or a side step (left for a walk
-    straight ahead or back), so the leading foot opens the gap and the feet never cross."""
-    return "right" if stride.dyaw < 0.0 or (stride.dyaw == 0.0 and stride.dy < 0.0) else "left"
-
-
 def _small(stride: Stride, envelope: Envelope, step_s: float) -> bool:
     """Short enough to close the feet from at once (within :data:`CLOSE_SHARE` of the envelope on every axis)."""
     limits = (max(envelope.forward_m_s, envelope.backward_m_s), envelope.sideways_m_s, envelope.turn_rad_s)
@@ -185,7 +179,7 @@ def next_phase(state: WalkState, intent: Intent, params: GaitParams, spec: Spec,
             n = ticks(STAND_S)
             feet, contact, ref = _hold(state, n, _middle(state))
             return Phase("stand", feet, contact, ref), replace(state, row=state.row + n)
-        swing = first_side(intent.stride)
+        swing = leading_side(intent.stride.dy, intent.stride.dyaw)
         support = state.foot(other_side(swing))
         middle = _middle(state)
         blend = quintic_blend(np.arange(1, n_start + 1) / n_start)[:, None]

@@ -181,15 +181,11 @@ def rows_of_gait(gait: Gait, legs: Mapping[str, Leg]) -> RowBuffer:
     return rows
 
 
-def zmp_margins(rows: RowBuffer, spec: Any, count: int) -> np.ndarray:
+def planned_zmp_margins(rows: RowBuffer, spec: Any, count: int) -> np.ndarray:
     """Margin [m] of each of the first ``count`` rows' planned (multibody) ZMP to the sole(s) of its planned contact
-    (positive inside)."""
-    from op2motion.gait.footsteps import Footstep, sole_rectangle
-    from op2motion.robot.balance import polygon_margin
+    (positive inside): :func:`~.footsteps.zmp_margins` of the buffer's rows."""
+    from op2motion.gait.footsteps import zmp_margins
 
-    out = np.empty(count)
-    for k in range(rows.first, rows.first + count):
-        support = Support.of(rows.obj("contact", k))
-        corners = {side: sole_rectangle(spec, Footstep(side, *rows.feet(side, k)[[0, 1, 3]])) for side in support.feet}
-        out[k - rows.first] = polygon_margin(rows.get("zmp", k), support.polygon(corners))[0]
-    return out
+    ks = range(rows.first, rows.first + count)
+    feet = {side: np.array([rows.feet(side, k) for k in ks]) for side in SIDES}
+    return zmp_margins(np.array([rows.get("zmp", k) for k in ks]), [rows.obj("contact", k) for k in ks], feet, spec)

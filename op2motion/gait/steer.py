@@ -260,7 +260,7 @@ def plan_of_rows(twin: SteerableWalk, count: int) -> Plan:
 def planned_summary(walk: SteerableWalk) -> dict[str, Any]:
     """The figures of ``walk``'s planned commands (its dry run): steps, kicks, length, the torso's path and end pose,
     the planned ZMP's least margin to the soles on the floor."""
-    from op2motion.gait.rows import zmp_margins
+    from op2motion.gait.rows import planned_zmp_margins
 
     walk.plan                                                     # the dry run, once
     twin, n = walk.dry, walk.dry_rows
@@ -270,7 +270,7 @@ def planned_summary(walk: SteerableWalk) -> dict[str, Any]:
     kinds = [phase.kind for first, phase in twin.planner.phases if first < n]
     pos = rows.numeric["torso_pos"][:n:25, :2]
     yaw = float(rows.numeric["plan_yaw"][n - 1])
-    margin = zmp_margins(rows, walk.spec, n)
+    margin = planned_zmp_margins(rows, walk.spec, n)
     return {"rows": n, "duration_s": round(walk.plan.duration_s, 3), "steps": kinds.count("step"),
             "kicks": kinds.count("kick"), "path_m": round(float(np.sum(np.hypot(*np.diff(pos, axis=0).T))), 4),
             "end_pose": {"x_m": round(float(rows.numeric["torso_pos"][n - 1, 0]), 4),
