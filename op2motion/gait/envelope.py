@@ -97,9 +97,8 @@ class Envelope:
                       move(now.dyaw, target.dyaw, self.accel_yaw_rad_s2))
 
 
-#: The measured envelope of the ``steer`` preset (docs/steering.md; ``tools/steer_envelope.py``): the fastest
-#: commands that every member of the robustness family walks in both engines (the commanded walk's judge): 0.25 m/s
-#: forward, 0.15 m/s backward, 0.07 m/s sideways, 0.4 rad/s (23°/s) turning in place (0.5 rad/s: the heavy, soft
-#: body with its CoM back caught its swing foot and fell, both engines), and 0.1 m/s forward while turning 0.3 rad/s
-#: (shares 0.4 + 0.75: combined 1.15; 0.15 m/s with 0.45 rad/s failed 2 of 30).
+#: The envelope of the ``steer`` preset: the fastest commands that every member of the robustness family walks in
+#: both engines (the commanded walk's judge), each axis alone and forward while turning (``combined``: the sum of the
+#: shares of each axis's limit). How it was found and what failed beyond it: docs/steering.md
+#: (``tools/steer_envelope.py`` measures it again).
 STEER_ENVELOPE = Envelope(forward_m_s=0.25, backward_m_s=0.15, sideways_m_s=0.07, turn_rad_s=0.4, combined=1.15)
