@@ -73,9 +73,9 @@ def _studio_figures(spec: Spec, repeat: int) -> dict[str, Any]:
     """``studio_update_ms``: one joint edit in the pose studio and everything the page shows after it (both CoMs,
     margins, the settled CoM, swing-foot clearance, self-clearance, ticks); the check: the readout of the edit."""
     from op2motion.robot.pose import Pose
-    from op2motion.studio.session import Session
+    from op2motion.studio.session import PoseEdit
 
-    session = Session(spec, Pose("bench", Support.LEFT, book_to_servo(BookAngles.standing("left"), spec)[0]))
+    session = PoseEdit(spec, Pose("bench", Support.LEFT, book_to_servo(BookAngles.standing("left"), spec)[0]))
     angles = iter(np.tile(np.linspace(-30.0, 30.0, 7), 100))
     out: dict[str, Any] = {}
     update_ms = _best_ms(lambda: out.update(r=session.set_joint("l_sho_pitch", next(angles))), max(repeat, 3))

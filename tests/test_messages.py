@@ -16,7 +16,7 @@ from op2motion.physics.sweeps import servo_pose
 from op2motion.robot.joints import servo_to_ticks
 from op2motion.robot.pose import Pose
 from op2motion.robot.support import Support
-from op2motion.studio.session import Session
+from op2motion.studio.session import PoseEdit
 
 STAND, INIT, WALKREADY = pose_path("standing"), pose_path("init"), pose_path("walkready")
 LAST_TICK_DEG = 179.912       # tick 4095: the last angle the MX-28 can be told [deg]
@@ -59,11 +59,11 @@ def test_plus_180_is_one_rule_everywhere(capsys, tmp_path, spec):
         line = _fail(capsys, *argv)
         assert "l_sho_pitch" in line and "179.9" in line, line
     with pytest.raises(InputError, match="l_sho_pitch"):
-        Session(spec, read_pose(STAND, spec)).set_joint("l_sho_pitch", 180.0)
+        PoseEdit(spec, read_pose(STAND, spec)).set_joint("l_sho_pitch", 180.0)
     code, out, _ = run_cli(capsys, "export", "--format", "action", last, "-o", str(tmp_path / "a.bin"))
     assert code == 0
     assert servo_to_ticks(read_pose(last, spec).servo, spec)[spec.joint_names.index("l_sho_pitch")] == 4095
-    assert Session(spec, read_pose(STAND, spec)).set_joint("l_sho_pitch", -180.0).joints[1].ticks == 0
+    assert PoseEdit(spec, read_pose(STAND, spec)).set_joint("l_sho_pitch", -180.0).joints[1].ticks == 0
     assert not (tmp_path / "a.motion").exists()
 
 

@@ -13,7 +13,7 @@ from helpers import POSES, wait_for
 from op2motion.bus.follow import Follower
 from op2motion.formats.posefile import read_pose
 from op2motion.studio.folder import Workspace
-from op2motion.studio.session import Session
+from op2motion.studio.session import PoseEdit
 
 pytestmark = pytest.mark.physics
 TICK_DEG = 360.0 / 4096
@@ -46,7 +46,7 @@ def test_the_robot_moves_only_when_asked_checked_and_then_follows_and_is_read_ba
         follower = Follower(port, spec)
         follower.start()
         walkready = read_pose(POSES / "walkready.json", spec)
-        studio = Studio(spec, Session(spec, walkready), workspace=Workspace(tmp_path), follower=follower)
+        studio = Studio(spec, PoseEdit(spec, walkready), workspace=Workspace(tmp_path), follower=follower)
         try:
             wait_for(lambda: follower.pose() is not None, "the first reading")
             held = _goals_deg(emulator, spec)

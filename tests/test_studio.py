@@ -19,7 +19,7 @@ from helpers import wait_for
 from op2motion.errors import InputError
 from op2motion.formats.posefile import read_pose
 from op2motion.studio.folder import Workspace
-from op2motion.studio.session import CLEARANCE_WARN_M, Session
+from op2motion.studio.session import CLEARANCE_WARN_M, PoseEdit
 
 ROOT = os.path.join(os.path.dirname(__file__), "..")
 WALKREADY = os.path.join(ROOT, "poses", "walkready.json")
@@ -33,7 +33,7 @@ WAIT_S = 60.0
 
 
 def test_edits_are_checked_and_the_readout_follows(spec, tmp_path):
-    session = Session(spec, read_pose(WALKREADY, spec))
+    session = PoseEdit(spec, read_pose(WALKREADY, spec))
     before = session.servo.copy()
     for bad in (500, "abc", float("nan")):
         with pytest.raises(InputError, match="l_sho_pitch"):
@@ -46,7 +46,7 @@ def test_edits_are_checked_and_the_readout_follows(spec, tmp_path):
     assert readout.support == "double" and readout.margin_full_m > 0.02 and not readout.colliding
     clash = session.set_joint("l_sho_roll", 75)                      # the upper arm swung into the torso
     assert clash.colliding and clash.self_clearance_m < CLEARANCE_WARN_M and "body_link" in clash.closest_links
-    one_leg = Session(spec, read_pose(os.path.join(ROOT, "poses", "book_2_44.json"), spec)).readout()
+    one_leg = PoseEdit(spec, read_pose(os.path.join(ROOT, "poses", "book_2_44.json"), spec)).readout()
     assert one_leg.support == "left" and one_leg.swing_clearance_m > 0.01 and one_leg.margin_settled_m > 0.0
     hand = np.array(session.readout().hands["right_hand"])
     moved, left = session.reach("right", hand + (0.02, 0.0, 0.02))   # the arm IK: 2 cm forward and up
@@ -58,7 +58,7 @@ def test_edits_are_checked_and_the_readout_follows(spec, tmp_path):
 
 
 def test_balance_keeps_the_hand_and_the_pins_and_restores_the_margin(spec):
-    session = Session(spec, read_pose(os.path.join(ROOT, "poses", "book_2_44.json"), spec))
+    session = PoseEdit(spec, read_pose(os.path.join(ROOT, "poses", "book_2_44.json"), spec))
     for joint, degrees in (("r_hip_pitch", -50), ("r_knee", 0), ("l_sho_pitch", -60)):   # a leg out, an arm up
         edited = session.set_joint(joint, degrees)
     hip = session.servo[spec.joint_names.index("r_hip_pitch")]
@@ -69,12 +69,12 @@ def test_balance_keeps_the_hand_and_the_pins_and_restores_the_margin(spec):
     with pytest.raises(InputError, match="joint"):
         session.balance("left", ["no_such_joint"])
     with pytest.raises(InputError, match="one foot"):
-        Session(spec, read_pose(WALKREADY, spec)).balance("left", [])
+        PoseEdit(spec, read_pose(WALKREADY, spec)).balance("left", [])
 
 
 def test_an_action_file_is_played_scrubbed_and_written_only_when_saved(spec, tmp_path):
     stock = os.path.join(ROOT, "tests", "data", "motion_4096.bin")
-    session = Session(spec, read_pose(WALKREADY, spec))
+    session = PoseEdit(spec, read_pose(WALKREADY, spec))
     with pytest.raises(InputError, match="action file"):
         session.play(15)
     assert session.open_action(stock) > 0
@@ -142,7 +142,7 @@ def test_the_page_moves_a_joint_and_checks_in_physics(spec, tmp_path):
         pytest.skip("Debian's chromium is not installed (the CI script installs it)")
     from op2motion.studio.server import Studio
 
-    studio = Studio(spec, Session(spec, read_pose(WALKREADY, spec)), workspace=Workspace(tmp_path))
+    studio = Studio(spec, PoseEdit(spec, read_pose(WALKREADY, spec)), workspace=Workspace(tmp_path))
     try:
         with playwright.sync_playwright() as p:
             browser = p.chromium.launch(executable_path=CHROMIUM, args=BROWSER_ARGS, headless=True)

@@ -18,7 +18,7 @@ from helpers import wait_for
 
 from op2motion.formats.posefile import read_pose
 from op2motion.studio.folder import Workspace
-from op2motion.studio.session import Session
+from op2motion.studio.session import PoseEdit
 
 pytest.importorskip("viser")
 ROOT = os.path.join(os.path.dirname(__file__), "..")
@@ -39,7 +39,7 @@ def studio(spec, tmp_path):
     (tmp_path / "victim.json").write_text("precious", encoding="utf-8")
     (tmp_path / "victim.bin").write_bytes(b"x" * 651)
     os.symlink(tmp_path / "victim.json", work / "link.json")
-    served = Studio(spec, Session(spec, read_pose(work / "walkready.json", spec)), workspace=Workspace(work),
+    served = Studio(spec, PoseEdit(spec, read_pose(work / "walkready.json", spec)), workspace=Workspace(work),
                     pose_path=str(work / "walkready.json"))
     try:
         yield served
@@ -248,7 +248,7 @@ def test_edits_while_the_optimiser_works_are_refused_and_its_pose_adopted_whole(
 
     one_foot = tmp_path / "book_2_44.json"
     one_foot.write_bytes(open(os.path.join(ROOT, "poses", "book_2_44.json"), "rb").read())
-    served = Studio(spec, Session(spec, read_pose(one_foot, spec)), workspace=Workspace(tmp_path),
+    served = Studio(spec, PoseEdit(spec, read_pose(one_foot, spec)), workspace=Workspace(tmp_path),
                     pose_path=str(one_foot))
     client = Client(served)
     try:

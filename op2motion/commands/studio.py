@@ -105,7 +105,7 @@ def cmd_studio(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.robot.support import Support
     from op2motion.studio.folder import Workspace
     from op2motion.studio.guard import is_loopback
-    from op2motion.studio.session import Session
+    from op2motion.studio.session import PoseEdit
 
     if args.shared_port and args.robot is None:
         raise InputError("expected --robot with --shared-port (it opens the robot's port)", "shared_port")
@@ -123,7 +123,7 @@ def cmd_studio(args: argparse.Namespace, spec: Spec) -> int:
         from op2motion.studio.server import Studio
     except ImportError as exc:
         raise InputError(f"expected the studio extra (pip install '.[studio]'): {exc}", "studio") from None
-    session = Session(spec, pose)
+    session = PoseEdit(spec, pose)
     if action:
         session.open_action(args.pose)
     follower = _follower(args.robot, args.shared_port, spec)

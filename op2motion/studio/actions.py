@@ -11,7 +11,7 @@ from typing import Any, Callable
 from op2motion.errors import InputError, Op2MotionError
 from op2motion.studio.edits import Snapshot
 from op2motion.studio.folder import Workspace
-from op2motion.studio.session import Readout, Session
+from op2motion.studio.session import PoseEdit, Readout
 
 MAX_PAGE = 255
 
@@ -34,7 +34,7 @@ def _seconds(value: object) -> float:
 class ActionPanel:
     """The action-file controls (see the module docstring); the page's parts come from :class:`.server.Studio`."""
 
-    session: Session
+    session: PoseEdit
     server: Any
     events: Any
     workspace: Workspace

@@ -21,7 +21,7 @@ from typing import Any, Callable
 import numpy as np
 
 from op2motion.errors import Op2MotionError
-from op2motion.studio.session import Readout, Session
+from op2motion.studio.session import PoseEdit, Readout
 
 MAX_EVENTS = 1000                 # the last events kept for tests and the log
 NOTIFY_S = 6.0                    # a refusal shown to one tab closes after this long [s]
@@ -36,17 +36,17 @@ class Snapshot:
     played: Any
 
     @classmethod
-    def of(cls, s: Session) -> "Snapshot":
+    def of(cls, s: PoseEdit) -> "Snapshot":
         return cls(s.servo.copy(), s.support, s.name, s.action, s.played)
 
-    def restore(self, s: Session) -> None:
+    def restore(self, s: PoseEdit) -> None:
         s.servo, s.support, s.name, s.action, s.played = self.servo, self.support, self.name, self.action, self.played
 
 
 class Edits:
     """The editing rules of the module docstring; the page's parts come from :class:`.server.Studio`."""
 
-    session: Session
+    session: PoseEdit
     server: Any
     _message: Any
     _show: Callable[[Readout], None]

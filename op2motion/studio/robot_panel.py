@@ -15,13 +15,13 @@ from typing import Any, Callable
 import numpy as np
 
 from op2motion.errors import InputError
-from op2motion.studio.session import Readout, Session
+from op2motion.studio.session import PoseEdit, Readout
 
 
 class RobotPanel:
     """The robot's controls (see the module docstring); the page's parts come from :class:`.server.Studio`."""
 
-    session: Session
+    session: PoseEdit
     server: Any
     events: Any
     follower: Any

@@ -1,5 +1,5 @@
 """The pose studio's page: viser serves a three.js view of the robot and the controls; :class:`Studio` wires them to
-a :class:`~.session.Session`.
+a :class:`~.session.PoseEdit`.
 
 The robot is drawn from the generated URDF (its collision shapes: the bodies physics simulates), placed with its
 stance sole on the floor at the origin; beside it the support polygon, both centres of mass with their ground
@@ -35,7 +35,7 @@ from op2motion.studio.folder import Workspace
 from op2motion.studio.guard import Gate, guarded_viser, new_secret
 from op2motion.studio.place import root_in_sole, wxyz
 from op2motion.studio.robot_panel import RobotPanel
-from op2motion.studio.session import Readout, Session
+from op2motion.studio.session import PoseEdit, Readout
 from op2motion.studio.work import LongWork
 
 JOG_STEPS = ("-5°", "-1°", "+1°", "+5°")
@@ -56,7 +56,7 @@ class Studio(Edits, LongWork, ActionPanel, RobotPanel):
         follower: A robot following the pose (:class:`op2motion.bus.follow.Follower`, started), or None.
     """
 
-    def __init__(self, spec: Spec, session: Session, host: str = "127.0.0.1", port: int = 0, action_path: str = "",
+    def __init__(self, spec: Spec, session: PoseEdit, host: str = "127.0.0.1", port: int = 0, action_path: str = "",
                  workspace: Workspace | None = None, pose_path: str = "", follower: Any = None):
         import yourdfpy
         from viser.extras import ViserUrdf

@@ -1,13 +1,13 @@
 """The pose studio's model: one pose being edited, and what it looks like after every edit.
 
-A :class:`Session` holds servo angles (20,) [rad] and a support (left, right or double). Edits go through it
-(:meth:`Session.set_joint`, :meth:`Session.jog`, :meth:`Session.set_support`): a value outside the joint's
+A :class:`PoseEdit` holds servo angles (20,) [rad] and a support (left, right or double). Edits go through it
+(:meth:`PoseEdit.set_joint`, :meth:`PoseEdit.jog`, :meth:`PoseEdit.set_support`): a value outside the joint's
 mechanical range or not a finite number is refused with an :class:`~op2motion.errors.InputError` naming the joint
-and the range, and the pose is left as it was. After each edit :meth:`Session.readout` says what the page shows:
+and the range, and the pose is left as it was. After each edit :meth:`PoseEdit.readout` says what the page shows:
 both centres of mass with their margins (the book's lumped CoM against its foot rectangle; the full-inertia CoM
 against the real support polygon, on one foot also where it settles on the compliant servos), the swing foot's
 clearance, the least clearance between the collision shapes (and which links), and each joint in degrees and ticks
-with its cable-safe range. Nothing is written unless :meth:`Session.save` is called. World frame: the stance
+with its cable-safe range. Nothing is written unless :meth:`PoseEdit.save` is called. World frame: the stance
 foot's sole centre, X forward, Y left, Z up.
 """
 
@@ -96,7 +96,7 @@ class Readout:
         return out
 
 
-class Session:
+class PoseEdit:
     """One pose under edit (see the module docstring)."""
 
     def __init__(self, spec: Spec, pose: Pose):

@@ -15,7 +15,7 @@ from op2motion.errors import Op2MotionError
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Side, as_side
 from op2motion.studio.place import root_in_sole, wxyz
-from op2motion.studio.session import Readout, Session
+from op2motion.studio.session import PoseEdit, Readout
 
 CHECK_SECONDS = 3.0
 GREY = (0.6, 0.6, 0.6)
@@ -25,7 +25,7 @@ class LongWork:
     """Check, optimise, balance (see the module docstring); the page's parts come from :class:`.server.Studio`."""
 
     spec: Spec
-    session: Session
+    session: PoseEdit
     server: Any
     events: Any
     busy: dict[str, bool]
