@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from op2motion.bus import protocol as p
-from op2motion.bus.emulator.devices import Board, Servo
+from op2motion.bus.emulator.devices import Board, EmulatedServo
 from op2motion.bus.safety import (
     BLIND_TICKS,
     FALL_TILT_RAD,
@@ -210,7 +210,7 @@ def test_goals_clipped_to_mechanical_ranges(spec):
 
 
 def test_emulated_servo_table_rules():
-    servo = Servo(13)
+    servo = EmulatedServo(13)
     servo.voltage_v, servo.temperature_c = 12.0, 40.0
     servo.power_up(2048)
     assert servo.get("torque_enable") == 0 and servo.u16("goal_position") == 2048

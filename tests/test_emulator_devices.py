@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from op2motion.bus import protocol as p
-from op2motion.bus.emulator.devices import Servo
+from op2motion.bus.emulator.devices import EmulatedServo
 from op2motion.bus.emulator.faults import Faults, with_board
 from op2motion.bus.emulator.wire import BOOT_S, Wire
 from op2motion.bus.tables import CM730, CM730_ID, CM730_MODEL_NUMBER, CM740_MODEL_NUMBER, LED_HEAD_AT_POWER_ON, MX28
@@ -42,7 +42,7 @@ class Rig:
         assert len(replies) == 1, replies
         return replies[0]
 
-    def servo(self, device: int = SERVO) -> Servo:
+    def servo(self, device: int = SERVO) -> EmulatedServo:
         return self.wire.by_id[device]
 
 

@@ -19,14 +19,14 @@ from helpers import ROOT, run_cli
 
 from op2motion.errors import InputError
 from op2motion.gait import preset_path, read_preset
-from op2motion.tune.space import Param, SearchSpace
+from op2motion.tune.space import Param, ParameterSpace
 from op2motion.tune.spaces import walk_space
 from op2motion.tune.study import MARK, check_study, open_study, rows, run_study
 from op2motion.tune.trial import Task, identity
 
 NAME = "tune-walk-forward"          # the study name `tune walk` uses by default
 SEED = 0
-TOY = SearchSpace((Param("step_s", 0.2, 0.5, "s"), Param("step_length_m", 0.02, 0.08, "m")))
+TOY = ParameterSpace((Param("step_s", 0.2, 0.5, "s"), Param("step_length_m", 0.02, 0.08, "m")))
 
 
 def snapshot(folder: Path) -> dict[str, tuple[int, int, str]]:
@@ -252,9 +252,9 @@ def test_the_tuning_page_s_spec_example_runs(tmp_path, capsys, monkeypatch, othe
 
 
 def _outcome():
-    from op2motion.tune.study import Outcome
+    from op2motion.tune.study import TrialOutcome
 
-    return Outcome(0.2, 0.5, True, 1, 1, None, 0.0)
+    return TrialOutcome(0.2, 0.5, True, 1, 1, None, 0.0)
 
 
 class _Here:

@@ -7,19 +7,19 @@ from __future__ import annotations
 import pytest
 
 from op2motion.errors import InputError, Interrupted
-from op2motion.tune.space import Param, SearchSpace
-from op2motion.tune.study import Outcome, choose, open_study, pareto, rows, run_study
+from op2motion.tune.space import Param, ParameterSpace
+from op2motion.tune.study import TrialOutcome, choose, open_study, pareto, rows, run_study
 
-SPACE = SearchSpace((Param("step_s", 0.2, 0.5, "s"), Param("step_length_m", 0.02, 0.08, "m")))
+SPACE = ParameterSpace((Param("step_s", 0.2, 0.5, "s"), Param("step_length_m", 0.02, 0.08, "m")))
 SEED = 3
 
 
-def landscape(point: dict[str, float]) -> Outcome:
+def landscape(point: dict[str, float]) -> TrialOutcome:
     """A known answer: speed = length / time; margin falls with speed; beyond 0.3 m/s the walk 'falls' at once."""
     speed = point["step_length_m"] / point["step_s"]
     if speed > 0.3:
-        return Outcome(speed, -1.0, False, 1, 8, "fell", 0.0)
-    return Outcome(speed, 1.0 - speed / 0.3, True, 8, 8, None, 0.0)
+        return TrialOutcome(speed, -1.0, False, 1, 8, "fell", 0.0)
+    return TrialOutcome(speed, 1.0 - speed / 0.3, True, 8, 8, None, 0.0)
 
 
 class InThread:
@@ -101,7 +101,7 @@ def test_the_study_file_is_whole_when_the_program_ends_and_read_back_after_a_kil
 def test_a_study_of_other_parameters_is_refused(tmp_path):
     study = open_study(tmp_path / "s.db", "toy", SPACE, SEED)
     run_study(study, SPACE, landscape, (), 2, InThread())
-    other = SearchSpace((Param("step_s", 0.2, 0.5, "s"),))
+    other = ParameterSpace((Param("step_s", 0.2, 0.5, "s"),))
     with pytest.raises(InputError, match="use another study file"):
         open_study(tmp_path / "s.db", "toy", other, SEED)
     (tmp_path / "junk.db").write_text("not sqlite", encoding="utf-8")

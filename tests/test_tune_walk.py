@@ -11,7 +11,7 @@ from op2motion.gait.stock_config import StockConfig, parse_stock_config, stock_c
 from op2motion.robot.specfile import tomllib
 from op2motion.tune.executor import ProcessTrials
 from op2motion.tune.run import VERIFY_STEPS, Effort, preset_text, search_and_verify
-from op2motion.tune.space import Param, SearchSpace
+from op2motion.tune.space import Param, ParameterSpace
 from op2motion.tune.study import open_study, rows
 from op2motion.tune.trial import Task, evaluate
 
@@ -40,7 +40,7 @@ def test_bad_input_is_refused_and_nothing_is_written(tmp_path, capsys, argv, mes
 def test_a_walk_study_finds_verifies_and_writes_a_preset_that_reads_back(tmp_path):
     from op2motion.gait import load_preset
 
-    space = SearchSpace((Param("step_length_m", 0.07, 0.085, "m"),))
+    space = ParameterSpace((Param("step_length_m", 0.07, 0.085, "m"),))
     task = Task("walk", "forward", load_preset("forward"), members=NOMINAL, steps=STEPS)
     study = open_study(tmp_path / "s.db", "walk", space, SEED)
     trials = ProcessTrials(2)

@@ -34,7 +34,7 @@ _V = {name: i for i, name in enumerate(BOOK_VARS)}
 
 
 @dataclass(frozen=True)
-class Step:
+class ChainStep:
     """One frame of the chain: ``frame = parent · DH(sign·q[var] + offset, d, a, alpha) · Trans(trans) · Rot(rot)``;
     a step without ``var`` is the fixed part alone (the book's additional transforms)."""
 
@@ -63,44 +63,44 @@ def cached(kind: str, spec: Spec, support: Support | Side, build: Callable[[Spec
     return built
 
 
-def chain(spec: Spec, support: Support | Side) -> tuple[Step, ...]:
+def chain(spec: Spec, support: Support | Side) -> tuple[ChainStep, ...]:
     """The book's D-H chain with the real robot's lengths, rooted at the ``support`` ankle (frame "0")."""
     return cached("chain", spec, support, _build_chain)
 
 
-def _build_chain(spec: Spec, support: Support | Side) -> tuple[Step, ...]:
+def _build_chain(spec: Spec, support: Support | Side) -> tuple[ChainStep, ...]:
     g = spec.geometry
     left = support == "left"
     sgn = 1.0 if left else -1.0
     hw, sh, fwd, pi = g.hip_half_width, g.shoulder_half_width, -g.hip_x * sgn, math.pi
     steps = [
-        Step("1", "0", _V["phi1"], 1, _HALF_PI, alpha=_HALF_PI),
-        Step("2", "1", _V["th1"], -1, _HALF_PI, a=g.calf),
-        Step("3", "2", _V["th2"], -1, a=g.thigh),
-        Step("4", "3", _V["th3"], -1, alpha=-_HALF_PI),
-        Step("5", "4", _V["phi2"], 1, a=g.hip_yaw_to_roll, rot=_HIP),
-        Step("6", "5", _V["psi1"], 1, 0.0 if left else pi, a=2.0 * hw),
-        Step("7", "6", _V["psi2"], 1, alpha=-sgn * _HALF_PI, trans=(0.0, sgn * g.hip_yaw_to_roll, 0.0)),
-        Step("8", "7", _V["phi3"], 1, -sgn * _HALF_PI, alpha=-_HALF_PI),
-        Step("9", "8", _V["th4"], -1, pi, a=g.thigh),
-        Step("10", "9", _V["th5"], -1, a=g.calf),
-        Step("11", "10", _V["th6"], -1, alpha=_HALF_PI),
-        Step("12", "11", _V["phi4"], 1, a=g.ankle_to_sole),
+        ChainStep("1", "0", _V["phi1"], 1, _HALF_PI, alpha=_HALF_PI),
+        ChainStep("2", "1", _V["th1"], -1, _HALF_PI, a=g.calf),
+        ChainStep("3", "2", _V["th2"], -1, a=g.thigh),
+        ChainStep("4", "3", _V["th3"], -1, alpha=-_HALF_PI),
+        ChainStep("5", "4", _V["phi2"], 1, a=g.hip_yaw_to_roll, rot=_HIP),
+        ChainStep("6", "5", _V["psi1"], 1, 0.0 if left else pi, a=2.0 * hw),
+        ChainStep("7", "6", _V["psi2"], 1, alpha=-sgn * _HALF_PI, trans=(0.0, sgn * g.hip_yaw_to_roll, 0.0)),
+        ChainStep("8", "7", _V["phi3"], 1, -sgn * _HALF_PI, alpha=-_HALF_PI),
+        ChainStep("9", "8", _V["th4"], -1, pi, a=g.thigh),
+        ChainStep("10", "9", _V["th5"], -1, a=g.calf),
+        ChainStep("11", "10", _V["th6"], -1, alpha=_HALF_PI),
+        ChainStep("12", "11", _V["phi4"], 1, a=g.ankle_to_sole),
         # Upper body hung from frame 6; the torso origin sits -hip_x forward of the hip-yaw axes.
-        Step("13", "6", trans=(-hw - sgn * sh, fwd, g.torso), rot=_ARM_ROT[left]),
-        Step("17", "6", trans=(-hw + sgn * sh, fwd, g.torso), rot=_ARM_ROT[left]),
-        Step("21", "6", trans=(-hw, fwd, g.torso), rot=_NECK_ROT[left]),
-        Step("22", "21", _V["psi3"], 1, d=g.head_tilt_height, alpha=_HALF_PI),
-        Step("23", "22", _V["th11"], -1, _HALF_PI, a=g.head_length),
+        ChainStep("13", "6", trans=(-hw - sgn * sh, fwd, g.torso), rot=_ARM_ROT[left]),
+        ChainStep("17", "6", trans=(-hw + sgn * sh, fwd, g.torso), rot=_ARM_ROT[left]),
+        ChainStep("21", "6", trans=(-hw, fwd, g.torso), rot=_NECK_ROT[left]),
+        ChainStep("22", "21", _V["psi3"], 1, d=g.head_tilt_height, alpha=_HALF_PI),
+        ChainStep("23", "22", _V["th11"], -1, _HALF_PI, a=g.head_length),
     ]
     for first, pitch, roll, elbow, lateral in ((13, "th7", "phi5", "th8", 1.0), (17, "th9", "phi6", "th10", -1.0)):
         f = str(first)
         steps += [
-            Step(str(first + 1), f, _V[pitch], -1, d=lateral * g.shoulder_roll_lateral, a=g.shoulder_roll_drop,
+            ChainStep(str(first + 1), f, _V[pitch], -1, d=lateral * g.shoulder_roll_lateral, a=g.shoulder_roll_drop,
                  alpha=_HALF_PI),
-            Step(str(first + 2), str(first + 1), _V[roll], 1, -pi, a=g.upper_arm, alpha=-_HALF_PI,
+            ChainStep(str(first + 2), str(first + 1), _V[roll], 1, -pi, a=g.upper_arm, alpha=-_HALF_PI,
                  trans=(0.0, -g.elbow_forward, 0.0)),  # the real elbow offset, then the elbow axis
-            Step(str(first + 3), str(first + 2), _V[elbow], -1, a=g.lower_arm),
+            ChainStep(str(first + 3), str(first + 2), _V[elbow], -1, a=g.lower_arm),
         ]
     return tuple(steps)
 
@@ -165,7 +165,7 @@ def _build_matrix_plan(spec: Spec, support: Support | Side) -> MatrixPlan:
     joint = [f for f in order if by_frame[f].var is not None]
     fixed_only = [f for f in order if by_frame[f].var is None]
 
-    def fixed_of(st: Step) -> np.ndarray:
+    def fixed_of(st: ChainStep) -> np.ndarray:
         m = np.eye(4)
         if st.rot is not None:
             m[:3, :3] = np.asarray(st.rot)

@@ -24,7 +24,7 @@ from typing import Any, Callable, Iterator, Sequence
 from op2motion.errors import InputError, Interrupted
 from op2motion.library.grid import Job
 from op2motion.library.index import INDEX_JSON, IndexRow, load_index, reconcile, write_index
-from op2motion.library.jobs import BuildSettings, Recorder, solve_job
+from op2motion.library.jobs import BuildSettings, JobRecorder, solve_job
 from op2motion.processes.workers import EXECUTORS, ExecutorName, one_thread_each, starting_workers, worker_init
 from op2motion.robot.spec import Spec
 from op2motion.robot.specfile import spec_text
@@ -117,7 +117,7 @@ def build_library(jobs: Sequence[Job], spec: Spec, out_dir: str | Path, settings
     interrupted = False
     try:
         with _sigterm_as_interrupt():
-            record = Recorder(out, rows, on_done)
+            record = JobRecorder(out, rows, on_done)
             if todo and executor is not None and executor.kind == "ray":
                 from op2motion.library.cluster import run_on_ray
 
@@ -142,7 +142,7 @@ def build_library(jobs: Sequence[Job], spec: Spec, out_dir: str | Path, settings
 
 
 def _run(todo: Sequence[Job], spec: Spec, spec_path: str | None, settings: BuildSettings, workers: int,
-         record: Recorder) -> None:
+         record: JobRecorder) -> None:
     ctx = multiprocessing.get_context("spawn")  # fresh interpreters: no inherited threads or pyswarms state
     pool = None
     try:

@@ -21,7 +21,7 @@ from typing import Any, Iterator, Sequence
 
 from op2motion.errors import InputError
 from op2motion.library.grid import Job
-from op2motion.library.jobs import BuildSettings, Recorder, solve_job
+from op2motion.library.jobs import BuildSettings, JobRecorder, solve_job
 from op2motion.processes.workers import THREAD_VARIABLES
 from op2motion.robot.spec import Spec
 
@@ -200,7 +200,7 @@ def ray_session(address: str | None, workers: int) -> Iterator[tuple[Any, _Stop]
 
 
 def run_on_ray(todo: Sequence[Job], spec: Spec, spec_text: str, settings: BuildSettings, workers: int,
-               record: Recorder, address: str | None) -> None:
+               record: JobRecorder, address: str | None) -> None:
     """Solve ``todo`` as Ray tasks in a :func:`ray_session` and record each result as it comes; Ctrl-C and
     SIGTERM end the build between Ray's calls."""
     with ray_session(address, workers) as (ray, stop):

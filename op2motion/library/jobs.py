@@ -1,7 +1,7 @@
 """One library target solved by a worker (a process of the pool, or a Ray task), and the driver's record of it.
 
 :func:`solve_job` runs the posture workflow (:func:`op2motion.workflow.solve`) on one target and returns its index
-row and, when reached, the pose file's text; :class:`Recorder` is the only writer (pose files atomically, then the
+row and, when reached, the pose file's text; :class:`JobRecorder` is the only writer (pose files atomically, then the
 index). Shared by the process pool (:mod:`.build`) and Ray (:mod:`.cluster`).
 """
 
@@ -84,7 +84,7 @@ def _robust_row(row: IndexRow, servo: Any, job: Job, spec: Spec, validate: Valid
                    robust_worst=worst)
 
 
-class Recorder:
+class JobRecorder:
     """The driver's side of a build: each finished target's pose file (atomically), then the index."""
 
     def __init__(self, out: Path, rows: dict[str, IndexRow], on_done: Callable[[IndexRow], Any] | None):

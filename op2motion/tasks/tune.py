@@ -17,7 +17,7 @@ from op2motion.tasks.result import Output, TaskResult
 if TYPE_CHECKING:
     from op2motion.processes.workers import ExecutorName
     from op2motion.tune.run import TuneResult
-    from op2motion.tune.space import SearchSpace
+    from op2motion.tune.space import ParameterSpace
     from op2motion.tune.trial import Task
 
 
@@ -29,7 +29,7 @@ class TuneRequest:
     the settings at ``out``, the figures at ``out_json``, the Pareto figure at ``plot`` (None: none)."""
 
     task: Task
-    space: SearchSpace
+    space: ParameterSpace
     trials: int
     verify: int
     study_path: str

@@ -20,7 +20,7 @@ from op2motion.processes.workers import ExecutorName
 WAIT_S = 0.25                 # the driver waits this long at a time, so signals are handled between waits [s]
 
 
-class Trials(Protocol):
+class TrialRunner(Protocol):
     """Runs ``fn(*args)`` for trial numbers, ``workers`` at a time."""
 
     workers: int
@@ -122,8 +122,8 @@ def check_executor(kind: ExecutorName, address: str | None) -> None:
 
 @contextlib.contextmanager
 def trials_on(kind: ExecutorName, workers: int, address: str | None = None) -> Iterator[ProcessTrials | RayTrials]:
-    """Trials on ``kind`` ``process`` (a pool of ``workers``) or ``ray`` (``address``: a cluster; None: Ray on this
-    machine with ``workers`` CPUs), closed however the study ends."""
+    """A :class:`TrialRunner` on ``kind`` ``process`` (a pool of ``workers``) or ``ray`` (``address``: a cluster;
+    None: Ray on this machine with ``workers`` CPUs), closed however the study ends."""
     if kind == "ray":
         from op2motion.library.cluster import ray_session
 

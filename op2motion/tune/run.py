@@ -20,7 +20,7 @@ from dataclasses import dataclass, field, fields, replace
 from typing import TYPE_CHECKING, Any, Callable
 
 from op2motion.processes.workers import ExecutorName
-from op2motion.tune.study import Outcome, TrialRow, pareto, rows
+from op2motion.tune.study import TrialOutcome, TrialRow, pareto, rows
 from op2motion.tune.trial import Task, evaluate
 
 if TYPE_CHECKING:
@@ -41,7 +41,7 @@ class TuneResult:
     direction: Direction
     table: list[TrialRow]
     chosen: TrialRow | None = None
-    verified: dict[str, Outcome] = field(default_factory=dict)
+    verified: dict[str, TrialOutcome] = field(default_factory=dict)
     rejected: list[tuple[int, str]] = field(default_factory=list)
     settings: Any = None
     wall_s: float = 0.0
@@ -58,7 +58,7 @@ class TuneResult:
 
 
 def verify(point: dict[str, float], task: Task, trials: Any, on_run: Callable[[int, int], Any] | None = None,
-           members: tuple[str, ...] | None = None) -> dict[str, Outcome]:
+           members: tuple[str, ...] | None = None) -> dict[str, TrialOutcome]:
     """``point`` on every member of the family (or just ``members``), both engines, :data:`VERIFY_STEPS` steps
     (pushed for a walk), one trial per member on ``trials``; the outcome per member name."""
     from op2motion.physics import family
@@ -66,7 +66,7 @@ def verify(point: dict[str, float], task: Task, trials: Any, on_run: Callable[[i
 
     names = list(members) if members is not None else [m.name for m in family(spec_of(task.spec_path))]
     push = VERIFY_PUSH_N if task.kind == "walk" else 0.0
-    out: dict[str, Outcome] = {}
+    out: dict[str, TrialOutcome] = {}
     pending = dict(enumerate(names))
     for number, name in pending.items():
         trials.submit(number, evaluate, point, replace(task, members=(name,), engines=VERIFY_ENGINES,

@@ -1,8 +1,8 @@
 """What a tuning study searches: named parameters, each over a range, sampled by Optuna.
 
 A :class:`Param` is one setting with its range (``low`` to ``high``, optionally on a log scale or in steps); a
-:class:`SearchSpace` is an ordered set of them, plus the settings it may search but does not by default
-(``optional``: ``--param`` adds one). :meth:`SearchSpace.narrowed` takes the user's overrides
+:class:`ParameterSpace` is an ordered set of them, plus the settings it may search but does not by default
+(``optional``: ``--param`` adds one). :meth:`ParameterSpace.narrowed` takes the user's overrides
 (``--param NAME LOW HIGH``): an unknown name, an empty or inverted range, a range outside what the setting allows,
 or a non-finite bound is bad input naming the parameter.
 """
@@ -45,7 +45,7 @@ class Param:
 
 
 @dataclass(frozen=True)
-class SearchSpace:
+class ParameterSpace:
     """The parameters of a study, in order; ``optional``: those a ``--param`` may add (not searched by default)."""
 
     params: tuple[Param, ...]
@@ -65,7 +65,7 @@ class SearchSpace:
         """One point {name: value} for an Optuna ``trial``."""
         return {p.name: p.sample(trial) for p in self.params}
 
-    def narrowed(self, overrides: Iterable[Sequence[str]] = (), only: Sequence[str] | None = None) -> "SearchSpace":
+    def narrowed(self, overrides: Iterable[Sequence[str]] = (), only: Sequence[str] | None = None) -> "ParameterSpace":
         """The space with ranges from ``overrides`` (NAME LOW HIGH, as typed) and, with ``only``, just those
         parameters (the others stay at the base setting)."""
         by_name = {p.name: p for p in self.params}
@@ -90,4 +90,4 @@ class SearchSpace:
                 raise InputError(f"expected two numbers after {name}, got {low!r} {high!r}", "param") from None
             base = by_name[name]
             by_name[name] = replace(base, low=lo, high=hi, allowed=base.allowed or (base.low, base.high))
-        return SearchSpace(tuple(by_name.values()))
+        return ParameterSpace(tuple(by_name.values()))

@@ -2,7 +2,7 @@
 stock Walking module's ``[Walking Config]`` for the stock firmware.
 
 Each range is within what the setting allows (the preset's :data:`~op2motion.gait.params.RANGES`, the config's
-keys) and around what walks today; ``--param NAME LOW HIGH`` narrows or moves one (:meth:`~.space.SearchSpace.
+keys) and around what walks today; ``--param NAME LOW HIGH`` narrows or moves one (:meth:`~.space.ParameterSpace.
 narrowed`), ``--only NAME ...`` searches just those (the others keep the base preset's values).
 
 The swing shaping keys (``swing_level``, ``swing_level_roll``, ``swing_toe_deg``) are searched only when asked for
@@ -15,7 +15,7 @@ soft bodies of an independent simulator that way).
 from __future__ import annotations
 
 from op2motion.errors import InputError
-from op2motion.tune.space import Param, SearchSpace
+from op2motion.tune.space import Param, ParameterSpace
 from op2motion.tune.trial import Direction
 
 
@@ -34,7 +34,7 @@ def _shared() -> tuple[Param, ...]:
             _gait("heading_gain_scale", 0.5, 2.0))
 
 
-def walk_space(direction: Direction) -> SearchSpace:
+def walk_space(direction: Direction) -> ParameterSpace:
     """The default space of op2motion's walk in ``direction`` (forward, backward, sideways, turn)."""
     stride = {"forward": (_gait("step_length_m", 0.08, 0.105, "m"), _gait("zmp_offset_x_m", -0.01, 0.01, "m"),
                           _gait("torso_pitch_deg", 0.0, 6.0, "deg")),
@@ -43,7 +43,7 @@ def walk_space(direction: Direction) -> SearchSpace:
               "turn": (_gait("turn_deg", 8.0, 22.0, "deg"), _gait("zmp_offset_y_m", -0.01, 0.005, "m"))}
     if direction not in stride:
         raise InputError(f"expected one of {', '.join(stride)}, got {direction!r}", "direction")
-    return SearchSpace(stride[direction] + _shared(), optional=(_gait("p_gain", 28, 48), *_swing()))
+    return ParameterSpace(stride[direction] + _shared(), optional=(_gait("p_gain", 28, 48), *_swing()))
 
 
 def _swing() -> tuple[Param, ...]:
@@ -53,7 +53,7 @@ def _swing() -> tuple[Param, ...]:
             _gait("swing_toe_deg", 0.0, 8.0, "deg"))
 
 
-def stock_space() -> SearchSpace:
+def stock_space() -> ParameterSpace:
     """The default space of the stock Walking module: the forward amplitude it is tuned for and the config keys that
     shape its step and hold it (``[op2motion] x_move_amplitude_mm`` and ``[Walking Config]`` keys by their attribute
     names; the P gain only when asked for, see the module docstring)."""
@@ -64,7 +64,7 @@ def stock_space() -> SearchSpace:
     def key(name: str, low: float, high: float, unit: str = "") -> Param:
         return Param(name, low, high, unit, allowed=allowed[name])
 
-    return SearchSpace((key("x_move_amplitude_mm", 25.0, 45.0, "mm"), key("period_time_ms", 480.0, 700.0, "ms"),
+    return ParameterSpace((key("x_move_amplitude_mm", 25.0, 45.0, "mm"), key("period_time_ms", 480.0, 700.0, "ms"),
                         key("dsp_ratio", 0.05, 0.3), key("step_fb_ratio", 0.1, 0.4),
                         key("foot_height_mm", 20.0, 45.0, "mm"), key("swing_right_left_mm", 10.0, 30.0, "mm"),
                         key("swing_top_down_mm", 0.0, 10.0, "mm"), key("pelvis_offset_deg", 0.0, 6.0, "deg"),

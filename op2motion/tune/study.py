@@ -1,8 +1,8 @@
-"""A tuning study: Optuna asks for points of a :class:`~.space.SearchSpace`, the trials run on an executor
+"""A tuning study: Optuna asks for points of a :class:`~.space.ParameterSpace`, the trials run on an executor
 (:mod:`.executor`), each result is told back, and the study lives in a local SQLite file so that it can be stopped
 and resumed without losing a trial.
 
-* **Two objectives**, both maximised: the speed and the margin (:class:`Outcome`): the fastest walk is not the
+* **Two objectives**, both maximised: the speed and the margin (:class:`TrialOutcome`): the fastest walk is not the
   answer if it barely holds. The chosen point (:func:`choose`) is the fastest trial that held everywhere with at
   least :data:`MIN_MARGIN` to spare; the Pareto front is drawn beside it.
 * **Pruning**: Optuna's ``report``/``should_prune`` do not work in multi-objective studies, so a trial stops itself
@@ -48,7 +48,7 @@ from typing import Any, Callable, Iterable, Mapping
 
 from op2motion.errors import InputError, Interrupted, ref
 from op2motion.fileio import check_output_path, new_file_beside
-from op2motion.tune.space import SearchSpace
+from op2motion.tune.space import ParameterSpace
 
 MIN_MARGIN = 0.2                # the chosen point holds everywhere with at least this share of every bound to spare
 MAX_TRIALS = 10_000
@@ -62,7 +62,7 @@ SQLITE_MAGIC = b"SQLite format 3\x00"       # the first 16 bytes of every SQLite
 
 
 @dataclass(frozen=True)
-class Outcome:
+class TrialOutcome:
     """What one trial measured: the speed [m/s] (or [rad/s] turning) that counts (the nominal body's, the slowest
     engine's), the margin (the worst run's smallest share of a bound left: 1 is perfect, 0 on a bound, below 0
     beyond it), whether every run held, how many runs were made before it stopped (``runs`` of ``planned``), why
@@ -93,7 +93,7 @@ class TrialRow:
 
     number: int
     params: dict[str, float]
-    outcome: Outcome | None
+    outcome: TrialOutcome | None
     state: str
 
 
@@ -104,7 +104,7 @@ def check_budget(trials: int) -> int:
     return trials
 
 
-def study_mark(space: SearchSpace, about: Mapping[str, Any] | None = None) -> dict[str, Any]:
+def study_mark(space: ParameterSpace, about: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """The mark op2motion writes on a study it makes (the study's ``op2motion`` user attribute): the schema, the
     parameters searched and their ranges when it was made, and ``about``: what else it was made for (e.g. the
     task, the spec's fingerprint: :func:`op2motion.tune.trial.identity`; a value that is a mapping with a
@@ -113,7 +113,7 @@ def study_mark(space: SearchSpace, about: Mapping[str, Any] | None = None) -> di
             "ranges": {p.name: [p.low, p.high] for p in space.params}, **(about or {})}
 
 
-def check_study(path: str | Path, name: str, space: SearchSpace, about: Mapping[str, Any] | None = None) -> bool:
+def check_study(path: str | Path, name: str, space: ParameterSpace, about: Mapping[str, Any] | None = None) -> bool:
     """Refuse (:class:`InputError`, param ``study``), reading nothing but read-only, a study file that cannot be
     this run's: not a regular file, not writable, not an op2motion study file (:func:`_marks`), or holding the study
     ``name`` made for other parameters or another ``about`` (:func:`study_mark`), or one op2motion did not make.
@@ -132,7 +132,7 @@ def check_study(path: str | Path, name: str, space: SearchSpace, about: Mapping[
     return True
 
 
-def open_study(path: str | Path, name: str, space: SearchSpace, seed: int,
+def open_study(path: str | Path, name: str, space: ParameterSpace, seed: int,
                about: Mapping[str, Any] | None = None) -> Any:
     """The study ``name`` in the SQLite file ``path``, made if new (a new file is made beside its place, marked,
     :func:`study_mark`, and moved there whole). The file is looked at read-only first: one that :func:`check_study`
@@ -311,7 +311,7 @@ def _connect(path: Path) -> Any:
     return connection
 
 
-def violation(outcome: Outcome) -> float:
+def violation(outcome: TrialOutcome) -> float:
     """How far a trial is from holding (0: it held everywhere): the margin it lacked (at least 0.01) plus the share
     of its runs never made (a plan refused before any run: 1)."""
     if outcome.passed:
@@ -320,7 +320,7 @@ def violation(outcome: Outcome) -> float:
     return lacked + (outcome.planned - outcome.runs) / max(outcome.planned, 1)
 
 
-def _tell(study: Any, trial: Any, outcome: Outcome) -> None:
+def _tell(study: Any, trial: Any, outcome: TrialOutcome) -> None:
     for key, value in outcome.as_dict().items():
         trial.set_user_attr(key, value)
     trial.set_user_attr("violation", violation(outcome))
@@ -329,7 +329,7 @@ def _tell(study: Any, trial: Any, outcome: Outcome) -> None:
     study.tell(trial, [outcome.speed, max(margin, -1.0)])
 
 
-def run_study(study: Any, space: SearchSpace, evaluate: Callable[..., Outcome], args: tuple[Any, ...],
+def run_study(study: Any, space: ParameterSpace, evaluate: Callable[..., TrialOutcome], args: tuple[Any, ...],
               budget: int, trials: Any, on_trial: Callable[[int, int], Any] | None = None) -> int:
     """Run ``evaluate(point, *args)`` for new points until the study holds ``budget`` finished trials, ``trials``
     (an executor) running several at a time; ``on_trial(finished, budget)`` after each. Returns the trials this run
@@ -366,13 +366,13 @@ def rows(study: Any) -> list[TrialRow]:
         if t.state.name not in ("COMPLETE", "PRUNED"):
             continue
         attrs = t.user_attrs
-        outcome = Outcome(**{k: attrs[k] for k in Outcome.__dataclass_fields__}) if "speed" in attrs else None
+        outcome = TrialOutcome(**{k: attrs[k] for k in TrialOutcome.__dataclass_fields__}) if "speed" in attrs else None
         state = "PRUNED" if outcome is not None and outcome.pruned else t.state.name
         out.append(TrialRow(t.number, dict(t.params), outcome, state))
     return out
 
 
-def _held(table: Iterable[TrialRow]) -> list[tuple[TrialRow, Outcome]]:
+def _held(table: Iterable[TrialRow]) -> list[tuple[TrialRow, TrialOutcome]]:
     return [(r, r.outcome) for r in table if r.outcome is not None and r.outcome.passed and not r.outcome.pruned]
 
 
@@ -391,9 +391,9 @@ def choose(table: Iterable[TrialRow], min_margin: float = MIN_MARGIN) -> TrialRo
     return max(good, key=lambda ro: ro[1].speed)[0] if good else None
 
 
-def timed(fn: Callable[[], Outcome]) -> Outcome:
+def timed(fn: Callable[[], TrialOutcome]) -> TrialOutcome:
     """``fn()`` with its wall time filled in."""
     t0 = time.perf_counter()
     out = fn()
-    return Outcome(out.speed, out.margin, out.passed, out.runs, out.planned, out.problem,
+    return TrialOutcome(out.speed, out.margin, out.passed, out.runs, out.planned, out.problem,
                    round(time.perf_counter() - t0, 2))

@@ -26,7 +26,7 @@ from functools import lru_cache
 from typing import TYPE_CHECKING, Any, Literal
 
 from op2motion.errors import InputError
-from op2motion.tune.study import Outcome
+from op2motion.tune.study import TrialOutcome
 
 if TYPE_CHECKING:
     from op2motion.physics import EngineName
@@ -202,18 +202,18 @@ def plan_problem(task: Task, chosen: Any, spec: Any) -> tuple[Any, str | None]:
         return None, f"plan refused: {exc.message}"
 
 
-def evaluate(point: dict[str, float], task: Task) -> Outcome:
+def evaluate(point: dict[str, float], task: Task) -> TrialOutcome:
     """One trial (see the module docstring)."""
     from op2motion.physics import check
     from op2motion.tune.study import timed
 
-    def run() -> Outcome:
+    def run() -> TrialOutcome:
         spec = spec_of(task.spec_path)
         members = members_of(task)
         planned = len(members) * len(task.engines)
         gait, problem = plan_problem(task, settings(task, point), spec)
         if problem is not None:
-            return Outcome(0.0, -1.0, False, 0, planned, problem, 0.0)
+            return TrialOutcome(0.0, -1.0, False, 0, planned, problem, 0.0)
         pushes = None
         if task.push_n:
             from op2motion.gait import side_pushes
@@ -234,8 +234,8 @@ def evaluate(point: dict[str, float], task: Task) -> Outcome:
                 if report.run.walk is not None and (member.name == "nominal" or len(members) == 1):
                     speeds.append(measure(task, report.run.walk))
                 if problem is not None:
-                    return Outcome(min(speeds, default=0.0), margin, False, runs, planned,
+                    return TrialOutcome(min(speeds, default=0.0), margin, False, runs, planned,
                                    f"{member.name}, {engine}: {problem}", 0.0)
-        return Outcome(min(speeds, default=0.0), margin, True, runs, planned, None, 0.0)
+        return TrialOutcome(min(speeds, default=0.0), margin, True, runs, planned, None, 0.0)
 
     return timed(run)

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, NamedTuple, Sequence
 
 import numpy as np
 
-from op2motion.bus.emulator.devices import Board, Servo
+from op2motion.bus.emulator.devices import Board, EmulatedServo
 from op2motion.bus.tables import SPEED_RAD_S_PER_UNIT, TORQUE_LIMIT_FULL, magnitude
 from op2motion.robot.imu import encode, imu_of
 from op2motion.robot.spec import Spec
@@ -105,7 +105,7 @@ class EmulatedBody:
             self.engine.step(self.model.active_torque(self.pose, q, kp))
         self.gyro, self.accel, _ = self.sensor.read(self.engine, self.engine.state()[0], 1.0)
 
-    def drive(self, servos: Sequence[Servo], powered: bool) -> Drive:
+    def drive(self, servos: Sequence[EmulatedServo], powered: bool) -> Drive:
         """What the servos' registers ask of the motors now (good until a register is written): torque enabled, goal
         [rad], moving speed [rad/s], stiffness, torque limit [N·m]."""
         enabled = np.array([powered and s.get("torque_enable") == 1 for s in servos], dtype=bool)
@@ -117,7 +117,7 @@ class EmulatedBody:
         volts = min(1.0, self.supply_v / self.rated_v)
         return Drive(enabled, goal, speed, kp, self.model.torque_max * share * volts * enabled)
 
-    def step(self, n: int, servos: Sequence[Servo], drive: Drive) -> None:
+    def step(self, n: int, servos: Sequence[EmulatedServo], drive: Drive) -> None:
         """``n`` physics steps as ``drive`` (:meth:`drive`) asks; a servo held at its limit latches its overload."""
         count = len(servos)
         enabled, goal, speed, kp, limit = drive
@@ -142,7 +142,7 @@ class EmulatedBody:
             if self.saturated_s[i] >= OVERLOAD_S:
                 servos[i].overloaded = True
 
-    def sense(self, servos: Sequence[Servo], board: Board, overrides: dict[int, float]) -> None:
+    def sense(self, servos: Sequence[EmulatedServo], board: Board, overrides: dict[int, float]) -> None:
         """The present-state registers and the board's IMU and voltage from the body (``overrides``: forced
         temperatures {id: °C})."""
         q, dq = self.engine.state()

@@ -14,11 +14,11 @@ covers its byte 29) and are refused on the CM-730 (its firmware's range table ma
 
 The :class:`Board` (CM-730) switches the servos' power (register 24) and has no REG_WRITE (its firmware answers it, and
 ACTION, with the instruction error). It plays the OP2's CM-740 too (:func:`.faults.with_board`): the e-manual gives the
-CM-740 the CM-730's control table; what differs is the model number it reports. A :class:`Servo` (MX-28) adds what its
-firmware does with its registers: power-up defaults, the alarm shutdown (an error bit in ``alarm_shutdown`` switches the
-torque off), the latched overload, the input-voltage and overheating conditions against its EEPROM limits, REG_WRITE and
-ACTION (Registered, address 44, is 1 while a write waits; ACTION without one is an instruction error: Protocol 1.0
-e-manual), and the angle limits below.
+CM-740 the CM-730's control table; what differs is the model number it reports. An :class:`EmulatedServo` (MX-28) adds
+what its firmware does with its registers: power-up defaults, the alarm shutdown (an error bit in ``alarm_shutdown``
+switches the torque off), the latched overload, the input-voltage and overheating conditions against its EEPROM limits,
+REG_WRITE and ACTION (Registered, address 44, is 1 while a write waits; ACTION without one is an instruction error:
+Protocol 1.0 e-manual), and the angle limits below.
 
 Angle limits (MX-28 e-manual: the CW / CCW angle limit is the smallest / largest goal position; a goal out of that
 range sets the angle-limit error bit and triggers the alarm as set in alarm LED / shutdown). In joint mode (the two
@@ -154,7 +154,7 @@ class Board(Device):
         self.power_changed = False
 
 
-class Servo(Device):
+class EmulatedServo(Device):
     """One MX-28 (see the module docstring); the body (:mod:`.body`) fills its present-state registers."""
 
     def __init__(self, device_id: int):

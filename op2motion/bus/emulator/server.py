@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from op2motion.bus.emulator.body import Drive, EmulatedBody
-from op2motion.bus.emulator.devices import Servo
+from op2motion.bus.emulator.devices import EmulatedServo
 from op2motion.bus.emulator.faults import Faults
 from op2motion.bus.emulator.timing import TimedLink, WireTiming, return_delay_s
 from op2motion.bus.emulator.wire import BOOT_S, Wire
@@ -319,7 +319,7 @@ class Emulator:
                 os.write(master, bytes(self.outbox))
             self.outbox.clear()
 
-    def _limp_servos(self) -> list[Servo]:
+    def _limp_servos(self) -> list[EmulatedServo]:
         """The servos as the body sees them: a missing or unplugged servo has no torque."""
         for servo in self.servos:
             if self.wire.silent(servo.id):

@@ -33,7 +33,7 @@ import random
 from typing import Any, Callable
 
 from op2motion.bus import protocol as p
-from op2motion.bus.emulator.devices import Board, Servo
+from op2motion.bus.emulator.devices import Board, EmulatedServo
 from op2motion.bus.emulator.faults import Faults
 from op2motion.bus.tables import CM730_ID
 from op2motion.robot.spec import Spec
@@ -104,7 +104,7 @@ class Wire:
         self.faults, self.now, self.present_ticks = faults, now, present_ticks
         self.rng = random.Random(faults.seed)
         self.board = Board()
-        self.servos = [Servo(j.id) for j in spec.joints]
+        self.servos = [EmulatedServo(j.id) for j in spec.joints]
         self.by_id: dict[int, Any] = {s.id: s for s in self.servos}
         self.by_id[CM730_ID] = self.board
         for device, model in faults.models.items():            # kept over power cycles: address 0 is EEPROM
@@ -237,7 +237,7 @@ class Wire:
             return error, data or b"", READ_LEVEL
         if code == p.Instruction.WRITE and len(params) >= 2:
             return self.write(device, params[0], bytes(params[1:])), b"", ALL_LEVEL
-        if isinstance(device, Servo):
+        if isinstance(device, EmulatedServo):
             if code == p.Instruction.REG_WRITE and len(params) >= 2:
                 return device.reg_write(params[0], bytes(params[1:])), b"", ALL_LEVEL
             if code == p.Instruction.ACTION and not params:
