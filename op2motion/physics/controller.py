@@ -1,23 +1,26 @@
-"""Who tells the servos what to do: the :class:`Controller` protocol, and the open-loop :class:`Schedule`.
+"""Who tells the servos what to do: the :class:`Controller` protocol, the hooks a controller may offer
+(:class:`ControllerHooks`), the one goal merger both loops use (:class:`GoalMerger`), and the open-loop
+:class:`Schedule`.
 
-The physics loop (:mod:`.loop`) calls a controller every :data:`~op2motion.robot.framework.CONTROL_PERIOD_S`
-(8 ms, the robot's motion timer) with what the OP2's CM-730 board would measure:
+The physics loop (:mod:`.loop`) and the robot's 8 ms loop (:mod:`op2motion.bus.loop`) call a controller every
+:data:`~op2motion.robot.framework.CONTROL_PERIOD_S` (8 ms, the robot's motion timer) with what the OP2's CM-730 board
+measures:
 
 * ``start(joint_positions)`` once, where the run begins (it also resets the controller, so one controller serves
   several runs one after the other); it returns the first goals;
 * ``step(t_s, gyro_rad_s, accel_m_s2, joint_positions)`` at every later tick: the time since the start [s], the
   torso's angular velocity [rad/s] and its accelerometer reading (specific force: the acceleration less gravity,
   +9.81 m/s² upwards at rest) [m/s²], both in the torso frame (x forward, y left, z up), and the joint angles;
-  it returns the goals; a controller whose ``step`` also takes ``foot_forces_n`` gets each sole's vertical load [N]
-  ({"left": .., "right": ..}) as well;
+  it returns the goals;
 * ``done``: true once it has nothing more to send (the servos then hold its last goals).
 
-Positions and goals are ``{official joint name: rad}``; a goal left out keeps its previous value. A controller
-carries the :class:`~.plan.Plan` it follows (``plan``): where the robot starts, the P gains, and what the judge
-compares the run with (the planned supports and torso). An optional ``p_gains`` attribute ({joint: P}) overrides the
-plan's P gains while it is set; an optional ``torque_limits`` attribute ({joint: share of the servo's available
-torque, 0 to 1}; joints left out keep all of it) lowers the servos' torque limit while it is set (the MX-28's
-torque-limit register, e.g. while the robot falls).
+Positions and goals are ``{official joint name: rad}``; a goal left out keeps its previous value, an unknown name is
+refused. A controller carries the :class:`~.plan.Plan` it follows (``plan``): where the robot starts, the P gains, and
+what the judge compares the run with (the planned supports and torso).
+
+Anything more a controller offers (its own P gains, torque limits, the soles' loads, a stop or resume of its own,
+falls handled itself) it declares by subclassing :class:`ControllerHooks` and overriding those hooks; a controller
+that does not subclass it offers none, and both loops then do what the hooks' defaults say (:func:`hooks_of`).
 
 :class:`Schedule` is the open-loop controller: it ignores its sensors and sends the plan's goals row by row. A held
 pose, a planned motion, a played action page and a planned gait are each a schedule.
@@ -54,6 +57,85 @@ class Controller(Protocol):
     @property
     def done(self) -> bool:
         """Nothing more to send: the servos hold the last goals."""
+
+
+class ControllerHooks:
+    """What a controller may offer beyond ``plan``, ``start``, ``step`` and ``done``: subclass this and override the
+    hooks it offers (a property or a class attribute; an attribute set in ``__init__`` needs its class-level
+    declaration). Each default says what both loops do for a controller that does not offer it."""
+
+    #: On the robot the safety watch stops the run on a fall; a controller that deals with falls itself (the fall
+    #: :class:`~op2motion.motion.fall.Supervisor`) sets this and is not stopped for one.
+    handles_falls: bool = False
+    #: True: ``step`` also takes ``foot_forces_n``, each sole's vertical load [N] ({"left": .., "right": ..}); the
+    #: physics loop measures them, and the robot's loop refuses such a controller (the OP2 does not measure them).
+    takes_foot_forces: bool = False
+    #: True: :meth:`stop` ends the controller by itself (the robot's loop then runs it until ``done``, at most
+    #: :data:`op2motion.bus.stopping.SOFT_STOP_MAX_S`); otherwise a stop request freezes the goals.
+    stops_itself: bool = False
+
+    @property
+    def p_gains(self) -> Mapping[str, float] | None:
+        """P gains {joint: P} over the plan's while set (joints left out keep the plan's); None: the plan's."""
+        return None
+
+    @property
+    def torque_limits(self) -> Mapping[str, float] | None:
+        """The servos' torque limit {joint: share of the available torque, 0 to 1} while set (joints left out keep
+        all of it; the MX-28's torque-limit register, e.g. while the robot falls); None: full torque."""
+        return None
+
+    def stop(self) -> None:
+        """A stop request (Ctrl-C on the robot), when :attr:`stops_itself`; by default nothing."""
+
+    def resume(self, joint_positions: Goals, t_s: float) -> Goals | None:
+        """Go on after the robot was put back on its feet at ``t_s`` [s] of an outer clock (a supervisor's): the
+        first goals; None (the default): nothing to go on with, the supervisor calls ``start`` instead."""
+        return None
+
+
+#: What both loops read from a controller that offers no hooks.
+NO_HOOKS = ControllerHooks()
+
+
+def hooks_of(controller: object) -> ControllerHooks:
+    """The hooks ``controller`` offers: itself when it subclasses :class:`ControllerHooks`, else the defaults."""
+    return controller if isinstance(controller, ControllerHooks) else NO_HOOKS
+
+
+class GoalMerger:
+    """A controller's output as both loops take it: named goals merged into the (20,) the servos hold, the P gains
+    and the torque-limit shares with its hooks on top of the plan."""
+
+    def __init__(self, controller: Controller, joint_names: Sequence[str]):
+        self.controller, self.hooks = controller, hooks_of(controller)
+        self.names = tuple(joint_names)
+        self.index = {n: i for i, n in enumerate(self.names)}
+
+    def merge(self, held: np.ndarray, goals: Goals) -> None:
+        """``goals`` {joint: rad} into ``held`` (20,) [rad], in place; an unknown joint name is refused."""
+        for name, value in goals.items():
+            i = self.index.get(name)
+            if i is None:
+                raise InputError(f"expected goals by official joint name ({self.names[0]}, ...), got {name!r}",
+                                 "goals")
+            held[i] = float(value)
+
+    def p_gains(self, row: int) -> np.ndarray:
+        """The P gains (20,) at plan row ``row``: the plan's, the controller's ``p_gains`` over them while set."""
+        gains = np.array(self.controller.plan.p_gains[row], dtype=float)
+        override = self.hooks.p_gains
+        if override:
+            gains = np.array([override.get(n, g) for n, g in zip(self.names, gains)], dtype=float)
+        return gains
+
+    def torque_shares(self) -> np.ndarray | None:
+        """The servos' torque limits (20,) as shares 0 to 1 of the most, from the controller's ``torque_limits``;
+        None while it sets none (full torque)."""
+        limits = self.hooks.torque_limits
+        if not limits:
+            return None
+        return np.clip(np.array([float(limits.get(n, 1.0)) for n in self.names]), 0.0, 1.0)
 
 
 def check_goals(goals: np.ndarray, spec: Spec, param: str = "goals") -> np.ndarray:
