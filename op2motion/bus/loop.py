@@ -303,8 +303,7 @@ def run_controller(controller: Controller, port: RobotPort | OP2, spec: Spec | N
     for ``duration_s`` (default: its plan's duration; with ``until_done`` also ending as soon as the controller is
     done, e.g. a steered walk standing still after its stop, a get-up standing), until ``stop`` is set or a fault
     stops it (see the module docstring). ``on_tick`` gets every :class:`Tick`. The servos keep holding the last
-    goals afterwards. A controller with ``handles_falls`` (:class:`~op2motion.physics.controller.ControllerHooks`, a
-    :class:`~op2motion.motion.fall.Supervisor`) deals with falls itself: the watch does not stop it for one."""
+    goals afterwards. The controller's hooks (:class:`~op2motion.physics.controller.ControllerHooks`) are honoured."""
     if not isinstance(port, OP2):
         raise InputError(f"expected an OP2 already taken control of, got {type(port).__name__}: a controller on a "
                          f"port starts with op2motion.bus.walks.run_on_robot(port, spec, controller), which moves the "

@@ -41,8 +41,7 @@ from op2motion.gait.presets import load_preset
 from op2motion.gait.rolling import RollingPlanner
 from op2motion.gait.steer_feedback import RollingCalibration, RollingLearner, RollingOdometry
 from op2motion.gait.timeline import ticks
-from op2motion.physics import RAMP_S, Plan, WalkClock
-from op2motion.physics.controller import ControllerHooks
+from op2motion.physics import RAMP_S, ControllerHooks, Plan, WalkClock
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Side, Support

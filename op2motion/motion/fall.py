@@ -34,8 +34,7 @@ from op2motion.errors import Op2MotionError
 from op2motion.motion.getup import GetUp
 from op2motion.motion.lying import FALL_TILT_DEG
 from op2motion.motion.stillness import Stillness
-from op2motion.physics import Controller, Plan
-from op2motion.physics.controller import ControllerHooks, hooks_of
+from op2motion.physics import Controller, ControllerHooks, Plan, hooks_of
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.imu import FallWatch, board_of, encode
 from op2motion.robot.spec import GRAVITY_M_S2, Spec

@@ -33,8 +33,7 @@ from op2motion.formats.action import ActionFile
 from op2motion.motion.lying import UPRIGHT_TILT_DEG, lying_side, tilt_deg
 from op2motion.motion.stillness import Stillness
 from op2motion.motion.ways import Ways
-from op2motion.physics import Plan
-from op2motion.physics.controller import ControllerHooks
+from op2motion.physics import ControllerHooks, Plan
 from op2motion.robot.framework import CONTROL_PERIOD_S, DEFAULT_P_GAIN
 from op2motion.robot.spec import Spec
 

@@ -1,6 +1,5 @@
 """Who tells the servos what to do: the :class:`Controller` protocol, the hooks a controller may offer
-(:class:`ControllerHooks`), the one goal merger both loops use (:class:`GoalMerger`), and the open-loop
-:class:`Schedule`.
+(:class:`ControllerHooks`), the goal merger both loops use (:class:`GoalMerger`), and the open-loop :class:`Schedule`.
 
 The physics loop (:mod:`.loop`) and the robot's 8 ms loop (:mod:`op2motion.bus.loop`) call a controller every
 :data:`~op2motion.robot.framework.CONTROL_PERIOD_S` (8 ms, the robot's motion timer) with what the OP2's CM-730 board
@@ -16,11 +15,8 @@ measures:
 
 Positions and goals are ``{official joint name: rad}``; a goal left out keeps its previous value, an unknown name is
 refused. A controller carries the :class:`~.plan.Plan` it follows (``plan``): where the robot starts, the P gains, and
-what the judge compares the run with (the planned supports and torso).
-
-Anything more a controller offers (its own P gains, torque limits, the soles' loads, a stop or resume of its own,
-falls handled itself) it declares by subclassing :class:`ControllerHooks` and overriding those hooks; a controller
-that does not subclass it offers none, and both loops then do what the hooks' defaults say (:func:`hooks_of`).
+what the judge compares the run with (the planned supports and torso). Anything more it offers, it declares as
+:class:`ControllerHooks`.
 
 :class:`Schedule` is the open-loop controller: it ignores its sensors and sends the plan's goals row by row. A held
 pose, a planned motion, a played action page and a planned gait are each a schedule.
@@ -60,82 +56,75 @@ class Controller(Protocol):
 
 
 class ControllerHooks:
-    """What a controller may offer beyond ``plan``, ``start``, ``step`` and ``done``: subclass this and override the
-    hooks it offers (a property or a class attribute; an attribute set in ``__init__`` needs its class-level
-    declaration). Each default says what both loops do for a controller that does not offer it."""
+    """What a controller may offer beyond ``plan``, ``start``, ``step`` and ``done``, and what both loops do when it
+    does not (the defaults). A controller offers a hook by subclassing this and overriding it (a property, or a class
+    attribute that instances may then set); one that does not subclass it offers none (:func:`hooks_of`).
 
-    #: On the robot the safety watch stops the run on a fall; a controller that deals with falls itself (the fall
-    #: :class:`~op2motion.motion.fall.Supervisor`) sets this and is not stopped for one.
-    handles_falls: bool = False
-    #: True: ``step`` also takes ``foot_forces_n``, each sole's vertical load [N] ({"left": .., "right": ..}); the
-    #: physics loop measures them, and the robot's loop refuses such a controller (the OP2 does not measure them).
-    takes_foot_forces: bool = False
-    #: True: :meth:`stop` ends the controller by itself (the robot's loop then runs it until ``done``, at most
-    #: :data:`op2motion.bus.stopping.SOFT_STOP_MAX_S`); otherwise a stop request freezes the goals.
-    stops_itself: bool = False
+    * ``p_gains``: {joint: P} over the plan's P gains while set (joints left out keep the plan's); None: the plan's;
+    * ``torque_limits``: {joint: share of the servo's torque, 0 to 1} while set (the MX-28's torque-limit register,
+      e.g. while the robot falls; joints left out keep all of it); None: full torque;
+    * ``takes_foot_forces``: ``step`` also takes ``foot_forces_n``, each sole's vertical load [N] ({"left": ..,
+      "right": ..}), measured in physics; the robot's loop refuses such a controller (the OP2 does not measure them);
+    * ``stops_itself``: a stop request (Ctrl-C on the robot) calls :meth:`stop` and the loop runs on until ``done``
+      (at most :data:`op2motion.bus.stopping.SOFT_STOP_MAX_S`); otherwise the loop freezes the goals;
+    * ``resume(joint_positions, t_s)``: the goals to go on with, the robot put back on its feet (after a fall, at
+      ``t_s`` [s] of the fall supervisor's clock); None: the supervisor calls ``start`` instead;
+    * ``handles_falls``: the robot's safety watch does not stop the run for a fall (the fall supervisor's own).
+    """
+
+    handles_falls = takes_foot_forces = stops_itself = False
 
     @property
     def p_gains(self) -> Mapping[str, float] | None:
-        """P gains {joint: P} over the plan's while set (joints left out keep the plan's); None: the plan's."""
+        """None: the plan's P gains."""
         return None
 
     @property
     def torque_limits(self) -> Mapping[str, float] | None:
-        """The servos' torque limit {joint: share of the available torque, 0 to 1} while set (joints left out keep
-        all of it; the MX-28's torque-limit register, e.g. while the robot falls); None: full torque."""
+        """None: full torque."""
         return None
 
     def stop(self) -> None:
-        """A stop request (Ctrl-C on the robot), when :attr:`stops_itself`; by default nothing."""
+        """Nothing: a controller that does not stop itself is stopped by its loop."""
 
     def resume(self, joint_positions: Goals, t_s: float) -> Goals | None:
-        """Go on after the robot was put back on its feet at ``t_s`` [s] of an outer clock (a supervisor's): the
-        first goals; None (the default): nothing to go on with, the supervisor calls ``start`` instead."""
+        """None: nothing to go on with."""
         return None
 
 
-#: What both loops read from a controller that offers no hooks.
 NO_HOOKS = ControllerHooks()
 
 
 def hooks_of(controller: object) -> ControllerHooks:
-    """The hooks ``controller`` offers: itself when it subclasses :class:`ControllerHooks`, else the defaults."""
+    """The hooks ``controller`` offers: itself if it subclasses :class:`ControllerHooks`, else :data:`NO_HOOKS`."""
     return controller if isinstance(controller, ControllerHooks) else NO_HOOKS
 
 
 class GoalMerger:
-    """A controller's output as both loops take it: named goals merged into the (20,) the servos hold, the P gains
-    and the torque-limit shares with its hooks on top of the plan."""
+    """A controller's output as both loops take it: named goals into the (20,) the servos hold, and the P gains and
+    torque-limit shares its hooks set over the plan's."""
 
     def __init__(self, controller: Controller, joint_names: Sequence[str]):
-        self.controller, self.hooks = controller, hooks_of(controller)
-        self.names = tuple(joint_names)
+        self.controller, self.hooks, self.names = controller, hooks_of(controller), tuple(joint_names)
         self.index = {n: i for i, n in enumerate(self.names)}
 
     def merge(self, held: np.ndarray, goals: Goals) -> None:
         """``goals`` {joint: rad} into ``held`` (20,) [rad], in place; an unknown joint name is refused."""
         for name, value in goals.items():
-            i = self.index.get(name)
-            if i is None:
+            if name not in self.index:
                 raise InputError(f"expected goals by official joint name ({self.names[0]}, ...), got {name!r}",
                                  "goals")
-            held[i] = float(value)
+            held[self.index[name]] = float(value)
 
     def p_gains(self, row: int) -> np.ndarray:
-        """The P gains (20,) at plan row ``row``: the plan's, the controller's ``p_gains`` over them while set."""
-        gains = np.array(self.controller.plan.p_gains[row], dtype=float)
-        override = self.hooks.p_gains
-        if override:
-            gains = np.array([override.get(n, g) for n, g in zip(self.names, gains)], dtype=float)
-        return gains
+        """The P gains (20,) at plan row ``row``: the plan's, the ``p_gains`` hook's over them."""
+        over = self.hooks.p_gains or {}
+        return np.array([over.get(n, p) for n, p in zip(self.names, self.controller.plan.p_gains[row])], dtype=float)
 
     def torque_shares(self) -> np.ndarray | None:
-        """The servos' torque limits (20,) as shares 0 to 1 of the most, from the controller's ``torque_limits``;
-        None while it sets none (full torque)."""
+        """The ``torque_limits`` hook as shares (20,) of the servos' torque, 0 to 1; None while it sets none."""
         limits = self.hooks.torque_limits
-        if not limits:
-            return None
-        return np.clip(np.array([float(limits.get(n, 1.0)) for n in self.names]), 0.0, 1.0)
+        return np.clip([float(limits.get(n, 1.0)) for n in self.names], 0.0, 1.0) if limits else None
 
 
 def check_goals(goals: np.ndarray, spec: Spec, param: str = "goals") -> np.ndarray:

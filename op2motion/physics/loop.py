@@ -103,7 +103,6 @@ class _Servos:
         self.goals = controller.plan.goals[0].copy()
         self.kp = servo.kp_of(controller.plan.p_gains[0])
         self.limit: np.ndarray | None = None          # per joint [N·m], when the controller lowers its servos' limit
-        self.feet = self.merger.hooks.takes_foot_forces
         self.foot_links = body.foot_links
 
     def _apply(self, goals: Goals, row: int) -> None:
@@ -120,7 +119,7 @@ class _Servos:
         """One control tick: the sensors to the controller, its goals to the servos."""
         gyro, accel, q = reading
         positions = dict(zip(self.names, q.tolist()))
-        if self.feet:
+        if self.merger.hooks.takes_foot_forces:
             ground = [c for c in engine.contacts() if c.other is None and c.normal_force > 0.0]
             loads = {side: load for side, (load, _) in foot_loads(ground, self.foot_links).items()}
             goals = self.controller.step(t, gyro, accel, positions, foot_forces_n=loads)  # type: ignore[call-arg]
