@@ -12,6 +12,7 @@ from helpers import ROOT
 
 from op2motion.errors import InputError
 from op2motion.physics import ENGINES, Plan, Schedule, Sensors, Setup, check
+from op2motion.physics.controller import ControllerHooks
 from op2motion.physics.sweeps import centred, leaned, servo_pose
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import GRAVITY_M_S2
@@ -107,11 +108,13 @@ def test_a_plan_checks_its_rows(spec):
 
 
 def test_a_controller_that_asks_gets_the_soles_loads(spec):
-    """A ``step`` with a ``foot_forces_n`` parameter is offered each sole's vertical load [N]: at rest on two feet
-    they carry the robot's weight between them."""
+    """A controller that declares ``takes_foot_forces`` gets each sole's vertical load [N] in ``step``: at rest on
+    two feet they carry the robot's weight between them."""
     weight_n = sum(i.mass for i in spec.inertials) * GRAVITY_M_S2
 
-    class Loads(Recorder):
+    class Loads(Recorder, ControllerHooks):
+        takes_foot_forces = True
+
         def step(self, t_s, gyro_rad_s, accel_m_s2, joint_positions, foot_forces_n=None):
             self.loads = foot_forces_n
             return super().step(t_s, gyro_rad_s, accel_m_s2, joint_positions)

@@ -15,6 +15,7 @@ from op2motion.motion import GetUp, Supervisor
 from op2motion.motion.lying import lying_side, tilt_deg
 from op2motion.physics import LYING, Plan, Pushes, Setup, check
 from op2motion.physics.body import Body, lowest_point, lying_placement
+from op2motion.physics.controller import ControllerHooks
 from op2motion.robot.spec import GRAVITY_M_S2
 from op2motion.robot.specfile import default_spec
 
@@ -69,8 +70,10 @@ def test_the_framework_fall_test_in_counts_and_the_tilt(spec):
 # -- the physics hooks -------------------------------------------------------------------------------------------
 
 
-class _Limp:
+class _Limp(ControllerHooks):
     """Holds a pose with the servos' torque limit at ``share`` of what they have."""
+
+    torque_limits = None        # the hook, set per instance
 
     def __init__(self, spec, share: float):
         self.spec, self.share = spec, share

@@ -28,7 +28,6 @@ until then). A controller's ``torque_limits`` are written when they change.
 
 from __future__ import annotations
 
-import inspect
 import math
 import threading
 from dataclasses import dataclass, field
@@ -51,7 +50,7 @@ from op2motion.bus.tables import (
     TORQUE_LIMIT_FULL,
 )
 from op2motion.errors import CheckFailed, InputError, PortFailed
-from op2motion.physics import Controller
+from op2motion.physics import Controller, GoalMerger
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.imu import decode
 from op2motion.robot.joints import servo_to_ticks
@@ -145,13 +144,12 @@ class _Run:
         self.spec: Spec = robot.spec
         self.names = self.spec.joint_names
         self.ids = robot.ids
-        self.index = {n: i for i, n in enumerate(self.names)}
+        self.merger = GoalMerger(controller, self.names)
+        self.index = self.merger.index
         self.lower, self.upper = safety.mechanical_bounds(self.spec)
         self.watch = safety.Watch(self.spec, robot.imu, CONTROL_PERIOD_S, self.ids, self.names,
-                                  falls=not getattr(controller, "handles_falls", False)) if watch else None
-        params = inspect.signature(controller.step).parameters
-        feet = params.get("foot_forces_n")
-        if feet is not None and feet.default is inspect.Parameter.empty:
+                                  falls=not self.merger.hooks.handles_falls) if watch else None
+        if self.merger.hooks.takes_foot_forces:
             raise InputError("expected a controller that runs without foot forces (the OP2 does not measure them)",
                              "controller")
         known = robot.positions()                        # a tick reads only some servos: start from all of them
@@ -218,34 +216,24 @@ class _Run:
 
     def apply(self, goals: Any, row: int) -> np.ndarray:
         """The controller's goals merged into the held ones, clipped; the P gains (20,) to send."""
-        for name, value in goals.items():
-            if name not in self.index:
-                raise InputError(f"expected goals by official joint name ({self.names[0]}, ...), got {name!r}",
-                                 "goals")
-            self.goals[self.index[name]] = float(value)
+        self.merger.merge(self.goals, goals)
         clipped, where = safety.clip_goals(self.goals, self.lower, self.upper)
         for i in np.flatnonzero(where):
             self.report.clipped[self.names[i]] = self.report.clipped.get(self.names[i], 0) + 1
         self.goals = clipped
-        plan = self.controller.plan
-        gains = np.array(plan.p_gains[row], dtype=float)
-        override = getattr(self.controller, "p_gains", None)
-        if override:
-            gains = np.array([override.get(n, g) for n, g in zip(self.names, gains)], dtype=float)
-        return np.clip(np.rint(gains), 0, MAX_P_GAIN).astype(int)
+        return np.clip(np.rint(self.merger.p_gains(row)), 0, MAX_P_GAIN).astype(int)
 
-    def limit(self, shares: Any) -> None:
-        """The controller's torque limits ({joint: share of the most}, or None for full), written when they change
-        (a supervisor lowers them while the robot falls)."""
-        values = np.full(len(self.names), TORQUE_LIMIT_FULL, dtype=int)
-        for name, share in (shares or {}).items():
-            if name in self.index:
-                values[self.index[name]] = int(round(min(max(float(share), 0.0), 1.0) * TORQUE_LIMIT_FULL))
-        if self.limits is None and not shares:
+    def limit(self) -> None:
+        """The controller's torque limits, written when they change (a supervisor lowers them while the robot
+        falls)."""
+        shares = self.merger.torque_shares()
+        if self.limits is None and shares is None:
             return
+        values = np.full(len(self.names), TORQUE_LIMIT_FULL) if shares is None else np.rint(
+            shares * TORQUE_LIMIT_FULL).astype(int)
         if self.limits is None or not np.array_equal(values, self.limits):
             self.robot.sync("torque_limit", {d: int(values[i]) for i, d in enumerate(self.ids)})
-            self.limits = None if not shares else values
+            self.limits = None if shares is None else values
 
     def send(self, gains: np.ndarray) -> None:
         """The framework's sync write: D, I, P, 0, goal low, goal high for every servo."""
@@ -287,7 +275,7 @@ def _step(run: _Run, stops: Stops, k: int, now: float, stop: threading.Event | N
         run.robot.torque_limit(TORQUE_LIMIT_FULL)
         stops.fall_until, stops.end_at = None, now
     run.send(run.apply(goals, row))
-    run.limit(getattr(controller, "torque_limits", None))
+    run.limit()
     return t, row
 
 
@@ -315,8 +303,7 @@ def run_controller(controller: Controller, port: RobotPort | OP2, spec: Spec | N
     for ``duration_s`` (default: its plan's duration; with ``until_done`` also ending as soon as the controller is
     done, e.g. a steered walk standing still after its stop, a get-up standing), until ``stop`` is set or a fault
     stops it (see the module docstring). ``on_tick`` gets every :class:`Tick`. The servos keep holding the last
-    goals afterwards. A controller with ``handles_falls`` (a :class:`~op2motion.motion.fall.Supervisor`) deals with
-    falls itself: the watch does not stop it for one."""
+    goals afterwards. The controller's hooks (:class:`~op2motion.physics.controller.ControllerHooks`) are honoured."""
     if not isinstance(port, OP2):
         raise InputError(f"expected an OP2 already taken control of, got {type(port).__name__}: a controller on a "
                          f"port starts with op2motion.bus.walks.run_on_robot(port, spec, controller), which moves the "

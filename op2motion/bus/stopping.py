@@ -1,6 +1,6 @@
 """How a run of the 8 ms loop ends (:mod:`.loop`): by its plan's end, by a fault (:mod:`.safety`'s policy) or by a
-stop request (Ctrl-C). A controller with a ``stop()`` of its own (a steered walk) is told to stop and runs on until
-it is done, at most :data:`SOFT_STOP_MAX_S`. Otherwise a stop freezes the goals at a row and holds them
+stop request (Ctrl-C). A controller that stops itself (``stops_itself``, a steered walk) is told to stop and runs on
+until it is done, at most :data:`SOFT_STOP_MAX_S`. Otherwise a stop freezes the goals at a row and holds them
 :data:`STOP_HOLD_S` before the loop ends: a planned walk's next row on both feet (:func:`stop_row`), anything else the
 row it is at; a fall lowers the torque limits and, :data:`~.safety.FALL_SETTLE_S` later, relaxes the goals to where
 the joints lie.
@@ -13,6 +13,7 @@ from typing import Any, Callable
 from op2motion.bus import safety
 from op2motion.bus.robot import OP2
 from op2motion.bus.tables import CM730_ID
+from op2motion.physics import hooks_of
 from op2motion.robot.support import Support
 
 STOP_HOLD_S = 0.3                  # after a stop, the held goals are sent this long before the loop ends
@@ -57,9 +58,9 @@ class Stops:
         double support, anything else at once."""
         if self.frozen_at is not None or self.soft_until is not None:
             return
-        ender = getattr(controller, "stop", None)
-        if k and callable(ender):
-            ender()
+        hooks = hooks_of(controller)
+        if k and hooks.stops_itself:
+            hooks.stop()
             self.soft_until = now + SOFT_STOP_MAX_S
         else:
             self.frozen_at = stop_row(plan, row) if k else 0

@@ -12,9 +12,9 @@ with the torso past :data:`FRAMEWORK_GUARD_DEG`):
 2. **wait** until the body has kept still (:mod:`.stillness`; at most :data:`WAIT_MAX_S`), then restore the torque;
 3. **get up** (:class:`.getup.GetUp`, or the one given);
 4. **resume**: blend from where the robot stands to the wrapped controller's first goals (:func:`.planner.blend`),
-   and run it again: ``resume(joint_positions, t_s)`` when it has one, with its own clock at the fall (a steered
-   walk keeps its command, and its timeline goes on from where the fall stopped it: nothing commanded while it was
-   down is skipped), else ``start(joint_positions)``. With ``resume=False``, or when getting up failed, it reports
+   and run it again: its ``resume(joint_positions, t_s)`` hook when it offers one, with its own clock at the fall (a
+   steered walk keeps its command, and its timeline goes on from where the fall stopped it: nothing commanded while it
+   was down is skipped), else ``start(joint_positions)``. With ``resume=False``, or when getting up failed, it reports
    instead: :attr:`Supervisor.done`, :attr:`Supervisor.events` says what happened and when.
 
 Its :attr:`plan` is the wrapped controller's, :data:`EXTRA_S` longer (a fall and a get-up take time). Check it in
@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import Any, Mapping
+from typing import Mapping
 
 import numpy as np
 
@@ -34,7 +34,7 @@ from op2motion.errors import Op2MotionError
 from op2motion.motion.getup import GetUp
 from op2motion.motion.lying import FALL_TILT_DEG
 from op2motion.motion.stillness import Stillness
-from op2motion.physics import Controller, Plan
+from op2motion.physics import Controller, ControllerHooks, Plan, hooks_of
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.imu import FallWatch, board_of, encode
 from op2motion.robot.spec import GRAVITY_M_S2, Spec
@@ -84,14 +84,16 @@ class Attitude:
         return math.degrees(math.acos(max(-1.0, min(1.0, math.cos(pitch) * math.cos(roll)))))
 
 
-class Supervisor:
-    """Wraps a controller: fall, land, wait, get up, resume (see the module docstring)."""
+class Supervisor(ControllerHooks):
+    """Wraps a controller: fall, land, wait, get up, resume (see the module docstring); its hooks are the wrapped
+    controller's while that runs."""
 
     handles_falls = True        # on the robot, the bus's safety watch leaves falls to it (op2motion.bus.loop)
 
     def __init__(self, controller: Controller, getup: GetUp | None = None, spec: Spec | None = None,
                  resume: bool = True, extra_s: float = EXTRA_S):
-        self.inner, self.resume = controller, resume
+        self.inner, self.hooks, self.resumes = controller, hooks_of(controller), resume
+        self.stops_itself = self.hooks.stops_itself
         self.getup = getup or GetUp(spec)
         self.spec = self.getup.spec
         plan: Plan = controller.plan
@@ -113,18 +115,18 @@ class Supervisor:
         self.paused: str | None = None                 # what resuming says of the wrapped controller's commands
 
     @property
-    def p_gains(self) -> Any:
+    def p_gains(self) -> Mapping[str, float] | None:
         """The P gains of whoever drives the servos (GetUp's while getting up)."""
         if self.phase == "getting_up":
             return self.getup.p_gains
-        return getattr(self.inner, "p_gains", None) if self.phase == "run" else None
+        return self.hooks.p_gains if self.phase == "run" else None
 
     @property
-    def torque_limits(self) -> Any:
+    def torque_limits(self) -> Mapping[str, float] | None:
         """Lowered while the robot falls and lies; the wrapped controller's otherwise."""
         if self.phase == "falling":
             return {n: FALLING_TORQUE_SHARE for n in self.spec.joint_names}
-        return getattr(self.inner, "torque_limits", None) if self.phase == "run" else None
+        return self.hooks.torque_limits if self.phase == "run" else None
 
     @property
     def done(self) -> bool:
@@ -133,11 +135,9 @@ class Supervisor:
         return self.phase in ("gave_up", "up") or (self.phase == "run" and self.inner.done)
 
     def stop(self) -> None:
-        """Pass a stop request on to the wrapped controller if it can stop itself (a steered walk); down or getting up,
-        it goes on to the stop once it runs again."""
-        ender = getattr(self.inner, "stop", None)
-        if callable(ender):
-            ender()
+        """Pass a stop request on to the wrapped controller (one that stops itself, a steered walk); down or getting
+        up, it goes on to the stop once it runs again."""
+        self.hooks.stop()
 
     def start(self, joint_positions: Mapping[str, float]) -> Mapping[str, float]:
         """Start over, and the wrapped controller with it."""
@@ -194,15 +194,16 @@ class Supervisor:
             self.events.append((t_s, "could not get up"))
             return
         self.events.append((t_s, "standing again"))
-        if not self.resume:
+        if not self.resumes:
             self.phase = "up"
             return
         from op2motion.motion.planner import blend
 
-        again = getattr(self.inner, "resume", None)
-        first = again(joint_positions, self.paused_at) if again is not None else self.inner.start(joint_positions)
-        self.paused = (f"its commands were paused while it was down ({t_s - self.fell_at:.1f} s): they go on from "
-                       f"where the fall stopped them" if again is not None else None)
+        first = self.hooks.resume(joint_positions, self.paused_at)
+        down_s = t_s - self.fell_at
+        self.paused = None if first is None else (f"its commands were paused while it was down ({down_s:.1f} s): "
+                                                  f"they go on from where the fall stopped them")
+        first = self.inner.start(joint_positions) if first is None else first
         target = np.array([first.get(n, joints[i]) for i, n in enumerate(self.spec.joint_names)])
         self.rows, self.row, self.hold = blend(joints, target, self.spec, RESUME_LEAST_S), 0, joints
         self.phase = "blend"

@@ -33,7 +33,7 @@ from op2motion.formats.action import ActionFile
 from op2motion.motion.lying import UPRIGHT_TILT_DEG, lying_side, tilt_deg
 from op2motion.motion.stillness import Stillness
 from op2motion.motion.ways import Ways
-from op2motion.physics import Plan
+from op2motion.physics import ControllerHooks, Plan
 from op2motion.robot.framework import CONTROL_PERIOD_S, DEFAULT_P_GAIN
 from op2motion.robot.spec import Spec
 
@@ -48,8 +48,10 @@ GETUP_S = 20.0              # the plan's length for a physics check [s]
 LYING_POSE_DEG = {"r_sho_roll": -45.0, "l_sho_roll": 45.0, "r_el": -90.0, "l_el": 90.0}
 
 
-class GetUp:
+class GetUp(ControllerHooks):
     """Gets the robot up from lying (see the module docstring)."""
+
+    p_gains: dict[str, float] | None = None     # the way's P gains while it plays (a hook: ControllerHooks)
 
     def __init__(self, spec: Spec | None = None, action: ActionFile | str | Path | None = None,
                  seconds: float = GETUP_S):
@@ -61,7 +63,6 @@ class GetUp:
         self.ways = Ways(self.spec, action)
         lying = np.radians([LYING_POSE_DEG.get(n, 0.0) for n in self.spec.joint_names])
         self.plan = Plan.hold(lying, "double", seconds, np.full(len(self.spec.joints), float(DEFAULT_P_GAIN)))
-        self.p_gains: dict[str, float] | None = None
         self._reset(lying)
 
     def _reset(self, joints: np.ndarray) -> None:

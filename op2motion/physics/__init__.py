@@ -15,7 +15,7 @@ controller's :class:`Plan`. The result is a typed :class:`CheckReport`::
 from __future__ import annotations
 
 from op2motion.physics.body import LYING, margin_to
-from op2motion.physics.controller import Controller, Goals, Schedule
+from op2motion.physics.controller import Controller, ControllerHooks, GoalMerger, Goals, Schedule, hooks_of
 from op2motion.physics.engine import Engine, make_engine
 from op2motion.physics.loop import StartFacts
 from op2motion.physics.plan import (
@@ -51,8 +51,8 @@ from op2motion.physics.track import Track
 
 __all__ = ["DEFAULT_SECONDS", "ENGINES", "FALL_REASONS", "FLOOR_FRICTION", "MAX_PUSH_N", "MAX_SECONDS",
            "LYING", "MIN_SECONDS", "MOTION_HOLD_S", "MOTION_SETTLE_S", "RAMP_S", "REASONS", "TIME_STEP_S",
-           "CheckReport", "Controller", "Engine", "EngineName", "EngineReport",
-           "Failure", "FootLoad", "Goals",
+           "CheckReport", "Controller", "ControllerHooks", "Engine", "EngineName", "EngineReport",
+           "Failure", "FootLoad", "GoalMerger", "Goals", "hooks_of",
            "Member", "MotionMeasures", "Plan", "PushResult", "Pushes", "RobustReport", "RobustRun", "RunMeasures",
            "RunReport",
            "Schedule", "Sensors", "Setup", "StartFacts", "Track", "Trials",

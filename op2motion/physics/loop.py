@@ -11,9 +11,9 @@
 2. Every :data:`~op2motion.robot.framework.CONTROL_PERIOD_S` the controller gets the time, the torso's gyro and
    accelerometer (torso frame; the acceleration is the torso origin's velocity change over the last period) and the
    joint angles (:mod:`.controller`), and returns the goals the servos hold until the next call. The first call
-   (``start``) comes at time 0; the ticks fall where the plan's rows change (:attr:`.plan.Plan.tick_phase_s`). A
-   controller's optional ``p_gains`` ({joint: P}) and ``torque_limits`` ({joint: share of the available torque,
-   0 to 1}, as the MX-28's torque-limit register) are read after every call.
+   (``start``) comes at time 0; the ticks fall where the plan's rows change (:attr:`.plan.Plan.tick_phase_s`). The
+   goals, P gains and torque limits are taken as on the robot (:class:`.controller.GoalMerger`, the controller's
+   hooks read after every call).
 3. Every physics step (1 kHz) the servo model turns goals and joint angles into motor torques; a push, if any,
    acts on the torso's centre of mass; every :data:`.track.SAMPLE_S` the state is recorded (:class:`.track.Track`).
 """
@@ -21,17 +21,15 @@
 from __future__ import annotations
 
 import functools
-import inspect
 from dataclasses import dataclass, replace
 from typing import Callable
 
 import numpy as np
 
-from op2motion.errors import InputError
 from op2motion.model.equilibrium import sagged_angles
 from op2motion.model.servo import ServoModel
 from op2motion.physics.body import Body, BodyState, lying_placement, margin_to, placement
-from op2motion.physics.controller import Controller, Goals
+from op2motion.physics.controller import Controller, GoalMerger, Goals
 from op2motion.physics.engine import Engine
 from op2motion.physics.plan import RAMP_S, PlannedStates, planned_states
 from op2motion.physics.sensors import Imu, Reading, Sensors
@@ -101,27 +99,17 @@ class _Servos:
     def __init__(self, controller: Controller, body: Body, servo: ServoModel):
         self.controller, self.servo = controller, servo
         self.names = body.spec.joint_names
-        self.index = {n: i for i, n in enumerate(self.names)}
+        self.merger = GoalMerger(controller, self.names)
         self.goals = controller.plan.goals[0].copy()
         self.kp = servo.kp_of(controller.plan.p_gains[0])
         self.limit: np.ndarray | None = None          # per joint [N·m], when the controller lowers its servos' limit
-        self.feet = "foot_forces_n" in inspect.signature(controller.step).parameters
         self.foot_links = body.foot_links
 
     def _apply(self, goals: Goals, row: int) -> None:
-        for name, value in goals.items():
-            if name not in self.index:
-                raise InputError(f"expected goals by official joint name ({self.names[0]}, ...), got {name!r}",
-                                 "goals")
-            self.goals[self.index[name]] = value
-        gains = getattr(self.controller, "p_gains", None)
-        plan_gains = self.controller.plan.p_gains[row]
-        if gains is not None:
-            plan_gains = np.array([gains.get(n, p) for n, p in zip(self.names, plan_gains)], dtype=float)
-        self.kp = self.servo.kp_of(plan_gains)
-        limits = getattr(self.controller, "torque_limits", None)
-        self.limit = None if not limits else self.servo.torque_max * np.array(
-            [min(max(float(limits.get(n, 1.0)), 0.0), 1.0) for n in self.names])
+        self.merger.merge(self.goals, goals)
+        self.kp = self.servo.kp_of(self.merger.p_gains(row))
+        shares = self.merger.torque_shares()
+        self.limit = None if shares is None else self.servo.torque_max * shares
 
     def start(self, q: np.ndarray) -> None:
         """Ask the controller for its first goals."""
@@ -131,7 +119,7 @@ class _Servos:
         """One control tick: the sensors to the controller, its goals to the servos."""
         gyro, accel, q = reading
         positions = dict(zip(self.names, q.tolist()))
-        if self.feet:
+        if self.merger.hooks.takes_foot_forces:
             ground = [c for c in engine.contacts() if c.other is None and c.normal_force > 0.0]
             loads = {side: load for side, (load, _) in foot_loads(ground, self.foot_links).items()}
             goals = self.controller.step(t, gyro, accel, positions, foot_forces_n=loads)  # type: ignore[call-arg]
