@@ -250,3 +250,18 @@ def test_a_pushed_robot_walk_gets_up_and_walks_on(tmp_path, capsys):
     assert report["torque_limit_min"] < 1023                                  # lowered while it fell
     # up, having walked (0.59-0.63 m in five runs here, 0.19 m once in CI: the message shows the torso and the events)
     assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and truth["x_m"] > WALKED_M, (truth, events)
+
+
+def test_forward_speed_comes_back_when_a_turn_ends():
+    """Turning while walking forward shortens the stride (the envelope's combined limit); once the turn is keyed
+    off, the forward speed the keys asked for is back (it stayed clamped: 0.15 -> 0.12 m/s)."""
+    from op2motion.bus.teleop import Teleop
+    from op2motion.gait.envelope import STEER_ENVELOPE
+
+    keys = Teleop(STEER_ENVELOPE)
+    keys.feed("www")
+    asked = keys.command[0]
+    keys.feed("qqqq")
+    assert keys.command[0] < asked and keys.command[2] > 0.0                 # clamped while turning
+    keys.feed("eeee")
+    assert keys.command == (asked, 0.0, 0.0)
