@@ -296,3 +296,21 @@ def test_a_planned_walk_is_done_once_its_plan_has_run_out_and_the_body_is_still(
     assert ctl.done
     ctl.step(t + DT, np.array([0.0, 3.0, 0.0]), still[1], dict(zip(spec.joint_names, ctl.gait.joints[-1])))
     assert not ctl.done                                    # moving again: not still
+
+
+def test_commands_not_followed_are_reported(capsys, tmp_path):
+    """A command beyond the envelope is named with what it walks; a plan that ends far from where the commands end
+    says so, both in the text and the JSON's warnings (the result said nothing)."""
+    path = tmp_path / "fast.csv"
+    path.write_text("t_s,vx_m_s,vy_m_s,yaw_rate_deg_s,event\n0,0.40,0,0,\n4,,,,stop\n")
+    code, out, err = run_cli(capsys, "walk", "--commands", str(path), "--json")
+    warnings = json.loads(out)["warnings"]
+    assert code == 0 and any("0 s: the command (+0.400 m/s forward" in w and "it walks (+0.250 m/s" in w
+                             for w in warnings), warnings
+    assert any(w.startswith("the plan ends at") for w in warnings), warnings
+    from helpers import ROOT
+
+    from op2motion.gait.envelope import STEER_ENVELOPE
+
+    example = read_commands(f"{ROOT}/examples/steer_commands.csv")        # the shipped example asks for no more
+    assert all(STEER_ENVELOPE.clamp(*e.command) == e.command for e in example.entries if e.command is not None)

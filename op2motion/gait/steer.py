@@ -262,7 +262,8 @@ def plan_of_rows(twin: SteerableWalk, count: int) -> Plan:
 
 def planned_summary(walk: SteerableWalk) -> dict[str, Any]:
     """The figures of ``walk``'s planned commands (its dry run): steps, kicks, length, the torso's path and end pose,
-    the planned ZMP's least margin to the soles on the floor."""
+    the planned ZMP's least margin to the soles on the floor, when (the controller's time [s]) and in which kind of
+    phase (a step, a kick, ...)."""
     from op2motion.gait.rows import planned_zmp_margins
 
     walk.plan                                                     # the dry run, once
@@ -274,12 +275,16 @@ def planned_summary(walk: SteerableWalk) -> dict[str, Any]:
     pos = rows.numeric["torso_pos"][:n:25, :2]
     yaw = float(rows.numeric["plan_yaw"][n - 1])
     margin = planned_zmp_margins(rows, walk.spec, n)
+    worst = int(np.argmin(margin))
+    during = next((phase.kind for first, phase in reversed(twin.planner.phases) if first <= rows.first + worst), "")
     return {"rows": n, "duration_s": round(walk.plan.duration_s, 3), "steps": kinds.count("step"),
             "kicks": kinds.count("kick"), "path_m": round(float(np.sum(np.hypot(*np.diff(pos, axis=0).T))), 4),
             "end_pose": {"x_m": round(float(rows.numeric["torso_pos"][n - 1, 0]), 4),
                          "y_m": round(float(rows.numeric["torso_pos"][n - 1, 1]), 4),
                          "yaw_deg": round(math.degrees(yaw), 2)},
-            "zmp_margin_min_m": round(float(margin.min()), 4)}
+            "zmp_margin_min_m": round(float(margin.min()), 4),
+            "zmp_margin_min_at_s": round(LEAD_S + worst * CONTROL_PERIOD_S, 3),
+            "zmp_margin_min_during": during}
 
 
 WalkController._steerable = SteerableWalk.make

@@ -119,8 +119,49 @@ def steered_walk(request: SteeredRequest, spec: Spec, progress: ProgressFor | No
         lines.append(table)
     elif report is not None:
         lines += [walk_line(e, s) for e, s in data["physics"]["engines"].items()]
+    warnings = command_warnings(walk, data["commands"]["end_pose"], summary)
     failed = report is not None and (not report.passed if table is not None else report.fell)
     outputs = {"plot": Output(request.plot, _figure(walk, report))} if request.plot else {}
     problem = f"the commanded walk {'failed in the robustness family' if table else 'fell in physics'}" if failed \
         else None
-    return TaskResult(problem is None, problem, None, outputs, data, tuple(lines))
+    return TaskResult(problem is None, problem, warnings, outputs, data, tuple(lines))
+
+
+END_M = 0.10                       # the plan may end this far from where the commands end without a warning [m]
+END_DEG = 10.0                     # ... and turned this far from their heading [deg]
+
+
+def command_warnings(walk: Any, commanded_end: dict[str, float], planned: dict[str, Any]) -> tuple[str, ...]:
+    """What keeps the commands from being followed, in words: each command the envelope cuts (asked, and what it
+    walks), each kick (the walk stops for it), where the plan ends against where the commands end (beyond
+    :data:`END_M` or :data:`END_DEG`), and a planned ZMP outside the soles (when, during what)."""
+    out = []
+    for entry in walk.commands.entries:
+        if entry.command is None:
+            continue
+        asked = entry.command
+        kept = walk.envelope.clamp(*asked)
+        if max(abs(a - k) for a, k in zip(asked, kept)) > 1e-9:
+            out.append(f"{entry.t_s:g} s: the command ({_speeds(asked)}) is beyond the steered walk's envelope: it "
+                       f"walks ({_speeds(kept)}) (docs/steering.md)")
+    out += [f"{e.t_s:g} s: {e.event.replace('_', ' ')}: the walk stops, closes its feet and kicks, then walks on; the "
+            f"commands meanwhile are not walked" for e in walk.commands.entries if e.event and e.event != "stop"]
+    end = planned["end_pose"]
+    off_m = math.hypot(end["x_m"] - commanded_end["x_m"], end["y_m"] - commanded_end["y_m"])
+    off_deg = abs(math.remainder(end["yaw_deg"] - commanded_end["yaw_deg"], 360.0))
+    turned = abs(end["yaw_deg"] - commanded_end["yaw_deg"])
+    if off_m > END_M or turned > END_DEG:
+        out.append(f"the plan ends at x {end['x_m']:.3f} m, y {end['y_m']:.3f} m, heading {end['yaw_deg']:+.1f}°; "
+                   f"the commands end at x {commanded_end['x_m']:.3f} m, y {commanded_end['y_m']:.3f} m, heading "
+                   f"{commanded_end['yaw_deg']:+.1f}° ({off_m:.2f} m and {min(off_deg, turned):.0f}° apart"
+                   f"{', a turn of ' + format(turned, '.0f') + '° short' if turned > off_deg + 1e-6 else ''})")
+    if planned["zmp_margin_min_m"] < 0.0:
+        out.append(f"the planned ZMP leaves the soles by {-planned['zmp_margin_min_m'] * 1000:.1f} mm at "
+                   f"{planned['zmp_margin_min_at_s']:.2f} s (during a {planned['zmp_margin_min_during'] or 'phase'}): "
+                   f"the plan itself would tip the robot there unless the servos' compliance and feedback catch it")
+    return tuple(out)
+
+
+def _speeds(command: tuple[float, float, float]) -> str:
+    vx, vy, yaw_rate = command
+    return f"{vx:+.3f} m/s forward, {vy:+.3f} m/s left, {math.degrees(yaw_rate):+.1f}°/s"
