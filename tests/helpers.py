@@ -52,6 +52,20 @@ def source_tree(path: Path) -> ast.Module:
     return ast.parse(path.read_text(encoding="utf-8"))
 
 
+def same_verdict(early, full) -> None:
+    """Two reports of one physics run, ``early`` ended once its verdict was known and ``full`` played to its end:
+    the same verdict, and every failure of the full run up to where the early one stopped, in the same order (the
+    causes of a fall too: saturation, joint limits, collisions), at the same times."""
+    import pytest
+
+    from op2motion.physics.stopping import FULL
+
+    assert full.ended == FULL and full.seconds == pytest.approx(full.planned_seconds)
+    assert early.stable == full.stable, (early.reasons, full.reasons)
+    until = [(f.reason, f.time_s) for f in full.failures if f.time_s <= early.seconds + 1e-9]
+    assert [(f.reason, f.time_s) for f in early.failures] == until, (early.failures, full.failures)
+
+
 def pose_path(name: str) -> str:
     """Path of a committed pose file."""
     return str(POSES / f"{name}.json")
