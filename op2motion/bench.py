@@ -9,7 +9,7 @@ and pinocchio's), so a fast but wrong evaluator cannot pass unnoticed.
 from __future__ import annotations
 
 import time
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -183,10 +183,12 @@ def _robot_figures(spec: Spec) -> dict[str, Any]:
 
 
 def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
-              action: ActionFile | None = None, wall_runs: int = 0, wall_library: bool = True) -> dict[str, Any]:
+              action: ActionFile | None = None, wall_runs: int = 0, wall_library: bool = True,
+              wall_grid: Sequence[str] = ()) -> dict[str, Any]:
     """Time batched forward kinematics + CoM for ``n`` poses with each model, one physics validation, one PSO
     solve and (given an action file's bytes) one page played and validated; figures in milliseconds (scaled to
-    40 000 poses), with their correctness checks."""
+    40 000 poses), with their correctness checks. The physics validations and the PSO solve are timed
+    ``min(repeat, 3)`` times; ``wall_grid``: the library figure's grid flags (default: the default grid)."""
     rng = np.random.default_rng(seed)
     poses_dh = BookAngles.random(n, rng, "left", psi=True)
     poses_pb = BookAngles(poses_dh.th, poses_dh.phi, np.zeros_like(poses_dh.psi), Support.LEFT)
@@ -200,15 +202,15 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
     stand = book_to_servo(BookAngles.standing("left"), spec)[0]
     verdict: dict[str, RunReport] = {}
     hold = Schedule.hold(stand, "double", spec, DEFAULT_SECONDS)
-    validate_ms = _best_ms(lambda: verdict.update(v=check(hold, spec).run), 3)
-    validate_mujoco_ms = _best_ms(lambda: verdict.update(m=check(hold, spec, ("mujoco",)).run), 3)
+    validate_ms = _best_ms(lambda: verdict.update(v=check(hold, spec).run), min(repeat, 3))
+    validate_mujoco_ms = _best_ms(lambda: verdict.update(m=check(hold, spec, ("mujoco",)).run), min(repeat, 3))
     swarm = BookAngles.random(PSOSettings().particles, rng, "left")
     frames, shapes = matrix_frames(swarm.vector(), spec, "left"), shape_set(spec, "left")
     clearance_ms = _best_ms(lambda: clearances(frames, shapes, CLEARANCE_EXACT_M), repeat)
     standing = matrix_frames(BookAngles.standing("left").vector(), spec, "left")
     problem = PostureProblem.from_scenario(book.DEFAULT_PROBLEM)
     pso: dict[str, Any] = {}
-    pso_ms = _best_ms(lambda: pso.update(r=run_pso(problem, spec, PSOSettings())), 3)
+    pso_ms = _best_ms(lambda: pso.update(r=run_pso(problem, spec, PSOSettings())), min(repeat, 3))
     return {
         "poses": n,
         "repeat": repeat,
@@ -236,5 +238,5 @@ def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
         **_planning_figures(spec, action, repeat),
         **_walk_figures(spec, repeat),
         **_robot_figures(spec),
-        **(wall_figures(wall_runs, wall_library) if wall_runs else {}),
+        **(wall_figures(wall_runs, wall_library, wall_grid) if wall_runs else {}),
     }

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import ast
-import functools
 import re
 import time
 from pathlib import Path
@@ -46,11 +45,25 @@ def share_numba_cache(root: Path) -> None:
             os.utime(root / source, ns=(stat.st_atime_ns, stat.st_mtime_ns))
 
 
-@functools.cache
 def source_tree(path: Path) -> ast.Module:
-    """The parsed source of one file of the repository, parsed once per test process (several tests walk the
-    package's sources: the layers, the choices, the commands' shapes)."""
+    """The parsed source of one file of the repository. Not kept: callers keep what they read from it (the package's
+    220 syntax trees, held for the rest of a test process, made each of its full garbage collections 0.14 s
+    slower; built while collecting, they cost every test process 1.4 s)."""
     return ast.parse(path.read_text(encoding="utf-8"))
+
+
+def same_verdict(early, full) -> None:
+    """Two reports of one physics run, ``early`` ended once its verdict was known and ``full`` played to its end:
+    the same verdict, and every failure of the full run up to where the early one stopped, in the same order (the
+    causes of a fall too: saturation, joint limits, collisions), at the same times."""
+    import pytest
+
+    from op2motion.physics.stopping import FULL
+
+    assert full.ended == FULL and full.seconds == pytest.approx(full.planned_seconds)
+    assert early.stable == full.stable, (early.reasons, full.reasons)
+    until = [(f.reason, f.time_s) for f in full.failures if f.time_s <= early.seconds + 1e-9]
+    assert [(f.reason, f.time_s) for f in early.failures] == until, (early.failures, full.failures)
 
 
 def pose_path(name: str) -> str:

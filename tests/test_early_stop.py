@@ -1,5 +1,7 @@
 """A physics check ends when its verdict is known (op2motion.physics.stopping): a settled pose and a fallen one end
-early with the verdict (and the first failure) of the run played to its full length."""
+early with the verdict (and the first failure) of the run played to its full length. (The hardest cases, the lean
+sweeps' last standing leans and first falls in both engines, are played both ways by tests/test_lean_sweeps.py,
+whose sweeps have run them already.)"""
 
 from __future__ import annotations
 
@@ -8,26 +10,19 @@ import os
 
 import numpy as np
 import pytest
+from helpers import same_verdict
 
 from op2motion.formats.action import ActionFile
 from op2motion.formats.posefile import read_pose
 from op2motion.physics import Schedule
 from op2motion.physics.loop import Push, RunSetup
 from op2motion.physics.runner import Setup, _Runner
-from op2motion.physics.stopping import EDGE_BAND_M, FELL, FULL, SETTLED, EarlyStop
-from op2motion.physics.sweeps import leaned, sweep_base
+from op2motion.physics.stopping import FULL, SETTLED, EarlyStop
 
 pytestmark = pytest.mark.physics
 ROOT = os.path.join(os.path.dirname(__file__), "..")
 SECONDS = 3.0
 SAME_MARGIN_M = 5e-4           # a settled margin measured early agrees with the full run's to this
-# The lean sweeps' last standing lean and first fall in either engine (README, Lean sweeps; -5.5°, -9.5° and +10°
-# stand in MuJoCo and fall in PyBullet): (support, kind, deg).
-SWEEP_EDGES = [("left", "pitch", 6.0), ("left", "pitch", 6.5), ("left", "pitch", -5.0), ("left", "pitch", -5.5),
-               ("left", "pitch", -6.0), ("left", "roll", 6.5), ("left", "roll", 7.0), ("double", "pitch", 9.5),
-               ("double", "pitch", 10.0), ("double", "pitch", 10.5), ("double", "pitch", -9.0),
-               ("double", "pitch", -9.5), ("double", "pitch", -10.0), ("double", "roll", 22.5),
-               ("double", "roll", 23.0)]
 STOCK_PAGES = [15, 16]            # sit down, stand up (from the init pose)
 
 
@@ -42,35 +37,12 @@ def _both(schedule: Schedule, spec, engine: str, setup: RunSetup = RunSetup()):
     return early, full
 
 
-def _same_verdict(early, full) -> None:
-    """The same verdict, and every failure of the full run up to where the early one stopped, in the same order
-    (the causes of a fall too: saturation, joint limits, collisions), at the same times."""
-    assert full.ended == FULL and full.seconds == pytest.approx(full.planned_seconds)
-    assert early.stable == full.stable, (early.reasons, full.reasons)
-    until = [(f.reason, f.time_s) for f in full.failures if f.time_s <= early.seconds + 1e-9]
-    assert [(f.reason, f.time_s) for f in early.failures] == until, (early.failures, full.failures)
-
-
-@pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
-@pytest.mark.parametrize("support, kind, degrees", SWEEP_EDGES, ids=[f"{s}-{k}{d:+g}" for s, k, d in SWEEP_EDGES])
-def test_lean_sweep_edges_keep_their_verdict(spec, engine, support, kind, degrees):
-    pose = leaned(spec, sweep_base(spec, support), support, kind, degrees)
-    early, full = _both(Schedule.hold(pose, support, spec, SECONDS), spec, engine)
-    _same_verdict(early, full)
-    if early.stable:   # near its edge a pose plays the whole plan; clear of it, it ends once settled
-        assert early.ended == FULL or (early.ended == SETTLED and early.support_margin_m > EDGE_BAND_M)
-    else:
-        assert early.ended == FELL and early.seconds < SECONDS
-    if early.stable:   # the same still robot measured
-        assert early.support_margin_m == pytest.approx(full.support_margin_m, abs=SAME_MARGIN_M)
-
-
 @pytest.mark.parametrize("path", sorted(glob.glob(os.path.join(ROOT, "poses", "*.json"))),
                          ids=lambda p: os.path.basename(p))
 def test_committed_poses_keep_their_verdict(spec, path):
     pose = read_pose(path, spec)
     early, full = _both(Schedule.hold(pose.servo, pose.support, spec, SECONDS), spec, "pybullet")
-    _same_verdict(early, full)
+    same_verdict(early, full)
     assert early.support_margin_m == pytest.approx(full.support_margin_m, abs=SAME_MARGIN_M)
 
 
@@ -80,7 +52,7 @@ def test_stock_pages_keep_their_verdict(spec, page):
 
     played = play_page(ActionFile.read(os.path.join(ROOT, "tests", "data", "motion_4096.bin")), page, spec)
     early, full = _both(played.trajectory.schedule(spec), spec, "mujoco")
-    _same_verdict(early, full)
+    same_verdict(early, full)
     assert early.seconds <= full.seconds
 
 
@@ -88,7 +60,7 @@ def test_a_push_is_waited_out(spec):
     pose = read_pose(os.path.join(ROOT, "poses", "standing.json"), spec)
     push = Push(np.array([0.0, 8.0, 0.0]), 1.5, 0.1)
     early, full = _both(Schedule.hold(pose.servo, pose.support, spec, SECONDS), spec, "mujoco", RunSetup(push=push))
-    _same_verdict(early, full)
+    same_verdict(early, full)
     assert early.seconds >= 1.6 + 1.0 - 1e-9       # the steady window lies wholly after the push
 
 

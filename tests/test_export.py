@@ -167,7 +167,10 @@ def test_a_robust_library_build_holds_each_pose_on_the_family_and_counts(spec, t
     from op2motion.workflow import Validate
 
     jobs = grid_jobs(["left"], ["left"], [0.7], [0.10], [0.05], [0.07])
-    settings = BuildSettings(PSOSettings(iterations=120), restarts=0, validate=Validate(MIN_SECONDS), robust=True)
+    # (held in MuJoCo: what is tested is the robust runs' count and how the index and the summary report them, in
+    # the check's engine, whichever it is; PyBullet took four times as long)
+    settings = BuildSettings(PSOSettings(iterations=120), restarts=0, validate=Validate(MIN_SECONDS, "mujoco"),
+                             robust=True)
     summary = build_library(jobs, spec, tmp_path, settings, workers=1)
     row = json.loads((tmp_path / "index.json").read_text(encoding="utf-8"))[0]
     assert row["reached"] and row["stable"]

@@ -17,6 +17,9 @@ import pytest
 from foreign_sim.harness import ServoModel, simulate
 
 from op2motion.gait.controller import WalkController
+from op2motion.gait.generator import Gait
+from op2motion.gait.presets import load_preset
+from op2motion.gait.speeds import gait_within_speed
 from op2motion.model.urdf import build_urdf
 from op2motion.robot.specfile import default_spec, load_spec
 
@@ -41,6 +44,13 @@ def foreign_urdf() -> str:
     return build_urdf(load_spec(FOREIGN_BODY))
 
 
+@pytest.fixture(scope="module")
+def forward_gait() -> Gait:
+    """The twelve forward steps (``WalkController.from_preset("forward", steps=STEPS)``'s gait), planned once for
+    the tests that walk them: each walks a fresh controller of it."""
+    return gait_within_speed(load_preset("forward").with_steps(STEPS), default_spec())
+
+
 class _Hold:
     """A controller that holds the goals it was made with."""
 
@@ -57,9 +67,9 @@ class _Hold:
         return dict(self.goals)
 
 
-def test_walk_controller_walks_in_the_foreign_simulator(foreign_urdf: str) -> None:
+def test_walk_controller_walks_in_the_foreign_simulator(foreign_urdf: str, forward_gait: Gait) -> None:
     """Twelve forward steps, planned on the shipped spec, walked by the foreign body in the foreign simulator."""
-    ctl = WalkController.from_preset("forward", steps=STEPS, spec=default_spec())
+    ctl = WalkController(forward_gait, default_spec())
     result = simulate(foreign_urdf, ctl, seconds=ctl.plan.duration_s)
     facts = {k: v for k, v in result.items() if k not in ("last_gyro", "last_accel")}
     assert not result["fell"], f"fell at {result['fall_time_s']} s: {facts}"
@@ -77,9 +87,9 @@ VARIANTS = {"servos x0.6": {"servo": ServoModel(kp_nm_rad=0.6 * ServoModel().kp_
 
 
 @pytest.mark.parametrize("variant", sorted(VARIANTS))
-def test_walk_controller_walks_the_foreign_worlds_variants(foreign_urdf: str, variant: str) -> None:
+def test_walk_controller_walks_the_foreign_worlds_variants(foreign_urdf: str, forward_gait: Gait, variant: str) -> None:
     """The same twelve steps with the foreign world's servos, floor or latency changed."""
-    ctl = WalkController.from_preset("forward", steps=STEPS, spec=default_spec())
+    ctl = WalkController(forward_gait, default_spec())
     result = simulate(foreign_urdf, ctl, seconds=ctl.plan.duration_s, **VARIANTS[variant])
     facts = {k: v for k, v in result.items() if k not in ("last_gyro", "last_accel")}
     assert not result["fell"], f"fell at {result['fall_time_s']} s: {facts}"
@@ -88,10 +98,10 @@ def test_walk_controller_walks_the_foreign_worlds_variants(foreign_urdf: str, va
     assert abs(result["end_yaw_deg"]) <= MAX_YAW_DEG, facts
 
 
-def test_harness_at_rest_reads_gravity_and_no_rotation(foreign_urdf: str) -> None:
+def test_harness_at_rest_reads_gravity_and_no_rotation(foreign_urdf: str, forward_gait: Gait) -> None:
     """The walk's first goals held: the robot stands, the gyro reads nothing and the accelerometer reads g along
     the torso's true vertical (the pose sags back a few degrees on the servos' compliance)."""
-    ctl = WalkController.from_preset("forward", steps=STEPS, spec=default_spec())
+    ctl = WalkController(forward_gait, default_spec())
     first = ctl.start({name: 0.0 for name in ctl.spec.joint_names})
     result = simulate(foreign_urdf, _Hold(first), seconds=REST_S)
     gyro, accel = result["last_gyro"], result["last_accel"]
@@ -225,8 +235,6 @@ def test_the_swing_shaping_carries_a_fast_walk_over_the_soft_heavy_corner() -> N
     swing shaping off catches its swing toe and falls within a few steps."""
     from dataclasses import replace
 
-    from op2motion.gait.presets import load_preset
-    from op2motion.gait.speeds import gait_within_speed
     from op2motion.physics import family
 
     official = load_spec(FOREIGN_BODY)

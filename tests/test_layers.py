@@ -6,8 +6,10 @@ The graph is drawn from every ``import`` in the source (module level and inside 
 from __future__ import annotations
 
 import ast
+import functools
 import re
 from pathlib import Path
+from typing import NamedTuple
 
 import pytest
 from helpers import source_tree
@@ -43,12 +45,13 @@ def _module_name(path: Path) -> str:
     return ".".join(parts)
 
 
-def _imports(path: Path) -> set[str]:
-    """op2motion modules imported by one file (relative imports resolved), as dotted names below the package."""
+def _imports(path: Path, tree: ast.Module) -> set[str]:
+    """op2motion modules imported by one file (``tree``, parsed; relative imports resolved), as dotted names below
+    the package."""
     name = _module_name(path)
     package = name.split(".") if path.name == "__init__.py" else name.split(".")[:-1]
     found: set[str] = set()
-    for node in ast.walk(source_tree(path)):
+    for node in ast.walk(tree):
         if isinstance(node, ast.ImportFrom):
             if node.level:
                 base = package[:len(package) - (node.level - 1)] if node.level > 1 else package
@@ -80,12 +83,41 @@ def _layer(module: str) -> int:
     raise AssertionError(f"module {module} is in no layer: add it to LAYERS")
 
 
-GRAPH = {_module_name(p): _imports(p) for p in sorted(PACKAGE.rglob("*.py"))}
+class _Facts(NamedTuple):
+    """What the tests read from one source file (the syntax tree itself is not kept)."""
+
+    imports: set[str]
+    functions: list[tuple[str, int, int]]       # (path:name, parameters but self and cls, lines)
+    documented: bool
 
 
-@pytest.mark.parametrize("module", sorted(GRAPH))
+def _facts_of(path: Path) -> _Facts:
+    tree = source_tree(path)
+    functions = []
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            a = node.args
+            params = [*a.posonlyargs, *a.args, *a.kwonlyargs] + ([a.vararg] if a.vararg else []) + (
+                [a.kwarg] if a.kwarg else [])
+            functions.append((f"{path.relative_to(PACKAGE.parent)}:{node.name}",
+                              len([p for p in params if p.arg not in ("self", "cls")]),
+                              node.end_lineno - node.lineno + 1))
+    return _Facts(_imports(path, tree), functions, bool(ast.get_docstring(tree)))
+
+
+@functools.cache
+def _facts() -> dict[Path, _Facts]:
+    """Every source file's facts, read once per test process when a test first asks (not while collecting)."""
+    return {p: _facts_of(p) for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+def _graph() -> dict[str, set[str]]:
+    return {_module_name(p): f.imports for p, f in _facts().items()}
+
+
+@pytest.mark.parametrize("module", sorted(_module_name(p) for p in PACKAGE.rglob("*.py")))
 def test_imports_run_downwards(module):
-    for target in GRAPH[module]:
+    for target in _graph()[module]:
         same_package = target.split(".")[0] == module.split(".")[0]
         assert same_package or _layer(target) < _layer(module), f"{module} imports {target} (a higher layer)"
 
@@ -95,14 +127,15 @@ def test_no_circles():
 
     def visit(node: str, path: list[str]) -> None:
         state[node] = 1
-        for nxt in GRAPH.get(node, ()):
+        for nxt in graph.get(node, ()):
             if state.get(nxt) == 1:
                 raise AssertionError("import circle: " + " -> ".join(path + [nxt]))
             if nxt not in state:
                 visit(nxt, path + [nxt])
         state[node] = 2
 
-    for module in GRAPH:
+    graph = _graph()
+    for module in graph:
         if module not in state:
             visit(module, [module])
 
@@ -122,11 +155,12 @@ def optimiser_violations(graph: dict[str, set[str]]) -> list[tuple[str, str]]:
 
 
 def test_the_optimiser_depends_on_no_file_format_nor_physics():
-    assert optimiser_violations(GRAPH) == []
+    assert optimiser_violations(_graph()) == []
 
 
 def test_the_optimiser_rule_catches_a_planted_import():
-    planted = {**GRAPH, "posture.solve": GRAPH["posture.solve"] | {"formats.posefile"}}
+    graph = _graph()
+    planted = {**graph, "posture.solve": graph["posture.solve"] | {"formats.posefile"}}
     assert optimiser_violations(planted) == [("posture.solve", "formats.posefile")]
 
 
@@ -148,10 +182,8 @@ UNROLLED_KERNELS = {"op2motion/kinematics/projection.py:_chunk",    # the book's
 
 
 def _functions():
-    for path in sorted(PACKAGE.rglob("*.py")):
-        for node in ast.walk(source_tree(path)):
-            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
-                yield f"{path.relative_to(PACKAGE.parent)}:{node.name}", node
+    for facts in _facts().values():
+        yield from facts.functions
 
 
 def test_the_package_shows_its_wings():
@@ -160,20 +192,13 @@ def test_the_package_shows_its_wings():
 
 
 def test_no_function_takes_more_than_8_parameters():
-    heavy = []
-    for name, node in _functions():
-        a = node.args
-        params = [*a.posonlyargs, *a.args, *a.kwonlyargs] + ([a.vararg] if a.vararg else []) + (
-            [a.kwarg] if a.kwarg else [])
-        count = len([p for p in params if p.arg not in ("self", "cls")])
-        if count > MAX_PARAMETERS:
-            heavy.append((name, count))
+    heavy = [(name, count) for name, count, _ in _functions() if count > MAX_PARAMETERS]
     assert heavy == []
 
 
 def test_no_function_is_longer_than_60_lines():
-    long = [(name, node.end_lineno - node.lineno + 1) for name, node in _functions()
-            if node.end_lineno - node.lineno + 1 > MAX_FUNCTION_LINES and name not in UNROLLED_KERNELS]
+    long = [(name, lines) for name, _, lines in _functions()
+            if lines > MAX_FUNCTION_LINES and name not in UNROLLED_KERNELS]
     assert long == []
 
 
@@ -186,7 +211,7 @@ ENGINE_USERS = {"bus.emulator.body": {"physics.engine", "physics.sensors", "phys
 
 def test_physics_check_is_the_only_way_into_physics():
     """Outside the physics package (and the tests), nothing runs an engine or the loop by itself."""
-    for module, targets in GRAPH.items():
+    for module, targets in _graph().items():
         if not module.startswith("physics"):
             used = {t for t in targets if t.startswith("physics")}
             allowed = PHYSICS_API | ENGINE_USERS.get(module, set())
@@ -200,6 +225,5 @@ def test_physics_check_is_the_only_way_into_physics():
 
 def test_every_module_says_what_it_is():
     """Every module of the package, packages included, opens with a docstring."""
-    bare = [str(p.relative_to(PACKAGE)) for p in sorted(PACKAGE.rglob("*.py"))
-            if not ast.get_docstring(source_tree(p))]
+    bare = [str(p.relative_to(PACKAGE)) for p, facts in _facts().items() if not facts.documented]
     assert bare == []

@@ -1,5 +1,5 @@
-"""Lean sweeps: a pose leaned at the support ankle(s) until it falls, in both engines: 2° steps from upright,
-then 0.5° steps across the switch.
+"""Lean sweeps: a pose leaned at the support ankle(s) until it falls, in both engines: 4° steps from upright, then
+each engine's switch halved down to 0.5° and three leans past it.
 
 The verdict must be monotonic (once a pose falls, every further lean falls too), the two engines must agree on every
 pose whose margin is beyond ±5 mm, and the verdict must switch where the pose runs out of support: where the settled
@@ -12,22 +12,31 @@ rolls onto its inner edge from about 10° of lean (the statically sagged solutio
 its centre of pressure beyond that edge) and the loaded foot tips over its outer edge while the other still carries
 12 % of the weight, so the CoM is 10 mm inside the hull of both soles: there the switch is measured on the loaded
 foot's own centre of pressure, which reaches its edge within 5 mm.
+
+Each engine's last standing lean and first fall are the hardest cases for a check that ends once its verdict is
+known (op2motion.physics.stopping, tests/test_early_stop.py): there every sweep's run, in both engines, is played to
+its full length as well and must end with the same verdict and first failures.
 """
 
 from __future__ import annotations
 
+import functools
 import multiprocessing
 
 import pytest
+from helpers import same_verdict
 
-from op2motion.physics.sweeps import sweep_verdict
+from op2motion.physics.stopping import EDGE_BAND_M, FELL, FULL, SETTLED
+from op2motion.physics.sweeps import sweep_outcome, sweep_run
 
-STEP_DEG = 0.5                 # the fine step, around each engine's switch
-COARSE_DEG = 2.0               # the step from the upright start until a pose falls
+STEP_DEG = 0.5                 # the fine step: each engine's last standing lean and first fall lie this far apart
+COARSE_DEG = 4.0               # the step from the upright start until a pose falls
 SECONDS = 3.0
 FALLS_PAST_SWITCH = 3          # steps leaned on after the first fall, to see that nothing stands again
 MAX_DEG = 35.0
 AGREE_BEYOND_M = 0.005         # the engines agree wherever the margin is beyond this
+SAME_MARGIN_M = 5e-4           # a settled margin measured early agrees with the full run's to this
+ENGINES = ("mujoco", "pybullet")
 SWITCH_TOL_M = 0.005           # the switch lies this close to the edge
 pytestmark = pytest.mark.physics
 
@@ -37,43 +46,61 @@ SWEEPS = [  # support, kind, direction, what runs out (the CoM's polygon or a lo
 ]
 
 
-def _sweep(pool, support: str, kind: str, direction: int) -> tuple[list[float], dict[str, list]]:
+def _sweep(pool, support: str, kind: str, direction: int) -> tuple[list[float], dict[str, list], list[tuple]]:
     """One sweep in both engines: leaned in :data:`COARSE_DEG` steps from upright until a pose falls in either
-    engine, then in :data:`STEP_DEG` steps from each engine's first fall back to the lean before it, and on until
-    at least :data:`FALLS_PAST_SWITCH` leans lie past it; every lean runs in both engines."""
+    engine; then the gap between each engine's last standing lean and its first fall halved until it is
+    :data:`STEP_DEG`, and leaned on until at least :data:`FALLS_PAST_SWITCH` leans lie past each first fall (an
+    engine that has not fallen yet leans on in coarse steps); every lean runs in both engines. (Halving finds the
+    switch to the same 0.5° as stepping 0.5° across it did, in fewer leans: 54 instead of 70 for the six sweeps.)
+    Returns the leans (signed), each engine's :func:`sweep_outcome` per lean, and :func:`_edges`."""
     verdicts: dict[float, dict[str, tuple]] = {}
+    reports: dict[tuple[float, str], object] = {}
 
-    def run(degrees: list[float]) -> None:
-        todo = sorted({round(d, 6) for d in degrees} - set(verdicts))
-        tasks = [(support, kind, direction * d, e, SECONDS) for d in todo for e in ("mujoco", "pybullet")]
-        for (_, _, deg, engine, _), v in zip(tasks, pool.map(sweep_verdict, tasks)):
-            verdicts.setdefault(abs(deg), {})[engine] = v
+    def run(degrees: set[float]) -> None:
+        todo = sorted({round(d, 6) for d in degrees if d <= MAX_DEG} - set(verdicts))
+        tasks = [(support, kind, direction * d, e, SECONDS) for d in todo for e in ENGINES]
+        for (_, _, deg, engine, _), report in zip(tasks, pool.map(sweep_run, tasks)):
+            verdicts.setdefault(abs(deg), {})[engine] = sweep_outcome(report)
+            reports[abs(deg), engine] = report
+
+    def next_leans(engine: str) -> set[float]:
+        falls = sorted(d for d, v in verdicts.items() if not v[engine][0])
+        if not falls:                                       # not fallen yet in this engine: lean on
+            return {max(verdicts) + COARSE_DEG}
+        below = max((d for d in verdicts if d < falls[0]), default=falls[0])
+        if falls[0] - below > STEP_DEG + 1e-9:              # halve the gap (on the fine step's grid)
+            return {round((below + falls[0]) / 2 / STEP_DEG) * STEP_DEG}
+        past = sum(d > falls[0] for d in verdicts)
+        return {max(verdicts) + STEP_DEG * k for k in range(1, FALLS_PAST_SWITCH - past + 1)}
 
     coarse = 0.0
-    while coarse <= MAX_DEG:
-        run([coarse, coarse + COARSE_DEG])
-        if not all(v[0] for d in verdicts.values() for v in d.values()):
+    while coarse <= MAX_DEG and all(v[0] for d in verdicts.values() for v in d.values()):
+        run({coarse})
+        coarse += COARSE_DEG
+    while True:
+        todo = {round(d, 6) for e in ENGINES for d in next_leans(e) if d <= MAX_DEG} - set(verdicts)
+        if not todo:
             break
-        coarse += 2 * COARSE_DEG
-    for fill in (True, False):        # first the fine steps back from each first fall, then the leans past it
-        while True:
-            todo: set[float] = set()
-            for engine in ("mujoco", "pybullet"):
-                falls = sorted(d for d, v in verdicts.items() if not v[engine][0])
-                if not falls:                   # not fallen yet in this engine: lean on
-                    todo |= {max(verdicts) + STEP_DEG * k for k in range(1, FALLS_PAST_SWITCH + 1)}
-                elif fill:
-                    below = max((d for d in verdicts if d < falls[0]), default=falls[0])
-                    todo |= {falls[0] - STEP_DEG * k for k in range(1, int(round((falls[0] - below) / STEP_DEG)))}
-                else:
-                    past = sum(d > falls[0] for d in verdicts)
-                    todo |= {max(verdicts) + STEP_DEG * k for k in range(1, FALLS_PAST_SWITCH - past + 1)}
-            todo = {round(d, 6) for d in todo if d <= MAX_DEG} - set(verdicts)
-            if not todo:
-                break
-            run(sorted(todo))
+        run(todo)
     angles = sorted(verdicts)
-    return [direction * a for a in angles], {e: [verdicts[a][e] for a in angles] for e in ("mujoco", "pybullet")}
+    return ([direction * a for a in angles], {e: [verdicts[a][e] for a in angles] for e in ENGINES},
+            _edges(pool, (support, kind, direction), verdicts, reports))
+
+
+def _edges(pool, sweep: tuple[str, str, int], verdicts: dict, reports: dict) -> list[tuple]:
+    """Each engine's last standing lean and first fall, in both engines: (lean [deg], engine, the sweep's run (ended
+    once its verdict was known), the same run played to its full length); a run that played its whole hold is its
+    own full-length run."""
+    support, kind, direction = sweep
+    leans = set()
+    for engine in ENGINES:
+        fall = min(d for d, v in verdicts.items() if not v[engine][0])
+        leans |= {fall, max((d for d in verdicts if d < fall), default=fall)}
+    early = {(d, e): reports[d, e] for d in sorted(leans) for e in ENGINES}
+    again = [key for key, report in early.items() if report.ended != FULL]
+    tasks = [(support, kind, direction * d, e, SECONDS) for d, e in again]
+    full = dict(zip(again, pool.map(functools.partial(sweep_run, full_length=True), tasks)))
+    return [(direction * d, e, report, full.get((d, e), report)) for (d, e), report in early.items()]
 
 
 @pytest.fixture(scope="module")
@@ -99,7 +126,7 @@ def _switch_margin(angles: list[float], verdicts: list, index: int = 1) -> float
 @pytest.mark.parametrize("support, kind, direction, criterion", SWEEPS,
                          ids=[f"{s}-{k}-{d:+d}" for s, k, d, _ in SWEEPS])
 def test_lean_sweep(sweeps, support, kind, direction, criterion):
-    angles, by_engine = sweeps[(support, kind, direction)]
+    angles, by_engine, _ = sweeps[(support, kind, direction)]
     assert any(not v[0] for v in by_engine["mujoco"]), "the sweep never fell"
     for engine, verdicts in by_engine.items():
         stable = [v[0] for v in verdicts]
@@ -110,3 +137,21 @@ def test_lean_sweep(sweeps, support, kind, direction, criterion):
     for deg, mj, pb in zip(angles, by_engine["mujoco"], by_engine["pybullet"]):
         if min(abs(mj[1]), abs(pb[1])) > AGREE_BEYOND_M:
             assert mj[0] == pb[0], f"{deg}°: MuJoCo {mj}, PyBullet {pb}"
+
+
+@pytest.mark.parametrize("support, kind, direction", [s[:3] for s in SWEEPS],
+                         ids=[f"{s}-{k}-{d:+d}" for s, k, d, _ in SWEEPS])
+def test_the_edges_end_early_with_the_verdict_of_the_full_run(sweeps, support, kind, direction):
+    """At each engine's last standing lean and first fall, in both engines, the check that ended once its verdict
+    was known has the verdict and the first failures of the same run played to its end: near its edge a pose plays
+    the whole hold, clear of it it ends once settled (with the same margin), and a fall ends early."""
+    edges = sweeps[(support, kind, direction)][2]
+    assert len({deg for deg, *_ in edges}) >= 2 and len(edges) % len(ENGINES) == 0
+    for deg, engine, early, full in edges:
+        same_verdict(early, full)
+        if early.stable:
+            assert early.ended == FULL or (early.ended == SETTLED and early.support_margin_m > EDGE_BAND_M), (
+                deg, engine, early.ended)
+            assert early.support_margin_m == pytest.approx(full.support_margin_m, abs=SAME_MARGIN_M), (deg, engine)
+        else:
+            assert early.ended == FELL and early.seconds < SECONDS, (deg, engine, early.ended)

@@ -4,6 +4,7 @@ row, deterministically; an impossible pair is refused; the CLI writes nothing th
 
 from __future__ import annotations
 
+import functools
 import json
 
 import numpy as np
@@ -19,11 +20,13 @@ from op2motion.motion.checks import check_trajectory, clearance, require_clear
 from op2motion.motion.planner import trajectory_through
 from op2motion.motion.route import route_segment
 from op2motion.motion.rrt import Box, RrtSettings, edge_points, rrt_connect, shortcut
+from op2motion.motion.trajectory import Trajectory
 from op2motion.motion.waypoint import Waypoint
 from op2motion.physics import check
 from op2motion.posture.cost import SELF_CLEARANCE_M
 from op2motion.robot.joints import servo_to_book
 from op2motion.robot.pose import Pose
+from op2motion.robot.specfile import default_spec
 from op2motion.robot.support import Support
 
 OBSTACLE_RADIUS = 0.3
@@ -49,6 +52,15 @@ def _pair(spec, change: dict, duration_s: float = 2.0) -> tuple[Waypoint, Waypoi
     for joint, (x, y) in change.items():
         a[spec.joint_names.index(joint)], b[spec.joint_names.index(joint)] = np.radians(x), np.radians(y)
     return Waypoint("a", a, 0.0, 0.0, support), Waypoint("b", b, duration_s, 0.0, support)
+
+
+@functools.lru_cache(maxsize=None)
+def _planned(name: str) -> Trajectory:
+    """The pair's motion as planned around (seed 0) with the shipped spec, once per test process: the tests of its
+    rows' clearance, against PyBullet and in physics look at the one trajectory (the first test plans it twice
+    more itself, to see that planning repeats)."""
+    spec = default_spec()
+    return trajectory_through(list(_pair(spec, PAIRS[name])), spec, seed=0)
 
 
 def _disc_world(weights: tuple[float, float] = (1.0, 1.0)):
@@ -106,11 +118,11 @@ def test_colliding_pairs_are_planned_around_with_clearance_at_every_row(spec, na
         m = checks.measure(x + np.linspace(0.0, 1.0, n)[:, None] * (y - x))
         assert m.clearance.min() >= least - 1e-9 and m.margin.min() > MIN_MARGIN_M
         assert m.swing.min() >= 0.0                                  # on one foot, the other stays lifted
-    traj = trajectory_through([a, b], spec, seed=0)
+    traj = _planned(name)
     assert clearance(traj.goals, spec)[0].min() >= SELF_CLEARANCE_M
     assert check_trajectory(traj, spec).summary()["min_clearance_m"] >= SELF_CLEARANCE_M - 5e-6
     assert any("planned around" in n for n in traj.notes)
-    again = trajectory_through([a, b], spec, seed=0)
+    again = trajectory_through([a, b], spec, seed=0)          # planned again here: the same rows
     assert np.array_equal(traj.goals, again.goals)
     ends = np.array([traj.goals[0] - a.servo, traj.goals[-1] - b.servo])
     assert np.abs(ends).max() < END_TOL_RAD               # on one foot the balance lean leaves the ends as they were
@@ -164,7 +176,7 @@ def test_cli_refuses_a_pair_with_no_path_writing_nothing(tmp_path, spec, capsys)
 @pytest.mark.parametrize("name", sorted(PAIRS))
 def test_planned_rows_clearance_agrees_with_pybullets_closest_points(spec, pybullet_robot, name):
     client, robot = pybullet_robot
-    traj = trajectory_through(list(_pair(spec, PAIRS[name])), spec, seed=0)
+    traj = _planned(name)
     rows = traj.goals[np.linspace(0, len(traj.goals) - 1, ROWS_COMPARED).astype(int)]
     shapes = shape_set(spec, "left")
     _, frames = forward_dh_frames(servo_to_book(rows, "left", spec), spec)
@@ -181,6 +193,6 @@ def test_planned_rows_clearance_agrees_with_pybullets_closest_points(spec, pybul
 @pytest.mark.physics
 @pytest.mark.parametrize("name", sorted(PAIRS))
 def test_planned_motions_stand_in_both_engines(spec, name):
-    traj = trajectory_through(list(_pair(spec, PAIRS[name])), spec, seed=0)
+    traj = _planned(name)
     report = check(traj.schedule(spec), spec, ("pybullet", "mujoco"))
     assert report.agree and report.stable, [e.run.reasons for e in report.engines.values()]

@@ -18,7 +18,9 @@ def register(sub: Any) -> None:
     p = add_command(sub, "bench", cmd_bench, "speed figures of the batched models, the PSO and the physics check")
     p.add_argument("--poses", type=whole(100, 1_000_000), default=BENCH_POSES,
                    help=f"batch size; figures are scaled to {BENCH_POSES} (default {BENCH_POSES})")
-    p.add_argument("--repeat", type=whole(1, 100), default=9, help="runs per figure; the best is reported (default 9)")
+    p.add_argument("--repeat", type=whole(1, 100), default=9,
+                   help="runs per figure (at most 3 for the physics checks, the PSO and the planners); the best is "
+                        "reported (default 9)")
     p.add_argument("--wall-runs", type=whole(0, 20), default=3,
                    help="fresh-process runs of --help, optimize and optimize --validate (median reported), plus one "
                         "library build of the default grid; 0 skips them (default 3)")

@@ -15,7 +15,8 @@ import numpy as np
 
 from op2motion.model.dynamics import dynamics_for
 from op2motion.physics.controller import Schedule
-from op2motion.physics.runner import check
+from op2motion.physics.report import RunReport
+from op2motion.physics.runner import Setup, check
 from op2motion.robot.joints import BookAngles, book_to_servo, hip_roll_sign
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Side, Support, SupportName
@@ -116,17 +117,32 @@ def leaned(spec: Spec, base: np.ndarray, support: Support | SupportName, kind: s
     return out
 
 
-def sweep_verdict(task: tuple[SupportName, str, float, EngineName, float]) -> tuple[bool, float, list[str], float]:
-    """One pose of a sweep, (support, kind, degrees, engine, seconds) -> (stable, margin [m], reasons, foot margin
-    [m]); the margin is the settled one for a standing pose, the one when gravity reached full strength for a
-    falling one; the foot margin is the least margin of a foot's own CoP to its sole among the feet carrying at
-    least a tenth of the load (NaN for a falling pose). A worker for process pools (the shipped spec)."""
+SweepTask = tuple[SupportName, str, float, "EngineName", float]    # support, kind, degrees, engine, seconds
+
+
+def sweep_run(task: SweepTask, full_length: bool = False) -> RunReport:
+    """One pose of a sweep, (support, kind, degrees, engine, seconds), held in that engine (the shipped spec): the
+    run's report; ``full_length`` plays the whole hold (a check ends once its verdict is known). A worker for process
+    pools."""
     from op2motion.robot.specfile import default_spec
 
     support, kind, degrees, engine, seconds = task
     spec = default_spec()
     pose = leaned(spec, sweep_base(spec, support), support, kind, degrees)
-    v = check(Schedule.hold(pose, support, spec, seconds), spec, (engine,)).run
+    return check(Schedule.hold(pose, support, spec, seconds), spec, (engine,),
+                 setup=Setup(full_length=full_length)).run
+
+
+def sweep_outcome(v: RunReport) -> tuple[bool, float, list[str], float]:
+    """(stable, margin [m], reasons, foot margin [m]) of a sweep's run: the margin is the settled one for a standing
+    pose, the one when gravity reached full strength for a falling one; the foot margin is the least margin of a
+    foot's own CoP to its sole among the feet carrying at least a tenth of the load (NaN for a falling pose)."""
     feet = [f.cop_margin_m for f in v.feet.values() if f.load_share >= 0.1]
     foot = min(feet) if v.stable and feet else float("nan")
     return v.stable, (v.support_margin_m if v.stable else v.margin_at_load_m), v.reasons, foot
+
+
+def sweep_verdict(task: SweepTask) -> tuple[bool, float, list[str], float]:
+    """One pose of a sweep, (support, kind, degrees, engine, seconds) -> :func:`sweep_outcome` of its run. A worker
+    for process pools (the shipped spec)."""
+    return sweep_outcome(sweep_run(task))
