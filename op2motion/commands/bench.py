@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from op2motion.bench import BENCH_POSES
+from op2motion.book import TIMED_POSES as BENCH_POSES
 from op2motion.commands.common import add_command, whole
 from op2motion.robot.spec import Spec
 
