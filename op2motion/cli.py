@@ -17,6 +17,8 @@ from typing import Any, Sequence
 from op2motion.errors import Interrupted, Op2MotionError, one_line
 from op2motion.version import __version__
 
+BLAS_THREADS = "OPENBLAS_NUM_THREADS"
+
 #: Every subcommand in the order ``--help`` lists it: the command module that registers it, its name and its
 #: one-line help (the module's own, held equal by tests/test_startup.py). The top-level ``--help`` is drawn from this
 #: table, and a command's module is imported only when that command is parsed or its help shown: ``op2motion
@@ -136,9 +138,14 @@ def entry() -> None:
     """The ``op2motion`` program: :func:`main`, then a quick exit. Every file is written, every child joined and
     every ``atexit`` handler run before the process ends; only the interpreter's teardown of its loaded modules is
     skipped (with numba's compiler loaded it took 0.12 s, an eighth of an ``optimize``). SIGTERM is handled as
-    Ctrl-C (exit 130 with one line, temp files removed, workers ended)."""
+    Ctrl-C (exit 130 with one line, temp files removed, workers ended).
+
+    The program's maths run on one OpenBLAS thread unless ``OPENBLAS_NUM_THREADS`` says otherwise: its matrices are
+    small, and each OpenBLAS that loads (NumPy's, SciPy's) starts a thread per extra core that spins for a while
+    (0.2-0.4 s of CPU in an ``optimize``, on the core its figure renderers need)."""
     import signal
 
+    os.environ.setdefault(BLAS_THREADS, "1")        # before NumPy loads: it reads this once
     def terminated(signum: int, frame: object) -> None:
         raise KeyboardInterrupt     # SIGTERM ends a command as Ctrl-C does: files in order, one line, exit 130
 

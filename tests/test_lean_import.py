@@ -90,3 +90,23 @@ def test_the_lean_global_best_is_pyswarms_own_without_scipy():
     found = json.loads(done.stdout.splitlines()[-1])
     assert found["after_lean"] == [], found["after_lean"]      # no SciPy loaded, no pyswarms module left behind
     assert found["lean"] == found["whole"] and not found["same_class"]
+
+
+#: In a fresh interpreter: numba's CPU target started (its array maths module checks for BLAS) inside the lent
+#: SciPy BLAS table, and what is loaded inside and after.
+NUMBA_BLAS = """
+import json, sys
+from op2motion.processes.imports import scipy_blas_for_numba
+with scipy_blas_for_numba():
+    import numba.np.arraymath
+    inside = {"blas": numba.np.arraymath._HAVE_BLAS, "linalg": "scipy.linalg" in sys.modules}
+after = "scipy.linalg.cython_blas" in sys.modules
+import scipy.linalg.cython_blas
+print(json.dumps({**inside, "after": after, "usual": "dgemm" in scipy.linalg.cython_blas.__pyx_capi__}))
+"""
+
+
+def test_numba_finds_scipys_blas_without_scipy_linalg():
+    done = subprocess.run([sys.executable, "-c", NUMBA_BLAS], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout.splitlines()[-1]) == {"blas": True, "linalg": False, "after": False, "usual": True}

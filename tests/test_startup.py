@@ -35,10 +35,9 @@ def test_no_heavy_library_is_loaded(argv, run):
     assert loaded.isdisjoint(HEAVY), sorted(loaded & set(HEAVY))
 
 
-def _loaded(argv: list[str]) -> set[str]:
-    """Every module (full dotted names) loaded by ``op2motion ARGV`` run in a fresh interpreter."""
-    done = subprocess.run([sys.executable, "-c", PROBE.format(argv=["op2motion", *argv],
-                                                              run="runpy.run_module('op2motion', run_name='__main__')")
+def _loaded(argv: list[str], run: str = "runpy.run_module('op2motion', run_name='__main__')") -> set[str]:
+    """Every module (full dotted names) loaded by ``op2motion ARGV`` run in a fresh interpreter (by ``run``)."""
+    done = subprocess.run([sys.executable, "-c", PROBE.format(argv=["op2motion", *argv], run=run)
                            .replace("m.split('.')[0]", "m")], capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
     return set(json.loads(done.stdout.splitlines()[-1]))
@@ -96,3 +95,13 @@ def test_the_lazy_parser_is_the_full_parser(monkeypatch):
     argv = ["optimize", "--target", "0.1", "0.05", "0.07", "--seed", "3", "--json"]
     parsed, expected = vars(build_parser(lazy=True).parse_args(argv)), vars(full.parse_args(argv))
     assert {k: v for k, v in parsed.items() if k != "parser"} == {k: v for k, v in expected.items() if k != "parser"}
+
+
+def test_the_main_job_loads_no_scipy_linalg_spatial_or_optimize_and_no_pyswarms_package(tmp_path):
+    """``optimize`` (a short search, no refinement) runs pyswarms' GlobalBestPSO and the compiled cost without
+    SciPy's linalg, spatial or optimize packages and leaves no ``pyswarms`` module loaded (processes/imports.py)."""
+    loaded = _loaded(["optimize", "--iters", "3", "--particles", "4", "--restarts", "0", "--no-refine", "--out",
+                      str(tmp_path / "pose.json")], run="from op2motion.cli import main; main()")   # not os._exit
+    assert "numba" in loaded and "op2motion.posture.kernel" in loaded         # the compiled cost ran
+    assert not {"scipy.linalg", "scipy.spatial", "scipy.optimize", "matplotlib"} & loaded
+    assert not [m for m in loaded if m.startswith("pyswarms")]

@@ -1,7 +1,9 @@
 """One module of a third-party package, loaded without the package ``__init__`` that would load everything else.
 
 ``import pyswarms`` loads every optimiser and topology pyswarms has, and its ring and random topologies load SciPy's
-spatial and sparse-graph modules: 0.4 s of a 1-s ``optimize``, which uses one optimiser class. :func:`lean_import`
+spatial and sparse-graph modules: 0.4 s of a 1-s ``optimize``, which uses one optimiser class; numba's compiled
+code finds BLAS in ``scipy.linalg.cython_blas``, and importing that loads all of ``scipy.linalg`` first (0.1-0.2 s,
+:func:`scipy_blas_for_numba`). :func:`lean_import`
 imports just the module that defines what is used, with empty packages of the same path standing in for the heavy
 ``__init__`` s while it loads; the module's own code and what it imports run unchanged. Afterwards every module of
 the skipped packages that the load added is taken out of ``sys.modules`` again (what was loaded lives on in the
@@ -23,7 +25,7 @@ import os
 import sys
 import threading
 import types
-from typing import Mapping, Sequence
+from typing import Iterator, Mapping, Sequence
 
 _LOCK = threading.Lock()
 _LOADED: dict[str, types.ModuleType] = {}
@@ -39,6 +41,29 @@ def lean_import(module: str, skipped: Sequence[str], provides: Mapping[str, Mapp
         if module not in _LOADED:
             _LOADED[module] = _load(module, skipped, provides or {})
         return _LOADED[module]
+
+
+#: SciPy's table of BLAS functions for compiled code, and the package whose ``__init__`` it is loaded without.
+SCIPY_BLAS, SCIPY_LINALG = "scipy.linalg.cython_blas", "scipy.linalg"
+
+
+@contextlib.contextmanager
+def scipy_blas_for_numba() -> Iterator[None]:
+    """While inside, :data:`SCIPY_BLAS` is in ``sys.modules``, loaded without ``scipy.linalg``'s ``__init__``:
+    numba's CPU target imports it when it starts (to call BLAS from compiled code), and through ``scipy.linalg``
+    that import costs 0.1-0.2 s of SciPy's decompositions and array-API layer that no kernel of op2motion uses.
+    Wrap a process's first numba kernel call in it (:class:`~op2motion.processes.compiled.CompileOnce` does).
+    Afterwards the entry is taken out again (unless ``scipy.linalg`` was loaded meanwhile), so that a later
+    ``import scipy.linalg.cython_blas`` loads it the usual way, under its package."""
+    lent = None
+    if SCIPY_BLAS not in sys.modules and SCIPY_LINALG not in sys.modules:
+        with contextlib.suppress(ImportError):          # no SciPy: numba says what it misses, as before
+            lent = sys.modules[SCIPY_BLAS] = lean_import(SCIPY_BLAS, (SCIPY_LINALG,))
+    try:
+        yield
+    finally:
+        if lent is not None and SCIPY_LINALG not in sys.modules and sys.modules.get(SCIPY_BLAS) is lent:
+            del sys.modules[SCIPY_BLAS]
 
 
 def _load(module: str, skipped: Sequence[str], provides: Mapping[str, Mapping[str, str]]) -> types.ModuleType:
