@@ -20,8 +20,9 @@ def register(sub: Any) -> None:
                    help=f"batch size; figures are scaled to {BENCH_POSES} (default {BENCH_POSES})")
     p.add_argument("--repeat", type=whole(1, 100), default=9, help="runs per figure; the best is reported (default 9)")
     p.add_argument("--wall-runs", type=whole(0, 20), default=3,
-                   help="fresh-process runs of --help, optimize and optimize --validate (median reported), plus one "
-                        "library build of the default grid; 0 skips them (default 3)")
+                   help="fresh runs of the op2motion program: --help, optimize and optimize --validate, each timed "
+                        "to its exit (the best and the median reported), plus one library build of the default grid; "
+                        "0 skips them (default 3)")
     p.add_argument("--action", metavar="FILE", default=str(STOCK_ACTION) if STOCK_ACTION.exists() else None,
                    help="action file for motion_play_ms / motion_validate_ms (default: the stock file in the "
                         "repository's tests/data, when present)")

@@ -96,7 +96,7 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     command = "op2motion " + " ".join(sys.argv[1:]) if len(sys.argv) > 1 else "op2motion optimize"
     request = Reach(problem, settings, name, str(out), str(png), str(cost), args.restarts, not args.no_refine,
                     Validate(args.seconds, args.engine) if args.validate else None, command)
-    with Renderers(2) as renderers:          # they load matplotlib while the swarm searches
+    with Renderers(2, ("op2motion.figures.pose",)) as renderers:    # they load matplotlib while the swarm searches
         with ticker(args, "PSO", "it", settings.iterations) as bar:
             def seen(best: float) -> None:
                 if bar.n >= bar.total:              # a restart on the next seed (only when the hand missed): more
