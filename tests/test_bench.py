@@ -29,6 +29,7 @@ def test_bench_reports_every_figure_and_its_work_is_right(spec):
         assert result[key] > 0, key
     assert result["check_help_ok"] and result["check_optimize_reached"] and result["check_optimize_validate_stands"]
     assert result["check_main_job_files_written"] is True
+    assert 0 < result["main_job_answer_s"] <= result["main_job_s"]
     assert "library_poses_per_min" not in result          # asked not to: the library figure is the next test's
     assert result["validate_ended"] == "settled" and result["validate_simulated_s"] < result["validate_seconds"]
     assert result["check_dh_vs_pinocchio_m"] < DH_VS_PINOCCHIO_M
@@ -63,7 +64,8 @@ def test_the_shell_figures_run_the_program_a_user_runs_until_it_exits(tmp_path):
     argv0 = program()
     assert argv0[-1].endswith("op2motion") and (len(argv0) == 1 or argv0[1:] == ["-m", "op2motion"])
     runs = shell_runs(["--help"], 2)
-    assert runs.ok and len(runs.seconds) == 2 and 0 < runs.best <= runs.median
+    assert runs.ok and len(runs.seconds) == 2 and 0 < runs.best <= runs.median and "COMMAND" in runs.text
+    assert all(0 < answer <= seconds for answer, seconds in zip(runs.answers, runs.seconds))
     assert not shell_runs(["no-such-command"], 1).ok
 
 
@@ -73,7 +75,8 @@ def test_a_run_that_names_a_file_it_did_not_write_fails_the_check(tmp_path):
     (tmp_path / "poses").mkdir()
     (tmp_path / "poses" / "a.json").write_text("{}")
     (tmp_path / "poses" / "a.png").write_bytes(b"")
-    assert files_written({"files": {"pose": "poses/a.json"}}, tmp_path)
-    assert not files_written({"files": {"pose": "poses/a.json", "png": "poses/a.png"}}, tmp_path)    # empty
-    assert not files_written({"files": {"pose": "poses/a.json", "cost_png": "poses/b.png"}}, tmp_path)
-    assert not files_written({"files": {}}, tmp_path) and not files_written({}, tmp_path)
+    said = "left hand to (0.100, 0.050, 0.070) m on the left foot, br 0.7: reached\n  wrote {}\n"
+    assert files_written(said.format("poses/a.json"), tmp_path)
+    assert not files_written(said.format("poses/a.json, poses/a.png"), tmp_path)              # empty
+    assert not files_written(said.format("poses/a.json, poses/b.png"), tmp_path)              # missing
+    assert not files_written("reached\n", tmp_path)                                        # none named
