@@ -27,7 +27,7 @@ from op2motion.robot.joints import BookAngles, book_to_servo
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support
 
-BENCH_POSES = 40_000
+BENCH_POSES = book.TIMED_POSES
 CHECK_POSES = 200   # poses compared against pinocchio one by one
 
 

@@ -67,3 +67,21 @@ def test_a_ctrl_c_as_the_renderers_fork_is_ignored_by_them():
                           timeout=120)
     assert done.returncode == 0 and done.stdout.strip() == "True", done.stdout + done.stderr
     assert "Traceback" not in done.stderr and "KeyboardInterrupt" not in done.stderr, done.stderr
+
+
+def _loaded_here(module: str) -> bool:
+    import sys
+
+    return module in sys.modules
+
+
+def test_the_renderers_load_the_figures_modules_before_the_data_arrives():
+    """``preload``: the figure modules are loaded with matplotlib while the caller computes, not when the job
+    (and its arguments) arrive."""
+    import sys
+
+    assert "xml.dom.minidom" not in sys.modules          # a module nothing here loads
+    with Renderers(2, ("xml.dom.minidom",)) as renderers:
+        jobs = [renderers.submit(_loaded_here, "xml.dom.minidom"), renderers.submit(_loaded_here, "matplotlib")]
+        assert [renderers.result(j) for j in jobs] == [True, True]
+    assert "xml.dom.minidom" not in sys.modules

@@ -174,6 +174,29 @@ def test_optimize_default_writes_pose_and_figures(capsys, tmp_path, monkeypatch)
     assert doc["pose"]["provenance"]["seed"] == 0 and doc["pose"]["metrics"]["br"] == 0.7
 
 
+def test_optimize_prints_its_answer_before_the_figures_and_names_the_files_once_written(capsys, tmp_path,
+                                                                                         monkeypatch):
+    """For a person the result comes as soon as it is known, while the figures are drawn; the files are named after
+    all of them are written; the text is what it always was (the same lines, then the files)."""
+    from op2motion.figures.background import Renderers
+
+    monkeypatch.chdir(tmp_path)
+    at_each_wait = []
+    wait = Renderers.result
+
+    def result(self, job):
+        at_each_wait.append((capsys.readouterr().out, (tmp_path / "poses").exists()))
+        return wait(self, job)
+
+    monkeypatch.setattr(Renderers, "result", result)
+    code, out, _ = run_cli(capsys, "optimize")
+    shown, written_then = at_each_wait[0]
+    assert code == 0 and "reached: hand" in shown and "wrote" not in shown and not written_then
+    assert out == "  wrote poses/reach-ll-100-50-70-br70.json, poses/reach-ll-100-50-70-br70.png, " \
+                  "poses/reach-ll-100-50-70-br70_cost.png\n"
+    assert shown.count("\n") == 3 and (tmp_path / "poses" / "reach-ll-100-50-70-br70_cost.png").stat().st_size > 0
+
+
 def test_unreachable_target_writes_nothing(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     code, out, err = run_cli(capsys, "optimize", "--target", "0.5", "0", "0.07", "--restarts", "0", "--iters", "60")

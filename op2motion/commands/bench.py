@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from op2motion.bench import BENCH_POSES
+from op2motion.book import TIMED_POSES as BENCH_POSES
 from op2motion.commands.common import add_command, whole
 from op2motion.robot.spec import Spec
 
@@ -22,8 +22,9 @@ def register(sub: Any) -> None:
                    help="runs per figure (at most 3 for the physics checks, the PSO and the planners); the best is "
                         "reported (default 9)")
     p.add_argument("--wall-runs", type=whole(0, 20), default=3,
-                   help="fresh-process runs of --help, optimize and optimize --validate (median reported), plus one "
-                        "library build of the default grid; 0 skips them (default 3)")
+                   help="fresh runs of the op2motion program: --help, optimize and optimize --validate, each timed "
+                        "to its exit (the best and the median reported), plus one library build of the default grid; "
+                        "0 skips them (default 3)")
     p.add_argument("--action", metavar="FILE", default=str(STOCK_ACTION) if STOCK_ACTION.exists() else None,
                    help="action file for motion_play_ms / motion_validate_ms (default: the stock file in the "
                         "repository's tests/data, when present)")

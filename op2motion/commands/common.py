@@ -16,12 +16,12 @@ import sys
 from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
 
 from op2motion.errors import InputError, OutputError, one_line, ref, render_refs
-from op2motion.robot.spec import Spec
 
 if TYPE_CHECKING:
     from op2motion.physics import EngineName
+    from op2motion.robot.spec import Spec
 
-Handler = Callable[[argparse.Namespace, Spec], int]
+Handler = Callable[[argparse.Namespace, "Spec"], int]
 #: Library parameter names whose flag is spelled differently.
 FLAG_ALIASES = {"iterations": "iters", "output": "output"}
 
@@ -42,6 +42,57 @@ class Parser(argparse.ArgumentParser):
             if action.dest == dest and not action.option_strings:
                 return (action.metavar if isinstance(action.metavar, str) else dest).upper()
         return param
+
+
+class LazyCommand(Parser):
+    """A subcommand's parser that is only a name and a help line until it is used: the first parse or help asks
+    its command module (``op2motion.commands.MODULE``) to register, which fills in this parser and its
+    ``siblings`` (the other subcommands of that module) in place. See :data:`op2motion.cli.COMMANDS`."""
+
+    _module: str | None = None
+    _siblings: dict[str, LazyCommand] = {}
+
+    def defer(self, module: str, siblings: dict[str, LazyCommand]) -> None:
+        """Register ``module``'s subcommands (``siblings``, by name, this one among them) on first use."""
+        self._module, self._siblings = module, siblings
+
+    def _load(self) -> None:
+        module = self._module
+        if module is None:
+            return
+        for command in self._siblings.values():
+            command._module = None
+        import importlib
+
+        importlib.import_module(f"op2motion.commands.{module}").register(_Registered(self._siblings))
+
+    def parse_known_args(self, args: Any = None, namespace: Any = None) -> Any:
+        self._load()
+        return super().parse_known_args(args, namespace)
+
+    def format_usage(self) -> str:
+        self._load()
+        return super().format_usage()
+
+    def format_help(self) -> str:
+        self._load()
+        return super().format_help()
+
+
+class _Registered:
+    """What a command module's ``register`` adds its subcommands to when they exist already as
+    :class:`LazyCommand` s: each ``add_parser`` hands back the one of that name with the given settings (its help
+    line is the table's)."""
+
+    def __init__(self, commands: dict[str, LazyCommand]):
+        self._commands = commands
+
+    def add_parser(self, name: str, **kwargs: Any) -> LazyCommand:
+        command = self._commands[name]
+        kwargs.pop("help", None)
+        for key, value in kwargs.items():       # description, epilog, formatter_class: read when help is drawn
+            setattr(command, key, value)
+        return command
 
 
 def add_command(sub: Any, name: str, handler: Handler, help_: str, description: str | None = None) -> Parser:

@@ -17,11 +17,12 @@ if TYPE_CHECKING:
 
 
 def deliver(args: argparse.Namespace, result: TaskResult, outputs: OutputSet | None = None,
-            written_as: Literal["each", "one", "none"] = "each") -> int:
+            written_as: Literal["each", "one", "none"] = "each", lines_shown: bool = False) -> int:
     """Write a yes's files (atomically, together, into ``outputs``: the command's output paths, checked before the
     task ran; None: the result's own), print the report (``--json``: :meth:`~.TaskResult.as_dict`; the files written
-    named ``written_as`` a line each, in one line, or not at all), and turn a no into exit 1 with its phrase
-    (nothing written); a task refused before its checks prints nothing."""
+    named ``written_as`` a line each, in one line, or not at all; ``lines_shown``: the result's lines were printed
+    already, while its files were being made), and turn a no into exit 1 with its phrase (nothing written); a task
+    refused before its checks prints nothing."""
     from op2motion.fileio import OutputSet
 
     if not result.checked:
@@ -38,7 +39,7 @@ def deliver(args: argparse.Namespace, result: TaskResult, outputs: OutputSet | N
     said = {"each": [f"  wrote {p}" for p in written.values()],
             "one": [f"  wrote {', '.join(str(p) for p in written.values())}"] if written else [],
             "none": []}[written_as]
-    emit(args, report, "\n".join([*result.lines, *said]))
+    emit(args, report, "\n".join([*(() if lines_shown and not args.json else result.lines), *said]))
     if not result.ok:
         raise (Interrupted if result.interrupted else CheckFailed)(str(result.problem))
     return 0

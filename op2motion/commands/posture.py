@@ -96,7 +96,8 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
     command = "op2motion " + " ".join(sys.argv[1:]) if len(sys.argv) > 1 else "op2motion optimize"
     request = Reach(problem, settings, name, str(out), str(png), str(cost), args.restarts, not args.no_refine,
                     Validate(args.seconds, args.engine) if args.validate else None, command)
-    with Renderers(2) as renderers:          # they load matplotlib while the swarm searches
+    shown: list[bool] = []
+    with Renderers(2, ("op2motion.figures.pose",)) as renderers:    # they load matplotlib while the swarm searches
         with ticker(args, "PSO", "it", settings.iterations) as bar:
             def seen(best: float) -> None:
                 if bar.n >= bar.total:              # a restart on the next seed (only when the hand missed): more
@@ -104,5 +105,13 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
                 bar.update()
                 bar.set_postfix(cost=f"{best:.4f}")
 
-            result = reach(request, spec, renderers, seen)
-    return deliver(args, result, outputs, "one")
+            def answer(lines: tuple[str, ...]) -> None:
+                """The result for a person as soon as it is known; the figures are drawn meanwhile, and the files
+                (all of them, or none) are named once written."""
+                if not args.json:
+                    bar.close()
+                    print("\n".join(lines), flush=True)
+                    shown.append(True)
+
+            result = reach(request, spec, renderers, seen, answer)
+    return deliver(args, result, outputs, "one", lines_shown=bool(shown))

@@ -11,17 +11,19 @@ here instead: the bytes are the same either way.
 from __future__ import annotations
 
 import contextlib
+import importlib
 import multiprocessing
 import os
 import signal
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
 _WAIT_S = 60.0      # a renderer that has not answered in this long is given up (the figure is drawn here)
 
 
-def _serve(conns: list[Any]) -> None:
-    """In the first renderer: load matplotlib once, fork one more renderer per extra pipe (the copies share what
-    was loaded), then each draws the one figure asked on its pipe and sends it back."""
+def _serve(conns: list[Any], preload: Sequence[str] = ()) -> None:
+    """In the first renderer: load matplotlib and the modules ``preload`` (those of the figures it will be asked
+    for) once, fork one more renderer per extra pipe (the copies share what was loaded), then each draws the one
+    figure asked on its pipe and sends it back."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)            # the parent decides what Ctrl-C ends (it started us
     signal.signal(signal.SIGTERM, signal.SIG_DFL)           # with it ignored); a SIGTERM ends a renderer quietly
     with contextlib.suppress(Exception):
@@ -30,6 +32,9 @@ def _serve(conns: list[Any]) -> None:
         matplotlib.use("Agg")
         import matplotlib.pyplot  # noqa: F401
         import mpl_toolkits.mplot3d  # noqa: F401
+
+        for module in preload:                              # not when the job's arguments arrive (then it waits)
+            importlib.import_module(module)
     for extra in conns[1:]:
         if os.fork() == 0:                                   # a copy, matplotlib loaded: it serves this pipe
             _answer(extra)
@@ -55,9 +60,10 @@ def _answer(conn: Any) -> None:
 
 class Renderers:
     """Up to ``count`` forked renderers (see the module docstring); use as a context manager, :meth:`submit` a
-    figure function with its (picklable) arguments, then :meth:`result` each in turn."""
+    figure function with its (picklable) arguments, then :meth:`result` each in turn. ``preload``: the modules of
+    those functions, loaded with matplotlib before the data is there."""
 
-    def __init__(self, count: int):
+    def __init__(self, count: int, preload: Sequence[str] = ()):
         self._idle: list[tuple[Any, Any]] = []
         self._procs: list[Any] = []
         self._jobs: list[tuple[Any, Callable[..., Any], tuple]] = []
@@ -69,7 +75,7 @@ class Renderers:
         try:
             with contextlib.suppress(OSError), starting_workers():     # no Ctrl-C inside the renderer as it forks
                 pipes = [ctx.Pipe() for _ in range(count)]
-                proc = ctx.Process(target=_serve, args=([child for _, child in pipes],), daemon=True)
+                proc = ctx.Process(target=_serve, args=([child for _, child in pipes], tuple(preload)), daemon=True)
                 proc.start()
                 self._procs.append(proc)
                 for parent, child in pipes:

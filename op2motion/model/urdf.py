@@ -12,7 +12,6 @@ Frame links carry a tiny inertial (:data:`FRAME_LINK_MASS_KG`): a link without o
 from __future__ import annotations
 
 from dataclasses import dataclass
-from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
@@ -104,6 +103,9 @@ def _inertial_xml(inertial: LinkInertial) -> str:
 
 def build_urdf(spec: Spec) -> str:
     """The URDF text of the robot described by ``spec``."""
+    # here, not at import: it loads urllib, http and email (40 ms) for every importer of this module
+    from xml.sax.saxutils import quoteattr
+
     inertials = {i.link: link_inertial(i) for i in spec.inertials}
     collisions: dict[str, list] = {}
     for c in spec.collisions:

@@ -9,6 +9,11 @@ default. ``seed`` makes runs identical.
 pyswarms has side effects that must not reach the user: importing it (and creating each optimiser) writes
 ``report.log`` into the working directory and reconfigures the root logger. :func:`contained_pyswarms` runs those
 steps in a private temporary directory and restores the logging configuration afterwards.
+
+Importing ``pyswarms`` loads every optimiser and topology it has (its ring topology loads SciPy's spatial module):
+0.4 s of a 1-s ``optimize``. :func:`global_best_pso` loads just ``GlobalBestPSO`` and what it imports (pyswarms' own
+modules, unchanged: the star topology, the backend, the base class, the reporter), with
+:func:`op2motion.processes.imports.lean_import`.
 """
 
 from __future__ import annotations
@@ -124,6 +129,19 @@ def contained_pyswarms() -> Iterator[None]:
         shutil.rmtree(scratch, ignore_errors=True)
 
 
+#: pyswarms' packages whose ``__init__`` loads all of it (every optimiser, every topology), skipped by
+#: :func:`global_best_pso`, and what the stand-in of the topology package must hold for GlobalBestPSO's imports.
+_PYSWARMS_SKIPPED = ("pyswarms", "pyswarms.single", "pyswarms.backend.topology")
+_PYSWARMS_PROVIDES = {"pyswarms.backend.topology": {"Star": "star", "Topology": "base"}}
+
+
+def global_best_pso() -> Any:
+    """pyswarms' ``GlobalBestPSO`` class, loaded without the rest of pyswarms (see the module docstring)."""
+    from op2motion.processes.imports import lean_import
+
+    return lean_import("pyswarms.single.global_best", _PYSWARMS_SKIPPED, _PYSWARMS_PROVIDES).GlobalBestPSO
+
+
 def variable_bounds(problem: PostureProblem, spec: Spec) -> tuple[np.ndarray, np.ndarray]:
     """Search box [rad] for the 20 book variables: the book's box (code 2.10) within the servo limits."""
     servo_lo, servo_hi = book_bounds(spec, problem.support)
@@ -176,8 +194,7 @@ def run_pso(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSett
     np.random.seed(settings.seed)  # pyswarms draws from NumPy's global generator
     try:
         with contained_pyswarms():
-            from pyswarms.single import GlobalBestPSO
-
+            GlobalBestPSO = global_best_pso()
             init = None
             if space is not None and space.start is not None:     # the start among uniform draws in the box
                 init = lo + (hi - lo) * np.random.uniform(size=(settings.particles, dims))

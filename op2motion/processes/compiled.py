@@ -39,7 +39,9 @@ class CompileOnce(Generic[R]):
     def __call__(self, *args: Any) -> R:
         if self._ready:
             return cast(R, self.kernel(*args))
-        with self._guard, _held(lock_path(self.kernel)):
+        from op2motion.processes.imports import scipy_blas_for_numba
+
+        with self._guard, _held(lock_path(self.kernel)), scipy_blas_for_numba():
             result = cast(R, self.kernel(*args))
             self._ready = True
         return result

@@ -44,9 +44,12 @@ def _lines(r: dict[str, Any]) -> list[str]:
     lines.append(f"  the wire (1 Mbps, 1 ms FTDI latency timer): a tick reads {r['robot_servos_per_tick']} servos, "
                  f"{r['robot_bulk_read_wire_ms']} ms on the wire, {r['robot_bulk_read_ms']} ms with the link's tail; "
                  f"ping {r['robot_ping_ms']} ms; in lockstep the loop runs {r['robot_lockstep_speedup']} x real time")
-    if "help_wall_s" in r:
-        lines += [f"from the shell (median of {r['wall_runs']}): --help {r['help_wall_s']:.2f} s, optimize "
-                  f"{r['optimize_wall_s']:.2f} s, optimize --validate {r['optimize_validate_wall_s']:.2f} s",
+    if "main_job_s" in r:
+        lines += [f"from the shell ({r['wall_program']}, best of {r['wall_runs']}; median): --help "
+                  f"{r['cli_start_s']:.2f} s ({r['cli_start_median_s']:.2f}), optimize {r['main_job_s']:.2f} s "
+                  f"({r['main_job_median_s']:.2f}; its answer after {r['main_job_answer_s']:.2f} s), optimize "
+                  f"--validate {r['main_job_validate_s']:.2f} s ({r['main_job_validate_median_s']:.2f}; answer "
+                  f"{r['main_job_validate_answer_s']:.2f} s)",
                   f"library build --validate --workers 2 (default grid): {r['check_library_standing_poses']} standing "
                   f"poses in {r['library_wall_s']:.1f} s = {r['library_poses_per_min']:.0f} per minute"]
     return lines

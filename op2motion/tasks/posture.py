@@ -56,9 +56,11 @@ def _lines(request: Reach, outcome: Any, tilt_deg: float) -> list[str]:
 
 
 def reach(request: Reach, spec: Spec, renderers: Renderers | None = None,
-          on_iteration: Callable[[float], Any] | None = None) -> TaskResult:
+          on_iteration: Callable[[float], Any] | None = None,
+          on_answer: Callable[[tuple[str, ...]], Any] | None = None) -> TaskResult:
     """``optimize``: solve ``request`` (see the module docstring); the figures drawn by ``renderers`` (forked
-    renderers, started before the search so that they are ready when it ends) or here."""
+    renderers, started before the search so that they are ready when it ends) or here. ``on_answer`` is given the
+    result's lines of a reached target as soon as they are known, before the figures are drawn."""
     from op2motion.figures.pose import outcome_cost_curve, outcome_pose_figure
     from op2motion.formats.posefile import pose_to_json
     from op2motion.workflow import solve
@@ -75,6 +77,8 @@ def reach(request: Reach, spec: Spec, renderers: Renderers | None = None,
     if renderers is not None:
         jobs = (renderers.submit(outcome_pose_figure, outcome, request.name, spec),
                 renderers.submit(outcome_cost_curve, outcome, request.name))
+        if on_answer is not None:
+            on_answer(tuple(lines))
         (figure, drawn), cost_curve = renderers.result(jobs[0]), renderers.result(jobs[1])
     else:
         (figure, drawn), cost_curve = outcome_pose_figure(outcome, request.name, spec), outcome_cost_curve(
