@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import functools
 import multiprocessing
+import os
 
 import pytest
 from helpers import same_verdict
@@ -103,13 +104,24 @@ def _edges(pool, sweep: tuple[str, str, int], verdicts: dict, reports: dict) -> 
     return [(direction * d, e, report, full.get((d, e), report)) for (d, e), report in early.items()]
 
 
+class _Here:
+    """A pool's ``map`` in this process."""
+
+    @staticmethod
+    def map(fn, tasks: list) -> list:
+        return [fn(task) for task in tasks]
+
+
 @pytest.fixture(scope="module")
 def sweeps():
-    """Every sweep, every lean in both engines (two processes)."""
+    """Every sweep, every lean in both engines: in two processes, or in this one where it is one of a test run's
+    processes (pytest-xdist's), which keep the cores busy already (two more processes would each import the package
+    and both engines again)."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        return {(s, k, d): _sweep(_Here(), s, k, d) for s, k, d, _ in SWEEPS}
     ctx = multiprocessing.get_context("spawn")
     with ctx.Pool(2) as pool:
-        return {(support, kind, direction): _sweep(pool, support, kind, direction)
-                for support, kind, direction, _ in SWEEPS}
+        return {(s, k, d): _sweep(pool, s, k, d) for s, k, d, _ in SWEEPS}
 
 
 def _switch_margin(angles: list[float], verdicts: list, index: int = 1) -> float:
