@@ -17,6 +17,7 @@ from op2motion.robot.joints import BookAngles, book_to_servo, servo_to_book
 from op2motion.robot.specfile import default_spec
 
 EXACT_M = 1e-9          # D-H vs the official description: the same rigid geometry, rounding only
+QUAT_SEED = 20261128    # the random rotations the quaternion is checked on
 LENGTH_M = 1e-9         # link lengths preserved by the D-H chain
 MODELS = ("dh", "pb")
 SUPPORTS = ("left", "right")
@@ -248,3 +249,22 @@ def test_projection_refuses_psi_and_unknown_models(spec):
         forward(BookAngles.from_deg(STANDING_TH_DEG, STANDING_PHI_DEG, [5, 0, 0]), spec, "pb")
     with pytest.raises(InputError, match="model"):
         forward(standing("left"), spec, "urdf")
+
+
+def test_the_quaternion_of_a_rotation_is_scipys_bit_for_bit():
+    """kinematics.frames.quat_xyzw (PyBullet's start orientation, the studio's frames) gives SciPy's
+    ``Rotation.from_matrix(...).as_quat()`` exactly: random rotations, half turns, ties between the diagonal
+    terms, the identity; a matrix off orthonormal and a reflection go to SciPy (orthonormalised, refused)."""
+    from scipy.spatial.transform import Rotation
+
+    from op2motion.kinematics.frames import quat_xyzw
+
+    mats = list(Rotation.random(2000, random_state=QUAT_SEED).as_matrix())
+    for axis in ([1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [1, -1, 0], [1, 1, 1]):
+        for angle in (0.0, np.pi, np.pi / 2, 1e-9, np.pi - 1e-9):
+            mats.append(Rotation.from_rotvec(np.array(axis) / np.linalg.norm(axis) * angle).as_matrix())
+    mats.append(mats[0] * (1 + 1e-6))                                           # not a rotation: SciPy's answer
+    for m in mats:
+        assert np.array_equal(np.array(quat_xyzw(m)), Rotation.from_matrix(m).as_quat())
+    with pytest.raises(ValueError):
+        quat_xyzw(np.diag([1.0, 1.0, -1.0]))

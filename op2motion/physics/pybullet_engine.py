@@ -24,6 +24,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
+from op2motion.kinematics.frames import quat_xyzw
 from op2motion.model.servo import ServoModel
 from op2motion.model.urdf import URDF_ROOT, build_urdf
 from op2motion.physics.scene import FLOOR_FRICTION, Contact
@@ -130,7 +131,7 @@ class PyBulletEngine:
         c = self.client
         for j, angle in zip(self.joints, q):
             c.resetJointState(self.robot, j, float(angle), 0.0)
-        orn = _quat_xyzw(base_rot)
+        orn = quat_xyzw(base_rot)
         com = c.multiplyTransforms(tuple(base_pos), orn, *self._inertial)
         c.resetBasePositionAndOrientation(self.robot, com[0], com[1])
         c.resetBaseVelocity(self.robot, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
@@ -189,14 +190,6 @@ class PyBulletEngine:
     def snapshot(self, width: int = 640, height: int = 480) -> bytes:
         """PNG bytes of the scene from the front left (TinyRenderer: works headless)."""
         return render_png(self.client, self.pb, self.base()[0], width, height)
-
-
-def _quat_xyzw(rot: np.ndarray) -> tuple[float, float, float, float]:
-    """Rotation matrix -> quaternion (x, y, z, w)."""
-    from scipy.spatial.transform import Rotation
-
-    x, y, z, w = (float(v) for v in Rotation.from_matrix(np.asarray(rot, dtype=float)).as_quat())
-    return x, y, z, w
 
 
 def render_png(client: Any, pb: Any, centre: np.ndarray, width: int, height: int) -> bytes:

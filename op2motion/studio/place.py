@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from op2motion.kinematics.frames import quat_xyzw
 from op2motion.kinematics.tree import link_frames
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Side
@@ -12,10 +13,8 @@ from op2motion.robot.support import Side
 
 def wxyz(rot: np.ndarray) -> tuple[float, float, float, float]:
     """A rotation matrix (3, 3) as viser's quaternion (w, x, y, z)."""
-    from scipy.spatial.transform import Rotation
-
-    x, y, z, w = Rotation.from_matrix(rot).as_quat()
-    return float(w), float(x), float(y), float(z)
+    x, y, z, w = quat_xyzw(rot)
+    return w, x, y, z
 
 
 def root_in_sole(spec: Spec, servo: np.ndarray, stance: Side) -> tuple[np.ndarray, np.ndarray]:
