@@ -105,10 +105,13 @@ def cmd_optimize(args: argparse.Namespace, spec: Spec) -> int:
                 bar.update()
                 bar.set_postfix(cost=f"{best:.4f}")
 
+            early = all(p.parent.is_dir() for p in outputs.paths.values())
+
             def answer(lines: tuple[str, ...]) -> None:
                 """The result for a person as soon as it is known; the figures are drawn meanwhile, and the files
-                (all of them, or none) are named once written."""
-                if not args.json:
+                (all of them, or none) are named once written. Only where the outputs' folders exist: a folder
+                that cannot be made fails the command with nothing printed, as before."""
+                if not args.json and early:
                     bar.close()
                     print("\n".join(lines), flush=True)
                     shown.append(True)
