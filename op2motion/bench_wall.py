@@ -93,12 +93,14 @@ class Runs:
         return statistics.median(self.seconds)
 
 
-def shell_runs(argv: list[str], runs: int, files: bool = False) -> Runs:
-    """``runs`` fresh runs of ``op2motion ARGV`` (see the module docstring), each in its own scratch folder;
-    ``files``: check the files its output names."""
+def shell_runs(argv: list[str], runs: int, files: bool = False, folders: Sequence[str] = ()) -> Runs:
+    """``runs`` fresh runs of ``op2motion ARGV`` (see the module docstring), each in its own scratch folder with
+    the sub-folders ``folders`` made; ``files``: check the files its output names."""
     out = Runs()
     for _ in range(runs):
         with tempfile.TemporaryDirectory(prefix="op2motion-bench-") as tmp:
+            for folder in folders:
+                (Path(tmp) / folder).mkdir(parents=True)
             answer, seconds, code, out.text = _run(argv, Path(tmp))
             out.answers.append(answer)
             out.seconds.append(seconds)
@@ -115,7 +117,9 @@ def wall_figures(runs: int = 3, library: bool = True, grid: Sequence[str] = ()) 
     ``optimize_wall_s``, ``optimize_validate_wall_s``. With ``library``: ``library_poses_per_min``
     (``--validate --workers 2`` on the default grid, or the ``grid`` flags given)."""
     start = shell_runs(["--help"], runs)
-    job, validated = shell_runs(["optimize"], runs, files=True), shell_runs(["optimize", "--validate"], runs, True)
+    # in a folder that has its poses/ (as after a first run): optimize answers there before its figures are drawn
+    job = shell_runs(["optimize"], runs, files=True, folders=["poses"])
+    validated = shell_runs(["optimize", "--validate"], runs, files=True, folders=["poses"])
     out: dict[str, Any] = {
         "cli_start_s": round(start.best, 3), "main_job_s": round(job.best, 3),
         "main_job_validate_s": round(validated.best, 3), "main_job_answer_s": round(min(job.answers), 3),

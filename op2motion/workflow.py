@@ -8,7 +8,7 @@ was asked for. :class:`Outcome` is the typed result (its figures: :mod:`op2motio
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
 from typing import Any, Callable
 
@@ -79,12 +79,16 @@ class Validate:
 
 def solve(problem: PostureProblem, spec: Spec, settings: PSOSettings = PSOSettings(), *,
           restarts: int = DEFAULT_RESTARTS, refine: bool = True, validate: Validate | None = None,
-          on_iteration: Callable[[float], Any] | None = None) -> Outcome:
+          on_iteration: Callable[[float], Any] | None = None,
+          on_check: Callable[[Outcome], Any] | None = None) -> Outcome:
     """Solve ``problem`` (see the module docstring); with ``validate``, every reached pose is checked in
-    physics and one that falls counts as not reached."""
+    physics and one that falls counts as not reached. ``on_check`` is given, as the first physics check starts,
+    the outcome as it will be if that pose stands (without its validation), e.g. to draw its figures meanwhile."""
     validations: dict[int, RunReport] = {}
 
     def physics_check(res: PostureResult, validate: Validate) -> tuple[bool, str]:
+        if on_check is not None and not validations:        # the first attempt's pose, kept if it stands
+            on_check(Outcome(replace(res, attempts=1, attempt_pso=(res.pso,)), None))
         schedule = Schedule.hold(res.pose("candidate", spec).servo, problem.support, spec, validate.seconds)
         v = check(schedule, spec, engines=(validate.engine,)).run
         validations[res.settings.seed] = v

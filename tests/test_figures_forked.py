@@ -6,6 +6,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from op2motion.figures.background import Renderers
 from op2motion.figures.draw import render_cost_curve
@@ -85,3 +86,84 @@ def test_the_renderers_load_the_figures_modules_before_the_data_arrives():
         jobs = [renderers.submit(_loaded_here, "xml.dom.minidom"), renderers.submit(_loaded_here, "matplotlib")]
         assert [renderers.result(j) for j in jobs] == [True, True]
     assert "xml.dom.minidom" not in sys.modules
+
+
+class _Sum:
+    """A staged job: begun with ``a``, finished with ``b``."""
+
+    def __init__(self, a: int):
+        if a < 0:
+            raise ValueError("begun here, it fails here")
+        self.a = a
+
+    def finish(self, b: int) -> int:
+        return self.a + b
+
+
+def test_a_staged_job_is_begun_at_once_and_finished_with_what_comes_later():
+    with Renderers(1) as renderers:
+        forked, here = renderers.begin(_Sum, 1), renderers.begin(_Sum, 10)     # the second: no renderer left
+        renderers.finish(here, 20)
+        renderers.finish(forked, 2)
+        assert renderers.result(forked) == 3 and renderers.result(here) == 30
+    with Renderers(1) as renderers:
+        failing = renderers.begin(_Sum, -1)
+        renderers.finish(failing, 2)
+        try:
+            renderers.result(failing)
+        except ValueError as exc:
+            assert "fails here" in str(exc)
+        else:
+            raise AssertionError("the error must reach the caller")
+
+
+@pytest.fixture(scope="module")
+def outcomes(spec):
+    """Two outcomes of a small search (seeds 0 and 1), as the first physics check sees the first (its candidate)
+    and as it ends (stands; falls)."""
+    from dataclasses import replace
+    from types import SimpleNamespace
+
+    from op2motion.book import DEFAULT_PROBLEM
+    from op2motion.posture.cost import PostureProblem
+    from op2motion.posture.pso import PSOSettings
+    from op2motion.workflow import Outcome, solve
+
+    problem = PostureProblem.from_scenario(DEFAULT_PROBLEM)
+    first, second = (solve(problem, spec, PSOSettings(particles=8, iterations=5, seed=seed), restarts=0,
+                           refine=False).result for seed in (0, 1))
+    candidate = Outcome(replace(first, attempts=1, attempt_pso=(first.pso,)), None)
+    stands = Outcome(replace(candidate.result, seconds=1.0), SimpleNamespace(stable=True, seconds=1.0, reason=""))
+    falls = Outcome(second, SimpleNamespace(stable=False, seconds=0.4, reason="fell"))
+    return candidate, stands, falls
+
+
+def test_a_pose_figure_drawn_before_its_verdict_is_the_figure_drawn_in_one_go(spec, outcomes):
+    """optimize --validate draws the pose while its physics check runs and the verdict after: the PNG is the one
+    matplotlib writes for the finished figure; a final outcome that shows another pose is drawn again."""
+    import io
+
+    from op2motion.figures.draw import DPI, _pyplot
+    from op2motion.figures.pose import StagedPoseFigure, verdict_of
+
+    candidate, stands, falls = outcomes
+    early = StagedPoseFigure(candidate, "staged", spec)
+    png, drawn = early.finish(stands)
+    whole = StagedPoseFigure(stands, "staged", spec).canvas         # the same figure, written by savefig
+    verdict, ok = verdict_of(stands.validation)
+    whole.fig.text(0.99, 1 - 0.2 / whole.height, verdict, fontsize=13, weight="bold", color="#1b7a1b", va="top",
+                   ha="right")
+    buf = io.BytesIO()
+    whole.fig.savefig(buf, format="png", dpi=DPI)
+    _pyplot().close(whole.fig)
+    assert ok and drawn["verdict"] == verdict and png == buf.getvalue()
+    other, redrawn = StagedPoseFigure(candidate, "staged", spec).finish(falls)
+    assert other != png and redrawn["verdict"] == "FALLS in physics: fell" and "PSO seed 1" in redrawn["lines"][1]
+
+
+def test_the_cost_curves_drawn_for_the_candidate_are_kept_only_if_the_outcome_has_them(outcomes):
+    from op2motion.figures.pose import StagedCostCurve, outcome_cost_curve
+
+    candidate, stands, falls = outcomes
+    assert StagedCostCurve(candidate, "staged").finish(stands) == outcome_cost_curve(stands, "staged")
+    assert StagedCostCurve(candidate, "staged").finish(falls) == outcome_cost_curve(falls, "staged")

@@ -151,59 +151,90 @@ def _legend_handles(figures: Sequence[PoseFigure]) -> list:
     return handles
 
 
+def _row_views(fig: Any, grid: Any, r: int, pf: PoseFigure, spec: Spec, rows: int) -> None:
+    """Row ``r`` of a pose figure: the front, side and top views and the 3D view of ``pf``."""
+    xyz = {name: np.array(val) for name, val in pf.points.as_dict(0).items()}
+    for c, (view, h, v, labels) in enumerate(_VIEWS):
+        ax = fig.add_subplot(grid[r, c])
+        _draw(ax, xyz, pf, spec, h, v)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel(labels[0])
+        ax.set_ylabel(labels[1])
+        ax.grid(True, alpha=0.3)
+        ax.set_title(f"{pf.label}: {view}" if c == 0 and rows > 1 else view, fontsize=10)
+    ax3 = fig.add_subplot(grid[r, 3], projection="3d")
+    _draw(ax3, xyz, pf, spec, None, None)
+    pts = np.array(list(xyz.values()))
+    centre, half = (pts.max(0) + pts.min(0)) / 2, (pts.max(0) - pts.min(0)).max() / 2 + 0.02
+    for setter, k in ((ax3.set_xlim, 0), (ax3.set_ylim, 1), (ax3.set_zlim, 2)):
+        setter(centre[k] - half, centre[k] + half)
+    ax3.set_box_aspect((1, 1, 1))
+    ax3.view_init(elev=18, azim=-135)
+    ticks = np.array([-0.6, 0.0, 0.6]) * half     # away from the box's corners, where two axes' labels meet
+    ax3.set_xticks(np.round(centre[0] + ticks, 2))
+    ax3.set_yticks(np.round(centre[1] + ticks, 2))
+    ax3.set_zticks(np.round(centre[2] + ticks, 2))
+    ax3.tick_params(labelsize=8)
+    ax3.set_xlabel("X forward [m]", labelpad=6)
+    ax3.set_ylabel("Y left [m]", labelpad=6)
+    ax3.zaxis.set_rotate_label(False)
+    ax3.set_zlabel("Z up [m]", labelpad=8, rotation=90)
+    ax3.set_title("3D" + (f" — {pf.note}" if pf.note else ""), fontsize=10)
+
+
+class PoseCanvas:
+    """A pose figure (see :func:`render_poses`) drawn in two steps: everything but the physics verdict when made,
+    the verdict (top right, where nothing else is drawn) and the PNG in :meth:`finish`, so that a figure can be
+    drawn while the pose's physics check runs. The bytes are those of drawing it in one go."""
+
+    def __init__(self, figures: Sequence[PoseFigure], spec: Spec, block: TitleBlock):
+        plt = _pyplot()
+        self.figures, self.block = figures, block
+        rows = len(figures)
+        header = 0.75 + 0.2 * len(block.lines) + 0.35        # title, number lines, panel titles [in]
+        footer = 1.25                                         # axis labels and the legend [in]
+        self.height = height = ROW_HEIGHT_IN * rows + header + footer
+        self.fig = fig = plt.figure(figsize=(19, height), dpi=DPI)
+        grid = fig.add_gridspec(rows, 4, width_ratios=(1, 1, 1, 1.45), left=0.045, right=0.99,
+                                top=1 - header / height, bottom=footer / height, wspace=0.28, hspace=0.35)
+        for r, pf in enumerate(figures):
+            _row_views(fig, grid, r, pf, spec, rows)
+        top = 1 - 0.2 / height
+        fig.text(0.045, top, block.title, fontsize=15, weight="bold", va="top")
+        fig.text(0.045, top - 0.5 / height, "\n".join(block.lines), fontsize=10, va="top", family="monospace")
+        self.handles = _legend_handles(figures)
+        fig.legend(handles=self.handles, loc="lower center", ncol=min(len(self.handles), 6), fontsize=9,
+                   frameon=False, bbox_to_anchor=(0.5, 0.02 / height))
+        fig.canvas.draw()
+
+    def finish(self, verdict: str, ok: bool | None) -> tuple[bytes, dict[str, Any]]:
+        """Draw the physics ``verdict`` (``ok`` None: not checked) and return the PNG bytes and the report."""
+        import matplotlib.image
+
+        colour = UNKNOWN_COLOUR if ok is None else OK_COLOUR if ok else BAD_COLOUR
+        fig, block = self.fig, self.block
+        text = fig.text(0.99, 1 - 0.2 / self.height, verdict, fontsize=13, weight="bold", color=colour, va="top",
+                        ha="right")
+        fig.draw_artist(text)
+        buf = io.BytesIO()       # as savefig writes it (it would draw the whole figure again first)
+        matplotlib.image.imsave(buf, fig.canvas.buffer_rgba(), format="png", origin="upper", dpi=fig.dpi)
+        self.close()
+        report = {"title": block.title, "verdict": verdict, "stable": ok, "lines": list(block.lines),
+                  "legend": [h.get_label() for h in self.handles],
+                  "rows": [{"model": f.label, "note": f.note, "com_lumped": [float(x) for x in f.com_lumped],
+                            "com_full": None if f.com_full is None else [float(x) for x in f.com_full],
+                            "target": None if f.target is None else [float(x) for x in f.target],
+                            "initial_pose": f.ghost is not None} for f in self.figures], **block.extra}
+        return buf.getvalue(), report
+
+    def close(self) -> None:
+        """Let the figure go (after :meth:`finish`, or when it will not be finished)."""
+        _pyplot().close(self.fig)
+
+
 def render_poses(figures: Sequence[PoseFigure], spec: Spec, block: TitleBlock) -> tuple[bytes, dict[str, Any]]:
     """Each pose as a row of front, side, top and 3D views under a title block; returns (PNG bytes, report)."""
-    plt = _pyplot()
-    rows = len(figures)
-    header = 0.75 + 0.2 * len(block.lines) + 0.35        # title, number lines, panel titles [in]
-    footer = 1.25                                         # axis labels and the legend [in]
-    height = ROW_HEIGHT_IN * rows + header + footer
-    fig = plt.figure(figsize=(19, height))
-    grid = fig.add_gridspec(rows, 4, width_ratios=(1, 1, 1, 1.45), left=0.045, right=0.99, top=1 - header / height,
-                            bottom=footer / height, wspace=0.28, hspace=0.35)
-    for r, pf in enumerate(figures):
-        xyz = {name: np.array(val) for name, val in pf.points.as_dict(0).items()}
-        for c, (view, h, v, labels) in enumerate(_VIEWS):
-            ax = fig.add_subplot(grid[r, c])
-            _draw(ax, xyz, pf, spec, h, v)
-            ax.set_aspect("equal", adjustable="datalim")
-            ax.set_xlabel(labels[0])
-            ax.set_ylabel(labels[1])
-            ax.grid(True, alpha=0.3)
-            ax.set_title(f"{pf.label}: {view}" if c == 0 and rows > 1 else view, fontsize=10)
-        ax3 = fig.add_subplot(grid[r, 3], projection="3d")
-        _draw(ax3, xyz, pf, spec, None, None)
-        pts = np.array(list(xyz.values()))
-        centre, half = (pts.max(0) + pts.min(0)) / 2, (pts.max(0) - pts.min(0)).max() / 2 + 0.02
-        for setter, k in ((ax3.set_xlim, 0), (ax3.set_ylim, 1), (ax3.set_zlim, 2)):
-            setter(centre[k] - half, centre[k] + half)
-        ax3.set_box_aspect((1, 1, 1))
-        ax3.view_init(elev=18, azim=-135)
-        ticks = np.array([-0.6, 0.0, 0.6]) * half     # away from the box's corners, where two axes' labels meet
-        ax3.set_xticks(np.round(centre[0] + ticks, 2))
-        ax3.set_yticks(np.round(centre[1] + ticks, 2))
-        ax3.set_zticks(np.round(centre[2] + ticks, 2))
-        ax3.tick_params(labelsize=8)
-        ax3.set_xlabel("X forward [m]", labelpad=6)
-        ax3.set_ylabel("Y left [m]", labelpad=6)
-        ax3.zaxis.set_rotate_label(False)
-        ax3.set_zlabel("Z up [m]", labelpad=8, rotation=90)
-        ax3.set_title("3D" + (f" — {pf.note}" if pf.note else ""), fontsize=10)
-    colour = UNKNOWN_COLOUR if block.ok is None else OK_COLOUR if block.ok else BAD_COLOUR
-    top = 1 - 0.2 / height
-    fig.text(0.045, top, block.title, fontsize=15, weight="bold", va="top")
-    fig.text(0.99, top, block.verdict, fontsize=13, weight="bold", color=colour, va="top", ha="right")
-    fig.text(0.045, top - 0.5 / height, "\n".join(block.lines), fontsize=10, va="top", family="monospace")
-    handles = _legend_handles(figures)
-    fig.legend(handles=handles, loc="lower center", ncol=min(len(handles), 6), fontsize=9, frameon=False,
-               bbox_to_anchor=(0.5, 0.02 / height))
-    report = {"title": block.title, "verdict": block.verdict, "stable": block.ok, "lines": list(block.lines),
-              "legend": [h.get_label() for h in handles],
-              "rows": [{"model": f.label, "note": f.note, "com_lumped": [float(x) for x in f.com_lumped],
-                        "com_full": None if f.com_full is None else [float(x) for x in f.com_full],
-                        "target": None if f.target is None else [float(x) for x in f.target],
-                        "initial_pose": f.ghost is not None} for f in figures], **block.extra}
-    return _png(fig), report
+    return PoseCanvas(figures, spec, block).finish(block.verdict, block.ok)
 
 
 def render_cost_curve(attempts: Sequence[Sequence[float] | np.ndarray],

@@ -13,7 +13,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from op2motion.figures.draw import PoseFigure, TitleBlock, render_cost_curve, render_poses
+from op2motion.figures.draw import PoseCanvas, PoseFigure, TitleBlock, render_cost_curve
 from op2motion.kinematics import ModelName, forward
 from op2motion.kinematics.report import PoseReport, evaluate
 from op2motion.physics import RunReport
@@ -68,11 +68,10 @@ class Drawing:
 MODEL_LABELS = {"dh": "D-H model", "pb": "projection model"}
 
 
-def pose_figure(name: str, angles: BookAngles, spec: Spec, drawing: Drawing = Drawing(),
-                validation: RunReport | None = None, metrics: Mapping[str, Any] | None = None
-                ) -> tuple[bytes, dict[str, Any], list[PoseReport]]:
-    """PNG bytes, a report of what was drawn, and the pose reports of one pose (see :class:`Drawing`); the verdict
-    comes from ``validation`` (a physics run now) or from a pose file's recorded ``metrics``."""
+def pose_canvas(name: str, angles: BookAngles, spec: Spec, drawing: Drawing = Drawing()
+                ) -> tuple[PoseCanvas, list[PoseReport]]:
+    """One pose drawn (see :class:`Drawing`) but for its physics verdict (:meth:`.PoseCanvas.finish`), and its pose
+    reports."""
     br, target, ghost, double = drawing.br, drawing.target, drawing.ghost, drawing.double
     rows, reports = [], []
     for model in drawing.models:
@@ -84,7 +83,6 @@ def pose_figure(name: str, angles: BookAngles, spec: Spec, drawing: Drawing = Dr
         label = MODEL_LABELS[model]
         rows.append(PoseFigure(report.points, label, report.com, report.com_full, br, target,
                                None if ghost is None else forward(ghost, spec, model), note, double))
-    verdict, ok = verdict_of(validation, metrics)
     support = "double" if double else angles.support
     margins = ({"margin_full_double_m": reports[0].double_support_margin_m} if double else
                {"margin_lumped_m": reports[0].stability_margin_m, "margin_full_m": reports[0].stability_margin_full_m})
@@ -92,27 +90,87 @@ def pose_figure(name: str, angles: BookAngles, spec: Spec, drawing: Drawing = Dr
               + ("" if double else f"   margin {r.stability_margin_m * 1000:+6.1f} mm") for r in reports[1:]]
     first = [f"{MODEL_LABELS[reports[0].model]}:"] if len(reports) > 1 else []
     block = TitleBlock(f"{name}: {spec.name}, {support} support",
-                       [*drawing.lines, *first, *_numbers(reports[0], double), *others], verdict, ok, margins)
-    png, drawn = render_poses(rows, spec, block)
+                       [*drawing.lines, *first, *_numbers(reports[0], double), *others], extra=margins)
+    return PoseCanvas(rows, spec, block), reports
+
+
+def pose_figure(name: str, angles: BookAngles, spec: Spec, drawing: Drawing = Drawing(),
+                validation: RunReport | None = None, metrics: Mapping[str, Any] | None = None
+                ) -> tuple[bytes, dict[str, Any], list[PoseReport]]:
+    """PNG bytes, a report of what was drawn, and the pose reports of one pose (see :class:`Drawing`); the verdict
+    comes from ``validation`` (a physics run now) or from a pose file's recorded ``metrics``."""
+    canvas, reports = pose_canvas(name, angles, spec, drawing)
+    png, drawn = canvas.finish(*verdict_of(validation, metrics))
     return png, drawn, reports
 
 
-def outcome_pose_figure(outcome: Outcome, name: str, spec: Spec) -> tuple[bytes, dict[str, Any]]:
-    """PNG bytes of the pose figure of an ``optimize`` outcome and the report of what was drawn."""
+def _outcome_drawing(outcome: Outcome) -> Drawing:
+    """What the pose figure of an ``optimize`` outcome shows besides the pose."""
     r = outcome.result
     p = r.problem
     lines = [f"{p.hand} hand to ({', '.join(f'{v:.3f}' for v in p.target)}) m: {r.message}",
              f"torso tilt {np.degrees(r.terms.tilt[0]):.0f}°, PSO seed {r.settings.seed} (attempt {r.attempts}), "
              f"refinement {r.method}"]
-    png, drawn, _ = pose_figure(name, r.angles, spec, Drawing(br=p.br, target=p.target, lines=lines),
-                                outcome.validation)
-    return png, drawn
+    return Drawing(br=p.br, target=p.target, lines=lines)
+
+
+def _pose_key(outcome: Outcome) -> tuple:
+    """Everything the pose figure of an outcome shows but the physics verdict."""
+    a, d = outcome.result.angles, _outcome_drawing(outcome)
+    return (a.th.tobytes(), a.phi.tobytes(), a.psi.tobytes(), str(a.support), d.br, tuple(d.target or ()),
+            tuple(d.lines))
+
+
+class StagedPoseFigure:
+    """The pose figure of an ``optimize`` outcome in two steps: drawn when the pose is known (``outcome``: the
+    candidate, before its physics check), finished with the verdict of the final outcome (:meth:`finish`); drawn
+    again if the final outcome shows anything else (another pose after a fall, another attempt count)."""
+
+    def __init__(self, outcome: Outcome, name: str, spec: Spec):
+        self.name, self.spec, self.key = name, spec, _pose_key(outcome)
+        self.canvas, _ = pose_canvas(name, outcome.result.angles, spec, _outcome_drawing(outcome))
+
+    def finish(self, outcome: Outcome) -> tuple[bytes, dict[str, Any]]:
+        """PNG bytes of ``outcome``'s pose figure and the report of what was drawn."""
+        if _pose_key(outcome) != self.key:
+            self.canvas.close()
+            return StagedPoseFigure(outcome, self.name, self.spec).finish(outcome)
+        return self.canvas.finish(*verdict_of(outcome.validation))
+
+
+def outcome_pose_figure(outcome: Outcome, name: str, spec: Spec) -> tuple[bytes, dict[str, Any]]:
+    """PNG bytes of the pose figure of an ``optimize`` outcome and the report of what was drawn."""
+    return StagedPoseFigure(outcome, name, spec).finish(outcome)
+
+
+def _cost_curve_args(outcome: Outcome, name: str) -> tuple:
+    """What :func:`.render_cost_curve` is given for an ``optimize`` outcome (every attempt)."""
+    r = outcome.result
+    attempts = r.attempt_pso or (r.pso,)
+    return ([a.history for a in attempts], [a.hand_error_history for a in attempts], r.tolerance_m,
+            f"PSO cost, {name} ({len(attempts)} attempt(s))", r.chosen_attempt,
+            (float(r.terms.total[0]), r.hand_error_m, r.method))
+
+
+def _cost_key(outcome: Outcome, name: str) -> tuple:
+    histories, errors, *rest = _cost_curve_args(outcome, name)
+    return (tuple(np.asarray(h).tobytes() for h in histories), tuple(np.asarray(e).tobytes() for e in errors),
+            *rest)
 
 
 def outcome_cost_curve(outcome: Outcome, name: str) -> bytes:
     """PNG bytes of the PSO cost curves of an ``optimize`` outcome (every attempt)."""
-    r = outcome.result
-    attempts = r.attempt_pso or (r.pso,)
-    return render_cost_curve([a.history for a in attempts], [a.hand_error_history for a in attempts], r.tolerance_m,
-                             f"PSO cost, {name} ({len(attempts)} attempt(s))", r.chosen_attempt,
-                             (float(r.terms.total[0]), r.hand_error_m, r.method))
+    return render_cost_curve(*_cost_curve_args(outcome, name))
+
+
+class StagedCostCurve:
+    """The cost curves of an ``optimize`` outcome drawn for its candidate (before the physics check, which they do
+    not show); :meth:`finish` hands them over, or draws them again if the final outcome has others (attempts after
+    a fall)."""
+
+    def __init__(self, outcome: Outcome, name: str):
+        self.name, self.key, self.png = name, _cost_key(outcome, name), outcome_cost_curve(outcome, name)
+
+    def finish(self, outcome: Outcome) -> bytes:
+        """PNG bytes of ``outcome``'s cost curves."""
+        return self.png if _cost_key(outcome, self.name) == self.key else outcome_cost_curve(outcome, self.name)

@@ -59,14 +59,27 @@ def reach(request: Reach, spec: Spec, renderers: Renderers | None = None,
           on_iteration: Callable[[float], Any] | None = None,
           on_answer: Callable[[tuple[str, ...]], Any] | None = None) -> TaskResult:
     """``optimize``: solve ``request`` (see the module docstring); the figures drawn by ``renderers`` (forked
-    renderers, started before the search so that they are ready when it ends) or here. ``on_answer`` is given the
-    result's lines of a reached target as soon as they are known, before the figures are drawn."""
-    from op2motion.figures.pose import outcome_cost_curve, outcome_pose_figure
+    renderers, started before the search so that they are ready when it ends; with ``validate``, they draw the
+    pose while its physics check runs and add the verdict after) or here. ``on_answer`` is given the result's lines
+    of a reached target as soon as they are known, before the figures are finished."""
+    from op2motion.figures.pose import (
+        StagedCostCurve,
+        StagedPoseFigure,
+        outcome_cost_curve,
+        outcome_pose_figure,
+    )
     from op2motion.formats.posefile import pose_to_json
     from op2motion.workflow import solve
 
+    begun: list[int] = []
+
+    def begin_figures(candidate: Any) -> None:
+        if renderers is not None:
+            begun.extend((renderers.begin(StagedPoseFigure, candidate, request.name, spec),
+                          renderers.begin(StagedCostCurve, candidate, request.name)))
+
     outcome = solve(request.problem, spec, request.settings, restarts=request.restarts, refine=request.refine,
-                    validate=request.validate, on_iteration=on_iteration)
+                    validate=request.validate, on_iteration=on_iteration, on_check=begin_figures)
     pose = outcome.pose(request.name, spec, {"command": request.command})
     data: dict[str, Any] = {"pose": json.loads(pose_to_json(pose, spec)), **outcome.as_dict()}
     lines = _lines(request, outcome, data["torso_tilt_deg"])
@@ -75,14 +88,16 @@ def reach(request: Reach, spec: Spec, renderers: Renderers | None = None,
         return TaskResult(False, f"{outcome.result.message}; nothing written", warnings, {}, data, tuple(lines),
                           files_on_no=False)
     if renderers is not None:
-        jobs = (renderers.submit(outcome_pose_figure, outcome, request.name, spec),
-                renderers.submit(outcome_cost_curve, outcome, request.name))
+        jobs = begun or [renderers.begin(StagedPoseFigure, outcome, request.name, spec),
+                         renderers.begin(StagedCostCurve, outcome, request.name)]
+        for job in jobs:
+            renderers.finish(job, outcome)
         if on_answer is not None:
             on_answer(tuple(lines))
         (figure, drawn), cost_curve = renderers.result(jobs[0]), renderers.result(jobs[1])
     else:
-        (figure, drawn), cost_curve = outcome_pose_figure(outcome, request.name, spec), outcome_cost_curve(
-            outcome, request.name)
+        (figure, drawn), cost_curve = (outcome_pose_figure(outcome, request.name, spec),
+                                       outcome_cost_curve(outcome, request.name))
     data["figure"] = drawn
     outputs = {"out": Output(request.pose_path, pose_to_json(pose, spec), "pose"),
                "plot": Output(request.figure_path, figure, "png"),
