@@ -21,6 +21,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
 
+from op2motion.errors import Op2MotionError
+
 WALL_TIMEOUT_S = 600.0
 
 
@@ -54,7 +56,8 @@ def _run(argv: list[str], cwd: Path) -> tuple[float, float, int, str]:
         t0 = time.perf_counter()
         proc = subprocess.Popen([*program(), *argv], cwd=cwd, stdout=subprocess.PIPE, stderr=errors, text=True,
                                 env=_environment())
-        assert proc.stdout is not None
+        if proc.stdout is None:                      # asked for a pipe: never the case, but a typed way to say so
+            raise Op2MotionError("expected the program's output on a pipe")
         with proc.stdout:
             first = proc.stdout.readline()
             answer = time.perf_counter() - t0

@@ -31,12 +31,8 @@ def test_renderers_draw_the_same_bytes_and_fall_back_here():
 def test_a_failing_figure_fails_where_the_caller_sees_it():
     with Renderers(1) as renderers:
         job = renderers.submit(_fails)
-        try:
+        with pytest.raises(ValueError, match="fails here"):      # the error reaches the caller
             renderers.result(job)
-        except ValueError as exc:
-            assert "fails here" in str(exc)
-        else:
-            raise AssertionError("the error must reach the caller")
 
 
 #: Each renderer forked sends itself Ctrl-C's signal the moment it exists (as a Ctrl-C at a command's start would
@@ -109,12 +105,8 @@ def test_a_staged_job_is_begun_at_once_and_finished_with_what_comes_later():
     with Renderers(1) as renderers:
         failing = renderers.begin(_Sum, -1)
         renderers.finish(failing, 2)
-        try:
+        with pytest.raises(ValueError, match="fails here"):
             renderers.result(failing)
-        except ValueError as exc:
-            assert "fails here" in str(exc)
-        else:
-            raise AssertionError("the error must reach the caller")
 
 
 @pytest.fixture(scope="module")

@@ -229,10 +229,8 @@ class Port:
         view = memoryview(data)
         while view:
             try:
-                try:
+                with contextlib.suppress(BlockingIOError):     # the adapter's buffer is full: wait below
                     view = view[os.write(self.fd, view):]
-                except BlockingIOError:
-                    pass
                 left = deadline - time.monotonic()
                 if view and left <= 0:
                     raise PortFailed(f"{shown(self.path)} did not take {len(data)} bytes within "
