@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import signal
 import sys
 
 #: One BLAS thread per test process (and the subprocesses it starts): the test processes fill the cores already, and
@@ -76,6 +77,10 @@ WORKER_NICE = 10
 
 
 def pytest_configure(config: pytest.Config) -> None:
+    # A suite started in the background of a non-interactive shell (``pytest &``) inherits Ctrl-C ignored, and so
+    # would every process it starts: the tests of Ctrl-C need Python's own handler, as in a terminal.
+    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     if os.environ.get("PYTEST_XDIST_WORKER"):
         with contextlib.suppress(OSError):
             os.nice(WORKER_NICE)
