@@ -18,6 +18,7 @@ from op2motion.tune.trial import Task, evaluate
 SEED = 1
 TRIALS = 3
 STEPS = 6                       # a short walk for the search [steps]
+QUICK_VERIFY_STEPS = 8          # ... and for the verification (the command verifies VERIFY_STEPS)
 NOMINAL = ("nominal",)
 
 
@@ -41,17 +42,18 @@ def test_a_walk_study_finds_verifies_and_writes_a_preset_that_reads_back(tmp_pat
     from op2motion.gait import load_preset
 
     space = ParameterSpace((Param("step_length_m", 0.07, 0.085, "m"),))
-    task = Task("walk", "forward", load_preset("forward"), members=NOMINAL, steps=STEPS)
+    task = Task("walk", "forward", load_preset("forward"), members=NOMINAL, steps=STEPS, engines=("mujoco",))
     study = open_study(tmp_path / "s.db", "walk", space, SEED)
     trials = ProcessTrials(2)
     try:
-        result = search_and_verify(study, space, task, Effort(TRIALS, 1, NOMINAL), trials)
+        result = search_and_verify(study, space, task, Effort(TRIALS, 1, NOMINAL, QUICK_VERIFY_STEPS), trials)
     finally:
         trials.close()
     assert len(rows(study)) == TRIALS and all(r.outcome is not None for r in result.table)
     assert result.chosen is not None and result.verified["nominal"].passed, result.rejected
     params = result.settings
-    assert 0.07 <= params.step_length_m <= 0.085 and params.steps == VERIFY_STEPS
+    assert 0.07 <= params.step_length_m <= 0.085 and params.steps == QUICK_VERIFY_STEPS != VERIFY_STEPS
+    assert {o.runs for o in result.verified.values()} == {2}                 # verified in both engines
     again = params_from_mapping(tomllib.loads(preset_text(params, ["a header"])))
     assert again == params                                                   # what is written reads back the same
 

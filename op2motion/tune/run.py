@@ -35,7 +35,8 @@ VERIFY_ENGINES: tuple[EngineName, ...] = ("pybullet", "mujoco")
 @dataclass
 class TuneResult:
     """What a tuning run found: the study's trials, the chosen point and its verified runs per member, the settings
-    written (or None), and the cost (wall time [s] of this run, the trials' summed time [s], workers, executor)."""
+    written (or None), the verification walk's steps, and the cost (wall time [s] of this run, the trials' summed
+    time [s], workers, executor)."""
 
     kind: str
     direction: Direction
@@ -49,6 +50,7 @@ class TuneResult:
     workers: int = 1
     executor: ExecutorName = "process"
     ran: int = 0
+    verify_steps: int = VERIFY_STEPS
 
     @property
     def verified_speed(self) -> float | None:
@@ -58,9 +60,9 @@ class TuneResult:
 
 
 def verify(point: dict[str, float], task: Task, trials: Any, on_run: Callable[[int, int], Any] | None = None,
-           members: tuple[str, ...] | None = None) -> dict[str, TrialOutcome]:
-    """``point`` on every member of the family (or just ``members``), both engines, :data:`VERIFY_STEPS` steps
-    (pushed for a walk), one trial per member on ``trials``; the outcome per member name."""
+           members: tuple[str, ...] | None = None, steps: int = VERIFY_STEPS) -> dict[str, TrialOutcome]:
+    """``point`` on every member of the family (or just ``members``), both engines, ``steps`` steps (pushed for a
+    walk), one trial per member on ``trials``; the outcome per member name."""
     from op2motion.physics import family
     from op2motion.tune.trial import spec_of
 
@@ -70,7 +72,7 @@ def verify(point: dict[str, float], task: Task, trials: Any, on_run: Callable[[i
     pending = dict(enumerate(names))
     for number, name in pending.items():
         trials.submit(number, evaluate, point, replace(task, members=(name,), engines=VERIFY_ENGINES,
-                                                      steps=VERIFY_STEPS, push_n=push))
+                                                      steps=steps, push_n=push))
     while len(out) < len(names):
         for number, outcome in trials.finished():
             out[pending[number]] = outcome
@@ -92,12 +94,14 @@ def candidates(table: list[TrialRow], limit: int) -> list[TrialRow]:
 
 @dataclass(frozen=True)
 class Effort:
-    """How much a run does: the study's budget of ``trials``, the best points to ``verify`` at most, and the bodies
-    to verify on (``verify_members``; None: the whole family; fewer for a quick look, not a tuned result)."""
+    """How much a run does: the study's budget of ``trials``, the best points to ``verify`` at most, the bodies
+    to verify on (``verify_members``; None: the whole family) and the verification walk's ``verify_steps`` (fewer
+    bodies or steps for a quick look, not a tuned result)."""
 
     trials: int
     verify: int = 3
     verify_members: tuple[str, ...] | None = None
+    verify_steps: int = VERIFY_STEPS
 
 
 def search_and_verify(study: Any, space: Any, task: Task, effort: Effort, trials: Any,
@@ -110,15 +114,16 @@ def search_and_verify(study: Any, space: Any, task: Task, effort: Effort, trials
     t0 = time.perf_counter()
     ran = run_study(study, space, evaluate, (task,), effort.trials, trials, on_trial)
     table = rows(study)
-    result = TuneResult(task.kind, task.direction, table, workers=trials.workers, ran=ran)
+    result = TuneResult(task.kind, task.direction, table, workers=trials.workers, ran=ran,
+                        verify_steps=effort.verify_steps)
     for row in candidates(table, effort.verify):
-        runs = verify(row.params, task, trials, on_run, effort.verify_members)
+        runs = verify(row.params, task, trials, on_run, effort.verify_members, effort.verify_steps)
         problems = [o.problem for o in runs.values() if not o.passed]
         if problems:
             result.rejected.append((row.number, str(problems[0])))
             continue
         result.chosen, result.verified = row, runs
-        result.settings = replace(settings(task, row.params), steps=VERIFY_STEPS) if task.kind == "walk" \
+        result.settings = replace(settings(task, row.params), steps=effort.verify_steps) if task.kind == "walk" \
             else settings(task, row.params)
         break
     result.wall_s = time.perf_counter() - t0
@@ -176,7 +181,7 @@ def header_lines(result: TuneResult, unit: str) -> list[str]:
             f"({data['trials']['pruned']} pruned), {data['cost']['study_wall_s']:.0f} s wall on {result.workers} "
             f"{result.executor} worker(s) ({data['cost']['trial_s']:.0f} s of trials; this run "
             f"{data['cost']['wall_s']:.0f} s).",
-            f"Verified: {VERIFY_STEPS} steps on every body of the robustness family ({len(result.verified)}) in "
+            f"Verified: {result.verify_steps} steps on every body of the robustness family ({len(result.verified)}) in "
             f"PyBullet and MuJoCo (MX-28 servo model, 1 kHz){', 2 N side pushes' if result.kind == 'walk' else ''}: "
             f"all hold; nominal {speed:.3f} {unit} (slowest engine), least margin {worst:.2f}.",
             "Figures: the JSON file beside this one."]
