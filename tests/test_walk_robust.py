@@ -1,7 +1,15 @@
 """The forward walk under WalkController across a representative subset of the robustness family, in both engines
-(the whole family's table is in the README, from ``op2motion walk --validate --robust --engine both``)."""
+(the whole family's table is in the README, from ``op2motion walk --validate --robust --engine both``).
+
+The forward walk takes :data:`FORWARD_STEPS` steps here, not the preset's 20: its steady window (the walk's middle)
+lies after the start's transients either way, and the figures below were measured on the preset's 20 steps (at 12
+the six bodies walk 0.23-0.27 m/s, drift at most 18 mm, heading within 1.2°, in both engines). The side steps keep
+the preset's 20: their drift is judged against the judge's least distance (0.5 m) at any length, and without the
+leg odometry it grew with the steps (47-65 mm after 20), so 20 steps keep that failure clear of the 25 mm allowed."""
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import pytest
 
@@ -15,6 +23,7 @@ from op2motion.robot.specfile import default_spec
 pytestmark = pytest.mark.physics
 
 MIN_SPEED_MPS = 0.22        # the issue: the forward walk at 0.22 m/s or more (steady window)
+FORWARD_STEPS = 12          # [steps] (see the module docstring)
 #: Servos 0.6 times as stiff as the model: without the swing leg's learnt feed-forward the last steps land short and
 #: turned (heading -9°, 0.16 m/s in both engines); with it the walk passes (0.24 m/s).
 SOFT = "stiffness ×0.6"
@@ -36,7 +45,7 @@ SIDEWAYS_SUBSET = ("torso CoM x +20 mm", "stiffness ×1.6")
 @pytest.fixture(scope="module")
 def report():
     spec = default_spec()
-    gait = gait_within_speed(load_preset("forward"), spec)
+    gait = gait_within_speed(replace(load_preset("forward"), steps=FORWARD_STEPS), spec)
     members = [m for m in family(spec) if m.name in SUBSET]
     assert len(members) == len(SUBSET)
     return robust_check(lambda: WalkController(gait, spec), spec, ("pybullet", "mujoco"), walk_judge,
