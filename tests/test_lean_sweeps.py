@@ -14,8 +14,9 @@ its centre of pressure beyond that edge) and the loaded foot tips over its outer
 foot's own centre of pressure, which reaches its edge within 5 mm.
 
 Each engine's last standing lean and first fall are the hardest cases for a check that ends once its verdict is
-known (op2motion.physics.stopping, tests/test_early_stop.py): there every sweep's run, in both engines, is played to
-its full length as well and must end with the same verdict and first failures.
+known (op2motion.physics.stopping, tests/test_early_stop.py): there each engine's run of every sweep is played to
+its full length as well and must end with the same verdict and first failures. (Each engine at its own edges: the
+other engine's edges are other leans of the sweep, none closer to this engine's switch than its own edges.)
 """
 
 from __future__ import annotations
@@ -89,15 +90,15 @@ def _sweep(pool, support: str, kind: str, direction: int) -> tuple[list[float], 
 
 
 def _edges(pool, sweep: tuple[str, str, int], verdicts: dict, reports: dict) -> list[tuple]:
-    """Each engine's last standing lean and first fall, in both engines: (lean [deg], engine, the sweep's run (ended
+    """Each engine's last standing lean and first fall, in that engine: (lean [deg], engine, the sweep's run (ended
     once its verdict was known), the same run played to its full length); a run that played its whole hold is its
     own full-length run."""
     support, kind, direction = sweep
-    leans = set()
+    early = {}
     for engine in ENGINES:
         fall = min(d for d, v in verdicts.items() if not v[engine][0])
-        leans |= {fall, max((d for d in verdicts if d < fall), default=fall)}
-    early = {(d, e): reports[d, e] for d in sorted(leans) for e in ENGINES}
+        for d in sorted({fall, max((d for d in verdicts if d < fall), default=fall)}):
+            early[d, engine] = reports[d, engine]
     again = [key for key, report in early.items() if report.ended != FULL]
     tasks = [(support, kind, direction * d, e, SECONDS) for d, e in again]
     full = dict(zip(again, pool.map(functools.partial(sweep_run, full_length=True), tasks)))
@@ -154,11 +155,12 @@ def test_lean_sweep(sweeps, support, kind, direction, criterion):
 @pytest.mark.parametrize("support, kind, direction", [s[:3] for s in SWEEPS],
                          ids=[f"{s}-{k}-{d:+d}" for s, k, d, _ in SWEEPS])
 def test_the_edges_end_early_with_the_verdict_of_the_full_run(sweeps, support, kind, direction):
-    """At each engine's last standing lean and first fall, in both engines, the check that ended once its verdict
-    was known has the verdict and the first failures of the same run played to its end: near its edge a pose plays
-    the whole hold, clear of it it ends once settled (with the same margin), and a fall ends early."""
+    """At each engine's last standing lean and first fall, the check that ended once its verdict was known has the
+    verdict and the first failures of the same run played to its end: near its edge a pose plays the whole hold,
+    clear of it it ends once settled (with the same margin), and a fall ends early."""
     edges = sweeps[(support, kind, direction)][2]
-    assert len({deg for deg, *_ in edges}) >= 2 and len(edges) % len(ENGINES) == 0
+    assert sorted(e for _, e, *_ in edges) == sorted(ENGINES * 2)             # two edges per engine
+    assert all({early.stable for _, e, early, _ in edges if e == engine} == {True, False} for engine in ENGINES)
     for deg, engine, early, full in edges:
         same_verdict(early, full)
         if early.stable:
