@@ -6,6 +6,7 @@ path to search for."""
 from __future__ import annotations
 
 import json
+import math
 
 import pytest
 from helpers import pose_path, run_cli
@@ -68,13 +69,15 @@ def test_plus_180_is_one_rule_everywhere(capsys, tmp_path, spec):
 
 
 def test_orientation_is_scaled_before_its_length(capsys, tmp_path):
-    results = []
-    for direction in (["1e154", "1e154", "0"], ["1", "1", "0"], ["1e-300", "1e-300", "0"]):
-        code, out, err = run_cli(capsys, "motion", "line", WALKREADY, "--hand", "right", "--by", "0.02", "0", "0",
-                                 "--duration", "1", "--orientation", *direction, "--json")
-        assert code == 0, err
-        results.append(json.loads(out)["pointing_error_max_deg"])
-    assert results[0] == pytest.approx(results[1]) == pytest.approx(results[2])
+    from op2motion.motion.cartesian import LineRequest
+
+    units = [LineRequest("right", 1.0, delta_m=(0.02, 0.0, 0.0), orientation=d).validated().orientation
+             for d in ((1e154, 1e154, 0.0), (1.0, 1.0, 0.0), (1e-300, 1e-300, 0.0))]
+    for unit in units:
+        assert unit == pytest.approx((0.5 ** 0.5, 0.5 ** 0.5, 0.0))
+    code, out, err = run_cli(capsys, "motion", "line", WALKREADY, "--hand", "right", "--by", "0.02", "0", "0",
+                             "--duration", "1", "--orientation", "1e154", "1e154", "0", "--json")
+    assert code == 0 and math.isfinite(json.loads(out)["pointing_error_max_deg"]), err
     for bad in (["0", "0", "0"], ["1e400", "0", "0"], ["nan", "1", "0"]):
         line = _fail(capsys, "motion", "line", WALKREADY, "--hand", "right", "--by", "0.02", "0", "0",
                      "--duration", "1", "--orientation", *bad)
