@@ -77,7 +77,7 @@ class RowBuffer:
 
     def _index(self, k: int) -> int:
         i = k - self.first
-        if not 0 <= i < self.end - self.first:
+        if not 0 <= i < len(self.objects["contact"]):                  # (the rows kept: read every tick)
             raise InputError(f"expected a row from {self.first} to {self.end - 1}, got {k}", "row")
         return i
 
