@@ -99,7 +99,7 @@ def penalty_swing_foot_height(swing_foot_min_z: np.ndarray, des_ht: float = 0.0)
 
 def convex_hull(points: np.ndarray) -> np.ndarray:
     """Convex hull (m, 2) of points (n, 2) [m], counter-clockwise, without repeated or collinear points."""
-    pts = sorted({(float(x), float(y)) for x, y in np.asarray(points, dtype=float).reshape(-1, 2)})
+    pts = sorted(set(map(tuple, np.asarray(points, dtype=float).reshape(-1, 2).tolist())))
     if len(pts) < 3:
         return np.asarray(pts, dtype=float).reshape(-1, 2)
 
