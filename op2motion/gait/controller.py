@@ -41,18 +41,17 @@ from op2motion.gait.calibration import StiffnessCalibration
 from op2motion.gait.feedback import GYRO_GAINS_S, OPEN_LOOP, STOCK_GYRO_GAINS_S, Feedback
 from op2motion.gait.generator import Gait
 from op2motion.gait.learning import StepLearner
+from op2motion.gait.leg_targets import LegTargets
 from op2motion.gait.odometry import FootOdometry, left_of
 from op2motion.gait.presets import load_preset
-from op2motion.gait.rows import REACH_SHARE, RowBuffer, rows_of_gait, swing_phase
+from op2motion.gait.rows import RowBuffer, rows_of_gait, swing_phase
 from op2motion.gait.schedule import plan_of_gait
-from op2motion.gait.swing_foot import toe_raised
-from op2motion.kinematics import small
-from op2motion.kinematics.leg_ik import leg_ik_pose, leg_of, within_reach_pose
+from op2motion.kinematics.leg_ik import leg_of
 from op2motion.motion.stillness import Stillness
 from op2motion.physics import Plan, Schedule
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import SIDES, Side
+from op2motion.robot.support import SIDES
 
 MAX_HEADING_RAD = 0.2             # the swing foot is steered at most this far per step (11°)
 MAX_TRIM_RAD = 0.15                # a leg joint's integral trim stays within this [rad] (8.6°)
@@ -101,8 +100,9 @@ class _State:
     error: tuple[float, float] = (0.0, 0.0)                                 # last attitude error (pitch, roll) [rad]
 
 
-class WalkController:
-    """A planned gait played with attitude stabilisation (see the module docstring).
+class WalkController(LegTargets):
+    """A planned gait played with attitude stabilisation (see the module docstring; the legs' goals for a turned
+    body and moved soles: :class:`.leg_targets.LegTargets`).
 
     ``done`` says when the walk is over: its plan has run out (the last row held) and the body has kept still for
     :data:`op2motion.motion.stillness.STILL_S` (then the servos may hold the last goals); until then the stabiliser
@@ -126,16 +126,14 @@ class WalkController:
         self.legs = {side: leg_of(spec, side) for side in SIDES}
         self.leg_index = np.array(sorted(i for leg in self.legs.values() for i in leg.index))
         self._leg_servos = {side: np.array(leg.index) for side, leg in self.legs.items()}    # index once, not per tick
+        self._both_legs = np.concatenate(list(self._leg_servos.values()))
+        self._both_signs = np.concatenate([leg.sign for leg in self.legs.values()])
         self._names = spec.joint_names
         self.delay_rows = int(round(feedback.latency_s / CONTROL_PERIOD_S))
         self.state = _State()
         self.stillness = Stillness()
         self._k = -1
 
-    @property
-    def _swing_shaped(self) -> bool:
-        """Does the preset shape the swing foot (:mod:`.swing_foot`)?"""
-        return bool(self.params.swing_level or self.params.swing_level_roll or self.params.swing_toe_deg)
 
     @property
     def plan_yaw(self) -> np.ndarray:
@@ -271,10 +269,10 @@ class WalkController:
         measured = measured_all[self.leg_index]
         error = self.rows.get("joints", k)[self.leg_index] - measured
         trim = s.joint_integral[self.leg_index] + self.feedback.joint_ki * error * CONTROL_PERIOD_S
-        s.joint_integral[self.leg_index] = np.clip(trim, -MAX_TRIM_RAD, MAX_TRIM_RAD)
+        s.joint_integral[self.leg_index] = np.minimum(np.maximum(trim, -MAX_TRIM_RAD), MAX_TRIM_RAD)   # np.clip
         return s.joint_integral
 
-    def _estimate(self, gyro: Sequence[float], accel: Sequence[float], k: int) -> tuple[float, float]:
+    def _estimate(self, gyro: Sequence[float], accel: np.ndarray | Sequence[float], k: int) -> tuple[float, float]:
         """Update the attitude estimate and the error integral from the (pitch, roll) rates [rad/s] and the
         accelerometer (3,) [m/s²]; the error [rad] (pitch, roll) against the plan."""
         s, dt = self.state, CONTROL_PERIOD_S
@@ -316,67 +314,7 @@ class WalkController:
             scale *= max(self.calibration.estimate, 1.0) ** -self.params.gyro_stiff_share
         hip_roll, knee, ankle_pitch, ankle_roll = (g * scale for g in self.feedback.gyro)
         roll_rate, pitch_rate = float(gyro[0]), float(gyro[1])
-        natural = np.array([0.0, hip_roll * roll_rate, 0.0, knee * pitch_rate, ankle_pitch * pitch_rate,
-                            ankle_roll * roll_rate])
+        natural = [0.0, hip_roll * roll_rate, 0.0, knee * pitch_rate, ankle_pitch * pitch_rate, ankle_roll * roll_rate]
         out = np.zeros(len(self._names))
-        for side, leg in self.legs.items():
-            out[self._leg_servos[side]] = natural * leg.sign
+        out[self._both_legs] = np.array(natural * len(self.legs)) * self._both_signs      # every leg at once
         return out
-
-    def _landed(self, side: Side, k: int) -> tuple[small.Vec3, float] | None:
-        """Where the ``side`` foot is held instead of its plan (its measured landing's miss: position (3,) [m] and
-        yaw [rad]) at gait row ``k``, or None: after the closing step, the landed foot where it landed."""
-        last = self.odometry.last
-        if self.feedback.accept_landing and last is not None and last[0] == side:
-            return (float(last[1][0]), float(last[1][1]), 0.0), float(last[2])
-        return None
-
-    def _leg_change(self, k: int, pitch: float, roll: float, heading: float = 0.0) -> np.ndarray:
-        """The servo change (20,) [rad] that turns the whole body by (pitch, roll) [rad] about the support point,
-        the soles staying where the plan puts them, and the swing sole turned by ``heading`` [rad] about the stance
-        sole's centre (in full at landing) and moved against the feet's placement error (leg odometry); after the
-        closing step, the landed sole where it landed. Single vectors and rotations as floats (:mod:`.small`)."""
-        rows = self.rows
-        pos, rot = rows.get("torso_pos", k).tolist(), rows.get("torso_rot", k).tolist()
-        pivot, turn = rows.get("support_point", k).tolist(), small.mul(small.rot_y(pitch), small.rot_x(roll))
-        moved_pos, moved_rot = small.add(pivot, small.apply(turn, small.sub(pos, pivot))), small.mul(turn, rot)
-        contact = rows.obj("contact", k)
-        phase = rows.value("swing_phase", k)
-        out = np.zeros(len(self._names))
-        for side, leg in self.legs.items():
-            swinging = contact not in ("double", side)
-            sole, sole_rot = self._sole_target(side, k, contact, phase, heading if swinging else 0.0)
-            body_pos, body_rot = moved_pos, moved_rot
-            if swinging and self._swing_shaped:
-                sole, sole_rot = toe_raised(sole, sole_rot, phase, math.radians(self.params.swing_toe_deg),
-                                            self.spec.sole_extents(side)[1])
-                error = self.state.error
-                tilt = small.mul(small.rot_y(self.params.swing_level * float(error[0])),
-                                 small.rot_x(self.params.swing_level_roll * float(error[1])))
-                body_pos = small.add(pivot, small.apply(tilt, small.sub(moved_pos, pivot)))
-                body_rot = small.mul(tilt, moved_rot)
-            local_rot = small.mul_t(body_rot, sole_rot)
-            local = within_reach_pose(leg, small.apply_t(body_rot, small.sub(sole, body_pos)), local_rot, REACH_SHARE)
-            out[self._leg_servos[side]] = np.subtract(leg_ik_pose(leg, local, local_rot), rows.legs(side, k))
-        return out
-
-    def _sole_target(self, side: Side, k: int, contact: str, phase: float, heading: float
-                     ) -> tuple[small.Vec3, small.Mat3]:
-        """Where the ``side`` sole is to be at gait row ``k`` (position [m], rotation; world): the plan's, a swing
-        sole turned by ``heading`` [rad] x ``phase`` about the stance sole and moved against the placement error, a
-        landed sole held where it landed."""
-        rows = self.rows
-        x, y, z, yaw = rows.feet(side, k).tolist()
-        sole, sole_rot = (x, y, z), small.rot_z(yaw)
-        swinging = contact not in ("double", side)
-        if swinging and heading:
-            steer = small.rot_z(heading * phase)
-            stance = rows.feet(contact, k)[:3].tolist()
-            sole, sole_rot = small.add(stance, small.apply(steer, small.sub(sole, stance))), small.mul(steer, sole_rot)
-        landed = self._landed(side, k)
-        if landed is not None:
-            sole, sole_rot = small.add(sole, landed[0]), small.mul(small.rot_z(landed[1]), sole_rot)
-        if swinging and self.feedback.placement:
-            shift = self.odometry.shift(self.feedback.placement, rows.get("velocity", k)).tolist()
-            sole = small.add(sole, small.scaled(shift, phase))
-        return sole, sole_rot

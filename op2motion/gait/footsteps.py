@@ -151,7 +151,8 @@ def zmp_margins(zmp: np.ndarray, contacts: Sequence[str], feet: Mapping[str, np.
     for i, contact in enumerate(contacts):
         support = Support.of(contact)
         corners = {side: sole_rectangle(spec, Footstep(side, *feet[side][i, [0, 1, 3]])) for side in support.feet}
-        out[i] = point_margin(*points[i], support.polygon(corners))
+        x, y = points[i]
+        out[i] = point_margin(x, y, support.polygon(corners))
     return out
 
 
