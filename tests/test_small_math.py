@@ -25,7 +25,7 @@ from op2motion.robot.balance import convex_hull, point_margin, polygon_margin
 from op2motion.robot.specfile import default_spec
 from op2motion.robot.support import Support
 
-SEED = 20261207
+SEED = 20261128
 ROUNDING = 1e-15        # floats vs NumPy on unit-sized numbers: a few ulps (NumPy's products may fuse)
 IK_SAME_RAD = 1e-12     # the one-pose leg IK against the batched one
 MARGIN_SAME_M = 1e-15   # the one-point margin against the array one (distances of a few cm)
