@@ -134,7 +134,6 @@ class WalkController(LegTargets):
         self.stillness = Stillness()
         self._k = -1
 
-
     @property
     def plan_yaw(self) -> np.ndarray:
         """The planned heading of every row kept (K,) [rad], unwrapped."""
@@ -230,8 +229,9 @@ class WalkController(LegTargets):
         """The body's turn (pitch, roll) [rad] against the attitude ``error`` [rad], its integral and the ``rates``
         [rad/s] (P gain scheduled by the servos' softness), bounded."""
         f, soft, integral = self.feedback, self.calibration.softness, self.state.integral
-        return tuple(_clip(-((f.kp[i] + f.soft_kp[i] * soft) * error[i] + f.ki[i] * integral[i] + f.kd[i] * rates[i]),
-                           MAX_CORRECTION_RAD) for i in range(2))  # type: ignore[return-value]
+        pitch, roll = (_clip(-((f.kp[i] + f.soft_kp[i] * soft) * error[i] + f.ki[i] * integral[i] + f.kd[i] * rates[i]),
+                             MAX_CORRECTION_RAD) for i in range(2))
+        return pitch, roll
 
     def _remember(self, k: int, intended: np.ndarray, measured: np.ndarray) -> None:
         """Keep this row's intended joints; teach the learner what the joints (measured ``delay_rows`` late)
