@@ -65,7 +65,7 @@ def test_a_raised_toe_keeps_the_heel_and_is_flat_at_lift_off_and_landing():
     for phase in (0.0, 1.0):
         same = toe_raised(sole, rot, phase, math.radians(TOE_DEG), BACK_M)
         assert np.allclose(same[0], sole) and np.allclose(same[1], rot)
-    pos, turned = toe_raised(sole, rot, 0.5, math.radians(TOE_DEG), BACK_M)
+    pos, turned = (np.asarray(v) for v in toe_raised(sole, rot, 0.5, math.radians(TOE_DEG), BACK_M))  # tuples
     assert np.allclose(pos + turned @ np.array([-BACK_M, 0.0, 0.0]), heel)         # the heel edge stays put
     toe_up = math.asin(turned[2, 0])                                               # the sole's x axis rises
     assert toe_up == pytest.approx(math.radians(TOE_DEG))

@@ -87,14 +87,14 @@ class StiffnessCalibration:
     @property
     def softness(self) -> float:
         """0 at the model's stiffness or stiffer, 1 at :data:`SOFT_STIFFNESS` or softer, linear between."""
-        return float(np.clip((1.0 - self.estimate) / (1.0 - SOFT_STIFFNESS), 0.0, 1.0))
+        return min(max((1.0 - self.estimate) / (1.0 - SOFT_STIFFNESS), 0.0), 1.0)   # np.clip: microseconds a float
 
     def compensation(self, k: int, size: int) -> np.ndarray:
         """The goals' change (size,) [rad] at gait row ``k``: the feed-forward a softer servo lacks, ramped in
         between the end of the calibration and the first step (zero before)."""
         out = np.zeros(size)
         ramp = self.first_step - self.end_row
-        weight = 1.0 if ramp <= 0 else float(np.clip((k - self.end_row) / ramp, 0.0, 1.0))
+        weight = 1.0 if ramp <= 0 else min(max((k - self.end_row) / ramp, 0.0), 1.0)
         lack = max(1.0 / self.estimate - 1.0, 0.0)
         ff = self._ff(k) if weight and lack else None
         if ff is not None:

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -41,17 +41,17 @@ from op2motion.gait.calibration import StiffnessCalibration
 from op2motion.gait.feedback import GYRO_GAINS_S, OPEN_LOOP, STOCK_GYRO_GAINS_S, Feedback
 from op2motion.gait.generator import Gait
 from op2motion.gait.learning import StepLearner
+from op2motion.gait.leg_targets import LegTargets
 from op2motion.gait.odometry import FootOdometry, left_of
 from op2motion.gait.presets import load_preset
-from op2motion.gait.rows import REACH_SHARE, RowBuffer, rows_of_gait, swing_phase
+from op2motion.gait.rows import RowBuffer, rows_of_gait, swing_phase
 from op2motion.gait.schedule import plan_of_gait
-from op2motion.gait.swing_foot import toe_raised
-from op2motion.kinematics.leg_ik import leg_ik, leg_of, rot_x, rot_y, rot_z, within_reach
+from op2motion.kinematics.leg_ik import leg_of
 from op2motion.motion.stillness import Stillness
 from op2motion.physics import Plan, Schedule
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import SIDES, Side
+from op2motion.robot.support import SIDES
 
 MAX_HEADING_RAD = 0.2             # the swing foot is steered at most this far per step (11°)
 MAX_TRIM_RAD = 0.15                # a leg joint's integral trim stays within this [rad] (8.6°)
@@ -64,8 +64,18 @@ LANDING_ROWS = 2                   # a landing is measured this many rows past t
 def attitude_of(rot: np.ndarray) -> np.ndarray:
     """Pitch and roll [rad] of a torso rotation: the tilt of its z axis towards +x (pitch: leaning forward > 0) and
     towards -y (roll: turned about +X > 0)."""
-    z = rot[:, 2]
-    return np.array([math.atan2(z[0], z[2]), math.atan2(-z[1], math.hypot(z[0], z[2]))])
+    return np.array(_attitude(rot))
+
+
+def _attitude(rot: np.ndarray) -> tuple[float, float]:
+    """:func:`attitude_of` as two floats (per tick)."""
+    x, y, z = rot[:, 2].tolist()
+    return math.atan2(x, z), math.atan2(-y, math.hypot(x, z))
+
+
+def _clip(value: float, bound: float) -> float:
+    """``value`` within ±``bound`` (``np.clip`` on one float costs microseconds)."""
+    return min(max(value, -bound), bound)
 
 
 _swing_phase = swing_phase           # the name the tests knew
@@ -76,20 +86,23 @@ __all__ = ["Feedback", "GYRO_GAINS_S", "OPEN_LOOP", "STOCK_GYRO_GAINS_S", "WalkC
 
 @dataclass
 class _State:
-    attitude: np.ndarray = field(default_factory=lambda: np.zeros(2))     # estimated pitch, roll [rad]
-    integral: np.ndarray = field(default_factory=lambda: np.zeros(2))     # of the attitude error [rad·s]
+    """The stabiliser's memory; pairs are (pitch, roll) or (x, y), as floats (the per-tick arithmetic is scalar)."""
+
+    attitude: tuple[float, float] = (0.0, 0.0)                              # estimated pitch, roll [rad]
+    integral: tuple[float, float] = (0.0, 0.0)                              # of the attitude error [rad·s]
     yaw: float = 0.0                                                        # integrated gyro z [rad]
     yaw_integral: float = 0.0                                               # of the heading error [rad·s]
-    offset: np.ndarray = field(default_factory=lambda: np.zeros(2))       # dead-reckoned position error [m]
+    offset: tuple[float, float] = (0.0, 0.0)                                # dead-reckoned position error [m]
     joint_integral: np.ndarray | None = None                                # leg goal trims (20,) [rad]
     intended: list[np.ndarray] = field(default_factory=list)                # recent intended joints (20,) [rad]
     started: bool = False
-    accel: np.ndarray | None = None
-    error: np.ndarray = field(default_factory=lambda: np.zeros(2))        # last attitude error (pitch, roll) [rad]
+    accel: tuple[float, float, float] | None = None                         # low-passed accelerometer [m/s²]
+    error: tuple[float, float] = (0.0, 0.0)                                 # last attitude error (pitch, roll) [rad]
 
 
-class WalkController:
-    """A planned gait played with attitude stabilisation (see the module docstring).
+class WalkController(LegTargets):
+    """A planned gait played with attitude stabilisation (see the module docstring; the legs' goals for a turned
+    body and moved soles: :class:`.leg_targets.LegTargets`).
 
     ``done`` says when the walk is over: its plan has run out (the last row held) and the body has kept still for
     :data:`op2motion.motion.stillness.STILL_S` (then the servos may hold the last goals); until then the stabiliser
@@ -112,15 +125,14 @@ class WalkController:
         """What both kinds of walk share: the legs, the latency in rows, the state."""
         self.legs = {side: leg_of(spec, side) for side in SIDES}
         self.leg_index = np.array(sorted(i for leg in self.legs.values() for i in leg.index))
+        self._leg_servos = {side: np.array(leg.index) for side, leg in self.legs.items()}    # index once, not per tick
+        self._both_legs = np.concatenate(list(self._leg_servos.values()))
+        self._both_signs = np.concatenate([leg.sign for leg in self.legs.values()])
+        self._names = spec.joint_names
         self.delay_rows = int(round(feedback.latency_s / CONTROL_PERIOD_S))
         self.state = _State()
         self.stillness = Stillness()
         self._k = -1
-
-    @property
-    def _swing_shaped(self) -> bool:
-        """Does the preset shape the swing foot (:mod:`.swing_foot`)?"""
-        return bool(self.params.swing_level or self.params.swing_level_roll or self.params.swing_toe_deg)
 
     @property
     def plan_yaw(self) -> np.ndarray:
@@ -177,7 +189,7 @@ class WalkController:
         self.learner.reset()
         self.calibration.reset()
         self.odometry.reset()
-        return dict(zip(self.spec.joint_names, self._planned_goals(0.0, self._row(0.0)).tolist()))
+        return dict(zip(self._names, self._planned_goals(0.0, self._row(0.0)).tolist()))
 
     def step(self, t_s: float, gyro_rad_s: np.ndarray, accel_m_s2: np.ndarray,
              joint_positions: Mapping[str, float]) -> dict[str, float]:
@@ -185,22 +197,21 @@ class WalkController:
         row = self._row(t_s)
         k = max(row, 0)                                   # the gait's own row (its first during the lead-in)
         self._k = row
-        measured = np.array([joint_positions[name] for name in self.spec.joint_names])
-        self.stillness.update(np.asarray(gyro_rad_s, dtype=float), measured)
-        gyro = np.array([gyro_rad_s[1], gyro_rad_s[0]])   # pitch rate (about y), roll rate (about x)
-        error = self._estimate(gyro, np.asarray(accel_m_s2, dtype=float), k)
+        measured = np.array([joint_positions[name] for name in self._names])
+        gyro_xyz = np.asarray(gyro_rad_s, dtype=float)
+        self.stillness.update(gyro_xyz, measured)
+        roll_rate, pitch_rate, yaw_rate = gyro_xyz.tolist()
+        error = self._estimate((pitch_rate, roll_rate), accel_m_s2, k)
         self.state.error = error
+        turn = self._turn(error, (pitch_rate, roll_rate))
+        change = self._damping(gyro_xyz) * self._standing_share(k)
+        heading = self._heading(yaw_rate, k)
         f = self.feedback
-        kp = np.add(f.kp, np.multiply(f.soft_kp, self.calibration.softness))
-        turn = -(kp * error + np.multiply(f.ki, self.state.integral) + np.multiply(f.kd, gyro))
-        turn = np.clip(turn, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
-        change = self._damping(np.asarray(gyro_rad_s, dtype=float)) * self._standing_share(k)
-        heading = self._heading(float(gyro_rad_s[2]), k)
-        if np.any(turn) or heading or f.placement or f.accept_landing or self._swing_shaped:
-            change += self._leg_change(k, float(turn[0]), float(turn[1]), heading)
+        if turn[0] or turn[1] or heading or f.placement or f.accept_landing or self._swing_shaped:
+            change += self._leg_change(k, turn[0], turn[1], heading)
         planned = self._planned_goals(t_s, row)
         if row >= 0 and self.rows.value("open", k):
-            return dict(zip(self.spec.joint_names, planned.tolist()))      # a kick inside a walk: as planned
+            return dict(zip(self._names, planned.tolist()))      # a kick inside a walk: as planned
         goals = planned + change
         if row >= 0:
             self._remember(k, self.rows.get("joints", k) + change, measured)
@@ -212,7 +223,15 @@ class WalkController:
             if f.calibrate:
                 self.calibration.observe(k, planned, measured)
                 goals += self.calibration.compensation(k, len(goals))
-        return dict(zip(self.spec.joint_names, goals.tolist()))
+        return dict(zip(self._names, goals.tolist()))
+
+    def _turn(self, error: tuple[float, float], rates: tuple[float, float]) -> tuple[float, float]:
+        """The body's turn (pitch, roll) [rad] against the attitude ``error`` [rad], its integral and the ``rates``
+        [rad/s] (P gain scheduled by the servos' softness), bounded."""
+        f, soft, integral = self.feedback, self.calibration.softness, self.state.integral
+        pitch, roll = (_clip(-((f.kp[i] + f.soft_kp[i] * soft) * error[i] + f.ki[i] * integral[i] + f.kd[i] * rates[i]),
+                             MAX_CORRECTION_RAD) for i in range(2))
+        return pitch, roll
 
     def _remember(self, k: int, intended: np.ndarray, measured: np.ndarray) -> None:
         """Keep this row's intended joints; teach the learner what the joints (measured ``delay_rows`` late)
@@ -231,14 +250,15 @@ class WalkController:
         s.yaw += yaw_rate * dt
         error = s.yaw - self.rows.value("plan_yaw", k)
         velocity = self.rows.get("velocity", k)
-        s.offset += (rot_z(error)[:2, :2] @ velocity - velocity) * dt
+        vx, vy = velocity.tolist()
+        c, si = math.cos(error), math.sin(error)                               # the velocity turned by the error
+        s.offset = (s.offset[0] + ((c * vx - si * vy) - vx) * dt, s.offset[1] + ((si * vx + c * vy) - vy) * dt)
         left = left_of(velocity)
         if left is not None:
-            error += f.cross_track * float(s.offset @ left)
-        s.yaw_integral = float(np.clip(s.yaw_integral + error * dt, -MAX_HEADING_RAD, MAX_HEADING_RAD))
+            error += f.cross_track * float(s.offset[0] * left[0] + s.offset[1] * left[1])
+        s.yaw_integral = _clip(s.yaw_integral + error * dt, MAX_HEADING_RAD)
         gain = self.params.heading_gain_scale                                   # the preset's tuning
-        return float(np.clip(-gain * (f.heading * error + f.heading_ki * s.yaw_integral), -MAX_HEADING_RAD,
-                             MAX_HEADING_RAD))
+        return _clip(-gain * (f.heading * error + f.heading_ki * s.yaw_integral), MAX_HEADING_RAD)
 
     def _joint_trim(self, k: int, measured_all: np.ndarray) -> np.ndarray:
         """The legs' integral trims (20,) [rad]: what the servos' sag keeps them from the planned angles, added to
@@ -249,24 +269,32 @@ class WalkController:
         measured = measured_all[self.leg_index]
         error = self.rows.get("joints", k)[self.leg_index] - measured
         trim = s.joint_integral[self.leg_index] + self.feedback.joint_ki * error * CONTROL_PERIOD_S
-        s.joint_integral[self.leg_index] = np.clip(trim, -MAX_TRIM_RAD, MAX_TRIM_RAD)
+        s.joint_integral[self.leg_index] = np.minimum(np.maximum(trim, -MAX_TRIM_RAD), MAX_TRIM_RAD)   # np.clip
         return s.joint_integral
 
-    def _estimate(self, gyro: np.ndarray, accel: np.ndarray, k: int) -> np.ndarray:
-        """Update the attitude estimate and the error integral; the error [rad] (pitch, roll) against the plan."""
+    def _estimate(self, gyro: Sequence[float], accel: np.ndarray | Sequence[float], k: int) -> tuple[float, float]:
+        """Update the attitude estimate and the error integral from the (pitch, roll) rates [rad/s] and the
+        accelerometer (3,) [m/s²]; the error [rad] (pitch, roll) against the plan."""
         s, dt = self.state, CONTROL_PERIOD_S
+        ax, ay, az = np.asarray(accel, dtype=float).tolist()
         if self.feedback.accel_tau_s:
             if s.accel is None:
-                s.accel = accel.copy()
-            s.accel = s.accel + dt / (self.feedback.accel_tau_s + dt) * (accel - s.accel)
-            accel = s.accel
-        measured = np.array([math.atan2(-accel[0], accel[2]), math.atan2(accel[1], math.hypot(accel[0], accel[2]))])
+                s.accel = (ax, ay, az)
+            w = dt / (self.feedback.accel_tau_s + dt)
+            mx, my, mz = s.accel
+            ax, ay, az = mx + w * (ax - mx), my + w * (ay - my), mz + w * (az - mz)
+            s.accel = (ax, ay, az)
+        measured = (math.atan2(-ax, az), math.atan2(ay, math.hypot(ax, az)))
         if not s.started:
             s.attitude, s.started = measured, True
         blend = dt / (self.feedback.attitude_tau_s + dt)
-        s.attitude = (1.0 - blend) * (s.attitude + gyro * dt) + blend * measured
-        error = s.attitude - attitude_of(self.rows.get("torso_rot", k))
-        s.integral = np.clip(s.integral + error * dt, -MAX_CORRECTION_RAD, MAX_CORRECTION_RAD)
+        rates = (float(gyro[0]), float(gyro[1]))
+        s.attitude = ((1.0 - blend) * (s.attitude[0] + rates[0] * dt) + blend * measured[0],
+                      (1.0 - blend) * (s.attitude[1] + rates[1] * dt) + blend * measured[1])
+        planned = _attitude(self.rows.get("torso_rot", k))
+        error = (s.attitude[0] - planned[0], s.attitude[1] - planned[1])
+        s.integral = (_clip(s.integral[0] + error[0] * dt, MAX_CORRECTION_RAD),
+                      _clip(s.integral[1] + error[1] * dt, MAX_CORRECTION_RAD))
         return error
 
     def _standing_share(self, k: int) -> float:
@@ -274,7 +302,7 @@ class WalkController:
         walking (the rows' ``damping`` fades to 0 there) and the servos were measured stiffer than the model: with
         servos 1.6 times as stiff and 16 ms of latency the damping kept a standing robot rocking, while soft servos
         need it to stand (taken out for them, the heavy, soft body fell over standing)."""
-        stiff = float(np.clip((self.calibration.estimate - STIFF_FROM) / (STIFF_FULL - STIFF_FROM), 0.0, 1.0))
+        stiff = min(max((self.calibration.estimate - STIFF_FROM) / (STIFF_FULL - STIFF_FROM), 0.0), 1.0)
         return 1.0 - (1.0 - self.rows.value("damping", k)) * stiff
 
     def _damping(self, gyro: np.ndarray) -> np.ndarray:
@@ -284,54 +312,9 @@ class WalkController:
         scale *= self.params.gyro_gain_scale                                    # the preset's tuning
         if self.params.gyro_stiff_share:                                        # stiff servos: less of it
             scale *= max(self.calibration.estimate, 1.0) ** -self.params.gyro_stiff_share
-        hip_roll, knee, ankle_pitch, ankle_roll = np.multiply(self.feedback.gyro, scale)
-        natural = np.array([0.0, hip_roll * gyro[0], 0.0, knee * gyro[1], ankle_pitch * gyro[1], ankle_roll * gyro[0]])
-        out = np.zeros(len(self.spec.joints))
-        for leg in self.legs.values():
-            out[list(leg.index)] = natural * leg.sign
-        return out
-
-    def _landed(self, side: Side, k: int) -> tuple[np.ndarray, float] | None:
-        """Where the ``side`` foot is held instead of its plan (its measured landing's miss: position (3,) [m] and
-        yaw [rad]) at gait row ``k``, or None: after the closing step, the landed foot where it landed."""
-        last = self.odometry.last
-        if self.feedback.accept_landing and last is not None and last[0] == side:
-            return np.array([*last[1], 0.0]), last[2]
-        return None
-
-    def _leg_change(self, k: int, pitch: float, roll: float, heading: float = 0.0) -> np.ndarray:
-        """The servo change (20,) [rad] that turns the whole body by (pitch, roll) [rad] about the support point,
-        the soles staying where the plan puts them, and the swing sole turned by ``heading`` [rad] about the stance
-        sole's centre (in full at landing) and moved against the feet's placement error (leg odometry); after the
-        closing step, the landed sole where it landed."""
-        rows = self.rows
-        pos, rot = rows.get("torso_pos", k), rows.get("torso_rot", k)
-        pivot, turn = rows.get("support_point", k), rot_y(pitch) @ rot_x(roll)
-        moved_pos, moved_rot = pivot + turn @ (pos - pivot), turn @ rot
-        contact = rows.obj("contact", k)
-        phase = rows.value("swing_phase", k)
-        out = np.zeros(len(self.spec.joints))
-        for side, leg in self.legs.items():
-            foot = rows.feet(side, k)
-            sole, sole_rot = foot[:3], rot_z(foot[3])
-            if contact not in ("double", side) and heading:
-                steer = rot_z(heading * phase)
-                stance = rows.feet(contact, k)[:3]
-                sole, sole_rot = stance + steer @ (sole - stance), steer @ sole_rot
-            landed = self._landed(side, k)
-            if landed is not None:
-                sole, sole_rot = sole + landed[0], rot_z(landed[1]) @ sole_rot
-            if contact not in ("double", side) and self.feedback.placement:
-                sole = sole + phase * self.odometry.shift(self.feedback.placement, rows.get("velocity", k))
-            planned = rows.legs(side, k)
-            body_pos, body_rot = moved_pos, moved_rot
-            if contact not in ("double", side) and self._swing_shaped:
-                sole, sole_rot = toe_raised(sole, sole_rot, phase, math.radians(self.params.swing_toe_deg),
-                                            self.spec.sole_extents(side)[1])
-                share = np.array([self.params.swing_level, self.params.swing_level_roll]) * self.state.error
-                tilt = rot_y(float(share[0])) @ rot_x(float(share[1]))
-                body_pos, body_rot = pivot + tilt @ (moved_pos - pivot), tilt @ moved_rot
-            moved = leg_ik(leg, *within_reach(leg, body_rot.T @ (sole - body_pos), body_rot.T @ sole_rot,
-                                              REACH_SHARE))[0]
-            out[list(leg.index)] = moved - planned
+        hip_roll, knee, ankle_pitch, ankle_roll = (g * scale for g in self.feedback.gyro)
+        roll_rate, pitch_rate = float(gyro[0]), float(gyro[1])
+        natural = [0.0, hip_roll * roll_rate, 0.0, knee * pitch_rate, ankle_pitch * pitch_rate, ankle_roll * roll_rate]
+        out = np.zeros(len(self._names))
+        out[self._both_legs] = np.array(natural * len(self.legs)) * self._both_signs      # every leg at once
         return out

@@ -143,14 +143,16 @@ def _target_moves(params: GaitParams, target: tuple[float, float, float]) -> lis
 def zmp_margins(zmp: np.ndarray, contacts: Sequence[str], feet: Mapping[str, np.ndarray], spec: Spec) -> np.ndarray:
     """Margin [m] of each row's ZMP (K, 2) to the sole(s) of its contact (K,) on the floor (positive inside); the
     feet (x, y, z, yaw) (K, 4) per side."""
-    from op2motion.robot.balance import polygon_margin
+    from op2motion.robot.balance import point_margin
     from op2motion.robot.support import Support
 
     out = np.empty(len(zmp))
+    points = np.asarray(zmp, dtype=float).tolist()
     for i, contact in enumerate(contacts):
         support = Support.of(contact)
         corners = {side: sole_rectangle(spec, Footstep(side, *feet[side][i, [0, 1, 3]])) for side in support.feet}
-        out[i] = polygon_margin(zmp[i], support.polygon(corners))[0]
+        x, y = points[i]
+        out[i] = point_margin(x, y, support.polygon(corners))
     return out
 
 
@@ -164,12 +166,14 @@ def sole_rectangle(spec: Spec, step: Footstep, grow: float = 0.0) -> np.ndarray:
 
 
 def _overlap(a: np.ndarray, b: np.ndarray) -> bool:
-    """Do two convex polygons (n, 2) overlap (separating-axis test)?"""
-    for poly in (a, b):
-        edges = np.roll(poly, -1, axis=0) - poly
-        for nx, ny in np.column_stack([-edges[:, 1], edges[:, 0]]):
-            pa, pb = a @ (nx, ny), b @ (nx, ny)
-            if pa.max() < pb.min() or pb.max() < pa.min():
+    """Do two convex polygons (n, 2) overlap (separating-axis test)? (On floats: a plan tests a few thousand pairs
+    of rectangles, where NumPy's call overhead was the cost.)"""
+    pa, pb = np.asarray(a, dtype=float).tolist(), np.asarray(b, dtype=float).tolist()
+    for poly in (pa, pb):
+        for (x0, y0), (x1, y1) in zip(poly, poly[1:] + poly[:1]):
+            nx, ny = -(y1 - y0), x1 - x0                                  # the edge's normal
+            on_a, on_b = [x * nx + y * ny for x, y in pa], [x * nx + y * ny for x, y in pb]
+            if max(on_a) < min(on_b) or max(on_b) < min(on_a):
                 return False
     return True
 

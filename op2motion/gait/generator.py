@@ -28,6 +28,7 @@ from op2motion.gait.footsteps import Footsteps, place_footsteps, zmp_margins
 from op2motion.gait.params import GaitParams
 from op2motion.gait.preview import preview_gains, track_reference
 from op2motion.gait.timeline import Timeline, build_timeline
+from op2motion.kinematics.frames import eigen_quaternions
 from op2motion.kinematics.leg_ik import leg_ik, leg_of, rot_y, rot_z, within_reach
 from op2motion.model.dynamics import dynamics_for
 from op2motion.model.servo import ServoModel
@@ -156,11 +157,10 @@ class _Body:
         return out
 
     def configs(self, goals: np.ndarray, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:
-        pin = self.dyn.pin
         out = np.repeat(self.dyn.configuration(goals[0])[None], len(goals), axis=0)
         out[:, self.dyn.q_index] = goals
         out[:, :3] = pos
-        out[:, 3:7] = [pin.Quaternion(r).coeffs() for r in rot]
+        out[:, 3:7] = eigen_quaternions(rot)
         return out
 
     def zmp(self, configs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -77,7 +77,7 @@ class RowBuffer:
 
     def _index(self, k: int) -> int:
         i = k - self.first
-        if not 0 <= i < self.end - self.first:
+        if not 0 <= i < len(self.objects["contact"]):                  # (the rows kept: read every tick)
             raise InputError(f"expected a row from {self.first} to {self.end - 1}, got {k}", "row")
         return i
 
@@ -121,8 +121,11 @@ def swing_phase(contact: tuple[str, ...]) -> np.ndarray:
 def support_points(feet: Mapping[str, np.ndarray], contact: tuple[str, ...]) -> np.ndarray:
     """The point (K, 3) [m] the body turns about at each row: the planned contact sole's centre, midway between the
     soles on two feet."""
-    return np.array([np.mean([feet[side][k, :3] for side in Support.of(c).feet], axis=0)
-                     for k, c in enumerate(contact)])
+    on = [Support.of(c).feet for c in contact]
+    both = np.array([len(f) == 2 for f in on], dtype=bool).reshape(-1, 1)
+    left_only = np.array([f == ("left",) for f in on], dtype=bool).reshape(-1, 1)
+    left, right = feet["left"][:len(on), :3], feet["right"][:len(on), :3]
+    return np.where(both, (left + right) / 2.0, np.where(left_only, left, right))  # the mean of one or two soles
 
 
 def planned_legs(legs: Mapping[str, Leg], feet: Mapping[str, np.ndarray], pos: np.ndarray,

@@ -41,6 +41,7 @@ from op2motion.gait.presets import load_preset
 from op2motion.gait.rolling import RollingPlanner
 from op2motion.gait.steer_feedback import RollingCalibration, RollingLearner, RollingOdometry
 from op2motion.gait.timeline import ticks
+from op2motion.kinematics import small
 from op2motion.physics import RAMP_S, ControllerHooks, Plan, WalkClock
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
@@ -180,14 +181,14 @@ class SteerableWalk(WalkController, ControllerHooks):
         self._clock_s, self._fed, self._command, self._stopping = clock, clock, command, stopping
         return goals
 
-    def _landed(self, side: Side, k: int) -> tuple[np.ndarray, float] | None:
+    def _landed(self, side: Side, k: int) -> tuple[small.Vec3, float] | None:
         """The foot that closed the feet, where it landed; as it swings again, carried to its planned path."""
         held = super()._landed(side, k)
         if held is None:
             return None
         contact = self.rows.obj("contact", k)
         weight = 1.0 - self.rows.value("swing_phase", k) if contact not in ("double", side) else 1.0
-        return held[0] * weight, held[1] * weight
+        return small.scaled(held[0], weight), held[1] * weight
 
     # -- the plan a physics check judges against ----------------------------------------------------------------
 

@@ -14,20 +14,20 @@ Three preset keys (:mod:`.params`), all off by default (the plan's swing foot, c
 from __future__ import annotations
 
 import math
+from typing import Sequence
 
-import numpy as np
-
-from op2motion.kinematics.leg_ik import rot_y
+from op2motion.kinematics import small
 
 
-def toe_raised(sole: np.ndarray, sole_rot: np.ndarray, phase: float, toe_rad: float,
-               back_m: float) -> tuple[np.ndarray, np.ndarray]:
-    """The swing sole (position (3,) [m], rotation (3, 3)) with its toe raised by ``toe_rad`` [rad] x
-    ``sin(pi phase)`` about its heel edge, ``back_m`` [m] behind the sole centre (world frame)."""
-    angle = toe_rad * math.sin(math.pi * float(np.clip(phase, 0.0, 1.0)))
+def toe_raised(sole: Sequence[float], sole_rot: Sequence[Sequence[float]], phase: float, toe_rad: float,
+               back_m: float) -> tuple[small.Vec3, small.Mat3]:
+    """The swing sole (position (3,) [m], rotation (3, 3); as tuples, :mod:`~op2motion.kinematics.small`: the
+    controller calls it every tick) with its toe raised by ``toe_rad`` [rad] x ``sin(pi phase)`` about its heel
+    edge, ``back_m`` [m] behind the sole centre (world frame)."""
+    angle = toe_rad * math.sin(math.pi * min(max(float(phase), 0.0), 1.0))
     if not angle:
-        return sole, sole_rot
-    tilt = rot_y(-angle)                                          # about the sole's y: toe up
-    heel = sole + sole_rot @ np.array([-back_m, 0.0, 0.0])
-    turned = sole_rot @ tilt
-    return heel + turned @ np.array([back_m, 0.0, 0.0]), turned
+        return small.vec(sole), small.mat(sole_rot)
+    tilt = small.rot_y(-angle)                                    # about the sole's y: toe up
+    heel = small.add(sole, small.apply(sole_rot, (-back_m, 0.0, 0.0)))
+    turned = small.mul(sole_rot, tilt)
+    return small.add(heel, small.apply(turned, (back_m, 0.0, 0.0))), turned

@@ -128,3 +128,30 @@ def quat_xyzw(rot: np.ndarray) -> tuple[float, float, float, float]:
     length = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
     x, y, z, w = (float(v) / length for v in q)
     return x, y, z, w
+
+
+def eigen_quaternions(rot: np.ndarray) -> np.ndarray:
+    """Rotations (K, 3, 3) as quaternions (K, 4) (x, y, z, w): what pinocchio's ``Quaternion(r).coeffs()`` gives
+    for each, bit for bit (Eigen's conversion: from the trace where it is positive, else from the largest diagonal
+    term), in a few array operations instead of K calls (a planned walk converts its torso poses a dozen times)."""
+    m = np.asarray(rot, dtype=float).reshape(-1, 3, 3)
+    out = np.empty((len(m), 4))
+    trace = m[:, 0, 0] + (m[:, 1, 1] + m[:, 2, 2])                  # summed in Eigen's order
+    up = trace > 0.0
+    t = np.sqrt(trace[up] + 1.0)
+    out[up, 3] = 0.5 * t
+    t = 0.5 / t
+    for i, (j, k) in enumerate(((2, 1), (0, 2), (1, 0))):
+        out[up, i] = (m[up, j, k] - m[up, k, j]) * t
+    for n in np.flatnonzero(~up):                                     # a half turn or more: rare, one at a time
+        r = m[n]
+        i = 1 if r[1, 1] > r[0, 0] else 0
+        i = 2 if r[2, 2] > r[i, i] else i
+        j, k = (i + 1) % 3, (i + 2) % 3
+        t = math.sqrt(r[i, i] - r[j, j] - r[k, k] + 1.0)
+        out[n, i] = 0.5 * t
+        t = 0.5 / t
+        out[n, 3] = (r[k, j] - r[j, k]) * t
+        out[n, j] = (r[j, i] + r[i, j]) * t
+        out[n, k] = (r[k, i] + r[i, k]) * t
+    return out

@@ -14,12 +14,14 @@ ankle pitch and roll from the direction of ``r``; the hip's yaw, roll and pitch 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from typing import Mapping
+from typing import Mapping, Sequence
 
 import numpy as np
 
 from op2motion.errors import InputError, ModelError
+from op2motion.kinematics import small
 from op2motion.robot.joints import LEG_JOINTS
 from op2motion.robot.sides import Side
 from op2motion.robot.spec import Spec
@@ -154,6 +156,46 @@ def leg_ik(leg: Leg, sole: np.ndarray, rot: np.ndarray) -> np.ndarray:
     out[:, 2] = np.arctan2(-m[:, 2, 0], m[:, 2, 2])                                    # pitch
     out[:, 3], out[:, 4], out[:, 5] = knee, ank, ank_roll
     return out * leg.sign
+
+
+def within_reach_pose(leg: Leg, sole: Sequence[float], rot: Sequence[Sequence[float]], share: float = 1.0
+                      ) -> small.Vec3:
+    """:func:`within_reach` for one sole target (3,) [m] with rotation (3, 3) (tuples, lists: :mod:`.small`): the
+    target, pulled in if need be (the per-tick path of a walk controller; the same arithmetic)."""
+    foot = leg.ankle_to_sole
+    hip = leg.hip.tolist()
+    span = (sole[0] + rot[0][2] * foot - hip[0], sole[1] + rot[1][2] * foot - hip[1],
+            sole[2] + rot[2][2] * foot - hip[2])
+    reach = (leg.thigh + leg.calf) * share
+    length = small.norm(span)
+    scale = 1.0 - reach / max(length, 1e-12) if length > reach else 0.0
+    return small.sub(sole, small.scaled(span, scale))
+
+
+def leg_ik_pose(leg: Leg, sole: Sequence[float], rot: Sequence[Sequence[float]]) -> tuple[float, ...]:
+    """:func:`leg_ik` for one sole pose: the six leg servo angles [rad] for the sole centre at ``sole`` (3,) [m]
+    with rotation ``rot`` (3, 3) in the torso frame (tuples, lists: :mod:`.small`). The same arithmetic on floats:
+    a walk controller solves two legs every 8 ms, and NumPy's call overhead made that a tenth of a walk check."""
+    foot, (hx, hy, hz) = leg.ankle_to_sole, leg.hip.tolist()
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rot
+    dx, dy, dz = hx - (sole[0] + r02 * foot), hy - (sole[1] + r12 * foot), hz - (sole[2] + r22 * foot)
+    r = (r00 * dx + r10 * dy + r20 * dz, r01 * dx + r11 * dy + r21 * dz, r02 * dx + r12 * dy + r22 * dz)
+    c = small.norm(r)
+    a, b = leg.thigh, leg.calf
+    if c > a + b + REACH_TOL_M or c < abs(a - b) + 1e-6:
+        raise InputError(f"expected the {leg.side} ankle within {a + b:.4f} m of the hip, got {c:.4f} m at row 0",
+                         "leg")
+    if r[2] <= 0.0:
+        raise InputError(f"expected the {leg.side} hip above the ankle in the foot frame, got {r[2]:.4f} m at row 0",
+                         "leg")
+    knee = math.acos(min(max((c ** 2 - a ** 2 - b ** 2) / (2.0 * a * b), -1.0), 1.0))
+    ank_roll = math.atan2(r[1], r[2])
+    ank = math.atan2(-a * math.sin(knee), a * math.cos(knee) + b) - math.atan2(r[0], math.hypot(r[1], r[2]))
+    m = small.mul(small.mul(rot, small.rot_x(-ank_roll)), small.rot_y(-(knee + ank)))
+    natural = (math.atan2(-m[0][1], m[1][1]), math.atan2(m[2][1], math.hypot(m[2][0], m[2][2])),
+               math.atan2(-m[2][0], m[2][2]), knee, ank, ank_roll)
+    sign = leg.sign.tolist()
+    return tuple([natural[i] * sign[i] for i in range(6)])
 
 
 def legs_ik(spec: Spec, soles: Mapping[Side, tuple[np.ndarray, np.ndarray]], base: np.ndarray) -> np.ndarray:

@@ -42,6 +42,7 @@ class Dynamics:
         self.pin, self.spec = pin, spec
         self.model = pin.buildModelFromXML(build_urdf(spec), pin.JointModelFreeFlyer())
         self.data = self.model.createData()
+        self._neutral = pin.neutral(self.model)          # copied by every configuration (a physics run: thousands)
         self.q_index = np.array([self.model.joints[self.model.getJointId(n)].idx_q for n in spec.joint_names])
         self.v_index = np.array([self.model.joints[self.model.getJointId(n)].idx_v for n in spec.joint_names])
         self.joint_ids = [self.model.getJointId(n) for n in spec.joint_names]
@@ -55,9 +56,9 @@ class Dynamics:
     def configuration(self, servo: np.ndarray) -> np.ndarray:
         """Pinocchio configuration: free flyer at identity, joints from servo angles (20,) [rad] in ID order."""
         servo = np.asarray(servo, dtype=float).reshape(-1)
-        if servo.size != len(self.spec.joints) or not np.all(np.isfinite(servo)):
+        if servo.size != len(self.spec.joints) or not np.isfinite(servo).all():
             raise InputError(f"expected {len(self.spec.joints)} finite values, got {servo.size}", "servo angles")
-        q = self.pin.neutral(self.model)
+        q = self._neutral.copy()
         q[self.q_index] = servo
         return q
 

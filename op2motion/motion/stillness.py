@@ -8,6 +8,7 @@ single samples are no speed). Both for :data:`STILL_S` on end: :attr:`Stillness.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 
 import numpy as np
@@ -35,9 +36,8 @@ class Stillness:
         blend = CONTROL_PERIOD_S / (GYRO_TAU_S + CONTROL_PERIOD_S)
         self.rate = gyro.copy() if self.rate is None else self.rate + blend * (gyro - self.rate)
         self.history.append(np.asarray(joints_rad, dtype=float).copy())
-        moved = float(np.max(np.abs(self.history[-1] - self.history[0]))) if len(self.history) > 1 else 0.0
-        full = len(self.history) == self.history.maxlen
-        calm = full and float(np.linalg.norm(self.rate)) < STILL_GYRO_RAD_S and moved < STILL_JOINT_RAD
+        calm = (len(self.history) == self.history.maxlen and math.hypot(*self.rate.tolist()) < STILL_GYRO_RAD_S
+                and float(np.max(np.abs(self.history[-1] - self.history[0]))) < STILL_JOINT_RAD)
         self.still_ticks = self.still_ticks + 1 if calm else 0
 
     @property

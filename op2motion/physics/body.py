@@ -21,7 +21,7 @@ import numpy as np
 from op2motion.errors import InputError
 from op2motion.model.dynamics import dynamics_for
 from op2motion.model.urdf import foot_box_corners, foot_link
-from op2motion.robot.balance import polygon_margin
+from op2motion.robot.balance import point_margin
 from op2motion.robot.spec import Collision, Spec, rpy_matrix
 from op2motion.robot.support import SIDES, Side, Support, SupportName
 
@@ -54,6 +54,8 @@ class Body:
         self.dyn = dynamics_for(spec)
         self.pin = self.dyn.pin
         self.local_corners = {side: foot_box_corners(spec, side) for side in SIDES}
+        # the corners with a 1 appended, so one product with a frame's 4 x 4 transform places them
+        self._corners_h = {side: np.hstack([c, np.ones((len(c), 1))]) for side, c in self.local_corners.items()}
         self.foot_ids = {side: self.dyn.model.getFrameId(foot_link(spec, side)) for side in SIDES}
         self.foot_links = {side: foot_link(spec, side) for side in SIDES}
 
@@ -69,12 +71,11 @@ class Body:
         config = self._configuration(base_pos, base_rot, q)
         com = pin.centerOfMass(model, data, config).copy()
         pin.updateFramePlacements(model, data)
-        soles, corners = {}, {}
+        soles, corners, frames = {}, {}, data.oMf
         for side in SIDES:
-            sole = data.oMf[self.dyn.sole_ids[side]]
-            foot = data.oMf[self.foot_ids[side]]
+            sole = frames[self.dyn.sole_ids[side]]
             soles[side] = (sole.translation.copy(), sole.rotation.copy())
-            corners[side] = self.local_corners[side] @ foot.rotation.T + foot.translation
+            corners[side] = (self._corners_h[side] @ frames[self.foot_ids[side]].homogeneous.T)[:, :3]
         return BodyState(com, soles, corners)
 
 
@@ -103,7 +104,7 @@ def placement(body: Body, q: np.ndarray, support: Support | SupportName) -> tupl
 
 def margin_to(state: BodyState, support: Support, xy: np.ndarray) -> float:
     """Margin [m] of a point (2,) to the support polygon of ``support`` in ``state`` (positive inside)."""
-    return float(polygon_margin(xy, support.polygon(state.corners))[0])
+    return point_margin(float(xy[0]), float(xy[1]), support.polygon(state.corners))
 
 
 def _axis_rotation(axis: tuple[float, float, float], angle: float) -> np.ndarray:

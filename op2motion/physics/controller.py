@@ -118,8 +118,11 @@ class GoalMerger:
 
     def p_gains(self, row: int) -> np.ndarray:
         """The P gains (20,) at plan row ``row``: the plan's, the ``p_gains`` hook's over them."""
-        over = self.hooks.p_gains or {}
-        return np.array([over.get(n, p) for n, p in zip(self.names, self.controller.plan.p_gains[row])], dtype=float)
+        over = self.hooks.p_gains
+        planned = self.controller.plan.p_gains[row]
+        if not over:
+            return planned.copy()                  # (the plan's, as they were: nothing to merge every 8 ms)
+        return np.array([over.get(n, p) for n, p in zip(self.names, planned)], dtype=float)
 
     def torque_shares(self) -> np.ndarray | None:
         """The ``torque_limits`` hook as shares (20,) of the servos' torque, 0 to 1; None while it sets none."""

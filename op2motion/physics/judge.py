@@ -154,14 +154,14 @@ def slip(times: np.ndarray, soles_xy: Mapping[str, np.ndarray], supporting: Mapp
     :data:`SLIP_LIMIT_M`."""
     worst, first_bad = 0.0, None
     for side, xy in soles_xy.items():
-        anchor = None
+        anchor, points, held = None, np.asarray(xy)[:, :2].tolist(), supporting[side]      # floats: per sample
         for k in range(len(times)):
-            if not supporting[side][k]:
+            if not held[k]:
                 anchor = None
                 continue
             if anchor is None:
-                anchor = start_xy[side] if k == 0 else xy[k]
-            slide = float(np.hypot(*(xy[k] - anchor)))
+                anchor = [float(v) for v in start_xy[side][:2]] if k == 0 else points[k]
+            slide = math.hypot(points[k][0] - anchor[0], points[k][1] - anchor[1])
             worst = max(worst, slide)
             if slide > SLIP_LIMIT_M and (first_bad is None or k < first_bad):
                 first_bad = k
@@ -196,7 +196,7 @@ def tilts(track: Track, start: StartFacts, plan: Plan) -> tuple[np.ndarray, np.n
             pending = times[k] + SUPPORT_SETTLE_S
         if pending is not None and times[k] >= pending - 1e-9:
             reference, pending = ups[k], None
-        tilt[k] = math.degrees(math.acos(float(np.clip(ups[k] @ reference, -1.0, 1.0))))
+        tilt[k] = math.degrees(math.acos(min(max(float(ups[k] @ reference), -1.0), 1.0)))
     return from_start, tilt, loaded
 
 

@@ -66,6 +66,7 @@ class MuJoCoEngine:
         self.root = m.body(spec.root_link).id
         self.floor = m.geom("floor").id
         self.body_name = {i: m.body(i).name for i in range(m.nbody)}
+        self.geom_body = [self.body_name[int(b)] for b in m.geom_bodyid]      # each geom's body, by geom id
 
     def close(self) -> None:
         """Nothing to release."""
@@ -89,8 +90,8 @@ class MuJoCoEngine:
         self.model.opt.gravity[2] = -GRAVITY_M_S2 * scale
 
     def state(self) -> tuple[np.ndarray, np.ndarray]:
-        """Joint angles and velocities (20,) [rad, rad/s]."""
-        return self.data.qpos[self.qadr].copy(), self.data.qvel[self.dadr].copy()
+        """Joint angles and velocities (20,) [rad, rad/s] (copies: indexing by an array copies)."""
+        return self.data.qpos[self.qadr], self.data.qvel[self.dadr]
 
     def step(self, torque: np.ndarray, push: np.ndarray | None = None) -> None:
         """One time step with the servos' active ``torque`` (20,) [N·m] and an optional ``push`` (3,) [N] at the
@@ -116,17 +117,21 @@ class MuJoCoEngine:
         """Contacts of the robot with the floor (``other`` None) and with itself, at the current state."""
         mj, m, d = self.mj, self.model, self.data
         mj.mj_forward(m, d)
-        out, wrench = [], np.zeros(6)
-        for i in range(d.ncon):
-            con = d.contact[i]
-            g0, g1 = int(con.geom[0]), int(con.geom[1])
+        n = d.ncon
+        if not n:
+            return []
+        con = d.contact                                             # every contact's fields as arrays (n, ...)
+        wrench, local = np.zeros(6), np.empty((n, 3))
+        for i in range(n):
             mj.mj_contactForce(m, d, i, wrench)
-            on_g1 = con.frame.reshape(3, 3).T @ wrench[:3]          # force on geom[1] from geom[0], world frame
+            local[i] = wrench[:3]                                   # normal, then the two tangents (contact frame)
+        on_g1 = np.einsum("nji,nj->ni", con.frame.reshape(n, 3, 3), local)   # force on geom[1] from geom[0], world
+        points, normal = con.pos.copy(), local[:, 0].tolist()
+        out = []
+        for i, (g0, g1) in enumerate(con.geom.tolist()):
             if self.floor in (g0, g1):
-                robot, force = (g1, on_g1) if g0 == self.floor else (g0, -on_g1)
-                out.append(Contact(self.body_name[int(m.geom_bodyid[robot])], None, float(wrench[0]), force,
-                                   con.pos.copy()))
+                robot, force = (g1, on_g1[i]) if g0 == self.floor else (g0, -on_g1[i])
+                out.append(Contact(self.geom_body[robot], None, normal[i], force, points[i]))
             else:
-                out.append(Contact(self.body_name[int(m.geom_bodyid[g0])], self.body_name[int(m.geom_bodyid[g1])],
-                                   float(wrench[0]), -on_g1, con.pos.copy()))
+                out.append(Contact(self.geom_body[g0], self.geom_body[g1], normal[i], -on_g1[i], points[i]))
         return out

@@ -179,13 +179,17 @@ class PyBulletEngine:
 
     def contacts(self) -> list[Contact]:
         """Contacts of the robot with the floor (``other`` None) and with itself."""
-        out = []
-        for cp in self.client.getContactPoints(self.robot):
-            normal = np.asarray(cp[7])                  # on B, pointing towards A
-            force = cp[9] * normal + cp[10] * np.asarray(cp[11]) + cp[12] * np.asarray(cp[13])
-            other = None if cp[2] == self.plane else self.link_name[cp[4]]
-            out.append(Contact(self.link_name[cp[3]], other, float(cp[9]), force, np.asarray(cp[5])))
-        return out
+        points = self.client.getContactPoints(self.robot)
+        if not points:
+            return []
+        # all contacts at once: (normal force, friction 1, friction 2) and their directions (the normal on B,
+        # pointing towards A); per contact, seven small arrays cost more than the arithmetic
+        size = np.array([(cp[9], cp[10], cp[12]) for cp in points])
+        normal, lateral1, lateral2 = (np.array([cp[i] for cp in points]) for i in (7, 11, 13))
+        force = size[:, :1] * normal + size[:, 1:2] * lateral1 + size[:, 2:] * lateral2
+        where = np.array([cp[5] for cp in points])
+        return [Contact(self.link_name[cp[3]], None if cp[2] == self.plane else self.link_name[cp[4]], float(cp[9]),
+                        force[i], where[i]) for i, cp in enumerate(points)]
 
     def snapshot(self, width: int = 640, height: int = 480) -> bytes:
         """PNG bytes of the scene from the front left (TinyRenderer: works headless)."""

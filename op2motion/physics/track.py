@@ -48,20 +48,31 @@ class Track:
     base_pos: np.ndarray | None = None
 
 
+def _load_and_moment(contacts: list[Contact]) -> tuple[float, float, float]:
+    """The contacts' summed vertical load [N] and its moments (x, y) [N·m] (load x point), summed in order as
+    floats (a sample sums a few contacts: array sums cost more than the arithmetic)."""
+    load = mx = my = 0.0
+    for c in contacts:
+        fz = float(c.force[2])
+        load += fz
+        mx += fz * float(c.point[0])
+        my += fz * float(c.point[1])
+    return load, mx, my
+
+
 def centre_of_pressure(contacts: list[Contact]) -> np.ndarray | None:
     """The load-weighted mean of the contact points (2,) [m], or None without vertical load."""
-    load = sum(c.force[2] for c in contacts)
-    return (sum(c.force[2] * c.point[:2] for c in contacts) / load) if load > _LOAD_EPS_N else None
+    load, mx, my = _load_and_moment(contacts)
+    return np.array([mx / load, my / load]) if load > _LOAD_EPS_N else None
 
 
 def foot_loads(ground: list[Contact], foot_links: dict[str, str]) -> FootSample:
     """Each foot's vertical load [N] and own centre of pressure, for the feet that carry any."""
     out = {}
     for side, link in foot_links.items():
-        on = [c for c in ground if c.link == link]
-        cop = centre_of_pressure(on)
-        if cop is not None:
-            out[side] = (float(sum(c.force[2] for c in on)), cop)
+        load, mx, my = _load_and_moment([c for c in ground if c.link == link])
+        if load > _LOAD_EPS_N:
+            out[side] = (load, np.array([mx / load, my / load]))
     return out
 
 

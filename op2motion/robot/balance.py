@@ -10,6 +10,7 @@ caller's to state (:data:`COM_MODEL_LUMPED`, :data:`COM_MODEL_FULL`).
 
 from __future__ import annotations
 
+import math
 from typing import Final, Literal, get_args
 
 import numpy as np
@@ -98,7 +99,7 @@ def penalty_swing_foot_height(swing_foot_min_z: np.ndarray, des_ht: float = 0.0)
 
 def convex_hull(points: np.ndarray) -> np.ndarray:
     """Convex hull (m, 2) of points (n, 2) [m], counter-clockwise, without repeated or collinear points."""
-    pts = sorted({(float(x), float(y)) for x, y in np.asarray(points, dtype=float).reshape(-1, 2)})
+    pts = sorted(set(map(tuple, np.asarray(points, dtype=float).reshape(-1, 2).tolist())))
     if len(pts) < 3:
         return np.asarray(pts, dtype=float).reshape(-1, 2)
 
@@ -130,3 +131,20 @@ def polygon_margin(xy: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     nearest = a[None, :, :] + t[:, :, None] * edge[None, :, :]
     outside = np.hypot(*(p[:, None, :] - nearest).transpose(2, 0, 1)).min(axis=1)
     return np.where(inside >= 0.0, inside, -outside)
+
+
+def point_margin(x: float, y: float, polygon: np.ndarray) -> float:
+    """:func:`polygon_margin` of one point (``x``, ``y``) [m], on floats: the per-sample callers (a run's support
+    margins, a plan's ZMP margins) ask for one point at a time, where NumPy's call overhead was most of the cost."""
+    corners = polygon.tolist()
+    if len(corners) < 3:                      # a degenerate polygon: the array version's answer, whatever it is
+        return float(polygon_margin(np.array([x, y]), polygon)[0])
+    inside = outside = math.inf
+    for (ax, ay), (bx, by) in zip(corners, corners[1:] + corners[:1]):
+        ex, ey = bx - ax, by - ay
+        length = math.hypot(ex, ey)
+        rx, ry = x - ax, y - ay
+        inside = min(inside, (ex * ry - ey * rx) / length)         # positive on the inner (left) side
+        t = min(max((rx * ex + ry * ey) / length ** 2, 0.0), 1.0)  # the nearest point of the edge
+        outside = min(outside, math.hypot(x - (ax + t * ex), y - (ay + t * ey)))
+    return inside if inside >= 0.0 else -outside

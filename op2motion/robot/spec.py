@@ -7,6 +7,7 @@ Angles [rad], lengths [m], masses [kg], torques [N·m].
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Mapping
@@ -295,9 +296,9 @@ class Spec:
     imu: ImuSpec | None = None
     framework_leg_m: tuple[float, float, float] | None = None   # the firmware's own thigh, calf, ankle-to-sole [m]
 
-    @property
+    @functools.cached_property
     def joint_names(self) -> tuple[str, ...]:
-        """Official joint names in Dynamixel ID order."""
+        """Official joint names in Dynamixel ID order (worked out once: per-tick code reads them every 8 ms)."""
         return tuple(j.name for j in self.joints)
 
     def joint(self, name: str) -> Joint:

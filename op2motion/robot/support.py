@@ -63,17 +63,17 @@ class Support(str, Enum):
     @property
     def is_double(self) -> bool:
         """Both feet carry the robot."""
-        return self is Support.DOUBLE
+        return self._value_ == "double"          # (the value, not the member: judging a run asks thousands of times)
 
     @property
     def feet(self) -> tuple[Side, ...]:
         """The feet on the floor: both for double support."""
-        return SIDES if self.is_double else (self.stance,)
+        return _FEET[self._value_]
 
     @property
     def stance(self) -> Side:
         """The foot the world frame is rooted on: the support foot, the left one for double support."""
-        return "right" if self is Support.RIGHT else "left"
+        return "right" if self._value_ == "right" else "left"
 
     @property
     def swing(self) -> Side | None:
@@ -84,6 +84,9 @@ class Support(str, Enum):
         """The support polygon (m, 2) [m], counter-clockwise: the convex hull of the supporting feet's sole corners,
         given per side as (k, 2) or (k, 3) points (only x and y are used)."""
         return convex_hull(np.vstack([np.asarray(corners[side])[:, :2] for side in self.feet]))
+
+
+_FEET: dict[str, tuple[Side, ...]] = {"left": ("left",), "right": ("right",), "double": SIDES}
 
 
 def fixed_foot(supports: Iterable[Support | SupportName]) -> Side:
