@@ -50,7 +50,7 @@ from op2motion.bus.tables import (
     TORQUE_LIMIT_FULL,
 )
 from op2motion.errors import CheckFailed, InputError, PortFailed
-from op2motion.physics import Controller, GoalMerger
+from op2motion.robot.controller import Controller, GoalMerger
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.imu import decode
 from op2motion.robot.joints import servo_to_ticks

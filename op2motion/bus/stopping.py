@@ -13,7 +13,7 @@ from typing import Any, Callable
 from op2motion.bus import safety
 from op2motion.bus.robot import OP2
 from op2motion.bus.tables import CM730_ID
-from op2motion.physics import hooks_of
+from op2motion.robot.controller import hooks_of
 from op2motion.robot.support import Support
 
 STOP_HOLD_S = 0.3                  # after a stop, the held goals are sent this long before the loop ends

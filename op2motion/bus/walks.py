@@ -67,7 +67,7 @@ def steered_walk(port: RobotPort, spec: Spec, preset: str | None = None, command
     from op2motion.motion.fall import Supervisor
 
     walker = SteerableWalk.make(spec, preset, commands=commands, action=action)
-    controller: Any = Supervisor(walker, spec=spec) if get_up else walker   # type: ignore[arg-type]
+    controller: Any = Supervisor(walker, spec=spec) if get_up else walker
     source = " and ".join(n for n, v in (("a command timeline", commands), ("keys", teleop)) if v is not None)
     what = f"steered walk '{walker.params.name}' ({source or 'standing'}{', getting up after falls' if get_up else ''})"
     duration = MAX_TELEOP_S if teleop is not None else None

@@ -31,7 +31,7 @@ from op2motion.model.servo import ServoModel
 from op2motion.physics.body import Body, BodyState, lying_placement, margin_to, placement
 from op2motion.physics.controller import Controller, GoalMerger, Goals
 from op2motion.physics.engine import Engine
-from op2motion.physics.plan import RAMP_S, PlannedStates, planned_states
+from op2motion.physics.plan import RAMP_S, Plan, PlannedStates, planned_states
 from op2motion.physics.sensors import Imu, Reading, Sensors
 from op2motion.physics.stopping import FULL, EarlyStop
 from op2motion.physics.track import SAMPLE_S, Recorder, Track, foot_loads
@@ -74,7 +74,7 @@ class StartFacts:
     ended: str = FULL
 
 
-def start_pose(body: Body, controller: Controller, servo: ServoModel, lying: str | None = None
+def start_pose(body: Body, controller: Controller[Plan], servo: ServoModel, lying: str | None = None
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, PlannedStates, bool]:
     """Where a run starts (see the module docstring): joint angles (20,) [rad], torso position [m] and rotation,
     the planned states (with the start's flat foot and gap), and whether gravity must be ramped in."""
@@ -96,7 +96,7 @@ def start_pose(body: Body, controller: Controller, servo: ServoModel, lying: str
 class _Servos:
     """The goals and stiffness the servos hold, updated from the controller every control tick."""
 
-    def __init__(self, controller: Controller, body: Body, servo: ServoModel):
+    def __init__(self, controller: Controller[Plan], body: Body, servo: ServoModel):
         self.controller, self.servo = controller, servo
         self.names = body.spec.joint_names
         self.merger = GoalMerger(controller, self.names)
@@ -128,7 +128,7 @@ class _Servos:
         self._apply(goals, self.controller.plan.row(t))
 
 
-def simulate(engine: Engine, body: Body, controller: Controller, servo: ServoModel, setup: RunSetup = RunSetup(),
+def simulate(engine: Engine, body: Body, controller: Controller[Plan], servo: ServoModel, setup: RunSetup = RunSetup(),
              on_tick: Callable[[float], object] | None = None) -> tuple[Track, StartFacts]:
     """One run of ``controller`` for its plan's duration, or until its verdict is known (:mod:`.stopping`; not
     with ``setup.full_length``); ``on_tick`` gets the simulated time [s] after every control period. Returns the

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterable
 
 from op2motion.physics.controller import Controller
+from op2motion.physics.plan import Plan
 from op2motion.physics.report import EngineReport
 from op2motion.physics.runner import Pushes, Setup, check, check_runs, check_work, runs_per_engine
 from op2motion.physics.scene import EngineName
@@ -154,7 +155,7 @@ def robust_runs(members: int, engines: int, pushes: Pushes | None) -> int:
     return members * check_runs(engines, pushes, None)
 
 
-def robust_check(make_controller: Callable[[], Controller], spec: Spec, engines: Iterable[EngineName],
+def robust_check(make_controller: Callable[[], Controller[Plan]], spec: Spec, engines: Iterable[EngineName],
                  judge: Judge = stands, pushes: Pushes | None = None, members: Iterable[Member] | None = None,
                  on_progress: Callable[[float, float], Any] | None = None) -> RobustReport:
     """Run a fresh controller from ``make_controller()`` on every member (default :func:`family`) in every engine;

@@ -130,7 +130,7 @@ def sag_allowance_deg(plan: Plan, spec: Spec, servo: ServoModel) -> float:
 class _Runner:
     """The runs of one check: one servo model, one body, one tilt limit; progress summed over every run."""
 
-    def __init__(self, controller: Controller, spec: Spec, setup: Setup, runs: int, on_progress: Progress | None):
+    def __init__(self, controller: Controller[Plan], spec: Spec, setup: Setup, runs: int, on_progress: Progress | None):
         self.controller, self.spec, self.setup = controller, spec, setup
         plan = controller.plan
         self.servo = ServoModel.of(spec, plan.p_gains[0], setup.stiffness, setup.voltage)
@@ -197,7 +197,7 @@ def check_work(runs: int, seconds_each: float, counted: str | None = None) -> No
                          f"pushes, bodies or engines")
 
 
-def check(controller: Controller, spec: Spec, engines: Sequence[EngineName] = ("pybullet",),
+def check(controller: Controller[Plan], spec: Spec, engines: Sequence[EngineName] = ("pybullet",),
           pushes: Pushes | None = None, trials: Trials | None = None, setup: Setup = Setup(),
           on_progress: Progress | None = None) -> CheckReport:
     """Run ``controller`` (a :class:`.controller.Controller`, e.g. a :class:`.controller.Schedule`) in each of
