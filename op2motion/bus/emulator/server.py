@@ -27,7 +27,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from op2motion.bus.emulator.body import Drive, EmulatedBody
-from op2motion.bus.emulator.devices import EmulatedServo
 from op2motion.bus.emulator.faults import Faults
 from op2motion.bus.emulator.timing import TimedLink, WireTiming, return_delay_s
 from op2motion.bus.emulator.wire import BOOT_S, Wire
@@ -102,7 +101,7 @@ class Emulator:
             servo.set("goal_position", int(round(self.body.pose[servo.id - 1] / self.spec.servo.rad_per_tick))
                       + self.spec.servo.center_tick + int(self.body.horn_ticks[servo.id - 1]))
             servo.set("torque_enable", 1)
-        self.body.sense(self.servos, self.board, self.temperature_overrides)
+        self.body.sense(self.servos, self.wire.tables, self.board, self.temperature_overrides)
 
     def _present_ticks(self) -> list[int]:
         s = self.spec.servo
@@ -253,7 +252,8 @@ class Emulator:
             n = min(steps, BATCH_STEPS)
             self._timed_faults()
             if self._drive is None:
-                self._drive = self.body.drive(self._limp_servos(), self.wire.powered())
+                self._limp_servos()
+                self._drive = self.body.drive(self.wire.tables, self.wire.powered())
             self.body.step(n, self.servos, self._drive)
             steps -= n
         self._stale = True
@@ -266,10 +266,10 @@ class Emulator:
         if not self._stale:
             return
         self._stale, self._refreshed_at = False, self._now()
-        self.body.sense(self.servos, self.board, self.temperature_overrides)
+        self.body.sense(self.servos, self.wire.tables, self.board, self.temperature_overrides)
         self._drive = None
         self._truth = self.body.truth()
-        self.torque_limit_min = min(self.torque_limit_min, *(s.u16("torque_limit") for s in self.servos))
+        self.torque_limit_min = min(self.torque_limit_min, int(self.wire.tables.column("torque_limit").min()))
         if self._truth["t_s"] >= self._next_trace:
             self.trace.append(self._truth)
             self._next_trace = self._truth["t_s"] + TRACE_EVERY_S
@@ -319,12 +319,13 @@ class Emulator:
                 os.write(master, bytes(self.outbox))
             self.outbox.clear()
 
-    def _limp_servos(self) -> list[EmulatedServo]:
+    def _limp_servos(self) -> None:
         """The servos as the body sees them: a missing or unplugged servo has no torque."""
+        if not (self.faults.missing or self.wire.unplugged):
+            return
         for servo in self.servos:
             if self.wire.silent(servo.id):
                 servo.set("torque_enable", 0)
-        return self.servos
 
     def _now(self) -> float:
         return self.body.steps * self.body.dt

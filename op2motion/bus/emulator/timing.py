@@ -40,6 +40,7 @@ KERNEL_LATENCY_TIMER_MS = 16       # Linux ftdi_sio's default since the low-late
 MAX_LATENCY_TIMER_MS = 255         # FT232R: 1..255 ms
 
 Answer = Callable[[float, bytes], list[bytes]]
+_UNKNOWN = object()                # Ftdi.next_packet not worked out since the chip's state last changed
 
 
 @dataclass(frozen=True)
@@ -92,18 +93,24 @@ def packet_ends(stream: bytes | bytearray) -> list[int]:
 
 
 class Ftdi:
-    """The FT232R's receive path (see the module docstring): bytes in as they finish on the wire, USB packets out."""
+    """The FT232R's receive path (see the module docstring): bytes in as they finish on the wire, USB packets out.
+
+    :meth:`next_packet` (when the next packet with bytes in it goes, were nothing more to arrive) is worked out from
+    the chip's state without changing it, by the arithmetic :meth:`step` does, and kept until the state changes: the
+    emulator asks it several times between two changes."""
 
     def __init__(self, latency_timer_s: float, byte_s: float, start_s: float):
         self.timer_s, self.byte_s = latency_timer_s, byte_s
         self.anchor = start_s                       # the last packet sent: the timer fires timer_s after it
         self.buffer = bytearray()
         self.incoming: collections.deque[tuple[float, bytes]] = collections.deque()   # (first byte's end, bytes)
+        self._next: float | None | object = _UNKNOWN                                 # next_packet's answer
 
     def receive(self, first_end_s: float, data: bytes) -> None:
         """``data`` arrives back to back, its first byte complete at ``first_end_s`` [s]."""
         if data:
             self.incoming.append((first_end_s, data))
+            self._next = _UNKNOWN
 
     def idle(self) -> bool:
         """Nothing buffered and nothing on its way."""
@@ -114,22 +121,21 @@ class Ftdi:
         payload for a timer firing with nothing buffered), bytes taken in (returns ``(t, b"")`` too), or None when
         nothing happens by then."""
         fire = self.anchor + self.timer_s
-        if self.idle():                              # skip whole idle periods at once
+        if not self.buffer and not self.incoming:    # idle: skip whole idle periods at once
             if fire > limit_s or math.isinf(limit_s):
                 return None
             periods = max(1, math.floor((limit_s - self.anchor) / self.timer_s + 1e-9))
             self.anchor += periods * self.timer_s
             return self.anchor, b""
-        if self.incoming and self.incoming[0][0] <= min(fire, limit_s):
+        self._next = _UNKNOWN
+        by = fire if fire < limit_s else limit_s
+        if self.incoming and self.incoming[0][0] <= by:
             first, data = self.incoming[0]
-            need = USB_PAYLOAD_BYTES - len(self.buffer)
-            by = min(fire, limit_s)
             count = min(len(data), int(math.floor((by - first) / self.byte_s + 1e-9)) + 1)
-            take = min(count, need)
+            take = min(count, USB_PAYLOAD_BYTES - len(self.buffer))
             self.buffer += data[:take]
-            rest = data[take:]
-            if rest:
-                self.incoming[0] = (first + take * self.byte_s, rest)
+            if take < len(data):
+                self.incoming[0] = (first + take * self.byte_s, data[take:])
             else:
                 self.incoming.popleft()
             at = first + (take - 1) * self.byte_s
@@ -139,6 +145,43 @@ class Ftdi:
         if fire <= limit_s:
             return self._send(fire)
         return None
+
+    def run(self, limit_s: float) -> list[bytes]:
+        """Everything the chip does up to ``limit_s`` [s]: the payloads of the USB packets with bytes in them it
+        sends by then."""
+        out: list[bytes] = []
+        while (event := self.step(limit_s)) is not None:
+            if event[1]:
+                out.append(event[1])
+        return out
+
+    def next_packet(self) -> float | None:
+        """When the chip sends its next packet with bytes in it [s], from what it holds and receives so far (None:
+        nothing held or on its way): :meth:`step` without a limit, on the state's numbers, nothing changed."""
+        if self._next is _UNKNOWN:
+            self._next = self._first_packet()
+        return self._next  # type: ignore[return-value]
+
+    def _first_packet(self) -> float | None:
+        anchor, held, timer_s, byte_s = self.anchor, len(self.buffer), self.timer_s, self.byte_s
+        for first, data in self.incoming:
+            size = len(data)
+            while True:                                                # this reply, in one take or several
+                fire = anchor + timer_s
+                if first <= fire:
+                    count = min(size, int(math.floor((fire - first) / byte_s + 1e-9)) + 1)
+                    take = min(count, USB_PAYLOAD_BYTES - held)
+                    held += take
+                    if held == USB_PAYLOAD_BYTES:                      # a full packet goes at once
+                        return first + (take - 1) * byte_s
+                    if take == size:
+                        break
+                    first, size = first + take * byte_s, size - take
+                elif held:
+                    return fire
+                else:
+                    anchor = fire                                      # an empty packet: the timer restarts
+        return anchor + timer_s if held else None
 
     def _send(self, t: float) -> tuple[float, bytes]:
         payload = bytes(self.buffer)
@@ -207,41 +250,25 @@ class TimedLink:
         if self.timing.instant:
             return None
         nxt = self.requests[0][0] if self.requests else None
-        sent = self._next_packet()
+        sent = self.ftdi.next_packet()
         if sent is not None and (nxt is None or sent < nxt):
             nxt = sent
         return nxt
 
-    def _next_packet(self) -> float | None:
-        """When the adapter sends its next packet with bytes in it, from what it holds and receives so far."""
-        if self.ftdi.idle():
-            return None
-        copy = Ftdi(self.ftdi.timer_s, self.byte_s, self.ftdi.anchor)
-        copy.buffer, copy.incoming = bytearray(self.ftdi.buffer), collections.deque(self.ftdi.incoming)
-        while True:
-            event = copy.step(math.inf)
-            if event is None:
-                return None
-            if event[1]:
-                return event[0]
-
     def run_until(self, t: float) -> list[bytes]:
         """Everything that happens up to ``t`` [s]; the bytes the host receives by then, in USB packets."""
-        out: list[bytes] = []
         if self.timing.instant:
-            out, self.ready = self.ready, out
+            out, self.ready = self.ready, []
             return out
-        while True:
-            due = self.requests[0][0] if self.requests and self.requests[0][0] <= t else None
-            event = self.ftdi.step(t if due is None else due)
-            if event is not None:
-                if event[1]:
-                    out.append(event[1])
-                continue
-            if due is None:
-                return out
-            _, request = self.requests.popleft()
+        out = []
+        requests = self.requests
+        while requests and requests[0][0] <= t:
+            due, request = requests[0]
+            out += self.ftdi.run(due)
+            requests.popleft()
             self._replies(due, self.answer(due, request))
+        out += self.ftdi.run(t)
+        return out
 
     def _replies(self, t: float, chunks: list[bytes]) -> None:
         """Put the replies to a request that reached the devices at ``t`` onto the wire, each after its device's

@@ -33,15 +33,17 @@ import random
 from typing import Any, Callable
 
 from op2motion.bus import protocol as p
+from op2motion.bus.emulator.bank import ServoTables
 from op2motion.bus.emulator.devices import Board, EmulatedServo
 from op2motion.bus.emulator.faults import Faults
-from op2motion.bus.tables import CM730_ID
+from op2motion.bus.tables import CM730, CM730_ID
 from op2motion.robot.spec import Spec
 
 BOOT_S = 0.1                       # the servos' silence after their power is switched on
 HEAD_BYTES = 4                     # FF FF ID LEN
 MIN_LENGTH = 2                     # LEN counts the instruction and the checksum
 PING_LEVEL, READ_LEVEL, ALL_LEVEL = 0, 1, 2   # the status return level an answer needs
+POWER = CM730["dynamixel_power"].address      # the board's switch of the servos' supply (one byte)
 
 
 class FirmwareParser:
@@ -104,7 +106,8 @@ class Wire:
         self.faults, self.now, self.present_ticks = faults, now, present_ticks
         self.rng = random.Random(faults.seed)
         self.board = Board()
-        self.servos = [EmulatedServo(j.id) for j in spec.joints]
+        self.tables = ServoTables(len(spec.joints))              # the servos' tables, a row each
+        self.servos = [EmulatedServo(j.id, self.tables.row(i)) for i, j in enumerate(spec.joints)]
         self.by_id: dict[int, Any] = {s.id: s for s in self.servos}
         self.by_id[CM730_ID] = self.board
         for device, model in faults.models.items():            # kept over power cycles: address 0 is EEPROM
@@ -131,7 +134,7 @@ class Wire:
 
     def powered(self) -> bool:
         """Whether the servos' supply is on."""
-        return self.board.get("dynamixel_power") == 1
+        return self.board.table[POWER] == 1
 
     def silent(self, device: int) -> bool:
         """A servo that is not on the bus (missing, or unplugged by now)."""
@@ -142,7 +145,7 @@ class Wire:
         if device == CM730_ID:
             return self.board
         servo = self.by_id.get(device)
-        if servo is None or self.silent(device) or not self.powered():
+        if servo is None or self.board.table[POWER] != 1 or self.silent(device):
             return None
         if self.powered_at is not None and self.now() - self.powered_at < BOOT_S:
             return None
@@ -255,8 +258,10 @@ class Wire:
             self.motion_t0 = self.now()
         for k in range(2, len(params), length + 1):
             device = self.present(params[k])
-            if device is not None:
+            if device is self.board:                    # its power switch: see write
                 self.write(device, address, bytes(params[k + 1:k + 1 + length]))
+            elif device is not None:                    # nobody answers: the standing conditions are not asked
+                device.put(address, bytes(params[k + 1:k + 1 + length]))
 
     def _bulk_read(self, params: bytes) -> None:
         if len(params) < 4 or (len(params) - 1) % 3:

@@ -1,0 +1,64 @@
+"""The emulated servos' control tables side by side: one block of bytes, a row per servo, that each
+:class:`~.devices.EmulatedServo` keeps its table in and that the body (:mod:`.body`) reads and fills for all the
+servos at once through a NumPy view, instead of register by register and servo by servo.
+
+What the bus sees is unchanged: a servo's table is its row, byte for byte; the body asks for the registers the motors
+follow (goal, speed, P gain, torque limit, torque enable) as arrays and writes the present state (position, speed,
+load, voltage, temperature, moving) as arrays.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from op2motion.bus.emulator.devices import alarm_conditions
+from op2motion.bus.tables import MX28
+
+#: The registers the motors follow, in one span (torque enable ... torque limit): what the body's drive depends on.
+DRIVE_SPAN = (MX28["torque_enable"].address, MX28["torque_limit"].end)
+
+
+class ServoTables:
+    """``count`` MX-28 control tables: :meth:`row` gives a servo its bytes, :meth:`column` a register of every
+    servo."""
+
+    def __init__(self, count: int):
+        self.count = count
+        self.data = bytearray(count * MX28.size)
+        self.regs = np.frombuffer(self.data, dtype=np.uint8).reshape(count, MX28.size)   # a view: writes go through
+        self._columns: dict[str, np.ndarray] = {}
+
+    def row(self, index: int) -> memoryview:
+        """Servo ``index``'s table (a view of its row)."""
+        return memoryview(self.data)[index * MX28.size:(index + 1) * MX28.size]
+
+    def column(self, name: str) -> np.ndarray:
+        """Register ``name`` of every servo (count,): bytes as uint8, words (little-endian) as uint16; a view
+        (assigning to it writes the registers)."""
+        view = self._columns.get(name)
+        if view is None:
+            r = MX28[name]
+            view = self.regs[:, r.address] if r.size == 1 else self.regs[:, r.address:r.end].view("<u2")[:, 0]
+            self._columns[name] = view
+        return view
+
+    def drive_bytes(self) -> bytes:
+        """Every servo's registers the motors follow (:data:`DRIVE_SPAN`), as one key: equal keys, equal drives."""
+        return self.regs[:, DRIVE_SPAN[0]:DRIVE_SPAN[1]].tobytes()
+
+    def put_present(self, ticks: np.ndarray, speed: np.ndarray, load: np.ndarray, volts: int, celsius: np.ndarray,
+                    moving: np.ndarray) -> None:
+        """Every servo's present-state registers (36..43 and 46): position [tick], speed and load (register values),
+        voltage [0.1 V], temperature [°C], moving (0/1)."""
+        for name, values in (("present_position", ticks), ("present_speed", speed), ("present_load", load),
+                             ("present_voltage", volts), ("present_temperature", celsius), ("moving", moving)):
+            self.column(name)[:] = values
+
+    def enforce_alarms(self, volts: int, celsius: np.ndarray, overloaded: np.ndarray) -> None:
+        """Every servo's alarm shutdown (:meth:`.devices.EmulatedServo.enforce_alarms`) at once: ``volts`` [0.1 V],
+        ``celsius`` (count,) [°C], ``overloaded`` (count,) bool."""
+        c = self.column
+        errors = alarm_conditions(volts, c("min_voltage_limit"), c("max_voltage_limit"), celsius,
+                                  c("temperature_limit"), overloaded)
+        torque = c("torque_enable")
+        torque[(torque != 0) & ((errors & c("alarm_shutdown")) != 0)] = 0
