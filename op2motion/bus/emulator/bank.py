@@ -11,11 +11,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from op2motion.bus.emulator.devices import alarm_conditions
+from op2motion.bus import protocol as p
+from op2motion.bus.emulator.devices import GOAL, WritePlan, alarm_conditions, within_limits
 from op2motion.bus.tables import MX28
 
-#: The registers the motors follow, in one span (torque enable ... torque limit): what the body's drive depends on.
+#: The registers the motors follow (torque enable ... torque limit, the goal position among them): what the body's
+#: drive depends on.
 DRIVE_SPAN = (MX28["torque_enable"].address, MX28["torque_limit"].end)
+GOAL_SPAN = (MX28["goal_position"].address, MX28["goal_position"].end)
+WORD_WEIGHTS = np.array([1, 256])  # a little-endian word's bytes
 
 
 class ServoTables:
@@ -42,9 +46,12 @@ class ServoTables:
             self._columns[name] = view
         return view
 
-    def drive_bytes(self) -> bytes:
-        """Every servo's registers the motors follow (:data:`DRIVE_SPAN`), as one key: equal keys, equal drives."""
-        return self.regs[:, DRIVE_SPAN[0]:DRIVE_SPAN[1]].tobytes()
+    def drive_keys(self) -> tuple[bytes, bytes]:
+        """Every servo's registers the motors follow (:data:`DRIVE_SPAN`) as two keys, the goals' and the others':
+        equal keys, equal drives (the goals change every tick, the others seldom)."""
+        regs = self.regs
+        return (regs[:, GOAL_SPAN[0]:GOAL_SPAN[1]].tobytes(),
+                regs[:, DRIVE_SPAN[0]:GOAL_SPAN[0]].tobytes() + regs[:, GOAL_SPAN[1]:DRIVE_SPAN[1]].tobytes())
 
     def put_present(self, ticks: np.ndarray, speed: np.ndarray, load: np.ndarray, volts: int, celsius: np.ndarray,
                     moving: np.ndarray) -> None:
@@ -54,11 +61,37 @@ class ServoTables:
                              ("present_voltage", volts), ("present_temperature", celsius), ("moving", moving)):
             self.column(name)[:] = values
 
-    def enforce_alarms(self, volts: int, celsius: np.ndarray, overloaded: np.ndarray) -> None:
+    def enforce_alarms(self, volts: int, celsius: np.ndarray, overloaded: np.ndarray | bool) -> None:
         """Every servo's alarm shutdown (:meth:`.devices.EmulatedServo.enforce_alarms`) at once: ``volts`` [0.1 V],
-        ``celsius`` (count,) [°C], ``overloaded`` (count,) bool."""
+        ``celsius`` (count,) [°C], ``overloaded`` (count,) bool (or False: none is)."""
         c = self.column
         errors = alarm_conditions(volts, c("min_voltage_limit"), c("max_voltage_limit"), celsius,
                                   c("temperature_limit"), overloaded)
+        if not errors.any():
+            return
         torque = c("torque_enable")
         torque[(torque != 0) & ((errors & c("alarm_shutdown")) != 0)] = 0
+
+    def put(self, rows: np.ndarray, address: int, data: np.ndarray, plan: WritePlan) -> None:
+        """A WRITE nobody answers (a sync write's) of ``data`` (len(rows), length) at ``address`` to the servos at
+        ``rows`` (each once), as :meth:`.devices.EmulatedServo.put` does it to each: ``plan`` (the span's, with no
+        reactions) refuses a row with a value out of range; a goal out of the angle limits is clipped to the nearest
+        one and raises the alarm."""
+        if plan.refused:
+            return
+        ok = np.ones(len(rows), dtype=bool)
+        for start, end, low, high in plan.checks:
+            value = data[:, start] if end - start == 1 else data[:, start:end].astype(np.int64) @ WORD_WEIGHTS
+            ok &= (low <= value) & (value <= high)
+        rows = rows[ok]
+        self.regs[rows, address:address + data.shape[1]] = data[ok]
+        if not address <= GOAL.address < address + data.shape[1]:
+            return
+        goal = self.column("goal_position")
+        asked = goal[rows]
+        clipped = within_limits(asked, self.column("cw_angle_limit")[rows], self.column("ccw_angle_limit")[rows])
+        off = clipped != asked
+        if off.any():
+            goal[rows[off]] = clipped[off]
+            alarmed = rows[off][(self.column("alarm_shutdown")[rows[off]] & p.ANGLE_LIMIT) != 0]
+            self.column("torque_enable")[alarmed] = 0

@@ -37,8 +37,8 @@ class Drive(NamedTuple):
     """What the servos' registers ask of the motors (20,) each: torque enabled, goal [rad], moving speed [rad/s]
     (0: as fast as it can), stiffness [N·m/rad], torque limit [N·m]; and what follows from them for every physics
     step until a register changes: ``free`` (no moving speed: the set point jumps to the goal), ``all_free``,
-    ``all_enabled``, the set point's largest move a step either way [rad], the torque at which a servo counts as at its limit [N·m],
-    and ``watched`` (the servos that can be: torque on, a limit above 0)."""
+    ``all_enabled``, the set point's largest move a step either way [rad], and the torque at which a servo counts
+    as at its limit [N·m] (infinite for one that cannot be: torque off, or a limit of 0)."""
 
     enabled: np.ndarray
     goal: np.ndarray
@@ -51,7 +51,6 @@ class Drive(NamedTuple):
     step_low_rad: np.ndarray
     step_high_rad: np.ndarray
     at_limit_nm: np.ndarray
-    watched: np.ndarray
 
 
 STARTS = ("standing", "lying_front", "lying_back", "lying_left", "lying_right")
@@ -99,7 +98,7 @@ class EmulatedBody:
         self.gyro, self.accel = np.zeros(3), np.array([0.0, 0.0, 9.81])
         self.push_n = 0.0                   # a push forward (+x, world) at the torso's centre of mass [N]
         self._tick_offset = spec.servo.center_tick + self.horn_ticks   # a joint at 0 reads this [tick]
-        self._drive_key: tuple[bool, bytes] | None = None
+        self._drive_keys: tuple[bytes, bool, bytes] | None = None     # the goals', the power, the other registers'
         self._drive: Drive | None = None
         self._imu_unsent = True             # the gyro and accelerometer read since the board's words were written
         self._place()
@@ -123,25 +122,33 @@ class EmulatedBody:
     def drive(self, tables: ServoTables, powered: bool) -> Drive:
         """What the servos' registers (``tables``) ask of the motors now (good until a register is written): torque
         enabled, goal [rad], moving speed [rad/s], stiffness, torque limit [N·m], and what follows (:class:`Drive`).
-        Worked out again only when those registers or the power changed."""
-        key = (powered, tables.drive_bytes())
-        if key != self._drive_key:
-            self._drive_key, self._drive = key, self._new_drive(tables, powered)
+        Worked out again only as far as those registers or the power changed."""
+        goals, others = tables.drive_keys()
+        if self._drive is None or (powered, others) != self._drive_keys[1:]:
+            self._drive = self._new_drive(tables, powered)
+        elif goals != self._drive_keys[0]:
+            self._drive = self._drive._replace(goal=self._goal_rad(tables))
+        self._drive_keys = (goals, powered, others)
         return self._drive
+
+    def _goal_rad(self, tables: ServoTables) -> np.ndarray:
+        """The goal positions [rad] (read-only: the set point may be this very array)."""
+        goal = tables.column("goal_position").astype(float)
+        goal = (goal - self.horn_ticks - self.spec.servo.center_tick) * self.spec.servo.rad_per_tick
+        goal.flags.writeable = False
+        return goal
 
     def _new_drive(self, tables: ServoTables, powered: bool) -> Drive:
         enabled = (tables.column("torque_enable") == 1) & powered
-        goal = tables.column("goal_position").astype(float)
-        goal = (goal - self.horn_ticks - self.spec.servo.center_tick) * self.spec.servo.rad_per_tick
         speed = tables.column("moving_speed").astype(float) * SPEED_RAD_S_PER_UNIT
         kp = self.model.kp_of(tables.column("p_gain").astype(float))
         share = tables.column("torque_limit").astype(float) / TORQUE_LIMIT_FULL
         volts = min(1.0, self.supply_v / self.rated_v)
         limit = self.model.torque_max * share * volts * enabled
         free = speed <= 0.0
-        goal.flags.writeable = False
-        return Drive(enabled, goal, speed, kp, limit, free, bool(free.all()), bool(enabled.all()), -speed * self.dt,
-                     speed * self.dt, OVERLOAD_SHARE * np.maximum(limit, 1e-9), enabled & (limit > 0))
+        at_limit = np.where(enabled & (limit > 0), OVERLOAD_SHARE * np.maximum(limit, 1e-9), np.inf)
+        return Drive(enabled, self._goal_rad(tables), speed, kp, limit, free, bool(free.all()), bool(enabled.all()),
+                     -speed * self.dt, speed * self.dt, at_limit)
 
     def step(self, n: int, servos: Sequence[EmulatedServo], drive: Drive) -> None:
         """``n`` physics steps as ``drive`` (:meth:`drive`) asks; a servo held at its limit latches its overload.
@@ -152,16 +159,16 @@ class EmulatedBody:
             torque = self.model.active_torque(self.command, q, drive.kp, drive.limit)
             self.engine.step(torque, np.array([self.push_n, 0.0, 0.0]) if self.push_n else None)
             self.torque = torque
-            at_limit = drive.watched & (np.abs(torque) >= drive.at_limit_nm)
-            self.saturated_s = np.where(at_limit, self.saturated_s + self.dt, 0.0)
+            self.saturated_s = np.where(np.abs(torque) >= drive.at_limit_nm, self.saturated_s + self.dt, 0.0)
             self.steps += 1
             if self.steps % 8 == 0:
                 self.gyro, self.accel, _ = self.sensor.read(self.engine, q, 1.0)
                 self._imu_unsent = True
         heat = RISE_AT_STALL_C * (self.torque / self.model.stall_torque) ** 2
         self.temperature += (AMBIENT_C + heat - self.temperature) * (n * self.dt / THERMAL_TAU_S)
-        for i in np.flatnonzero(self.saturated_s >= OVERLOAD_S):
-            servos[i].overloaded = True
+        if self.saturated_s.max() >= OVERLOAD_S:
+            for i in np.flatnonzero(self.saturated_s >= OVERLOAD_S):
+                servos[i].overloaded = True
 
     def _set_point(self, drive: Drive, q: np.ndarray) -> np.ndarray:
         """Where each servo drives its joint this step [rad]: its goal, or towards it at its moving speed; a limp
@@ -193,7 +200,8 @@ class EmulatedBody:
         volts = int(round(self.supply_v * 10))
         held = np.array(celsius)
         tables.put_present(ticks, both[:n], both[n:], volts, np.minimum(np.maximum(np.rint(held), 0), 255), moving)
-        tables.enforce_alarms(volts, held, np.array([servo.overloaded for servo in servos]))
+        overloaded = [servo.overloaded for servo in servos]
+        tables.enforce_alarms(volts, held, any(overloaded) and np.array(overloaded))
         if self._imu_unsent:                           # the board's IMU words change when the IMU is read
             for register, count in encode(self.imu, self.gyro, self.accel).items():
                 board.table[register:register + 2] = count.to_bytes(2, "little")

@@ -33,6 +33,8 @@ from __future__ import annotations
 
 from typing import Any, NamedTuple
 
+import numpy as np
+
 from op2motion.bus import protocol as p
 from op2motion.bus.tables import CM730, CM730_ID, MX28, ControlTable, Register
 
@@ -75,6 +77,7 @@ class Device:
         for r in table.registers:
             self.covers[r.address:r.end] = [r] * r.size
         self._level_at = table["status_return_level"].address
+        self._delay_at = table["return_delay_time"].address
         self._plans: dict[tuple[int, int], WritePlan] = {}
 
     def u16(self, name: str) -> int:
@@ -96,6 +99,11 @@ class Device:
     def return_level(self) -> int:
         """The status return level."""
         return self.table[self._level_at]
+
+    @property
+    def return_delay(self) -> int:
+        """The Return Delay Time register [2 µs]."""
+        return self.table[self._delay_at]
 
     def conditions(self) -> int:
         """The standing error bits (none for a plain device)."""
@@ -290,12 +298,18 @@ class EmulatedServo(Device):
 
 
 def _clipped(table: bytearray | memoryview, goal: int) -> int:
-    """``goal`` within the angle limits of ``table`` in joint mode (as it is in wheel and multi-turn mode)."""
+    """``goal`` within the angle limits of ``table`` (:func:`within_limits`)."""
     cw = table[CW_LIMIT.address] | (table[CW_LIMIT.address + 1] << 8)
     ccw = table[CCW_LIMIT.address] | (table[CCW_LIMIT.address + 1] << 8)
-    if (cw, ccw) in (WHEEL_MODE, MULTI_TURN_MODE):
-        return goal
-    return min(max(goal, cw), ccw)
+    return int(within_limits(goal, cw, ccw))
+
+
+def within_limits(goal: Any, cw: Any, ccw: Any) -> Any:
+    """``goal`` [tick] within the angle limits ``cw``..``ccw`` in joint mode, as it is in wheel and multi-turn mode
+    (see the module docstring). Of one servo (numbers) or of several (arrays, :mod:`.bank`)."""
+    joint = (((cw != WHEEL_MODE[0]) | (ccw != WHEEL_MODE[1]))
+             & ((cw != MULTI_TURN_MODE[0]) | (ccw != MULTI_TURN_MODE[1])))
+    return np.where(joint, np.minimum(np.maximum(goal, cw), ccw), goal)
 
 
 def alarm_conditions(volts: Any, min_volts: Any, max_volts: Any, celsius: Any, limit_c: Any, overloaded: Any) -> Any:

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import contextlib
 import errno
-import math
 import os
 import select
 import threading
@@ -239,13 +238,13 @@ class Emulator:
     def _delay_s(self, device: int) -> float:
         """Device ``device``'s return delay [s] (its register 5)."""
         found = self.wire.by_id.get(device)
-        return 0.0 if found is None else return_delay_s(found.get("return_delay_time"))
+        return 0.0 if found is None else return_delay_s(found.return_delay)
 
     def _step_to(self, t: float) -> None:
         """Whole physics steps up to simulated time ``t`` [s] (in batches of :data:`BATCH_STEPS`, the timed faults
         between them); the registers from the body at most every :data:`REFRESH_S` (and whenever a request is
         answered: :meth:`_refresh`)."""
-        steps = int(math.floor((t - self._now()) / self.body.dt + 1e-9))
+        steps = int((t - self._now()) / self.body.dt + 1e-9)         # int: floor, where it matters (> 0)
         if steps <= 0:
             return
         while steps > 0:
@@ -335,7 +334,7 @@ class Emulator:
         return self._now()
 
     def _timed_faults(self) -> None:
-        if self.motion_t0 is None:
+        if self.motion_t0 is None or not (self.faults.push or self.faults.unplug or self.faults.overheat):
             return
         since = self._now() - self.motion_t0
         self.body.push_n = self.faults.push_at(since)

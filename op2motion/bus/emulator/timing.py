@@ -131,8 +131,8 @@ class Ftdi:
         by = fire if fire < limit_s else limit_s
         if self.incoming and self.incoming[0][0] <= by:
             first, data = self.incoming[0]
-            count = min(len(data), int(math.floor((by - first) / self.byte_s + 1e-9)) + 1)
-            take = min(count, USB_PAYLOAD_BYTES - len(self.buffer))
+            done = int((by - first) / self.byte_s + 1e-9) + 1        # the bytes complete by then (int: floor, >= 0)
+            take = min(len(data), done, USB_PAYLOAD_BYTES - len(self.buffer))
             self.buffer += data[:take]
             if take < len(data):
                 self.incoming[0] = (first + take * self.byte_s, data[take:])
@@ -150,6 +150,8 @@ class Ftdi:
         """Everything the chip does up to ``limit_s`` [s]: the payloads of the USB packets with bytes in them it
         sends by then."""
         out: list[bytes] = []
+        if not self.buffer and not self.incoming and self.anchor + self.timer_s > limit_s:
+            return out                                # idle, and the timer does not fire by then: step's first case
         while (event := self.step(limit_s)) is not None:
             if event[1]:
                 out.append(event[1])
@@ -169,8 +171,7 @@ class Ftdi:
             while True:                                                # this reply, in one take or several
                 fire = anchor + timer_s
                 if first <= fire:
-                    count = min(size, int(math.floor((fire - first) / byte_s + 1e-9)) + 1)
-                    take = min(count, USB_PAYLOAD_BYTES - held)
+                    take = min(size, int((fire - first) / byte_s + 1e-9) + 1, USB_PAYLOAD_BYTES - held)
                     held += take
                     if held == USB_PAYLOAD_BYTES:                      # a full packet goes at once
                         return first + (take - 1) * byte_s

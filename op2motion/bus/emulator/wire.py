@@ -32,6 +32,8 @@ from __future__ import annotations
 import random
 from typing import Any, Callable
 
+import numpy as np
+
 from op2motion.bus import protocol as p
 from op2motion.bus.emulator.bank import ServoTables
 from op2motion.bus.emulator.devices import Board, EmulatedServo
@@ -108,6 +110,7 @@ class Wire:
         self.board = Board()
         self.tables = ServoTables(len(spec.joints))              # the servos' tables, a row each
         self.servos = [EmulatedServo(j.id, self.tables.row(i)) for i, j in enumerate(spec.joints)]
+        self.row_of = {s.id: i for i, s in enumerate(self.servos)}
         self.by_id: dict[int, Any] = {s.id: s for s in self.servos}
         self.by_id[CM730_ID] = self.board
         for device, model in faults.models.items():            # kept over power cycles: address 0 is EEPROM
@@ -170,19 +173,21 @@ class Wire:
         bulk read's replies go out back to back)."""
         if (device.return_level if level is None else level) < need:
             return
-        packet = bytearray(p.status(device.id, error | self.faults.errors.get(device.id, 0), params))
+        packet = p.status(device.id, error | self.faults.errors.get(device.id, 0), params)
         if self.faults.lose and self.rng.random() < self.faults.lose:
             self.stats["lost"] += 1
             return
         if self.faults.corrupt and self.rng.random() < self.faults.corrupt:
-            i = self.rng.randrange(2, len(packet))
-            packet[i] ^= 1 << self.rng.randrange(8)
+            damaged = bytearray(packet)
+            i = self.rng.randrange(2, len(damaged))
+            damaged[i] ^= 1 << self.rng.randrange(8)
+            packet = bytes(damaged)
             self.stats["corrupted"] += 1
         self.stats["replies"] += 1
         if out is not None:
             out += packet
         else:
-            self.out.append(bytes(packet))
+            self.out.append(packet)
 
     def write(self, device: Any, address: int, data: bytes) -> int:
         """A write to one device (the board's power switch powers the servos up or down); its error byte."""
@@ -256,6 +261,20 @@ class Wire:
         address, length = params[0], params[1]
         if self.motion_t0 is None:
             self.motion_t0 = self.now()
+        ids = params[2::length + 1]
+        targets = [self.present(d) for d in ids]
+        plan = self.servos[0].plan(address, length)
+        if plan.reactions or self.board in targets or len(set(ids)) < len(ids):
+            self._write_each(params)                     # a write may change who answers, or what a write does
+            return
+        chunks = np.frombuffer(params, dtype=np.uint8, offset=2).reshape(-1, length + 1)
+        here = np.array([device is not None for device in targets], dtype=bool)
+        rows = np.array([self.row_of[device.id] for device in targets if device is not None], dtype=np.intp)
+        self.tables.put(rows, address, chunks[here, 1:], plan)        # nobody answers: no standing conditions
+
+    def _write_each(self, params: bytes) -> None:
+        """A sync write's writes one by one, in order."""
+        address, length = params[0], params[1]
         for k in range(2, len(params), length + 1):
             device = self.present(params[k])
             if device is self.board:                    # its power switch: see write
@@ -271,9 +290,10 @@ class Wire:
         for k in range(1, len(params), 3):
             length, target, address = params[k], params[k + 1], params[k + 2]
             device = self.present(target)
-            if device is None or device.return_level < READ_LEVEL:
+            level = None if device is None else device.return_level
+            if level is None or level < READ_LEVEL:
                 break                              # the devices listed after it wait for its reply in vain
             error, data = device.read(address, length)
-            self._reply(device, error, data or b"", READ_LEVEL, out=out)
+            self._reply(device, error, data or b"", READ_LEVEL, level, out)
         if out:
             self.out.append(bytes(out))
