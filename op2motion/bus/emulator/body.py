@@ -101,6 +101,7 @@ class EmulatedBody:
         self._drive_keys: tuple[bytes, bool, bytes] | None = None     # the goals', the power, the other registers'
         self._drive: Drive | None = None
         self._imu_unsent = True             # the gyro and accelerometer read since the board's words were written
+        self._saturating = False            # some servo's time at its limit is above 0
         self._place()
 
     def _place(self) -> None:
@@ -153,20 +154,25 @@ class EmulatedBody:
     def step(self, n: int, servos: Sequence[EmulatedServo], drive: Drive) -> None:
         """``n`` physics steps as ``drive`` (:meth:`drive`) asks; a servo held at its limit latches its overload.
         The torque is the servo model's within the torque limit (the limit is at most the model's most torque)."""
+        state, engine_step, active_torque = self.engine.state, self.engine.step, self.model.active_torque
+        kp, limit, at_limit_nm = drive.kp, drive.limit, drive.at_limit_nm
         for _ in range(n):
-            q, _ = self.engine.state()
+            q, _ = state()
             self.command = self._set_point(drive, q)
-            torque = self.model.active_torque(self.command, q, drive.kp, drive.limit)
-            self.engine.step(torque, np.array([self.push_n, 0.0, 0.0]) if self.push_n else None)
-            self.torque = torque
-            self.saturated_s = np.where(np.abs(torque) >= drive.at_limit_nm, self.saturated_s + self.dt, 0.0)
+            self.torque = torque = active_torque(self.command, q, kp, limit)
+            engine_step(torque, np.array([self.push_n, 0.0, 0.0]) if self.push_n else None)
+            at_limit = np.abs(torque) >= at_limit_nm
+            held = np.count_nonzero(at_limit)
+            if held or self._saturating:                # else every servo's time at its limit stays 0
+                self.saturated_s = np.where(at_limit, self.saturated_s + self.dt, 0.0)
+                self._saturating = held > 0
             self.steps += 1
             if self.steps % 8 == 0:
                 self.gyro, self.accel, _ = self.sensor.read(self.engine, q, 1.0)
                 self._imu_unsent = True
         heat = RISE_AT_STALL_C * (self.torque / self.model.stall_torque) ** 2
         self.temperature += (AMBIENT_C + heat - self.temperature) * (n * self.dt / THERMAL_TAU_S)
-        if self.saturated_s.max() >= OVERLOAD_S:
+        if self._saturating and np.count_nonzero(self.saturated_s >= OVERLOAD_S):
             for i in np.flatnonzero(self.saturated_s >= OVERLOAD_S):
                 servos[i].overloaded = True
 
@@ -194,9 +200,10 @@ class EmulatedBody:
                                           self.torque / self.model.torque_max * TORQUE_LIMIT_FULL)))
         moving = (np.abs(self.command - q) > MOVING_RAD) | (np.abs(dq) > MOVING_RAD_S)
         celsius = self.temperature.tolist()
-        for i, servo in enumerate(servos):
-            servo.temperature_c = celsius[i] = overrides.get(servo.id, celsius[i])
-            servo.voltage_v = self.supply_v
+        if overrides:
+            celsius = [overrides.get(servo.id, c) for servo, c in zip(servos, celsius)]
+        for servo, c in zip(servos, celsius):
+            servo.temperature_c, servo.voltage_v = c, self.supply_v
         volts = int(round(self.supply_v * 10))
         held = np.array(celsius)
         tables.put_present(ticks, both[:n], both[n:], volts, np.minimum(np.maximum(np.rint(held), 0), 255), moving)

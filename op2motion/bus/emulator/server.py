@@ -268,7 +268,7 @@ class Emulator:
         self.body.sense(self.servos, self.wire.tables, self.board, self.temperature_overrides)
         self._drive = None
         self._truth = self.body.truth()
-        self.torque_limit_min = min(self.torque_limit_min, int(self.wire.tables.column("torque_limit").min()))
+        self.torque_limit_min = min(self.torque_limit_min, *self.wire.tables.column("torque_limit").tolist())
         if self._truth["t_s"] >= self._next_trace:
             self.trace.append(self._truth)
             self._next_trace = self._truth["t_s"] + TRACE_EVERY_S

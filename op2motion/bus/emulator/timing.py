@@ -130,21 +130,31 @@ class Ftdi:
         self._next = _UNKNOWN
         by = fire if fire < limit_s else limit_s
         if self.incoming and self.incoming[0][0] <= by:
-            first, data = self.incoming[0]
-            done = int((by - first) / self.byte_s + 1e-9) + 1        # the bytes complete by then (int: floor, >= 0)
-            take = min(len(data), done, USB_PAYLOAD_BYTES - len(self.buffer))
-            self.buffer += data[:take]
-            if take < len(data):
-                self.incoming[0] = (first + take * self.byte_s, data[take:])
-            else:
-                self.incoming.popleft()
-            at = first + (take - 1) * self.byte_s
-            if len(self.buffer) == USB_PAYLOAD_BYTES:                 # a full packet goes at once
-                return self._send(at)
-            return at, b""
+            return self._take_in(by)
         if fire <= limit_s:
             return self._send(fire)
         return None
+
+    def _take_in(self, by: float) -> tuple[float, bytes]:
+        """Bytes taken in: what of the incoming replies is complete by ``by`` [s], reply after reply while each comes
+        whole (one step each, as it were, taken together: nothing else happens between them), up to a full packet
+        (sent at once)."""
+        incoming, buffer, byte_s = self.incoming, self.buffer, self.byte_s
+        while True:
+            first, data = incoming[0]
+            done = int((by - first) / byte_s + 1e-9) + 1             # the bytes complete by then (int: floor, >= 0)
+            take = min(len(data), done, USB_PAYLOAD_BYTES - len(buffer))
+            buffer += data[:take]
+            whole = take == len(data)
+            if whole:
+                incoming.popleft()
+            else:
+                incoming[0] = (first + take * byte_s, data[take:])
+            at = first + (take - 1) * byte_s
+            if len(buffer) == USB_PAYLOAD_BYTES:                      # a full packet goes at once
+                return self._send(at)
+            if not whole or not incoming or incoming[0][0] > by:
+                return at, b""
 
     def run(self, limit_s: float) -> list[bytes]:
         """Everything the chip does up to ``limit_s`` [s]: the payloads of the USB packets with bytes in them it

@@ -110,7 +110,9 @@ class Wire:
         self.board = Board()
         self.tables = ServoTables(len(spec.joints))              # the servos' tables, a row each
         self.servos = [EmulatedServo(j.id, self.tables.row(i)) for i, j in enumerate(spec.joints)]
-        self.row_of = {s.id: i for i, s in enumerate(self.servos)}
+        self._row_of_id = np.full(256, -1, dtype=np.intp)           # a servo's row by its ID (-1: no servo)
+        for i, servo in enumerate(self.servos):
+            self._row_of_id[servo.id] = i
         self.by_id: dict[int, Any] = {s.id: s for s in self.servos}
         self.by_id[CM730_ID] = self.board
         for device, model in faults.models.items():            # kept over power cycles: address 0 is EEPROM
@@ -118,6 +120,7 @@ class Wire:
                 self.by_id[device].set("model_number", model)
         self.parser = FirmwareParser()
         self.powered_at: float | None = None
+        self._booted_since: float | None = None                 # the powered_at found booted (see _booted)
         self.motion_t0: float | None = None
         self.unplugged: set[int] = set()
         self.stats = {"packets": 0, "replies": 0, "lost": 0, "corrupted": 0, "bad_packets": 0}
@@ -148,11 +151,23 @@ class Wire:
         if device == CM730_ID:
             return self.board
         servo = self.by_id.get(device)
-        if servo is None or self.board.table[POWER] != 1 or self.silent(device):
-            return None
-        if self.powered_at is not None and self.now() - self.powered_at < BOOT_S:
+        if servo is None or self.silent(device) or not self.servos_up():
             return None
         return servo
+
+    def servos_up(self) -> bool:
+        """Whether the servos on the bus answer now: powered, and booted."""
+        return self.board.table[POWER] == 1 and self._booted()
+
+    def _booted(self) -> bool:
+        """Whether the servos have had :data:`BOOT_S` since their power came on (kept once so, until it next
+        comes on: time only moves on)."""
+        if self.powered_at is None or self.powered_at == self._booted_since:
+            return True
+        if self.now() - self.powered_at < BOOT_S:
+            return False
+        self._booted_since = self.powered_at
+        return True
 
     def feed(self, data: bytes) -> list[bytes]:
         """Bytes from the client in; the bytes to answer with out (one chunk per reply, a bulk read's together)."""
@@ -262,15 +277,17 @@ class Wire:
         if self.motion_t0 is None:
             self.motion_t0 = self.now()
         ids = params[2::length + 1]
-        targets = [self.present(d) for d in ids]
         plan = self.servos[0].plan(address, length)
-        if plan.reactions or self.board in targets or len(set(ids)) < len(ids):
+        if (plan.reactions or CM730_ID in ids or len(set(ids)) < len(ids) or self.faults.missing
+                or self.unplugged):
             self._write_each(params)                     # a write may change who answers, or what a write does
             return
+        if not self.servos_up():
+            return                                       # no servo takes it (and the board is not listed)
         chunks = np.frombuffer(params, dtype=np.uint8, offset=2).reshape(-1, length + 1)
-        here = np.array([device is not None for device in targets], dtype=bool)
-        rows = np.array([self.row_of[device.id] for device in targets if device is not None], dtype=np.intp)
-        self.tables.put(rows, address, chunks[here, 1:], plan)        # nobody answers: no standing conditions
+        rows = self._row_of_id[chunks[:, 0]]
+        here = rows >= 0                                 # the IDs of servos on the bus (no other device is)
+        self.tables.put(rows[here], address, chunks[here, 1:], plan)   # nobody answers: no standing conditions
 
     def _write_each(self, params: bytes) -> None:
         """A sync write's writes one by one, in order."""
