@@ -200,15 +200,17 @@ class EmulatedBody:
                                           self.torque / self.model.torque_max * TORQUE_LIMIT_FULL)))
         moving = (np.abs(self.command - q) > MOVING_RAD) | (np.abs(dq) > MOVING_RAD_S)
         celsius = self.temperature.tolist()
+        temperature = self.temperature
         if overrides:
             celsius = [overrides.get(servo.id, c) for servo, c in zip(servos, celsius)]
+            temperature = np.array(celsius)
         for servo, c in zip(servos, celsius):
             servo.temperature_c, servo.voltage_v = c, self.supply_v
         volts = int(round(self.supply_v * 10))
-        held = np.array(celsius)
-        tables.put_present(ticks, both[:n], both[n:], volts, np.minimum(np.maximum(np.rint(held), 0), 255), moving)
+        tables.put_present(ticks, both[:n], both[n:], volts, np.minimum(np.maximum(np.rint(temperature), 0), 255),
+                           moving)
         overloaded = [servo.overloaded for servo in servos]
-        tables.enforce_alarms(volts, held, any(overloaded) and np.array(overloaded))
+        tables.enforce_alarms(volts, temperature, any(overloaded) and np.array(overloaded))
         if self._imu_unsent:                           # the board's IMU words change when the IMU is read
             for register, count in encode(self.imu, self.gyro, self.accel).items():
                 board.table[register:register + 2] = count.to_bytes(2, "little")

@@ -226,6 +226,8 @@ class Emulator:
             if event is None or event > t:
                 break
             self.outbox += b"".join(self.timed_wire.run_until(event))
+            if event == t:
+                return                  # the wire has run up to t: running it up to t again does nothing
         self.outbox += b"".join(self.timed_wire.run_until(t))
 
     def _answer(self, t: float, request: bytes) -> list[bytes]:
