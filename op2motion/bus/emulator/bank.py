@@ -12,7 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from op2motion.bus import protocol as p
-from op2motion.bus.emulator.devices import CCW_LIMIT, CW_LIMIT, GOAL, WritePlan, alarm_conditions, within_limits
+from op2motion.bus.emulator.devices import CCW_LIMIT, CW_LIMIT, GOAL, alarm_conditions, within_limits
+from op2motion.bus.emulator.writeplan import WritePlan
 from op2motion.bus.tables import MX28
 
 #: The registers the motors follow (torque enable ... torque limit, the goal position among them): what the body's

@@ -98,7 +98,7 @@ class EmulatedBody:
         self.gyro, self.accel = np.zeros(3), np.array([0.0, 0.0, 9.81])
         self.push_n = 0.0                   # a push forward (+x, world) at the torso's centre of mass [N]
         self._tick_offset = spec.servo.center_tick + self.horn_ticks   # a joint at 0 reads this [tick]
-        self._drive_keys: tuple[bytes, bool, bytes] | None = None     # the goals', the power, the other registers'
+        self._drive_keys: tuple[bytes, bool, bytes] = (b"", False, b"")   # the goals', the power, the other registers'
         self._drive: Drive | None = None
         self._imu_unsent = True             # the gyro and accelerometer read since the board's words were written
         self._saturating = False            # some servo's time at its limit is above 0
@@ -125,12 +125,13 @@ class EmulatedBody:
         enabled, goal [rad], moving speed [rad/s], stiffness, torque limit [N·m], and what follows (:class:`Drive`).
         Worked out again only as far as those registers or the power changed."""
         goals, others = tables.drive_keys()
-        if self._drive is None or (powered, others) != self._drive_keys[1:]:
-            self._drive = self._new_drive(tables, powered)
+        drive = self._drive
+        if drive is None or (powered, others) != self._drive_keys[1:]:
+            drive = self._new_drive(tables, powered)
         elif goals != self._drive_keys[0]:
-            self._drive = self._drive._replace(goal=self._goal_rad(tables))
-        self._drive_keys = (goals, powered, others)
-        return self._drive
+            drive = drive._replace(goal=self._goal_rad(tables))
+        self._drive, self._drive_keys = drive, (goals, powered, others)
+        return drive
 
     def _goal_rad(self, tables: ServoTables) -> np.ndarray:
         """The goal positions [rad] (read-only: the set point may be this very array)."""
@@ -165,7 +166,7 @@ class EmulatedBody:
             held = np.count_nonzero(at_limit)
             if held or self._saturating:                # else every servo's time at its limit stays 0
                 self.saturated_s = np.where(at_limit, self.saturated_s + self.dt, 0.0)
-                self._saturating = held > 0
+                self._saturating = bool(held)
             self.steps += 1
             if self.steps % 8 == 0:
                 self.gyro, self.accel, _ = self.sensor.read(self.engine, q, 1.0)
@@ -173,7 +174,7 @@ class EmulatedBody:
         heat = RISE_AT_STALL_C * (self.torque / self.model.stall_torque) ** 2
         self.temperature += (AMBIENT_C + heat - self.temperature) * (n * self.dt / THERMAL_TAU_S)
         if self._saturating and np.count_nonzero(self.saturated_s >= OVERLOAD_S):
-            for i in np.flatnonzero(self.saturated_s >= OVERLOAD_S):
+            for i in np.flatnonzero(self.saturated_s >= OVERLOAD_S).tolist():
                 servos[i].overloaded = True
 
     def _set_point(self, drive: Drive, q: np.ndarray) -> np.ndarray:

@@ -31,12 +31,13 @@ at the limit as the servo does.
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
 from op2motion.bus import protocol as p
-from op2motion.bus.tables import CM730, CM730_ID, MX28, ControlTable, Register
+from op2motion.bus.emulator.writeplan import WritePlan, write_plan
+from op2motion.bus.tables import CM730, CM730_ID, MX28, ControlTable
 
 MIN_VOLTS, MAX_VOLTS = MX28["min_voltage_limit"].address, MX28["max_voltage_limit"].address
 TEMPERATURE_LIMIT, ALARM_SHUTDOWN = MX28["temperature_limit"].address, MX28["alarm_shutdown"].address
@@ -45,18 +46,6 @@ GOAL, CW_LIMIT, CCW_LIMIT = MX28["goal_position"], MX28["cw_angle_limit"], MX28[
 EEPROM_END = MX28["torque_enable"].address        # 24: the EEPROM area (kept over power cycles) ends
 WHEEL_MODE = (0, 0)                               # CW and CCW angle limits both 0
 MULTI_TURN_MODE = (4095, 4095)                    # ... both 4095
-
-
-class WritePlan(NamedTuple):
-    """What a WRITE of ``length`` bytes at ``address`` means for one control table, worked out once (a device is
-    written the same span every tick): ``refused`` whatever the values (beyond the table, half a word, a read-only
-    register, a byte of no register where those are refused); else ``checks`` (offset in the data, end, lowest,
-    highest) per register covered, and the registers it starts (name, address, end) whose writing the device reacts
-    to (:attr:`Device.reacts_to`)."""
-
-    refused: bool
-    checks: tuple[tuple[int, int, int, int], ...]
-    reactions: tuple[tuple[str, int, int], ...]
 
 
 class Device:
@@ -73,9 +62,6 @@ class Device:
             self.table = storage
         self.table[table["id"].address] = device_id
         self.span = {r.name: (r.address, r.end) for r in table.registers}     # looked up hundreds of times a tick
-        self.covers: list[Register | None] = [None] * table.size              # the register holding each byte
-        for r in table.registers:
-            self.covers[r.address:r.end] = [r] * r.size
         self._level_at = table["status_return_level"].address
         self._delay_at = table["return_delay_time"].address
         self._plans: dict[tuple[int, int], WritePlan] = {}
@@ -130,29 +116,8 @@ class Device:
         """The :class:`WritePlan` of a WRITE of ``length`` bytes at ``address`` (worked out on first use)."""
         plan = self._plans.get((address, length))
         if plan is None:
-            plan = self._plans[(address, length)] = self._make_plan(address, length)
+            plan = self._plans[(address, length)] = write_plan(self.spec, self.reacts_to, address, length)
         return plan
-
-    def _make_plan(self, address: int, length: int) -> WritePlan:
-        end = address + length
-        if not length or end > self.spec.size:
-            return WritePlan(True, (), ())
-        checks, reactions = [], []
-        a = address
-        while a < end:
-            r = self.covers[a]
-            if r is None:
-                if not self.spec.gaps_writable:
-                    return WritePlan(True, (), ())
-                a += 1
-                continue
-            if r.address < address or r.end > end or r.access != "RW":   # half a word, or read-only
-                return WritePlan(True, (), ())
-            checks.append((r.address - address, r.end - address, *self.spec.limits_of(r)))
-            if r.name in self.reacts_to:
-                reactions.append((r.name, r.address, r.end))
-            a = r.end
-        return WritePlan(False, tuple(checks), tuple(reactions))
 
     def verdict(self, address: int, data: bytes) -> int:
         """The error bits a WRITE of ``data`` at ``address`` gets, without writing (a plain device: the range)."""

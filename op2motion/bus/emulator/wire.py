@@ -8,11 +8,11 @@ Sources: the CM-730 firmware ``CM_DXL_COM.c`` (ROBOTIS 2010, model 0x7300, firmw
 * power: the servos are silent until the board's power register (24) is 1 and :data:`BOOT_S` has passed, and when
   missing or unplugged; switching the power on brings each up with its RAM defaults (torque off, goal where it is),
   switching it off drops their torque. :meth:`Wire.cold_start` is the robot just switched on: power 0, servos silent.
-* packets are taken as the firmware takes them: header, ID, length, then that many bytes. One whose checksum does not
-  match is not executed; the device it names answers it with the checksum error (16), except a PING (the firmware
-  skips it) and a broadcast (its ``ReturnPacket`` never answers a broadcast but a PING, so a damaged broadcast gets no
-  reply from anyone). The firmware also drops the rest of what it has buffered; the emulator goes on with the bytes
-  after the packet (the servos behind the board still see them).
+* packets are taken as the firmware takes them (:mod:`.parser`): header, ID, length, then that many bytes. One
+  whose checksum does not match is not executed; the device it names answers it with the checksum error (16), except
+  a PING (the firmware skips it) and a broadcast (its ``ReturnPacket`` never answers a broadcast but a PING, so a
+  damaged broadcast gets no reply from anyone). The firmware also drops the rest of what it has buffered; the
+  emulator goes on with the bytes after the packet (the servos behind the board still see them).
 * replies follow the status return level the device had when the packet arrived (the firmware answers a WRITE before
   writing, so a write that sets level 1 is still answered); a broadcast is not answered, but a PING to it is by the
   CM-730 (its firmware answers every PING; the servos do not answer broadcast). BULK_READ is a READ to each device
@@ -22,7 +22,9 @@ Sources: the CM-730 firmware ``CM_DXL_COM.c`` (ROBOTIS 2010, model 0x7300, firmw
   both with the instruction error); RESET: the CM-730 answers it with error 0 and does nothing (its firmware has the
   reset commented out); a servo refuses it with the instruction error (the e-manual's factory reset would renumber it
   to ID 1 at 57600 baud, off this bus: not emulated); other instructions: the instruction error.
-* SYNC_WRITE writes each listed device; the first one marks the motion's start (fault times count from it).
+* SYNC_WRITE writes each listed device; the first one marks the motion's start (fault times count from it). Written
+  to servos only, each listed once, with none missing or unplugged, it goes to their tables at once
+  (:meth:`.bank.ServoTables.put`), as the writes one by one would.
 * replies are lost or have a byte changed at the faults' rates (seeded); a device given error bits (``errors``)
   reports them in every status packet, one given another model (``models``) reports it at address 0.
 """
@@ -38,64 +40,13 @@ from op2motion.bus import protocol as p
 from op2motion.bus.emulator.bank import ServoTables
 from op2motion.bus.emulator.devices import Board, EmulatedServo
 from op2motion.bus.emulator.faults import Faults
+from op2motion.bus.emulator.parser import FirmwareParser
 from op2motion.bus.tables import CM730, CM730_ID
 from op2motion.robot.spec import Spec
 
 BOOT_S = 0.1                       # the servos' silence after their power is switched on
-HEAD_BYTES = 4                     # FF FF ID LEN
-MIN_LENGTH = 2                     # LEN counts the instruction and the checksum
 PING_LEVEL, READ_LEVEL, ALL_LEVEL = 0, 1, 2   # the status return level an answer needs
 POWER = CM730["dynamixel_power"].address      # the board's switch of the servos' supply (one byte)
-
-
-class FirmwareParser:
-    """Instruction packets out of the byte stream as a device's firmware reads them (``ProcessPackets``): after a
-    header (further FF before the ID are skipped) the ID, the length and that many bytes make one packet; each comes
-    out with whether its checksum matches. ``discarded`` counts bytes outside packets, ``bad_checksums`` the packets
-    whose checksum did not match."""
-
-    def __init__(self) -> None:
-        self.buffer = bytearray()
-        self.discarded = 0
-        self.bad_checksums = 0
-
-    def feed(self, data: bytes | bytearray) -> list[tuple[p.Packet, bool]]:
-        """Add ``data``; every complete packet now in the buffer, in order, with whether its checksum matches."""
-        buf = self.buffer
-        buf += data
-        out: list[tuple[p.Packet, bool]] = []
-        while True:
-            start = buf.find(p.HEADER)
-            if start < 0:
-                keep = 1 if buf[-1:] == b"\xff" else 0            # a lone FF may start the next header
-                self.discarded += len(buf) - keep
-                del buf[:len(buf) - keep]
-                return out
-            self.discarded += start
-            del buf[:start]
-            if len(buf) < HEAD_BYTES:
-                return out
-            if buf[2] == 0xFF:                                     # FF FF FF: the header starts one byte later
-                self.discarded += 1
-                del buf[:1]
-                continue
-            if buf[3] < MIN_LENGTH:
-                self.discarded += 2
-                del buf[:2]
-                continue
-            end = HEAD_BYTES + buf[3]
-            if len(buf) < end:
-                return out
-            body = bytes(buf[2:end - 1])
-            intact = p.checksum(body) == buf[end - 1]
-            if not intact:
-                self.bad_checksums += 1
-            out.append((p.Packet(body[0], body[2], body[3:]), intact))
-            del buf[:end]
-
-    def clear(self) -> None:
-        """Forget what is buffered."""
-        self.buffer.clear()
 
 
 class Wire:
