@@ -37,8 +37,9 @@ class Drive(NamedTuple):
     """What the servos' registers ask of the motors (20,) each: torque enabled, goal [rad], moving speed [rad/s]
     (0: as fast as it can), stiffness [N·m/rad], torque limit [N·m]; and what follows from them for every physics
     step until a register changes: ``free`` (no moving speed: the set point jumps to the goal), ``all_free``,
-    ``all_enabled``, the set point's largest move a step either way [rad], and the torque at which a servo counts
-    as at its limit [N·m] (infinite for one that cannot be: torque off, or a limit of 0)."""
+    ``all_enabled``, the set point's largest move a step either way [rad], the torque at which a servo counts as at
+    its limit [N·m] (infinite for one that cannot be: torque off, or a limit of 0), and ``limited``: some servo's
+    torque limit is below the model's most torque (else clipping at the model's most torque is all the clipping)."""
 
     enabled: np.ndarray
     goal: np.ndarray
@@ -51,6 +52,7 @@ class Drive(NamedTuple):
     step_low_rad: np.ndarray
     step_high_rad: np.ndarray
     at_limit_nm: np.ndarray
+    limited: bool
 
 
 STARTS = ("standing", "lying_front", "lying_back", "lying_left", "lying_right")
@@ -150,13 +152,14 @@ class EmulatedBody:
         free = speed <= 0.0
         at_limit = np.where(enabled & (limit > 0), OVERLOAD_SHARE * np.maximum(limit, 1e-9), np.inf)
         return Drive(enabled, self._goal_rad(tables), speed, kp, limit, free, bool(free.all()), bool(enabled.all()),
-                     -speed * self.dt, speed * self.dt, at_limit)
+                     -speed * self.dt, speed * self.dt, at_limit, bool((limit < self.model.torque_max).any()))
 
     def step(self, n: int, servos: Sequence[EmulatedServo], drive: Drive) -> None:
         """``n`` physics steps as ``drive`` (:meth:`drive`) asks; a servo held at its limit latches its overload.
         The torque is the servo model's within the torque limit (the limit is at most the model's most torque)."""
         state, engine_step, active_torque = self.engine.state, self.engine.step, self.model.active_torque
-        kp, limit, at_limit_nm = drive.kp, drive.limit, drive.at_limit_nm
+        kp, at_limit_nm = drive.kp, drive.at_limit_nm
+        limit = drive.limit if drive.limited else None          # None: the model's own clip, at its most torque
         for _ in range(n):
             q, _ = state()
             self.command = self._set_point(drive, q)

@@ -97,12 +97,13 @@ class Wire:
         """A servo that is not on the bus (missing, or unplugged by now)."""
         return device in self.faults.missing or device in self.unplugged
 
-    def present(self, device: int) -> Any:
-        """The device at ``device`` if it would answer now (a powered, booted servo on the bus; the board)."""
+    def present(self, device: int, servos_up: bool | None = None) -> Any:
+        """The device at ``device`` if it would answer now (a powered, booted servo on the bus; the board);
+        ``servos_up``: :meth:`servos_up` if the caller knows it."""
         if device == CM730_ID:
             return self.board
         servo = self.by_id.get(device)
-        if servo is None or self.silent(device) or not self.servos_up():
+        if servo is None or self.silent(device) or not (self.servos_up() if servos_up is None else servos_up):
             return None
         return servo
 
@@ -255,9 +256,10 @@ class Wire:
             self.stats["bad_packets"] += 1
             return
         out = bytearray()
+        up = self.servos_up()                      # reads change nothing of it
         for k in range(1, len(params), 3):
             length, target, address = params[k], params[k + 1], params[k + 2]
-            device = self.present(target)
+            device = self.present(target, up)
             level = None if device is None else device.return_level
             if level is None or level < READ_LEVEL:
                 break                              # the devices listed after it wait for its reply in vain
