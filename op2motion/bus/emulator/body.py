@@ -1,6 +1,6 @@
 """The emulated OP2's body: a physics :class:`~op2motion.physics.Engine` (the floor and the robot, 1 kHz) driven by
 the MX-28 servo model (:class:`~op2motion.model.servo.ServoModel`) from the servos' registers, and the registers
-filled from the simulated body.
+filled from the simulated body, all twenty servos at once (their tables side by side: :mod:`.bank`).
 
 Per servo, from its table: torque enable (off: no active torque), the P gain (the model's stiffness per P), the goal
 position, the moving speed (non-zero: the servo moves its set point towards the goal at that speed), the torque
