@@ -159,7 +159,7 @@ class EmulatedBody:
         The torque is the servo model's within the torque limit (the limit is at most the model's most torque)."""
         state, engine_step, active_torque = self.engine.state, self.engine.step, self.model.active_torque
         kp, at_limit_nm = drive.kp, drive.at_limit_nm
-        limit = drive.limit if drive.limited else None          # None: the model's own clip, at its most torque
+        limit = drive.limit if drive.limited else None    # None: every limit is the most torque, where the model clips
         for _ in range(n):
             q, _ = state()
             self.command = self._set_point(drive, q)

@@ -10,7 +10,6 @@ import collections
 import math
 
 USB_PAYLOAD_BYTES = 62             # FT232R: 64-byte USB packets, 2 of them modem status
-_UNKNOWN = object()                # Ftdi.next_packet not worked out since the chip's state last changed
 
 
 class Ftdi:
@@ -25,13 +24,14 @@ class Ftdi:
         self.anchor = start_s                       # the last packet sent: the timer fires timer_s after it
         self.buffer = bytearray()
         self.incoming: collections.deque[tuple[float, bytes]] = collections.deque()   # (first byte's end, bytes)
-        self._next: float | None | object = _UNKNOWN                                 # next_packet's answer
+        self._next: float | None = None              # next_packet's answer, while _next_known
+        self._next_known = False
 
     def receive(self, first_end_s: float, data: bytes) -> None:
         """``data`` arrives back to back, its first byte complete at ``first_end_s`` [s]."""
         if data:
             self.incoming.append((first_end_s, data))
-            self._next = _UNKNOWN
+            self._next_known = False
 
     def idle(self) -> bool:
         """Nothing buffered and nothing on its way."""
@@ -48,7 +48,7 @@ class Ftdi:
             periods = max(1, math.floor((limit_s - self.anchor) / self.timer_s + 1e-9))
             self.anchor += periods * self.timer_s
             return self.anchor, b""
-        self._next = _UNKNOWN
+        self._next_known = False
         by = fire if fire < limit_s else limit_s
         if self.incoming and self.incoming[0][0] <= by:
             return self._take_in(by)
@@ -91,11 +91,12 @@ class Ftdi:
     def next_packet(self) -> float | None:
         """When the chip sends its next packet with bytes in it [s], from what it holds and receives so far (None:
         nothing held or on its way): :meth:`step` without a limit, on the state's numbers, nothing changed."""
-        if self._next is _UNKNOWN:
-            self._next = self._first_packet()
-        return self._next  # type: ignore[return-value]
+        if not self._next_known:
+            self._next, self._next_known = self._first_packet(), True
+        return self._next
 
     def _first_packet(self) -> float | None:
+        """:meth:`step`'s arithmetic with no limit, on copies of the state's numbers."""
         anchor, held, timer_s, byte_s = self.anchor, len(self.buffer), self.timer_s, self.byte_s
         for first, data in self.incoming:
             size = len(data)
