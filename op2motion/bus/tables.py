@@ -39,6 +39,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 MX28_MODEL_NUMBER = 29
 CM730_MODEL_NUMBER = 0x7300        # what the CM-730 reports at address 0 (Bold Hearts' CM730 snapshot, 0x7300)
 CM740_MODEL_NUMBER = 0x7400        # ... the OP2's CM-740 (e-manual, OP2, CM-740 EEPROM area: 0x00, 0x74)
@@ -254,3 +256,10 @@ def magnitude(value: float) -> int:
     """A signed speed or load as its register value (bits 0-9 magnitude, clipped to 1023; bit 10 if negative)."""
     m = min(int(round(abs(value))), DIRECTION_BIT - 1)
     return m | DIRECTION_BIT if value < 0 and m else m
+
+
+def magnitudes(values: np.ndarray) -> np.ndarray:
+    """:func:`magnitude` of each of ``values`` (finite), as an int64 array."""
+    m = np.minimum(np.rint(np.abs(values)), DIRECTION_BIT - 1).astype(np.int64)
+    return np.where(values < -0.5, m | DIRECTION_BIT, m)      # negative and a magnitude of 1 or more (0.5 rounds
+    #                                                           to the even 0, as round does)

@@ -1,6 +1,6 @@
 """The emulated OP2's body: a physics :class:`~op2motion.physics.Engine` (the floor and the robot, 1 kHz) driven by
 the MX-28 servo model (:class:`~op2motion.model.servo.ServoModel`) from the servos' registers, and the registers
-filled from the simulated body.
+filled from the simulated body, all twenty servos at once (their tables side by side: :mod:`.bank`).
 
 Per servo, from its table: torque enable (off: no active torque), the P gain (the model's stiffness per P), the goal
 position, the moving speed (non-zero: the servo moves its set point towards the goal at that speed), the torque
@@ -24,8 +24,9 @@ from typing import TYPE_CHECKING, NamedTuple, Sequence
 
 import numpy as np
 
+from op2motion.bus.emulator.bank import ServoTables
 from op2motion.bus.emulator.devices import Board, EmulatedServo
-from op2motion.bus.tables import SPEED_RAD_S_PER_UNIT, TORQUE_LIMIT_FULL, magnitude
+from op2motion.bus.tables import SPEED_RAD_S_PER_UNIT, TORQUE_LIMIT_FULL, magnitudes
 from op2motion.robot.imu import encode, imu_of
 from op2motion.robot.spec import Spec
 
@@ -34,13 +35,24 @@ if TYPE_CHECKING:
 
 class Drive(NamedTuple):
     """What the servos' registers ask of the motors (20,) each: torque enabled, goal [rad], moving speed [rad/s]
-    (0: as fast as it can), stiffness [N·m/rad], torque limit [N·m]."""
+    (0: as fast as it can), stiffness [N·m/rad], torque limit [N·m]; and what follows from them for every physics
+    step until a register changes: ``free`` (no moving speed: the set point jumps to the goal), ``all_free``,
+    ``all_enabled``, the set point's largest move a step either way [rad], the torque at which a servo counts as at
+    its limit [N·m] (infinite for one that cannot be: torque off, or a limit of 0), and ``limited``: some servo's
+    torque limit is below the model's most torque (else clipping at the model's most torque is all the clipping)."""
 
     enabled: np.ndarray
     goal: np.ndarray
     speed: np.ndarray
     kp: np.ndarray
     limit: np.ndarray
+    free: np.ndarray
+    all_free: bool
+    all_enabled: bool
+    step_low_rad: np.ndarray
+    step_high_rad: np.ndarray
+    at_limit_nm: np.ndarray
+    limited: bool
 
 
 STARTS = ("standing", "lying_front", "lying_back", "lying_left", "lying_right")
@@ -87,6 +99,11 @@ class EmulatedBody:
         self.steps = 0
         self.gyro, self.accel = np.zeros(3), np.array([0.0, 0.0, 9.81])
         self.push_n = 0.0                   # a push forward (+x, world) at the torso's centre of mass [N]
+        self._tick_offset = spec.servo.center_tick + self.horn_ticks   # a joint at 0 reads this [tick]
+        self._drive_keys: tuple[bytes, bool, bytes] = (b"", False, b"")   # the goals', the power, the other registers'
+        self._drive: Drive | None = None
+        self._imu_unsent = True             # the gyro and accelerometer read since the board's words were written
+        self._saturating = False            # some servo's time at its limit is above 0
         self._place()
 
     def _place(self) -> None:
@@ -105,63 +122,104 @@ class EmulatedBody:
             self.engine.step(self.model.active_torque(self.pose, q, kp))
         self.gyro, self.accel, _ = self.sensor.read(self.engine, self.engine.state()[0], 1.0)
 
-    def drive(self, servos: Sequence[EmulatedServo], powered: bool) -> Drive:
-        """What the servos' registers ask of the motors now (good until a register is written): torque enabled, goal
-        [rad], moving speed [rad/s], stiffness, torque limit [N·m]."""
-        enabled = np.array([powered and s.get("torque_enable") == 1 for s in servos], dtype=bool)
-        goal = np.array([s.u16("goal_position") for s in servos], dtype=float)
+    def drive(self, tables: ServoTables, powered: bool) -> Drive:
+        """What the servos' registers (``tables``) ask of the motors now (good until a register is written): torque
+        enabled, goal [rad], moving speed [rad/s], stiffness, torque limit [N·m], and what follows (:class:`Drive`).
+        Worked out again only as far as those registers or the power changed."""
+        goals, others = tables.drive_keys()
+        drive = self._drive
+        if drive is None or (powered, others) != self._drive_keys[1:]:
+            drive = self._new_drive(tables, powered)
+        elif goals != self._drive_keys[0]:
+            drive = drive._replace(goal=self._goal_rad(tables))
+        self._drive, self._drive_keys = drive, (goals, powered, others)
+        return drive
+
+    def _goal_rad(self, tables: ServoTables) -> np.ndarray:
+        """The goal positions [rad] (read-only: the set point may be this very array)."""
+        goal = tables.column("goal_position").astype(float)
         goal = (goal - self.horn_ticks - self.spec.servo.center_tick) * self.spec.servo.rad_per_tick
-        speed = np.array([s.u16("moving_speed") for s in servos], dtype=float) * SPEED_RAD_S_PER_UNIT
-        kp = self.model.kp_of(np.array([s.get("p_gain") for s in servos], dtype=float))
-        share = np.array([s.u16("torque_limit") for s in servos], dtype=float) / TORQUE_LIMIT_FULL
+        goal.flags.writeable = False
+        return goal
+
+    def _new_drive(self, tables: ServoTables, powered: bool) -> Drive:
+        enabled = (tables.column("torque_enable") == 1) & powered
+        speed = tables.column("moving_speed").astype(float) * SPEED_RAD_S_PER_UNIT
+        kp = self.model.kp_of(tables.column("p_gain").astype(float))
+        share = tables.column("torque_limit").astype(float) / TORQUE_LIMIT_FULL
         volts = min(1.0, self.supply_v / self.rated_v)
-        return Drive(enabled, goal, speed, kp, self.model.torque_max * share * volts * enabled)
+        limit = self.model.torque_max * share * volts * enabled
+        free = speed <= 0.0
+        at_limit = np.where(enabled & (limit > 0), OVERLOAD_SHARE * np.maximum(limit, 1e-9), np.inf)
+        return Drive(enabled, self._goal_rad(tables), speed, kp, limit, free, bool(free.all()), bool(enabled.all()),
+                     -speed * self.dt, speed * self.dt, at_limit, bool((limit < self.model.torque_max).any()))
 
     def step(self, n: int, servos: Sequence[EmulatedServo], drive: Drive) -> None:
-        """``n`` physics steps as ``drive`` (:meth:`drive`) asks; a servo held at its limit latches its overload."""
-        count = len(servos)
-        enabled, goal, speed, kp, limit = drive
+        """``n`` physics steps as ``drive`` (:meth:`drive`) asks; a servo held at its limit latches its overload.
+        The torque is the servo model's within the torque limit (the limit is at most the model's most torque)."""
+        state, engine_step, active_torque = self.engine.state, self.engine.step, self.model.active_torque
+        kp, at_limit_nm = drive.kp, drive.at_limit_nm
+        limit = drive.limit if drive.limited else None    # None: every limit is the most torque, where the model clips
         for _ in range(n):
-            q, _ = self.engine.state()
-            free = speed <= 0.0
-            self.command = np.where(free, goal, self.command + np.clip(goal - self.command, -speed * self.dt,
-                                                                        speed * self.dt))
-            self.command = np.where(enabled, self.command, q)             # a limp servo's set point follows it
-            torque = self.model.active_torque(self.command, q, kp)
-            torque = np.minimum(np.maximum(torque, -limit), limit)
-            self.engine.step(torque, np.array([self.push_n, 0.0, 0.0]) if self.push_n else None)
-            self.torque = torque
-            at_limit = enabled & (np.abs(torque) >= OVERLOAD_SHARE * np.maximum(limit, 1e-9)) & (limit > 0)
-            self.saturated_s = np.where(at_limit, self.saturated_s + self.dt, 0.0)
+            q, _ = state()
+            self.command = self._set_point(drive, q)
+            self.torque = torque = active_torque(self.command, q, kp, limit)
+            engine_step(torque, np.array([self.push_n, 0.0, 0.0]) if self.push_n else None)
+            at_limit = np.abs(torque) >= at_limit_nm
+            held = np.count_nonzero(at_limit)
+            if held or self._saturating:                # else every servo's time at its limit stays 0
+                self.saturated_s = np.where(at_limit, self.saturated_s + self.dt, 0.0)
+                self._saturating = bool(held)
             self.steps += 1
             if self.steps % 8 == 0:
                 self.gyro, self.accel, _ = self.sensor.read(self.engine, q, 1.0)
+                self._imu_unsent = True
         heat = RISE_AT_STALL_C * (self.torque / self.model.stall_torque) ** 2
         self.temperature += (AMBIENT_C + heat - self.temperature) * (n * self.dt / THERMAL_TAU_S)
-        for i in range(count):
-            if self.saturated_s[i] >= OVERLOAD_S:
+        if self._saturating and np.count_nonzero(self.saturated_s >= OVERLOAD_S):
+            for i in np.flatnonzero(self.saturated_s >= OVERLOAD_S).tolist():
                 servos[i].overloaded = True
 
-    def sense(self, servos: Sequence[EmulatedServo], board: Board, overrides: dict[int, float]) -> None:
-        """The present-state registers and the board's IMU and voltage from the body (``overrides``: forced
-        temperatures {id: °C})."""
+    def _set_point(self, drive: Drive, q: np.ndarray) -> np.ndarray:
+        """Where each servo drives its joint this step [rad]: its goal, or towards it at its moving speed; a limp
+        servo's set point follows its joint ``q``."""
+        if drive.all_free:
+            command = drive.goal                                        # read-only: shared, never changed in place
+        else:
+            move = np.minimum(np.maximum(drive.goal - self.command, drive.step_low_rad), drive.step_high_rad)
+            command = np.where(drive.free, drive.goal, self.command + move)
+        return command if drive.all_enabled else np.where(drive.enabled, command, q)
+
+    def sense(self, servos: Sequence[EmulatedServo], tables: ServoTables, board: Board,
+              overrides: dict[int, float]) -> None:
+        """The present-state registers (``tables``, the servos' rows) and the board's IMU and voltage from the body
+        (``overrides``: forced temperatures {id: °C}); a servo whose alarm shutdown a condition trips drops its
+        torque."""
         q, dq = self.engine.state()
         s = self.spec.servo
-        ticks = np.clip(np.rint(q / s.rad_per_tick).astype(int) + s.center_tick + self.horn_ticks, s.min_tick,
-                        s.max_tick).tolist()
-        speed = [magnitude(v) for v in (dq / SPEED_RAD_S_PER_UNIT).tolist()]
-        load = [magnitude(v) for v in (self.torque / self.model.torque_max * TORQUE_LIMIT_FULL).tolist()]
-        moving = ((np.abs(self.command - q) > MOVING_RAD) | (np.abs(dq) > MOVING_RAD_S)).tolist()
+        ticks = np.minimum(np.maximum(np.rint(q / s.rad_per_tick).astype(int) + self._tick_offset, s.min_tick),
+                           s.max_tick)
+        n = len(q)
+        both = magnitudes(np.concatenate((dq / SPEED_RAD_S_PER_UNIT,
+                                          self.torque / self.model.torque_max * TORQUE_LIMIT_FULL)))
+        moving = (np.abs(self.command - q) > MOVING_RAD) | (np.abs(dq) > MOVING_RAD_S)
+        celsius = self.temperature.tolist()
+        temperature = self.temperature
+        if overrides:
+            celsius = [overrides.get(servo.id, c) for servo, c in zip(servos, celsius)]
+            temperature = np.array(celsius)
+        for servo, c in zip(servos, celsius):
+            servo.temperature_c, servo.voltage_v = c, self.supply_v
         volts = int(round(self.supply_v * 10))
-        for i, servo in enumerate(servos):
-            servo.temperature_c = overrides.get(servo.id, float(self.temperature[i]))
-            servo.voltage_v = self.supply_v
-            servo.present(ticks[i], speed[i], load[i], volts, int(min(max(round(servo.temperature_c), 0), 255)),
-                          int(moving[i]))
-            servo.enforce_alarms()
-        for register, count in encode(self.imu, self.gyro, self.accel).items():
-            board.table[register:register + 2] = count.to_bytes(2, "little")
-        board.set("voltage", int(round(self.supply_v * 10)))
+        tables.put_present(ticks, both[:n], both[n:], volts, np.minimum(np.maximum(np.rint(temperature), 0), 255),
+                           moving)
+        overloaded = [servo.overloaded for servo in servos]
+        tables.enforce_alarms(volts, temperature, any(overloaded) and np.array(overloaded))
+        if self._imu_unsent:                           # the board's IMU words change when the IMU is read
+            for register, count in encode(self.imu, self.gyro, self.accel).items():
+                board.table[register:register + 2] = count.to_bytes(2, "little")
+            self._imu_unsent = False
+        board.set("voltage", volts)
 
     def truth(self) -> dict[str, float]:
         """Where the simulated torso is: position [m], yaw and tilt from upright [rad], simulated time [s]."""

@@ -31,15 +31,17 @@ at the limit as the servo does.
 
 from __future__ import annotations
 
-import struct
+from typing import Any
+
+import numpy as np
 
 from op2motion.bus import protocol as p
-from op2motion.bus.tables import CM730, CM730_ID, MX28, ControlTable, Register
+from op2motion.bus.emulator.writeplan import WritePlan, write_plan
+from op2motion.bus.tables import CM730, CM730_ID, MX28, ControlTable
 
 MIN_VOLTS, MAX_VOLTS = MX28["min_voltage_limit"].address, MX28["max_voltage_limit"].address
 TEMPERATURE_LIMIT, ALARM_SHUTDOWN = MX28["temperature_limit"].address, MX28["alarm_shutdown"].address
-TORQUE_ENABLE, MOVING, PRESENT = MX28["torque_enable"].address, MX28["moving"].address, MX28["present_position"].address
-PRESENT_LAYOUT = struct.Struct("<HHHBB")          # present position, speed, load, voltage, temperature (36..43)
+TORQUE_ENABLE = MX28["torque_enable"].address
 GOAL, CW_LIMIT, CCW_LIMIT = MX28["goal_position"], MX28["cw_angle_limit"], MX28["ccw_angle_limit"]
 EEPROM_END = MX28["torque_enable"].address        # 24: the EEPROM area (kept over power cycles) ends
 WHEEL_MODE = (0, 0)                               # CW and CCW angle limits both 0
@@ -47,16 +49,22 @@ MULTI_TURN_MODE = (4095, 4095)                    # ... both 4095
 
 
 class Device:
-    """One device on the bus: its ID, control table and bytes."""
+    """One device on the bus: its ID, control table and bytes (``storage``: the bytes to keep the table in, e.g. a
+    row of :class:`.bank.ServoTables`; default its own)."""
 
-    def __init__(self, device_id: int, table: ControlTable):
+    reacts_to: frozenset[str] = frozenset()          # the registers whose writing the firmware reacts to (changed)
+
+    def __init__(self, device_id: int, table: ControlTable, storage: memoryview | None = None):
         self.id, self.spec = device_id, table
-        self.table = table.defaults()
+        self.table: bytearray | memoryview = table.defaults()
+        if storage is not None:
+            storage[:] = self.table
+            self.table = storage
         self.table[table["id"].address] = device_id
         self.span = {r.name: (r.address, r.end) for r in table.registers}     # looked up hundreds of times a tick
-        self.covers: list[Register | None] = [None] * table.size              # the register holding each byte
-        for r in table.registers:
-            self.covers[r.address:r.end] = [r] * r.size
+        self._level_at = table["status_return_level"].address
+        self._delay_at = table["return_delay_time"].address
+        self._plans: dict[tuple[int, int], WritePlan] = {}
 
     def u16(self, name: str) -> int:
         """A word register."""
@@ -76,7 +84,12 @@ class Device:
     @property
     def return_level(self) -> int:
         """The status return level."""
-        return self.get("status_return_level")
+        return self.table[self._level_at]
+
+    @property
+    def return_delay(self) -> int:
+        """The Return Delay Time register [2 µs]."""
+        return self.table[self._delay_at]
 
     def conditions(self) -> int:
         """The standing error bits (none for a plain device)."""
@@ -90,24 +103,21 @@ class Device:
 
     def check(self, address: int, data: bytes) -> int:
         """The range error a WRITE of ``data`` at ``address`` gets (0: none; see the module docstring)."""
-        end = address + len(data)
-        if not data or end > self.spec.size:
+        plan = self.plan(address, len(data))
+        if plan.refused:
             return p.RANGE
-        a = address
-        while a < end:
-            r = self.covers[a]
-            if r is None:
-                if not self.spec.gaps_writable:
-                    return p.RANGE
-                a += 1
-                continue
-            if r.address < address or r.end > end or r.access != "RW":   # half a word, or read-only
+        for start, end, low, high in plan.checks:
+            value = data[start] if end - start == 1 else int.from_bytes(data[start:end], "little")
+            if not low <= value <= high:
                 return p.RANGE
-            low, high = self.spec.limits_of(r)
-            if not low <= int.from_bytes(data[r.address - address:r.end - address], "little") <= high:
-                return p.RANGE
-            a = r.end
         return 0
+
+    def plan(self, address: int, length: int) -> WritePlan:
+        """The :class:`WritePlan` of a WRITE of ``length`` bytes at ``address`` (worked out on first use)."""
+        plan = self._plans.get((address, length))
+        if plan is None:
+            plan = self._plans[(address, length)] = write_plan(self.spec, self.reacts_to, address, length)
+        return plan
 
     def verdict(self, address: int, data: bytes) -> int:
         """The error bits a WRITE of ``data`` at ``address`` gets, without writing (a plain device: the range)."""
@@ -116,18 +126,21 @@ class Device:
     def write(self, address: int, data: bytes) -> int:
         """Apply a WRITE unless it is refused with a range error; its error byte (the conditions as it arrived)."""
         standing = self.conditions()
+        return standing | self.put(address, data)
+
+    def put(self, address: int, data: bytes) -> int:
+        """:meth:`write` without the standing conditions (what a write nobody answers needs): the write's own error
+        bits."""
         error = self.verdict(address, data)
         if not error & p.RANGE:
             self.apply(address, data)
-        return standing | error
+        return error
 
     def apply(self, address: int, data: bytes) -> None:
-        """Write checked bytes; the firmware reacts to each register written."""
+        """Write checked bytes; the firmware reacts to the registers written (:attr:`reacts_to`)."""
         self.table[address:address + len(data)] = data
-        for a in range(address, address + len(data)):
-            r = self.covers[a]
-            if r is not None and r.address == a:
-                self.changed(r.name, self.get(r.name))
+        for name, start, end in self.plan(address, len(data)).reactions:
+            self.changed(name, int.from_bytes(self.table[start:end], "little"))
 
     def changed(self, name: str, value: int) -> None:
         """A register was written (the firmware's reaction)."""
@@ -136,6 +149,8 @@ class Device:
 class Board(Device):
     """The CM-730 (the CM-740 once its model number is set): the servos' power switch, LEDs, buttons, IMU and supply
     voltage."""
+
+    reacts_to = frozenset({"dynamixel_power"})
 
     def __init__(self) -> None:
         super().__init__(CM730_ID, CM730)
@@ -155,10 +170,13 @@ class Board(Device):
 
 
 class EmulatedServo(Device):
-    """One MX-28 (see the module docstring); the body (:mod:`.body`) fills its present-state registers."""
+    """One MX-28 (see the module docstring); the body (:mod:`.body`) fills its present-state registers
+    (``storage``: its row of the servos' tables, :class:`.bank.ServoTables`)."""
 
-    def __init__(self, device_id: int):
-        super().__init__(device_id, MX28)
+    reacts_to = frozenset({"torque_enable"})
+
+    def __init__(self, device_id: int, storage: memoryview | None = None):
+        super().__init__(device_id, MX28, storage)
         self.table[MX28["baud_rate"].address] = 1                  # the OP2's servos: 1 Mbps, no return delay
         self.table[MX28["return_delay_time"].address] = 0
         self.overloaded = False
@@ -185,26 +203,14 @@ class EmulatedServo(Device):
         self.waiting = None
 
     def conditions(self) -> int:
-        error = 0
-        volts, t = round(self.voltage_v * 10), self.table
-        if not t[MIN_VOLTS] <= volts <= t[MAX_VOLTS]:
-            error |= p.INPUT_VOLTAGE
-        if self.temperature_c > t[TEMPERATURE_LIMIT]:
-            error |= p.OVERHEATING
-        if self.overloaded:
-            error |= p.OVERLOAD
-        return error
+        t = self.table
+        return alarm_conditions(round(self.voltage_v * 10), t[MIN_VOLTS], t[MAX_VOLTS], self.temperature_c,
+                                t[TEMPERATURE_LIMIT], self.overloaded)
 
     def enforce_alarms(self) -> None:
         """The alarm shutdown: a standing condition in its mask switches the torque off."""
         if self.table[TORQUE_ENABLE] and self.conditions() & self.table[ALARM_SHUTDOWN]:
             self.table[TORQUE_ENABLE] = 0
-
-    def present(self, ticks: int, speed: int, load: int, volts: int, celsius: int, moving: int) -> None:
-        """The present-state registers (36..43 and 46) in one go: position, speed, load, voltage, temperature,
-        moving."""
-        self.table[PRESENT:PRESENT + 8] = PRESENT_LAYOUT.pack(ticks, speed, load, volts, celsius)
-        self.table[MOVING] = moving
 
     def changed(self, name: str, value: int) -> None:
         if name == "torque_enable" and value == 1:
@@ -216,9 +222,13 @@ class EmulatedServo(Device):
         error = self.check(address, data)
         if error or not address <= GOAL.address < address + len(data):
             return error
-        after = bytearray(self.table)
-        after[address:address + len(data)] = data
-        goal = int.from_bytes(after[GOAL.address:GOAL.end], "little")
+        if address < CCW_LIMIT.end and CW_LIMIT.address < address + len(data):    # the limits written too
+            after: bytearray | memoryview = bytearray(self.table)
+            after[address:address + len(data)] = data
+        else:
+            after = self.table
+        at = GOAL.address - address                  # a whole word: half a one is refused above
+        goal = data[at] | (data[at + 1] << 8)
         return p.ANGLE_LIMIT if _clipped(after, goal) != goal else 0
 
     def apply(self, address: int, data: bytes) -> None:
@@ -252,10 +262,23 @@ class EmulatedServo(Device):
         return self.write(address, data)
 
 
-def _clipped(table: bytearray, goal: int) -> int:
-    """``goal`` within the angle limits of ``table`` in joint mode (as it is in wheel and multi-turn mode)."""
-    cw = int.from_bytes(table[CW_LIMIT.address:CW_LIMIT.end], "little")
-    ccw = int.from_bytes(table[CCW_LIMIT.address:CCW_LIMIT.end], "little")
-    if (cw, ccw) in (WHEEL_MODE, MULTI_TURN_MODE):
-        return goal
-    return min(max(goal, cw), ccw)
+def _clipped(table: bytearray | memoryview, goal: int) -> int:
+    """``goal`` within the angle limits of ``table`` (:func:`within_limits`)."""
+    cw = table[CW_LIMIT.address] | (table[CW_LIMIT.address + 1] << 8)
+    ccw = table[CCW_LIMIT.address] | (table[CCW_LIMIT.address + 1] << 8)
+    return int(within_limits(goal, cw, ccw))
+
+
+def within_limits(goal: Any, cw: Any, ccw: Any) -> Any:
+    """``goal`` [tick] within the angle limits ``cw``..``ccw`` in joint mode, as it is in wheel and multi-turn mode
+    (see the module docstring). Of one servo (numbers) or of several (arrays, :mod:`.bank`)."""
+    joint = (((cw != WHEEL_MODE[0]) | (ccw != WHEEL_MODE[1]))
+             & ((cw != MULTI_TURN_MODE[0]) | (ccw != MULTI_TURN_MODE[1])))
+    return np.where(joint, np.minimum(np.maximum(goal, cw), ccw), goal)
+
+
+def alarm_conditions(volts: Any, min_volts: Any, max_volts: Any, celsius: Any, limit_c: Any, overloaded: Any) -> Any:
+    """A servo's standing error bits: the input voltage [0.1 V] outside its limits, the temperature [°C] above its
+    limit, the latched overload. Of one servo (numbers) or of several (arrays, :mod:`.bank`)."""
+    return (((volts < min_volts) | (volts > max_volts)) * p.INPUT_VOLTAGE | (celsius > limit_c) * p.OVERHEATING
+            | overloaded * p.OVERLOAD)

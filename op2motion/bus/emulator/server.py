@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import contextlib
 import errno
-import math
 import os
 import select
 import threading
@@ -27,7 +26,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from op2motion.bus.emulator.body import Drive, EmulatedBody
-from op2motion.bus.emulator.devices import EmulatedServo
 from op2motion.bus.emulator.faults import Faults
 from op2motion.bus.emulator.timing import TimedLink, WireTiming, return_delay_s
 from op2motion.bus.emulator.wire import BOOT_S, Wire
@@ -102,7 +100,7 @@ class Emulator:
             servo.set("goal_position", int(round(self.body.pose[servo.id - 1] / self.spec.servo.rad_per_tick))
                       + self.spec.servo.center_tick + int(self.body.horn_ticks[servo.id - 1]))
             servo.set("torque_enable", 1)
-        self.body.sense(self.servos, self.board, self.temperature_overrides)
+        self.body.sense(self.servos, self.wire.tables, self.board, self.temperature_overrides)
 
     def _present_ticks(self) -> list[int]:
         s = self.spec.servo
@@ -228,6 +226,8 @@ class Emulator:
             if event is None or event > t:
                 break
             self.outbox += b"".join(self.timed_wire.run_until(event))
+            if event == t:
+                return                  # the wire has run up to t: running it up to t again does nothing
         self.outbox += b"".join(self.timed_wire.run_until(t))
 
     def _answer(self, t: float, request: bytes) -> list[bytes]:
@@ -240,20 +240,21 @@ class Emulator:
     def _delay_s(self, device: int) -> float:
         """Device ``device``'s return delay [s] (its register 5)."""
         found = self.wire.by_id.get(device)
-        return 0.0 if found is None else return_delay_s(found.get("return_delay_time"))
+        return 0.0 if found is None else return_delay_s(found.return_delay)
 
     def _step_to(self, t: float) -> None:
         """Whole physics steps up to simulated time ``t`` [s] (in batches of :data:`BATCH_STEPS`, the timed faults
         between them); the registers from the body at most every :data:`REFRESH_S` (and whenever a request is
         answered: :meth:`_refresh`)."""
-        steps = int(math.floor((t - self._now()) / self.body.dt + 1e-9))
+        steps = int((t - self._now()) / self.body.dt + 1e-9)         # int: floor, where it matters (> 0)
         if steps <= 0:
             return
         while steps > 0:
             n = min(steps, BATCH_STEPS)
             self._timed_faults()
             if self._drive is None:
-                self._drive = self.body.drive(self._limp_servos(), self.wire.powered())
+                self._limp_servos()
+                self._drive = self.body.drive(self.wire.tables, self.wire.powered())
             self.body.step(n, self.servos, self._drive)
             steps -= n
         self._stale = True
@@ -266,10 +267,10 @@ class Emulator:
         if not self._stale:
             return
         self._stale, self._refreshed_at = False, self._now()
-        self.body.sense(self.servos, self.board, self.temperature_overrides)
+        self.body.sense(self.servos, self.wire.tables, self.board, self.temperature_overrides)
         self._drive = None
         self._truth = self.body.truth()
-        self.torque_limit_min = min(self.torque_limit_min, *(s.u16("torque_limit") for s in self.servos))
+        self.torque_limit_min = min(self.torque_limit_min, *self.wire.tables.column("torque_limit").tolist())
         if self._truth["t_s"] >= self._next_trace:
             self.trace.append(self._truth)
             self._next_trace = self._truth["t_s"] + TRACE_EVERY_S
@@ -319,12 +320,13 @@ class Emulator:
                 os.write(master, bytes(self.outbox))
             self.outbox.clear()
 
-    def _limp_servos(self) -> list[EmulatedServo]:
+    def _limp_servos(self) -> None:
         """The servos as the body sees them: a missing or unplugged servo has no torque."""
+        if not (self.faults.missing or self.wire.unplugged):
+            return
         for servo in self.servos:
             if self.wire.silent(servo.id):
                 servo.set("torque_enable", 0)
-        return self.servos
 
     def _now(self) -> float:
         return self.body.steps * self.body.dt
@@ -334,7 +336,7 @@ class Emulator:
         return self._now()
 
     def _timed_faults(self) -> None:
-        if self.motion_t0 is None:
+        if self.motion_t0 is None or not (self.faults.push or self.faults.unplug or self.faults.overheat):
             return
         since = self._now() - self.motion_t0
         self.body.push_n = self.faults.push_at(since)

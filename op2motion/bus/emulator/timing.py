@@ -9,7 +9,7 @@ costs, so that the emulated OP2 answers when a real one would, not as fast as a 
   request's last byte;
 * **each device's Return Delay Time** (register 5, 2 µs a unit) before its reply, and in a bulk read the replies one
   after the other in the request's order, each device waiting its own delay after the previous reply;
-* **the USB adapter's receive path**: the FT232R sends what it received in USB packets of at most
+* **the USB adapter's receive path** (:mod:`.ftdi`): the FT232R sends what it received in USB packets of at most
   :data:`USB_PAYLOAD_BYTES` bytes (64 with its 2 status bytes); a full packet goes at once, a partial one waits for
   the latency timer, which fires every ``latency_timer_s`` and restarts at every packet sent (an empty one too).
 
@@ -26,13 +26,12 @@ when it is written and its replies are there at once (a pseudo-terminal's speed)
 from __future__ import annotations
 
 import collections
-import math
 from dataclasses import dataclass
 from typing import Callable
 
+from op2motion.bus.emulator.ftdi import USB_PAYLOAD_BYTES, Ftdi
 from op2motion.errors import InputError
 
-USB_PAYLOAD_BYTES = 62             # FT232R: 64-byte USB packets, 2 of them modem status
 RETURN_DELAY_UNIT_S = 2e-6         # Return Delay Time register (address 5): 2 µs a unit
 LATENCY_TIMERS_MS = (1, 16)        # what the timer is after a client sets low latency / on a current kernel
 DEFAULT_LATENCY_TIMER_MS = 1       # the emulator's: what op2motion's client sets at open (ASYNC_LOW_LATENCY)
@@ -40,6 +39,8 @@ KERNEL_LATENCY_TIMER_MS = 16       # Linux ftdi_sio's default since the low-late
 MAX_LATENCY_TIMER_MS = 255         # FT232R: 1..255 ms
 
 Answer = Callable[[float, bytes], list[bytes]]
+__all__ = ["DEFAULT_LATENCY_TIMER_MS", "INSTANT", "KERNEL_LATENCY_TIMER_MS", "USB_PAYLOAD_BYTES", "Ftdi", "TimedLink",
+           "WireTiming", "packet_ends", "return_delay_s"]
 
 
 @dataclass(frozen=True)
@@ -89,62 +90,6 @@ def packet_ends(stream: bytes | bytearray) -> list[int]:
             return ends
         ends.append(end)
         i = end
-
-
-class Ftdi:
-    """The FT232R's receive path (see the module docstring): bytes in as they finish on the wire, USB packets out."""
-
-    def __init__(self, latency_timer_s: float, byte_s: float, start_s: float):
-        self.timer_s, self.byte_s = latency_timer_s, byte_s
-        self.anchor = start_s                       # the last packet sent: the timer fires timer_s after it
-        self.buffer = bytearray()
-        self.incoming: collections.deque[tuple[float, bytes]] = collections.deque()   # (first byte's end, bytes)
-
-    def receive(self, first_end_s: float, data: bytes) -> None:
-        """``data`` arrives back to back, its first byte complete at ``first_end_s`` [s]."""
-        if data:
-            self.incoming.append((first_end_s, data))
-
-    def idle(self) -> bool:
-        """Nothing buffered and nothing on its way."""
-        return not self.buffer and not self.incoming
-
-    def step(self, limit_s: float) -> tuple[float, bytes] | None:
-        """The next thing the chip does at or before ``limit_s``: a USB packet sent (its time and payload; an empty
-        payload for a timer firing with nothing buffered), bytes taken in (returns ``(t, b"")`` too), or None when
-        nothing happens by then."""
-        fire = self.anchor + self.timer_s
-        if self.idle():                              # skip whole idle periods at once
-            if fire > limit_s or math.isinf(limit_s):
-                return None
-            periods = max(1, math.floor((limit_s - self.anchor) / self.timer_s + 1e-9))
-            self.anchor += periods * self.timer_s
-            return self.anchor, b""
-        if self.incoming and self.incoming[0][0] <= min(fire, limit_s):
-            first, data = self.incoming[0]
-            need = USB_PAYLOAD_BYTES - len(self.buffer)
-            by = min(fire, limit_s)
-            count = min(len(data), int(math.floor((by - first) / self.byte_s + 1e-9)) + 1)
-            take = min(count, need)
-            self.buffer += data[:take]
-            rest = data[take:]
-            if rest:
-                self.incoming[0] = (first + take * self.byte_s, rest)
-            else:
-                self.incoming.popleft()
-            at = first + (take - 1) * self.byte_s
-            if len(self.buffer) == USB_PAYLOAD_BYTES:                 # a full packet goes at once
-                return self._send(at)
-            return at, b""
-        if fire <= limit_s:
-            return self._send(fire)
-        return None
-
-    def _send(self, t: float) -> tuple[float, bytes]:
-        payload = bytes(self.buffer)
-        self.buffer.clear()
-        self.anchor = t
-        return t, payload
 
 
 class TimedLink:
@@ -207,41 +152,25 @@ class TimedLink:
         if self.timing.instant:
             return None
         nxt = self.requests[0][0] if self.requests else None
-        sent = self._next_packet()
+        sent = self.ftdi.next_packet()
         if sent is not None and (nxt is None or sent < nxt):
             nxt = sent
         return nxt
 
-    def _next_packet(self) -> float | None:
-        """When the adapter sends its next packet with bytes in it, from what it holds and receives so far."""
-        if self.ftdi.idle():
-            return None
-        copy = Ftdi(self.ftdi.timer_s, self.byte_s, self.ftdi.anchor)
-        copy.buffer, copy.incoming = bytearray(self.ftdi.buffer), collections.deque(self.ftdi.incoming)
-        while True:
-            event = copy.step(math.inf)
-            if event is None:
-                return None
-            if event[1]:
-                return event[0]
-
     def run_until(self, t: float) -> list[bytes]:
         """Everything that happens up to ``t`` [s]; the bytes the host receives by then, in USB packets."""
-        out: list[bytes] = []
         if self.timing.instant:
-            out, self.ready = self.ready, out
+            out, self.ready = self.ready, []
             return out
-        while True:
-            due = self.requests[0][0] if self.requests and self.requests[0][0] <= t else None
-            event = self.ftdi.step(t if due is None else due)
-            if event is not None:
-                if event[1]:
-                    out.append(event[1])
-                continue
-            if due is None:
-                return out
-            _, request = self.requests.popleft()
+        out = []
+        requests = self.requests
+        while requests and requests[0][0] <= t:
+            due, request = requests[0]
+            out += self.ftdi.run(due)
+            requests.popleft()
             self._replies(due, self.answer(due, request))
+        out += self.ftdi.run(t)
+        return out
 
     def _replies(self, t: float, chunks: list[bytes]) -> None:
         """Put the replies to a request that reached the devices at ``t`` onto the wire, each after its device's

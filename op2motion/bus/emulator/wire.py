@@ -8,11 +8,11 @@ Sources: the CM-730 firmware ``CM_DXL_COM.c`` (ROBOTIS 2010, model 0x7300, firmw
 * power: the servos are silent until the board's power register (24) is 1 and :data:`BOOT_S` has passed, and when
   missing or unplugged; switching the power on brings each up with its RAM defaults (torque off, goal where it is),
   switching it off drops their torque. :meth:`Wire.cold_start` is the robot just switched on: power 0, servos silent.
-* packets are taken as the firmware takes them: header, ID, length, then that many bytes. One whose checksum does not
-  match is not executed; the device it names answers it with the checksum error (16), except a PING (the firmware
-  skips it) and a broadcast (its ``ReturnPacket`` never answers a broadcast but a PING, so a damaged broadcast gets no
-  reply from anyone). The firmware also drops the rest of what it has buffered; the emulator goes on with the bytes
-  after the packet (the servos behind the board still see them).
+* packets are taken as the firmware takes them (:mod:`.parser`): header, ID, length, then that many bytes. One
+  whose checksum does not match is not executed; the device it names answers it with the checksum error (16), except
+  a PING (the firmware skips it) and a broadcast (its ``ReturnPacket`` never answers a broadcast but a PING, so a
+  damaged broadcast gets no reply from anyone). The firmware also drops the rest of what it has buffered; the
+  emulator goes on with the bytes after the packet (the servos behind the board still see them).
 * replies follow the status return level the device had when the packet arrived (the firmware answers a WRITE before
   writing, so a write that sets level 1 is still answered); a broadcast is not answered, but a PING to it is by the
   CM-730 (its firmware answers every PING; the servos do not answer broadcast). BULK_READ is a READ to each device
@@ -22,7 +22,9 @@ Sources: the CM-730 firmware ``CM_DXL_COM.c`` (ROBOTIS 2010, model 0x7300, firmw
   both with the instruction error); RESET: the CM-730 answers it with error 0 and does nothing (its firmware has the
   reset commented out); a servo refuses it with the instruction error (the e-manual's factory reset would renumber it
   to ID 1 at 57600 baud, off this bus: not emulated); other instructions: the instruction error.
-* SYNC_WRITE writes each listed device; the first one marks the motion's start (fault times count from it).
+* SYNC_WRITE writes each listed device; the first one marks the motion's start (fault times count from it). Written
+  to servos only, each listed once, with none missing or unplugged, it goes to their tables at once
+  (:meth:`.bank.ServoTables.put`), as the writes one by one would.
 * replies are lost or have a byte changed at the faults' rates (seeded); a device given error bits (``errors``)
   reports them in every status packet, one given another model (``models``) reports it at address 0.
 """
@@ -32,66 +34,19 @@ from __future__ import annotations
 import random
 from typing import Any, Callable
 
+import numpy as np
+
 from op2motion.bus import protocol as p
+from op2motion.bus.emulator.bank import ServoTables
 from op2motion.bus.emulator.devices import Board, EmulatedServo
 from op2motion.bus.emulator.faults import Faults
-from op2motion.bus.tables import CM730_ID
+from op2motion.bus.emulator.parser import FirmwareParser
+from op2motion.bus.tables import CM730, CM730_ID
 from op2motion.robot.spec import Spec
 
 BOOT_S = 0.1                       # the servos' silence after their power is switched on
-HEAD_BYTES = 4                     # FF FF ID LEN
-MIN_LENGTH = 2                     # LEN counts the instruction and the checksum
 PING_LEVEL, READ_LEVEL, ALL_LEVEL = 0, 1, 2   # the status return level an answer needs
-
-
-class FirmwareParser:
-    """Instruction packets out of the byte stream as a device's firmware reads them (``ProcessPackets``): after a
-    header (further FF before the ID are skipped) the ID, the length and that many bytes make one packet; each comes
-    out with whether its checksum matches. ``discarded`` counts bytes outside packets, ``bad_checksums`` the packets
-    whose checksum did not match."""
-
-    def __init__(self) -> None:
-        self.buffer = bytearray()
-        self.discarded = 0
-        self.bad_checksums = 0
-
-    def feed(self, data: bytes | bytearray) -> list[tuple[p.Packet, bool]]:
-        """Add ``data``; every complete packet now in the buffer, in order, with whether its checksum matches."""
-        buf = self.buffer
-        buf += data
-        out: list[tuple[p.Packet, bool]] = []
-        while True:
-            start = buf.find(p.HEADER)
-            if start < 0:
-                keep = 1 if buf[-1:] == b"\xff" else 0            # a lone FF may start the next header
-                self.discarded += len(buf) - keep
-                del buf[:len(buf) - keep]
-                return out
-            self.discarded += start
-            del buf[:start]
-            if len(buf) < HEAD_BYTES:
-                return out
-            if buf[2] == 0xFF:                                     # FF FF FF: the header starts one byte later
-                self.discarded += 1
-                del buf[:1]
-                continue
-            if buf[3] < MIN_LENGTH:
-                self.discarded += 2
-                del buf[:2]
-                continue
-            end = HEAD_BYTES + buf[3]
-            if len(buf) < end:
-                return out
-            body = bytes(buf[2:end - 1])
-            intact = p.checksum(body) == buf[end - 1]
-            if not intact:
-                self.bad_checksums += 1
-            out.append((p.Packet(body[0], body[2], body[3:]), intact))
-            del buf[:end]
-
-    def clear(self) -> None:
-        """Forget what is buffered."""
-        self.buffer.clear()
+POWER = CM730["dynamixel_power"].address      # the board's switch of the servos' supply (one byte)
 
 
 class Wire:
@@ -104,7 +59,11 @@ class Wire:
         self.faults, self.now, self.present_ticks = faults, now, present_ticks
         self.rng = random.Random(faults.seed)
         self.board = Board()
-        self.servos = [EmulatedServo(j.id) for j in spec.joints]
+        self.tables = ServoTables(len(spec.joints))              # the servos' tables, a row each
+        self.servos = [EmulatedServo(j.id, self.tables.row(i)) for i, j in enumerate(spec.joints)]
+        self._row_of_id = np.full(256, -1, dtype=np.intp)           # a servo's row by its ID (-1: no servo)
+        for i, servo in enumerate(self.servos):
+            self._row_of_id[servo.id] = i
         self.by_id: dict[int, Any] = {s.id: s for s in self.servos}
         self.by_id[CM730_ID] = self.board
         for device, model in faults.models.items():            # kept over power cycles: address 0 is EEPROM
@@ -112,6 +71,7 @@ class Wire:
                 self.by_id[device].set("model_number", model)
         self.parser = FirmwareParser()
         self.powered_at: float | None = None
+        self._booted_since: float | None = None                 # the powered_at found booted (see _booted)
         self.motion_t0: float | None = None
         self.unplugged: set[int] = set()
         self.stats = {"packets": 0, "replies": 0, "lost": 0, "corrupted": 0, "bad_packets": 0}
@@ -131,22 +91,35 @@ class Wire:
 
     def powered(self) -> bool:
         """Whether the servos' supply is on."""
-        return self.board.get("dynamixel_power") == 1
+        return self.board.table[POWER] == 1
 
     def silent(self, device: int) -> bool:
         """A servo that is not on the bus (missing, or unplugged by now)."""
         return device in self.faults.missing or device in self.unplugged
 
-    def present(self, device: int) -> Any:
-        """The device at ``device`` if it would answer now (a powered, booted servo on the bus; the board)."""
+    def present(self, device: int, servos_up: bool | None = None) -> Any:
+        """The device at ``device`` if it would answer now (a powered, booted servo on the bus; the board);
+        ``servos_up``: :meth:`servos_up` if the caller knows it."""
         if device == CM730_ID:
             return self.board
         servo = self.by_id.get(device)
-        if servo is None or self.silent(device) or not self.powered():
-            return None
-        if self.powered_at is not None and self.now() - self.powered_at < BOOT_S:
+        if servo is None or self.silent(device) or not (self.servos_up() if servos_up is None else servos_up):
             return None
         return servo
+
+    def servos_up(self) -> bool:
+        """Whether the servos on the bus answer now: powered, and booted."""
+        return self.board.table[POWER] == 1 and self._booted()
+
+    def _booted(self) -> bool:
+        """Whether the servos have had :data:`BOOT_S` since their power came on (kept once so, until it next
+        comes on: time only moves on)."""
+        if self.powered_at is None or self.powered_at == self._booted_since:
+            return True
+        if self.now() - self.powered_at < BOOT_S:
+            return False
+        self._booted_since = self.powered_at
+        return True
 
     def feed(self, data: bytes) -> list[bytes]:
         """Bytes from the client in; the bytes to answer with out (one chunk per reply, a bulk read's together)."""
@@ -167,19 +140,21 @@ class Wire:
         bulk read's replies go out back to back)."""
         if (device.return_level if level is None else level) < need:
             return
-        packet = bytearray(p.status(device.id, error | self.faults.errors.get(device.id, 0), params))
+        packet = p.status(device.id, error | self.faults.errors.get(device.id, 0), params)
         if self.faults.lose and self.rng.random() < self.faults.lose:
             self.stats["lost"] += 1
             return
         if self.faults.corrupt and self.rng.random() < self.faults.corrupt:
-            i = self.rng.randrange(2, len(packet))
-            packet[i] ^= 1 << self.rng.randrange(8)
+            damaged = bytearray(packet)
+            i = self.rng.randrange(2, len(damaged))
+            damaged[i] ^= 1 << self.rng.randrange(8)
+            packet = bytes(damaged)
             self.stats["corrupted"] += 1
         self.stats["replies"] += 1
         if out is not None:
             out += packet
         else:
-            self.out.append(bytes(packet))
+            self.out.append(packet)
 
     def write(self, device: Any, address: int, data: bytes) -> int:
         """A write to one device (the board's power switch powers the servos up or down); its error byte."""
@@ -253,22 +228,42 @@ class Wire:
         address, length = params[0], params[1]
         if self.motion_t0 is None:
             self.motion_t0 = self.now()
+        ids = params[2::length + 1]
+        plan = self.servos[0].plan(address, length)
+        if (plan.reactions or CM730_ID in ids or len(set(ids)) < len(ids) or self.faults.missing
+                or self.unplugged):
+            self._write_each(params)                     # a write may change who answers, or what a write does
+            return
+        if not self.servos_up():
+            return                                       # no servo takes it (and the board is not listed)
+        chunks = np.frombuffer(params, dtype=np.uint8, offset=2).reshape(-1, length + 1)
+        rows = self._row_of_id[chunks[:, 0]]
+        here = rows >= 0                                 # the IDs of servos on the bus (no other device is)
+        self.tables.put(rows[here], address, chunks[here, 1:], plan)   # nobody answers: no standing conditions
+
+    def _write_each(self, params: bytes) -> None:
+        """A sync write's writes one by one, in order."""
+        address, length = params[0], params[1]
         for k in range(2, len(params), length + 1):
             device = self.present(params[k])
-            if device is not None:
+            if device is self.board:                    # its power switch: see write
                 self.write(device, address, bytes(params[k + 1:k + 1 + length]))
+            elif device is not None:                    # nobody answers: the standing conditions are not asked
+                device.put(address, bytes(params[k + 1:k + 1 + length]))
 
     def _bulk_read(self, params: bytes) -> None:
         if len(params) < 4 or (len(params) - 1) % 3:
             self.stats["bad_packets"] += 1
             return
         out = bytearray()
+        up = self.servos_up()                      # reads change nothing of it
         for k in range(1, len(params), 3):
             length, target, address = params[k], params[k + 1], params[k + 2]
-            device = self.present(target)
-            if device is None or device.return_level < READ_LEVEL:
+            device = self.present(target, up)
+            level = None if device is None else device.return_level
+            if level is None or level < READ_LEVEL:
                 break                              # the devices listed after it wait for its reply in vain
             error, data = device.read(address, length)
-            self._reply(device, error, data or b"", READ_LEVEL, out=out)
+            self._reply(device, error, data or b"", READ_LEVEL, level, out)
         if out:
             self.out.append(bytes(out))
