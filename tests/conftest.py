@@ -62,12 +62,18 @@ def pybullet_robot(spec):
 LONG_FIRST = ("test_lean_sweeps.py", "test_walk_robust.py", "test_bench.py", "test_studio.py", "test_cluster.py")
 
 
+#: Test processes beyond one per core: many tests wait (on the programs they start, a pseudo-terminal's bytes, a
+#: browser, a Ray head), and one more process fills those waits. Measured on 2 cores: 2 processes 4:33-4:49, 3 processes
+#: 4:08, 4 processes 4:18 with the browser test timing out (docs/development.md).
+EXTRA_WORKERS = 1
+
+
 def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
-    """``-n auto``: one test process per core (the bus tests run in lockstep: none waits on the wall clock).
-    ``PYTEST_XDIST_AUTO_NUM_WORKERS`` decides where set."""
+    """``-n auto``: one test process per core and :data:`EXTRA_WORKERS` (the bus tests run in lockstep: none waits
+    on the wall clock). ``PYTEST_XDIST_AUTO_NUM_WORKERS`` decides where set."""
     if os.environ.get("PYTEST_XDIST_AUTO_NUM_WORKERS"):
         return int(os.environ["PYTEST_XDIST_AUTO_NUM_WORKERS"])
-    return len(os.sched_getaffinity(0))
+    return len(os.sched_getaffinity(0)) + EXTRA_WORKERS
 
 
 #: How much lower the test processes run than the system's own (``nice``): the one bus test that runs in real time

@@ -102,6 +102,7 @@ def test_straight_arm_is_a_clear_singular_error(spec):
 
 
 
+@pytest.mark.slow
 def test_cli_keys_and_exit_codes(capsys, tmp_path):
     pose = ["--th", *map(str, ARM_RUNS[0].th_deg), "--phi", *map(str, ARM_RUNS[0].phi_deg)]
     code, out, err = run_cli(capsys, "arm-ik", "--hand", "left", "--delta", "0.02", "0", "0", *pose, "--single-step",

@@ -112,6 +112,7 @@ def test_truncated_file_is_a_clear_error(capsys, tmp_path, stock_action_bytes):
     assert code == 2 and "truncated" in err
 
 
+@pytest.mark.slow
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.one_of(st.binary(max_size=2048),
                  st.lists(st.tuples(st.integers(0, FILE_SIZE - 1), st.integers(0, 255)), max_size=40)),

@@ -21,6 +21,7 @@ def _fails() -> bytes:
     raise ValueError("drawn here, it fails here")
 
 
+@pytest.mark.slow
 def test_renderers_draw_the_same_bytes_and_fall_back_here():
     with Renderers(2) as renderers:
         jobs = [renderers.submit(_curve, 1.0), renderers.submit(_curve, 2.0), renderers.submit(_curve, 3.0)]
@@ -57,6 +58,7 @@ print(drawn == [_curve(1.0), _curve(2.0)])
 """
 
 
+@pytest.mark.slow
 def test_a_ctrl_c_as_the_renderers_fork_is_ignored_by_them():
     """The renderers start with Ctrl-C ignored (the command decides what it ends): one forked before it set that
     itself printed a KeyboardInterrupt traceback when a Ctrl-C reached it at that moment."""
@@ -130,6 +132,7 @@ def outcomes(spec):
     return candidate, stands, falls
 
 
+@pytest.mark.slow
 def test_a_pose_figure_drawn_before_its_verdict_is_the_figure_drawn_in_one_go(spec, outcomes):
     """optimize --validate draws the pose while its physics check runs and the verdict after: the PNG is the one
     matplotlib writes for the finished figure; a final outcome that shows another pose is drawn again."""
@@ -153,6 +156,7 @@ def test_a_pose_figure_drawn_before_its_verdict_is_the_figure_drawn_in_one_go(sp
     assert other != png and redrawn["verdict"] == "FALLS in physics: fell" and "PSO seed 1" in redrawn["lines"][1]
 
 
+@pytest.mark.slow
 def test_the_cost_curves_drawn_for_the_candidate_are_kept_only_if_the_outcome_has_them(outcomes):
     from op2motion.figures.pose import StagedCostCurve, outcome_cost_curve
 

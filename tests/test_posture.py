@@ -160,6 +160,7 @@ def test_seeded_runs_are_identical_and_pyswarms_leaks_nothing(spec, tmp_path, mo
 
 
 
+@pytest.mark.slow
 def test_optimize_default_writes_pose_and_figures(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     code, out, err = run_cli(capsys, "optimize", "--json")
@@ -174,6 +175,7 @@ def test_optimize_default_writes_pose_and_figures(capsys, tmp_path, monkeypatch)
     assert doc["pose"]["provenance"]["seed"] == 0 and doc["pose"]["metrics"]["br"] == 0.7
 
 
+@pytest.mark.slow
 def test_optimize_prints_its_answer_before_the_figures_and_names_the_files_once_written(capsys, tmp_path,
                                                                                          monkeypatch):
     """For a person the result comes as soon as it is known, while the figures are drawn; the files are named after

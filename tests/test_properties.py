@@ -8,6 +8,7 @@ import math
 import re
 
 import numpy as np
+import pytest
 from helpers import ROOT, pose_path
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -43,6 +44,7 @@ def _use(spec) -> None:
     build_urdf(spec)
 
 
+@pytest.mark.slow
 @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(st.tuples(st.integers(0, 10_000), st.sampled_from(HOSTILE)), min_size=1, max_size=4))
 def test_spec_value_mutations_give_only_spec_errors(edits):
@@ -53,6 +55,7 @@ def test_spec_value_mutations_give_only_spec_errors(edits):
     _use(spec)
 
 
+@pytest.mark.slow
 @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(st.tuples(st.integers(0, len(SPEC_TEXT) - 1), st.characters()), min_size=1, max_size=6))
 def test_spec_character_mutations_give_only_spec_errors(edits):

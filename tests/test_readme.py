@@ -65,9 +65,14 @@ def _physics(line: str) -> bool:
     return "--validate" in line or line.split()[1] == "validate"
 
 
+#: Commands whose examples take seconds without an engine: a library build (worker processes), a walk or a motion
+#: planned, a pose optimised, a figure drawn.
+SLOW_COMMANDS = ("library", "walk", "motion", "optimize", "plot")
+
+
 def _marks(line: str) -> list[pytest.MarkDecorator]:
-    """physics where the example runs an engine; slow where it starts worker processes (a library build)."""
-    return [pytest.mark.physics] if _physics(line) else [pytest.mark.slow] if line.split()[1] == "library" else []
+    """physics where the example runs an engine; slow where it takes seconds without (:data:`SLOW_COMMANDS`)."""
+    return [pytest.mark.physics] if _physics(line) else [pytest.mark.slow] if line.split()[1] in SLOW_COMMANDS else []
 
 
 @pytest.mark.parametrize("line", [pytest.param(line, marks=_marks(line)) for line in _example_lines()],
@@ -112,21 +117,34 @@ def _python_blocks(text: str) -> list[str]:
     return re.findall(r"```python\n(.*?)```", text, re.S)
 
 
+#: Runs each example given on standard input (JSON: a list of sources) in a namespace of its own, in one process
+#: (each would otherwise import the package and its engines again), printing SEPARATOR after each one's output.
+SEPARATOR = "=== next example ==="
+RUN_EACH = f"""
+import json, sys
+for source in json.load(sys.stdin):
+    exec(compile(source, "<example>", "exec"), {{"__name__": "__main__"}})
+    print({SEPARATOR!r}, flush=True)
+"""
+
+
 @pytest.mark.physics
 def test_the_python_api_examples_run(clone):
-    """The README's example and the API page's first one, as written, in a fresh copy."""
+    """The README's example and the API page's first one and its tasks example, as written, in a fresh copy (one
+    after the other in one process, each in a namespace of its own)."""
+    import json
+
     front = _python_blocks(README.split("## In Python", 1)[1])[0]
-    done = subprocess.run([sys.executable, "-c", front], cwd=clone, capture_output=True, text=True, timeout=300)
+    page = _python_blocks((DOCS / "python.md").read_text(encoding="utf-8"))
+    tasks = next(b for b in page if "op2motion.tasks" in b)
+    done = subprocess.run([sys.executable, "-c", RUN_EACH], input=json.dumps([front, page[0], tasks]), cwd=clone,
+                          capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
-    assert "True [] " in done.stdout and "True reached" in done.stdout and "\nFalse 0.2" in done.stdout, done.stdout
-    page = _python_blocks((DOCS / "python.md").read_text(encoding="utf-8"))[0]
-    done = subprocess.run([sys.executable, "-c", page], cwd=clone, capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr
-    assert "True [] " in done.stdout and "\nTrue\n" in done.stdout and "True reached" in done.stdout
-    tasks = next(b for b in _python_blocks((DOCS / "python.md").read_text(encoding="utf-8")) if "op2motion.tasks" in b)
-    done = subprocess.run([sys.executable, "-c", tasks], cwd=clone, capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.startswith("True None ") and "['plot']" in done.stdout and "STABLE" in done.stdout
+    outputs = done.stdout.split(SEPARATOR + "\n")
+    assert len(outputs) == 4 and outputs[3] == "", done.stdout
+    assert "True [] " in outputs[0] and "True reached" in outputs[0] and "\nFalse 0.2" in outputs[0], outputs[0]
+    assert "True [] " in outputs[1] and "\nTrue\n" in outputs[1] and "True reached" in outputs[1], outputs[1]
+    assert outputs[2].startswith("True None ") and "['plot']" in outputs[2] and "STABLE" in outputs[2], outputs[2]
 
 
 def test_the_static_torque_table_is_the_codes():

@@ -97,6 +97,7 @@ def test_the_lazy_parser_is_the_full_parser(monkeypatch):
     assert {k: v for k, v in parsed.items() if k != "parser"} == {k: v for k, v in expected.items() if k != "parser"}
 
 
+@pytest.mark.slow
 def test_the_main_job_loads_no_scipy_linalg_spatial_or_optimize_and_no_pyswarms_package(tmp_path):
     """``optimize`` (a short search, no refinement) runs pyswarms' GlobalBestPSO and the compiled cost without
     SciPy's linalg, spatial or optimize packages and leaves no ``pyswarms`` module loaded (processes/imports.py)."""

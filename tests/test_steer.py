@@ -199,6 +199,7 @@ def _drive(walk: SteerableWalk, seconds: float, spec, at=None) -> dict[int, np.n
     return goals
 
 
+@pytest.mark.slow
 def test_the_rolling_rows_have_no_seams_and_the_dry_run_is_the_walk(spec):
     timeline = timeline_of([(0.0, 0.0, 0.0, 0.0), (1.0, 0.2, 0.0, 0.3), (4.0, 0.0, 0.05, 0.0), (6.0, "stop")])
     walk = WalkController.steerable(spec, commands=timeline)
@@ -216,6 +217,7 @@ def test_the_rolling_rows_have_no_seams_and_the_dry_run_is_the_walk(spec):
     assert np.allclose(online.rows.get("goals", k), rows.get("goals", k), atol=1e-12)
 
 
+@pytest.mark.slow
 def test_a_command_takes_effect_from_the_next_step_and_stop_ends_in_done(spec):
     walk = WalkController.steerable(spec)
     _drive(walk, LEAD_S + 2.0, spec)

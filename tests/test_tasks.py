@@ -32,6 +32,7 @@ def test_a_result_has_a_problem_exactly_when_it_is_a_no():
     assert not TaskResult.refused("goals out of range").checked
 
 
+@pytest.mark.slow
 def test_a_page_played_is_a_result_and_writes_nothing_itself(spec, tmp_path):
     from op2motion.formats.action import ActionFile
     from op2motion.tasks.motion import MotionCheck, play_page

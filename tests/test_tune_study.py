@@ -45,6 +45,7 @@ class InThread:
         return len(self._pending)
 
 
+@pytest.mark.slow
 def test_a_study_finds_the_fast_safe_corner_and_prunes_falls(tmp_path):
     study = open_study(tmp_path / "s.db", "toy", SPACE, SEED)
     assert run_study(study, SPACE, landscape, (), 40, InThread()) == 40
@@ -55,6 +56,7 @@ def test_a_study_finds_the_fast_safe_corner_and_prunes_falls(tmp_path):
     assert best is not None and 0.2 <= best.outcome.speed <= 0.3 * 0.8 + 1e-9
 
 
+@pytest.mark.slow
 def test_a_stopped_study_resumes_without_losing_trials(tmp_path):
     study = open_study(tmp_path / "s.db", "toy", SPACE, SEED)
     with pytest.raises(Interrupted, match="resume"):
