@@ -1,5 +1,5 @@
 """Lean sweeps: a pose leaned at the support ankle(s) until it falls, in both engines: 4° steps from upright, then
-each engine's switch halved down to 0.5° and three leans past it.
+each engine's switch halved down to 0.5° and two leans past it.
 
 The verdict must be monotonic (once a pose falls, every further lean falls too), the two engines must agree on every
 pose whose margin is beyond ±5 mm, and the verdict must switch where the pose runs out of support: where the settled
@@ -34,7 +34,7 @@ from op2motion.physics.sweeps import sweep_outcome, sweep_run
 STEP_DEG = 0.5                 # the fine step: each engine's last standing lean and first fall lie this far apart
 COARSE_DEG = 4.0               # the step from the upright start until a pose falls
 SECONDS = 3.0
-FALLS_PAST_SWITCH = 3          # steps leaned on after the first fall, to see that nothing stands again
+FALLS_PAST_SWITCH = 2          # steps leaned on after the first fall, to see that nothing stands again
 MAX_DEG = 35.0
 AGREE_BEYOND_M = 0.005         # the engines agree wherever the margin is beyond this
 SAME_MARGIN_M = 5e-4           # a settled margin measured early agrees with the full run's to this
@@ -42,8 +42,10 @@ ENGINES = ("mujoco", "pybullet")
 SWITCH_TOL_M = 0.005           # the switch lies this close to the edge
 pytestmark = pytest.mark.physics
 
+#: Leaned towards the toe and the side on one foot; towards the toe, the heel and the side on two (the heel on one foot
+#: runs out at the same edge of the same sole as on two).
 SWEEPS = [  # support, kind, direction, what runs out (the CoM's polygon or a loaded foot's own sole)
-    ("left", "pitch", 1, "com"), ("left", "pitch", -1, "com"), ("left", "roll", 1, "com"),
+    ("left", "pitch", 1, "com"), ("left", "roll", 1, "com"),
     ("double", "pitch", 1, "com"), ("double", "pitch", -1, "com"), ("double", "roll", 1, "foot"),
 ]
 
@@ -53,7 +55,7 @@ def _sweep(pool, support: str, kind: str, direction: int) -> tuple[list[float], 
     engine; then the gap between each engine's last standing lean and its first fall halved until it is
     :data:`STEP_DEG`, and leaned on until at least :data:`FALLS_PAST_SWITCH` leans lie past each first fall (an
     engine that has not fallen yet leans on in coarse steps); every lean runs in both engines. (Halving finds the
-    switch to the same 0.5° as stepping 0.5° across it did, in fewer leans: 54 instead of 70 for the six sweeps.)
+    switch to the same 0.5° as stepping 0.5° across it did, in fewer leans: 54 instead of 70 for six sweeps.)
     Returns the leans (signed), each engine's :func:`sweep_outcome` per lean, and :func:`_edges`."""
     verdicts: dict[float, dict[str, tuple]] = {}
     reports: dict[tuple[float, str], object] = {}

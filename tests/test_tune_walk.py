@@ -44,7 +44,7 @@ def test_a_walk_study_finds_verifies_and_writes_a_preset_that_reads_back(tmp_pat
     space = ParameterSpace((Param("step_length_m", 0.07, 0.085, "m"),))
     task = Task("walk", "forward", load_preset("forward"), members=NOMINAL, steps=STEPS, engines=("mujoco",))
     study = open_study(tmp_path / "s.db", "walk", space, SEED)
-    trials = ProcessTrials(2)
+    trials = ProcessTrials(1)                 # a worker process (each one imports the package and both engines)
     try:
         result = search_and_verify(study, space, task, Effort(TRIALS, 1, NOMINAL, QUICK_VERIFY_STEPS), trials)
     finally:
