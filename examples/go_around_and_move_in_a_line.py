@@ -30,7 +30,7 @@ print("\n".join(planned.notes))
 
 walkready = op2.read_pose(ROOT / "poses" / "walkready.json", spec)
 line = op2.line_move(walkready, op2.LineRequest("right", 1.0, delta_m=(0.05, 0.0, 0.0), back=True), spec)
-summary = line.summary(spec)
+summary = line.as_dict(spec)
 print(f"line: off the line <= {summary['line_deviation_max_m'] * 1000:.2f} mm, "
       f"CoM margin >= {summary['com_margin_min_m'] * 1000:.1f} mm")
 report = op2.check(line.trajectory().schedule(spec), spec, engines=("pybullet", "mujoco"))

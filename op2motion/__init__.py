@@ -24,22 +24,32 @@ from op2motion.version import __version__
 if TYPE_CHECKING:                     # what editors and type checkers see; at run time, __getattr__ imports on use
     from op2motion.errors import Op2MotionError as Op2MotionError
     from op2motion.formats.action import ActionFile as ActionFile
+    from op2motion.formats.motionfile import Motion as Motion
     from op2motion.formats.motionfile import read_motion as read_motion
     from op2motion.formats.posefile import read_pose as read_pose
     from op2motion.formats.posefile import write_pose as write_pose
     from op2motion.gait import gait_schedule as gait_schedule
     from op2motion.gait import generate_gait as generate_gait
     from op2motion.gait import load_preset as load_preset
+    from op2motion.gait.generator import Gait as Gait
+    from op2motion.gait.params import GaitParams as GaitParams
     from op2motion.kinematics import forward as forward
+    from op2motion.kinematics.arm_ik import ArmIKResult as ArmIKResult
     from op2motion.kinematics.arm_ik import solve_arm_ik as solve_arm_ik
+    from op2motion.kinematics.points import BodyPoints as BodyPoints
+    from op2motion.library.build import BuildSummary as BuildSummary
     from op2motion.library.build import build_library as build_library
     from op2motion.model.urdf import build_urdf as build_urdf
+    from op2motion.motion.cartesian import LineMove as LineMove
     from op2motion.motion.cartesian import LineRequest as LineRequest
     from op2motion.motion.cartesian import line_move as line_move
+    from op2motion.motion.pipeline import PlayedPage as PlayedPage
     from op2motion.motion.pipeline import plan_motion as plan_motion
     from op2motion.motion.pipeline import play_page as play_page
     from op2motion.motion.planner import trajectory_through as trajectory_through
+    from op2motion.motion.route import Routed as Routed
     from op2motion.motion.route import route as route
+    from op2motion.motion.trajectory import Trajectory as Trajectory
     from op2motion.motion.waypoint import Waypoint as Waypoint
     from op2motion.physics import Controller as Controller
     from op2motion.physics import Plan as Plan
@@ -48,16 +58,20 @@ if TYPE_CHECKING:                     # what editors and type checkers see; at r
     from op2motion.physics import Setup as Setup
     from op2motion.physics import Trials as Trials
     from op2motion.physics import check as check
+    from op2motion.physics.report import CheckReport as CheckReport
     from op2motion.posture.cost import PostureProblem as PostureProblem
     from op2motion.posture.pso import PSOSettings as PSOSettings
+    from op2motion.posture.solve import PostureResult as PostureResult
     from op2motion.posture.solve import optimize_posture as optimize_posture
     from op2motion.robot.balance import stability_margin as stability_margin
     from op2motion.robot.joints import BookAngles as BookAngles
     from op2motion.robot.joints import book_to_servo as book_to_servo
     from op2motion.robot.joints import servo_to_book as servo_to_book
     from op2motion.robot.pose import Pose as Pose
+    from op2motion.robot.spec import Spec as Spec
     from op2motion.robot.specfile import load_spec as load_spec
     from op2motion.robot.support import Support as Support
+    from op2motion.workflow import Outcome as Outcome
     from op2motion.workflow import Validate as Validate
     from op2motion.workflow import solve as solve
 
@@ -101,48 +115,23 @@ _API = {
     "gait_schedule": ("gait", "gait_schedule"),
     "build_library": ("library.build", "build_library"),
     "build_urdf": ("model.urdf", "build_urdf"),
+    # the results they return
+    "Spec": ("robot.spec", "Spec"),
+    "BodyPoints": ("kinematics.points", "BodyPoints"),
+    "ArmIKResult": ("kinematics.arm_ik", "ArmIKResult"),
+    "PostureResult": ("posture.solve", "PostureResult"),
+    "Outcome": ("workflow", "Outcome"),
+    "CheckReport": ("physics.report", "CheckReport"),
+    "Motion": ("formats.motionfile", "Motion"),
+    "PlayedPage": ("motion.pipeline", "PlayedPage"),
+    "Trajectory": ("motion.trajectory", "Trajectory"),
+    "Routed": ("motion.route", "Routed"),
+    "LineMove": ("motion.cartesian", "LineMove"),
+    "GaitParams": ("gait.params", "GaitParams"),
+    "Gait": ("gait.generator", "Gait"),
+    "BuildSummary": ("library.build", "BuildSummary"),
 }
-__all__ = [
-    "ActionFile",
-    "BookAngles",
-    "Controller",
-    "LineRequest",
-    "Op2MotionError",
-    "PSOSettings",
-    "Plan",
-    "Pose",
-    "PostureProblem",
-    "Pushes",
-    "Schedule",
-    "Setup",
-    "Support",
-    "Trials",
-    "Validate",
-    "Waypoint",
-    "book_to_servo",
-    "build_library",
-    "build_urdf",
-    "check",
-    "forward",
-    "gait_schedule",
-    "line_move",
-    "load_preset",
-    "load_spec",
-    "optimize_posture",
-    "generate_gait",
-    "plan_motion",
-    "trajectory_through",
-    "play_page",
-    "read_motion",
-    "read_pose",
-    "route",
-    "servo_to_book",
-    "solve",
-    "solve_arm_ik",
-    "stability_margin",
-    "write_pose",
-    "__version__",
-]
+__all__ = [*sorted(_API), "__version__"]
 
 
 def __getattr__(name: str) -> Any:

@@ -117,8 +117,8 @@ class LineMove:
         """Time of each row [s] (K,)."""
         return np.arange(len(self.goals)) * CONTROL_PERIOD_S
 
-    def summary(self, spec: Spec) -> dict[str, Any]:
-        """The figures of the move, for reports."""
+    def as_dict(self, spec: Spec) -> dict[str, Any]:
+        """The figures of the move, for reports and ``--json`` (joint names from ``spec``)."""
         worst = np.unravel_index(int(np.argmax(np.abs(self.speeds))), self.speeds.shape)
         out = {"hand": self.hand, "hand_start_m": [round(float(v), 5) for v in self.start_m],
                "hand_end_m": [round(float(v), 5) for v in self.end_m],

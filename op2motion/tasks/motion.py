@@ -192,7 +192,7 @@ def line_move(pose: Pose, request: LineRequest, spec: Spec, how: MotionCheck, na
     move: LineMove = moved_line(pose, request, spec)
     motion = move.motion(name)
     trajectory = move.trajectory(motion.p_gain)
-    summary = move.summary(spec)
+    summary = move.as_dict(spec)
     data = {"name": name, "pose": pose.name, "support": str(pose.support), **summary,
             "duration_s": round(trajectory.duration_s, 3), "ticks": len(trajectory.goals) - 1,
             "motion_file": how.motion_file}
