@@ -1,13 +1,11 @@
-"""The emulated OP2 on a pseudo-terminal: what a program on the robot's PC sees on ``/dev/ttyUSB0``, byte for byte.
+"""The emulated OP2: what a program on the robot's PC sees on ``/dev/ttyUSB0``, byte for byte.
 
-:meth:`Emulator.open` makes a pseudo-terminal and a symbolic link to its terminal side at the path asked for
-(pyserial and dynamixel-sdk open it like the real port). :meth:`Emulator.serve` is one thread doing two things in
-turn: taking the host's bytes as they arrive and answering them when the wire would (:mod:`.timing`: the request's
-bytes on the wire, then the devices of :mod:`.wire` and :mod:`.devices` answering, each after its return delay, and
-the USB adapter's packets), and stepping the body (:mod:`.body`) in batches of at most :data:`BATCH_STEPS` physics
-steps, kept on the wall clock. One thread, no locks. If the machine cannot keep up, simulated time slips behind the
-wall clock rather than running in bursts (``slipped_s``). :meth:`Emulator.advance` (the body and the wire up to a
-simulated time) and :meth:`Emulator.receive` are the same steps for a lockstep port (:mod:`.lockstep`).
+:class:`Emulator` answers the host's bytes when the wire would (:mod:`.timing`: the request's bytes on the wire, then
+the devices of :mod:`.wire` and :mod:`.devices` answering, each after its return delay, and the USB adapter's
+packets) and steps the body (:mod:`.body`) in batches of at most :data:`.pty.BATCH_STEPS` physics steps.
+:meth:`Emulator.advance` (the body and the wire up to a simulated time) and :meth:`Emulator.receive` (the host's
+bytes) serve a lockstep port (:mod:`.lockstep`) and the pseudo-terminal (:mod:`.pty`: made, linked and served in real
+time by one thread, no locks).
 
 Faults (:class:`.faults.Faults`) are injected as replies are made and as the body is stepped. :meth:`Emulator.close`
 removes the link and closes the pseudo-terminal.
@@ -15,31 +13,21 @@ removes the link and closes the pseudo-terminal.
 
 from __future__ import annotations
 
-import contextlib
-import errno
-import os
-import select
 import threading
-import time
-import tty
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from op2motion.bus.emulator.body import Drive, EmulatedBody
 from op2motion.bus.emulator.faults import Faults
+from op2motion.bus.emulator.pty import BATCH_STEPS, PtyServing
 from op2motion.bus.emulator.timing import TimedLink, WireTiming, return_delay_s
 from op2motion.bus.emulator.wire import BOOT_S, Wire
-from op2motion.bus.realtime import EMULATOR_PRIORITY, realtime, steady
 from op2motion.bus.tables import TORQUE_LIMIT_FULL
-from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
 
 if TYPE_CHECKING:
     from op2motion.physics import EngineName
 
-BATCH_STEPS = 4                    # physics steps between two looks at the port
-MAX_BEHIND_S = 0.05                # further behind the wall clock than this, simulated time slips instead
-HANGUP_SLEEP_S = 0.002             # with no program on the port, look again this often
 TRACE_EVERY_S = 0.05               # the ground truth is recorded this often [simulated s]
 PUBLISH_EVERY_S = 0.1              # ... and written to the truth file this often
 TRUTH_BYTES = 16384                # the truth file's size (its JSON padded with spaces)
@@ -47,7 +35,7 @@ REFRESH_S = 0.004                  # the registers follow the body at least this
                                    # request answered)
 
 
-class Emulator:
+class Emulator(PtyServing):
     """An emulated OP2 (see the module docstring): ``timing`` its wire (default the real one, 1 ms latency timer),
     ``return_delay`` every servo's Return Delay Time register (default 0, as the OP2 ships), ``cold``: the robot just
     switched on (the servos unpowered until a program sets the board's power register; default: powered and holding
@@ -107,60 +95,16 @@ class Emulator:
         return [int(round(q / s.rad_per_tick)) + s.center_tick + int(h)
                 for q, h in zip(self.body.joint_angles(), self.body.horn_ticks)]
 
-    def open(self, link: str | Path) -> str:
-        """Make the pseudo-terminal and the link to it at ``link``; returns the terminal's own path."""
-        link = Path(link)
-        if link.is_symlink():
-            target = os.readlink(link)
-            if target.startswith("/dev/pts/") or not os.path.exists(link):
-                link.unlink()                     # a stale link of an earlier emulator
-        if os.path.lexists(link):
-            raise InputError(f"{link} exists and is not an emulator's link (expected a free path for the link)",
-                             "link")
-        if not link.parent.is_dir():
-            raise InputError(f"expected the link in an existing folder, got {link}", "link")
-        master, slave = os.openpty()
-        tty.setraw(slave)
-        self.pty_name = os.ttyname(slave)
-        os.close(slave)                           # the terminal side is the client's: only it holds it open
-        os.set_blocking(master, False)
-        self.master = master
-        os.symlink(self.pty_name, link)
-        self.link = link
-        return self.pty_name
-
     def close(self) -> None:
         """Stop serving, remove the link, close the pseudo-terminal, release the engine."""
         self.stop()
         self._refresh()
         self._publish()
-        if self.link is not None:
-            with contextlib.suppress(OSError):
-                if os.readlink(self.link) == self.pty_name:
-                    self.link.unlink()
-            self.link = None
-        if self.master is not None:
-            with contextlib.suppress(OSError):
-                os.close(self.master)
-            self.master = None
+        self._close_pty()
         if self._truth_map is not None:
             self._truth_map.close()
             self._truth_map = None
         self.body.close()
-
-    # --- Python API ----------------------------------------------------------------------------------------------
-    def start(self) -> None:
-        """Serve in a background thread (for use from Python; ``robot emulate`` serves in the foreground)."""
-        self._stop.clear()
-        self._thread = threading.Thread(target=self.serve, name="op2-emulator", daemon=True)
-        self._thread.start()
-
-    def stop(self) -> None:
-        """Ask the serving loop to end, and wait for its thread."""
-        self._stop.set()
-        if self._thread is not None and self._thread is not threading.current_thread():
-            self._thread.join(timeout=5.0)
-            self._thread = None
 
     def truth(self) -> dict[str, float]:
         """The simulated torso now: ``t_s``, ``x_m``, ``y_m``, ``z_m``, ``yaw_rad``, ``tilt_rad``."""
@@ -278,48 +222,6 @@ class Emulator:
             self._publish()
             self._next_publish = self._truth["t_s"] + PUBLISH_EVERY_S
 
-    # --- serving on the pseudo-terminal -------------------------------------------------------------------------------
-    def serve(self, stop: threading.Event | None = None) -> None:
-        """Answer packets and step the body in real time until ``stop`` (or :meth:`stop`) is set (at real-time
-        priority where the system allows it: :mod:`..realtime`)."""
-        if self.master is None:
-            raise InputError("expected open() before serve(): the emulator has no pseudo-terminal yet", "emulator")
-        with steady(), realtime(EMULATOR_PRIORITY):
-            self._serve(stop or self._stop)
-
-    def _master_fd(self) -> int:
-        """The pseudo-terminal's master side (after :meth:`open`)."""
-        if self.master is None:
-            raise InputError("expected open() before serve(): the emulator has no pseudo-terminal yet", "emulator")
-        return self.master
-
-    def _serve(self, stop: threading.Event) -> None:
-        """Simulated time kept on the wall clock (``t0``: the wall time of simulated 0, moved on when the machine
-        falls behind by more than :data:`MAX_BEHIND_S`)."""
-        master = self._master_fd()
-        t0 = time.monotonic() - self._now()
-        while not stop.is_set() and not self._stop.is_set():
-            event = self.timed_wire.next_event()
-            due = self._now() + BATCH_STEPS * self.body.dt
-            due = due if event is None else min(due, event)
-            wait = max(0.0, t0 + due - time.monotonic())
-            ready, _, _ = select.select([master], [], [], wait)
-            if ready and not self._receive(time.monotonic() - t0):           # no program holds the port
-                time.sleep(min(wait, HANGUP_SLEEP_S))
-            behind = time.monotonic() - t0 - self._now()
-            if behind > MAX_BEHIND_S:
-                self.slipped_s += behind - MAX_BEHIND_S
-                t0 += behind - MAX_BEHIND_S
-            self.advance(time.monotonic() - t0)
-            self._flush(master)
-
-    def _flush(self, master: int) -> None:
-        """Hand the host what the wire delivered."""
-        if self.outbox:
-            with contextlib.suppress(BlockingIOError, OSError):
-                os.write(master, bytes(self.outbox))
-            self.outbox.clear()
-
     def _limp_servos(self) -> None:
         """The servos as the body sees them: a missing or unplugged servo has no torque."""
         if not (self.faults.missing or self.wire.unplugged):
@@ -346,19 +248,3 @@ class Emulator:
         for device, at, celsius in self.faults.overheat:
             if since >= at and device not in self.temperature_overrides:
                 self.overheat(device, celsius)
-
-    def _receive(self, t: float) -> bool:
-        """Read what the host wrote (at simulated time ``t``); False when no program holds the port."""
-        master = self._master_fd()
-        try:
-            data = os.read(master, 4096)
-        except BlockingIOError:
-            return True
-        except OSError as exc:
-            if exc.errno == errno.EIO:                              # the client closed the port
-                self.wire.parser.clear()
-                return False
-            raise
-        if data:
-            self.receive(max(t, self._now()), data)
-        return True
