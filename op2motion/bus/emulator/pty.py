@@ -18,7 +18,7 @@ import threading
 import time
 import tty
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 from op2motion.bus.realtime import EMULATOR_PRIORITY, realtime, steady
 from op2motion.errors import InputError
@@ -46,17 +46,10 @@ class PtyServing:
     timed_wire: TimedLink
     _stop: threading.Event
     _thread: threading.Thread | None
-
-    def _now(self) -> float:
-        raise NotImplementedError
-
-    def receive(self, t: float, data: bytes) -> None:
-        """The host wrote ``data`` at simulated time ``t`` [s] (the emulator's)."""
-        raise NotImplementedError
-
-    def advance(self, t: float) -> None:
-        """The body and the wire up to simulated time ``t`` [s] (the emulator's)."""
-        raise NotImplementedError
+    #: The emulator's: its simulated time [s]; the host's bytes at a simulated time; the body and the wire up to one.
+    _now: Callable[[], float]
+    receive: Callable[[float, bytes], None]
+    advance: Callable[[float], None]
 
     def open(self, link: str | Path) -> str:
         """Make the pseudo-terminal and the link to it at ``link``; returns the terminal's own path."""
