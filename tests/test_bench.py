@@ -14,6 +14,8 @@ PSO_REACH_M = 0.01            # the default problem's swarm lands the hand withi
 STANDING_CLEARANCE_M = 0.010   # standing, the forearms hang 8 mm beside the thighs
 WALK_SPEED_MPS = 0.20        # the forward preset's steady speed in PyBullet (issue "Walking": >= 0.20 m/s)
 SMALL_GRID_TARGETS = 2        # the library figure's mechanism on a small grid (bench itself builds the default one)
+LOCKSTEP_LOOP_S = 3.0          # the bench's lockstep loop runs the hold this long [simulated s] (bus/bench.py LOOP_S)
+LOCKSTEP_LOOP_TOL_S = 0.02     # ... to within a few ticks (it once ran 0.01 s: a hold is done at once)
 FULL_COM_VS_PINOCCHIO_M = 1e-5  # the URDF's six 10-mg frame links are the only difference (2 µm)
 
 
@@ -48,6 +50,7 @@ def test_bench_reports_every_figure_and_its_work_is_right(spec):
     assert result["check_walk_fell"] is False and result["check_walk_speed_mps"] > WALK_SPEED_MPS
     assert result["check_studio_readout"] is True
     assert result["check_robot_status_servos"] == 20 and result["robot_loop_ticks"] > 0   # (how many: the bench)
+    assert abs(result["check_robot_lockstep_s"] - LOCKSTEP_LOOP_S) < LOCKSTEP_LOOP_TOL_S    # the hold ran its length
     assert result["check_route_clearance_m"] >= SELF_CLEARANCE_M and result["check_line_deviation_m"] <= LINE_TOL_M
     assert result["book_matlab_dh_40k_ms"] == 3350.0 and result["book_matlab_pb_40k_ms"] == 780.0
 
