@@ -22,6 +22,7 @@ from op2motion.bus.tasks import Limp, Options, limp_question, setup, teach
 from op2motion.bus.walks import walk
 from op2motion.errors import CheckFailed, InputError
 from op2motion.formats.posefile import read_pose, write_pose
+from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.imu import FALL_TILT_RAD
 from op2motion.robot.limbs import limb_groups, select_joints
 from op2motion.robot.pose import Pose
@@ -301,27 +302,81 @@ def test_refused_unless_forced_and_a_fall_lowers_the_torque(spec, tmp_path):
     assert min(report["torque_limit"]) > FALL_TORQUE_LIMIT                    # ... and back up once it lay
 
 
+def _stop_after(emulator, walked_m: float, asked: list | None = None):
+    """A stop event set once the emulated torso has gone ``walked_m`` forward, the ``on_tick`` that sets it (noting
+    the tick in ``asked``) and where the torso started [m]."""
+    stop = __import__("threading").Event()
+    start = emulator.truth()["x_m"]
+
+    def on_tick(tick) -> None:
+        if not stop.is_set() and emulator.truth()["x_m"] - start >= walked_m:
+            stop.set()
+            if asked is not None:
+                asked.append(tick.index)
+    return stop, on_tick, start
+
+
+class _OpenLoopStop:
+    """A walk controller without its hooks: the loop cannot tell it to stop, so a stop freezes it on its next double
+    support (one foot ahead), as any plan played open loop is stopped."""
+
+    def __init__(self, walk):
+        self.walk, self.plan = walk, walk.plan
+
+    def start(self, joint_positions):
+        return self.walk.start(joint_positions)
+
+    def step(self, t_s, gyro, accel, joint_positions):
+        return self.walk.step(t_s, gyro, accel, joint_positions)
+
+    @property
+    def done(self) -> bool:
+        return self.walk.done
+
+
 @pytest.mark.physics
-def test_a_stop_mid_walk_ends_standing_and_the_next_walk_closes_the_feet_unforced(spec):
-    """Stopped mid-walk, the robot stands with one foot ahead; its leg odometry says how far it walked (not the whole
-    plan; the next walk, not forced, starts with the step that closes the feet (checked in physics) and walks
-    (it was refused: "slip: a supporting sole slid 19 mm")."""
+def test_a_stop_mid_walk_closes_the_feet_and_the_next_walk_needs_no_closing_step(spec):
+    """Stopped mid-walk (20 steps), the planned walk stops as a steered one does: within two steps, its feet side by
+    side, standing, done before the loop would freeze it; its leg odometry says how far it walked (not the whole
+    plan); the next walk, not forced, starts with its approach (no closing step)."""
+    from op2motion.bus.stopping import SOFT_STOP_MAX_S
+    from op2motion.gait.closing import CLOSED_M, CLOSED_RAD, apart
+    from op2motion.gait.footsteps import step_width
+    from op2motion.gait.presets import load_preset
+
     with lockstep(spec) as (emulator, port):
-        stop = __import__("threading").Event()
-        start = emulator.truth()["x_m"]
-
-        def on_tick(tick) -> None:
-            if emulator.truth()["x_m"] - start >= WALKED_M:
-                stop.set()
-
+        asked: list[int] = []
+        stop, on_tick, start = _stop_after(emulator, WALKED_M, asked)
         result = walk(port, spec, steps=20, options=Options(stop=stop, on_tick=on_tick))
-        port.clock.sleep_until(port.clock.now() + 0.5)
         truth = emulator.truth()
-        again = walk(port, spec, steps=4)                             # from the feet apart, not forced
+        front, behind, _, turned = apart(emulator.body.joint_angles(), spec, step_width(load_preset("forward"), spec))
+        again = walk(port, spec, steps=4)                             # not forced
         after = emulator.truth()
-    assert result.ended == "stopped" and result.fault is None
+    walked = dict(result.runs)["walk"]
+    assert result.ended == "stopped" and result.fault is None and walked.ended == "stopped"
+    assert (walked.ticks - asked[0]) * CONTROL_PERIOD_S < SOFT_STOP_MAX_S     # done, not frozen by the loop
     assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and WALKED_M < truth["x_m"] - start < 0.6
+    assert behind <= CLOSED_M and turned <= CLOSED_RAD, (front, behind, turned)
     assert abs(result.travel["x_m"] - (truth["x_m"] - start)) < ODOMETRY_TOL_M, (result.travel, truth)
+    assert again.ended == "done" and [name for name, _ in again.runs] in (["approach", "walk"], ["walk"]), again.runs
+    assert math.degrees(after["tilt_rad"]) < STANDING_TILT_DEG
+
+
+@pytest.mark.physics
+def test_a_walk_frozen_with_a_foot_ahead_is_closed_by_the_next_walk_unforced(spec):
+    """A plan played open loop and stopped freezes on both feet with one foot ahead; the next walk, not forced,
+    starts with the step that closes the feet (checked in physics) and walks (it was refused: "slip: a supporting
+    sole slid 19 mm")."""
+    from op2motion.bus.walks import run_on_robot
+    from op2motion.gait.controller import WalkController
+
+    with lockstep(spec) as (emulator, port):
+        stop, on_tick, _ = _stop_after(emulator, WALKED_M)
+        frozen = run_on_robot(port, spec, _OpenLoopStop(WalkController.from_preset("forward", 20, spec)),
+                              options=Options(stop=stop, on_tick=on_tick))
+        again = walk(port, spec, steps=4)
+        after = emulator.truth()
+    assert dict(frozen.runs)["run"].ended == "stopped"
     assert again.ended == "done" and [name for name, _ in again.runs] == ["close the feet", "approach", "walk"], (
         again.runs)
     assert "checked in physics" in again.checked and math.degrees(after["tilt_rad"]) < STANDING_TILT_DEG

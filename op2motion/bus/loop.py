@@ -19,9 +19,9 @@ Every :data:`~op2motion.robot.framework.CONTROL_PERIOD_S`, on an absolute clock:
 All time is the port's clock (:mod:`.clock`): the wall on a real robot, simulated time in lockstep with an emulated
 one. The loop measures its period (tick start to tick start: p50, p99, max), counts late ticks and missed reads, and
 ends when the plan's duration is over (or the controller is done, when asked to end then), on a fault
-(:mod:`.safety`'s policy), on a stop request (Ctrl-C: a controller that can stop itself, a steered walk, is told
-to and ends done, within :data:`~.stopping.SOFT_STOP_MAX_S`; a planned walk first reaches its next double support,
-so it stops on both feet, at most a step later), or at once when the port fails
+(:mod:`.safety`'s policy), on a stop request (Ctrl-C: a controller that can stop itself, a walk, is told to and
+ends done, within :data:`~.stopping.SOFT_STOP_MAX_S`, its feet side by side; a walk's plan played open loop first
+reaches its next double support, so it stops on both feet, at most a step later), or at once when the port fails
 (:class:`~op2motion.errors.PortFailed`: the fault ``port failed``, the report still returned with what the run did
 until then). A controller's ``torque_limits`` are written when they change.
 """

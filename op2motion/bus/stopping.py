@@ -1,9 +1,9 @@
 """How a run of the 8 ms loop ends (:mod:`.loop`): by its plan's end, by a fault (:mod:`.safety`'s policy) or by a
-stop request (Ctrl-C). A controller that stops itself (``stops_itself``, a steered walk) is told to stop and runs on
-until it is done, at most :data:`SOFT_STOP_MAX_S`. Otherwise a stop freezes the goals at a row and holds them
-:data:`STOP_HOLD_S` before the loop ends: a planned walk's next row on both feet (:func:`stop_row`), anything else the
-row it is at; a fall lowers the torque limits and, :data:`~.safety.FALL_SETTLE_S` later, relaxes the goals to where
-the joints lie.
+stop request (Ctrl-C). A controller that stops itself (``stops_itself``: a walk, planned or steered, closes its feet
+and stands) is told to stop and runs on until it is done, at most :data:`SOFT_STOP_MAX_S`. Otherwise a stop freezes
+the goals at a row and holds them :data:`STOP_HOLD_S` before the loop ends: a walk's plan played open loop at its
+next row on both feet (:func:`stop_row`), anything else the row it is at; a fall lowers the torque limits and,
+:data:`~.safety.FALL_SETTLE_S` later, relaxes the goals to where the joints lie.
 """
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ from op2motion.robot.controller import hooks_of
 from op2motion.robot.support import Support
 
 STOP_HOLD_S = 0.3                  # after a stop, the held goals are sent this long before the loop ends
-SOFT_STOP_MAX_S = 2.0              # a controller that stops itself (a steered walk: two steps, 1.2 s, then still)
-                                   # gets this long to be done; then its goals freeze where they are
+SOFT_STOP_MAX_S = 2.5              # a controller that stops itself gets this long to be done (a walk: up to two steps
+                                   # and still: about 2.1 s, docs/robot.md); then its goals freeze where they are
 
 
 def stop_row(plan: Any, row: int) -> int:
@@ -54,8 +54,8 @@ class Stops:
             self.frozen_at = stop_row(plan, row) if k else 0
 
     def request(self, plan: Any, row: int, k: int, controller: Any = None, now: float = 0.0) -> None:
-        """A stop request (Ctrl-C): a controller that stops itself is told to; a planned walk freezes on its next
-        double support, anything else at once."""
+        """A stop request (Ctrl-C): a controller that stops itself is told to; a walk's plan played open loop
+        freezes on its next double support, anything else at once."""
         if self.frozen_at is not None or self.soft_until is not None:
             return
         hooks = hooks_of(controller)

@@ -10,7 +10,8 @@
   same side (:data:`~.plans.CHECK_ENGINE`), until it stands.
 
 Each walk starts standing: a planned move from the present pose to the walk's first, checked in physics, then the
-walk in the 8 ms loop (:func:`~.loop.run_controller`). Ctrl-C stops a steered walk within two steps, on both feet.
+walk in the 8 ms loop (:func:`~.loop.run_controller`). Ctrl-C stops a walk within two steps, on both feet side by
+side (a planned one: :mod:`~op2motion.gait.planned_stop`).
 """
 
 from __future__ import annotations
@@ -198,12 +199,13 @@ def announce(controller: Any, options: Options) -> Callable[[Any], None] | None:
 
 def leg_travel(controller: Any, row: int = -1) -> dict[str, float]:
     """Where the feet took the robot, by leg odometry: the plan's travel of the feet's midpoint up to gait row
-    ``row`` (where the walk ended: its last, or the row a stop froze it at) plus the placement error the controller
+    ``row`` (where the walk ended: its last, or the row a stop froze it at; a walk stopped early: as planned
+    again from the stop) plus the placement error the controller
     measured at each landing from the joint angles (plan frame: x forward, y left) [m]."""
-    feet = controller.gait.timeline.feet
-    last = len(feet["left"]) - 1
-    at = last if row < 0 else min(row, last)
-    start = np.mean([feet[side][0, :2] for side in ("left", "right")], axis=0)
-    end = np.mean([feet[side][at, :2] for side in ("left", "right")], axis=0)
+    rows = controller.rows                  # (a walk stopped early: its rows planned again from the stop)
+    last = rows.end - 1
+    at = last if row < 0 else min(max(row, rows.first), last)
+    start = np.mean([rows.feet(side, rows.first)[:2] for side in ("left", "right")], axis=0)
+    end = np.mean([rows.feet(side, at)[:2] for side in ("left", "right")], axis=0)
     travel = end - start + np.asarray(controller.odometry.error, dtype=float)
     return {"x_m": float(travel[0]), "y_m": float(travel[1]), "distance_m": float(np.hypot(*travel))}

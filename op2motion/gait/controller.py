@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
@@ -43,15 +43,20 @@ from op2motion.gait.generator import Gait
 from op2motion.gait.learning import StepLearner
 from op2motion.gait.leg_targets import LegTargets
 from op2motion.gait.odometry import FootOdometry, left_of
+from op2motion.gait.phases import Intent
 from op2motion.gait.presets import load_preset
 from op2motion.gait.rows import RowBuffer, rows_of_gait, swing_phase
 from op2motion.gait.schedule import plan_of_gait
 from op2motion.kinematics.leg_ik import leg_of
 from op2motion.motion.stillness import Stillness
 from op2motion.physics import Plan, Schedule
+from op2motion.robot.controller import ControllerHooks
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import SIDES
+
+if TYPE_CHECKING:
+    from op2motion.gait.rolling import RollingPlanner
 
 MAX_HEADING_RAD = 0.2             # the swing foot is steered at most this far per step (11°)
 MAX_TRIM_RAD = 0.15                # a leg joint's integral trim stays within this [rad] (8.6°)
@@ -81,6 +86,11 @@ def _clip(value: float, bound: float) -> float:
 _swing_phase = swing_phase           # the name the tests knew
 
 
+def _stopping() -> Intent:
+    """What a planned walk stopped early asks of its planner: to stop."""
+    return Intent(stop=True)
+
+
 __all__ = ["Feedback", "GYRO_GAINS_S", "OPEN_LOOP", "STOCK_GYRO_GAINS_S", "WalkController", "attitude_of"]
 
 
@@ -100,14 +110,16 @@ class _State:
     error: tuple[float, float] = (0.0, 0.0)                                 # last attitude error (pitch, roll) [rad]
 
 
-class WalkController(LegTargets):
+class WalkController(LegTargets, ControllerHooks):
     """A planned gait played with attitude stabilisation (see the module docstring; the legs' goals for a turned
     body and moved soles: :class:`.leg_targets.LegTargets`).
 
     ``done`` says when the walk is over: its plan has run out (the last row held) and the body has kept still for
     :data:`op2motion.motion.stillness.STILL_S` (then the servos may hold the last goals); until then the stabiliser
-    keeps balancing.
+    keeps balancing. :meth:`stop` ends it early, on both feet side by side (:mod:`.planned_stop`).
     :meth:`steerable` makes the walk you steer while it walks (:mod:`.steer`)."""
+
+    stops_itself = True
 
     def __init__(self, gait: Gait, spec: Spec, feedback: Feedback = Feedback()):
         self.gait, self.spec, self.feedback, self.params = gait, spec, feedback, gait.params
@@ -133,6 +145,9 @@ class WalkController(LegTargets):
         self.state = _State()
         self.stillness = Stillness()
         self._k = -1
+        self.stopper: RollingPlanner | None = None        # plans the rest of a planned walk stopped early
+        self.stopped_from: int | None = None              # the gait row it plans from
+        self.held_row: int | None = None                  # the gait row a walk stopped before its first step holds
 
     @property
     def plan_yaw(self) -> np.ndarray:
@@ -170,8 +185,46 @@ class WalkController(LegTargets):
         return self._plan_over(self._k) and self.stillness.still
 
     def _plan_over(self, k: int) -> bool:
-        """Has the plan run out at gait row ``k``?"""
-        return k >= self.rows.end - 1
+        """Has the plan run out at gait row ``k``? (Stopped early: is the walk standing again?)"""
+        if self.stopper is not None:
+            since = self.stopper.stand_since
+            return since is not None and k >= since
+        return self.held_row is not None or k >= self.rows.end - 1
+
+    def stop(self) -> None:
+        """End the walk early (:mod:`.planned_stop`): from the next step that can still be planned again, a step
+        at half the stride and the one that closes the feet, then standing; before the first step, held where it
+        is (on both feet); :attr:`done` once still. The leg odometry measures on; the step learner's corrections
+        end there (a closing step learns nothing)."""
+        from op2motion.gait.planned_stop import splice_row, stop_planner
+        from op2motion.gait.steer_feedback import RollingCalibration
+
+        if self.stopper is not None or self.held_row is not None:
+            return
+        at = splice_row(self.gait, self._k)
+        if at is None:
+            return
+        if at[0] == 0:
+            self.held_row = max(self._k, 0)
+            return
+        self.stopped_from, self.stopper = at[1], stop_planner(self.gait, self.spec, self.legs, self.rows, *at)
+        calibration = RollingCalibration.rolling(self.rows, self.leg_index, self.calibration.first_step)
+        calibration.start_row, calibration.end_row = self.calibration.start_row, self.calibration.end_row
+        calibration.sums = self.calibration.sums
+        self.calibration = calibration
+
+    def _stopping_rows(self, k: int) -> None:
+        """Stopped early: plan on (a stage a tick) and, at the first row planned again, measure the landings
+        where the new rows say they happen."""
+        from op2motion.gait.steer_feedback import RollingOdometry
+
+        if self.stopper is None or self.stopped_from is None or k < 0:
+            return
+        self.stopper.tick(k, _stopping)
+        if k >= self.stopped_from and not isinstance(self.odometry, RollingOdometry):
+            odometry = RollingOdometry.rolling(self.rows, self.legs, self.delay_rows + LANDING_ROWS)
+            odometry.error, odometry.last = self.odometry.error, self.odometry.last
+            self.odometry = odometry
 
     def _row(self, t_s: float) -> int:
         """The gait row of time ``t_s`` [s] (negative during the lead-in)."""
@@ -179,6 +232,10 @@ class WalkController(LegTargets):
 
     def _planned_goals(self, t_s: float, k: int) -> np.ndarray:
         """The plan's goals (20,) [rad] at ``t_s`` (gait row ``k``)."""
+        if self.stopped_from is not None and k >= self.stopped_from:
+            return self.rows.get("goals", k).copy()
+        if self.held_row is not None:
+            return self.rows.get("goals", self.held_row).copy()
         return self.schedule.goals_at(t_s)
 
     def start(self, joint_positions: Mapping[str, float]) -> dict[str, float]:
@@ -195,8 +252,12 @@ class WalkController(LegTargets):
              joint_positions: Mapping[str, float]) -> dict[str, float]:
         """The goals at ``t_s`` [s]: the plan's, with the body turned against the torso's attitude error."""
         row = self._row(t_s)
+        if self.held_row is not None:
+            row = min(row, self.held_row)
         k = max(row, 0)                                   # the gait's own row (its first during the lead-in)
         self._k = row
+        if self.stopper is not None:
+            self._stopping_rows(row)
         measured = np.array([joint_positions[name] for name in self._names])
         gyro_xyz = np.asarray(gyro_rad_s, dtype=float)
         self.stillness.update(gyro_xyz, measured)
@@ -219,7 +280,8 @@ class WalkController(LegTargets):
                 self.odometry.observe(k, measured)
             if f.joint_ki:
                 goals += self._joint_trim(k, measured)
-            goals += self.learner.correction(k)
+            if self.stopped_from is None or k < self.stopped_from:
+                goals += self.learner.correction(k)
             if f.calibrate:
                 self.calibration.observe(k, planned, measured)
                 goals += self.calibration.compensation(k, len(goals))

@@ -26,7 +26,7 @@ import numpy as np
 from op2motion.errors import InputError
 from op2motion.gait.footsteps import Footsteps, place_footsteps, zmp_margins
 from op2motion.gait.params import GaitParams
-from op2motion.gait.preview import preview_gains, track_reference
+from op2motion.gait.preview import CartTrack, preview_gains, track_reference
 from op2motion.gait.timeline import Timeline, build_timeline
 from op2motion.kinematics.frames import eigen_quaternions
 from op2motion.kinematics.leg_ik import leg_ik, leg_of, rot_y, rot_z, within_reach
@@ -51,8 +51,10 @@ class Gait:
     planned joint angles (K, 20) [rad], the goals sent to the servos (K, 20) [rad] (the joint angles led by the
     servo model's inverse, :attr:`~.GaitParams.servo_feedforward`) with P gains (K, 20),
     the whole-body CoM (K, 3) [m], the cart's CoM (K, 2) [m], the
-    multibody ZMP (K, 2) [m] and its margin to the soles on the floor (K,) [m] (negative: outside); world frame
-    of the start (X forward, Y left, floor at Z = 0)."""
+    multibody ZMP (K, 2) [m] and its margin to the soles on the floor (K,) [m] (negative: outside); the preview
+    controller's state of the CoM path the body was fitted to (:func:`cart_states`, the sum of the pendulum's and
+    each correction's) and the reference's corrections, from which a walk stopped early is planned on
+    (:mod:`.planned_stop`); world frame of the start (X forward, Y left, floor at Z = 0)."""
 
     params: GaitParams
     footsteps: Footsteps
@@ -67,6 +69,8 @@ class Gait:
     cart_com: np.ndarray
     zmp: np.ndarray
     zmp_margin: np.ndarray
+    cart_states: np.ndarray | None = None        # the CoM path's preview state before each row (K, 4, 2)
+    zmp_correction: np.ndarray | None = None     # the multibody corrections added to the ZMP reference (K, 2) [m]
 
     @property
     def dt(self) -> float:
@@ -237,6 +241,8 @@ def generate_gait(params: GaitParams, spec: Spec, target: tuple[float, float, fl
     gains = preview_gains(CONTROL_PERIOD_S, com_height, params.preview_s, params.zmp_weight, params.jerk_weight)
     cart = track_reference(gains, timeline.zmp_ref)
     target_com = cart.com.copy()
+    states = cart_states(cart, timeline.zmp_ref)
+    correction = np.zeros_like(timeline.zmp_ref)
     for p in range(params.zmp_passes + 1):
         for _ in range(COM_PASSES):
             pos[:, :2] += target_com - com[:, :2]
@@ -246,10 +252,21 @@ def generate_gait(params: GaitParams, spec: Spec, target: tuple[float, float, fl
         if on_progress is not None:
             on_progress(p + 1, params.zmp_passes + 1)
         if p < params.zmp_passes:
-            fix = track_reference(gains, timeline.zmp_ref - zmp, start=np.zeros(2))
+            fix_ref = timeline.zmp_ref - zmp
+            fix = track_reference(gains, fix_ref, start=np.zeros(2))
             target_com = target_com + fix.com
+            states += cart_states(fix, fix_ref)
+            correction += fix_ref
     margin = zmp_margins(zmp, timeline.contact, timeline.feet, spec)
     p_gains = np.full_like(goals, float(params.p_gain))
     servo_goals = goals + body.feedforward(p_gains) if params.servo_feedforward else goals
     return Gait(params, footsteps, timeline, com_height, pos, rot, goals, servo_goals, p_gains, com, cart.com, zmp,
-                margin)
+                margin, states, correction)
+
+
+def cart_states(track: CartTrack, ref: np.ndarray) -> np.ndarray:
+    """The preview controller's state before each row (K, 4, 2): the cart's position [m], velocity [m/s] and
+    acceleration [m/s²], and the ZMP error summed over the rows before (the integral action's) [m], of a run from
+    rest along ``ref`` (K, 2) [m] (the controller is linear: the states of runs whose references add up add up)."""
+    summed = np.vstack([np.zeros((1, 2)), np.cumsum(track.zmp - ref, axis=0)[:-1]])
+    return np.stack([track.com, track.vel, track.acc, summed], axis=1)

@@ -75,7 +75,7 @@ class _Window:
 
 
 @dataclass
-class _History:
+class History:
     """The last :data:`HISTORY_ROWS` rows planned: soles, contact, torso poses, joints, ZMP reference."""
 
     feet: dict[str, np.ndarray]
@@ -86,29 +86,50 @@ class _History:
     ref: np.ndarray
 
     @classmethod
-    def of(cls, w: _Window, rows: slice) -> "_History":
+    def of(cls, w: _Window, rows: slice) -> History:
         """The rows ``rows`` of a window."""
         return cls({s: w.feet[s][rows].copy() for s in SIDES}, w.contact[rows], w.pos[rows].copy(),
                    w.rot[rows].copy(), w.joints[rows].copy(), w.ref[rows].copy())
 
 
+@dataclass
+class Seed:
+    """A walk planned so far by other means (a planned walk stopped early, :mod:`.planned_stop`), for the planner
+    to go on from: the state between two phases, its rows (ending there), the last :data:`HISTORY_ROWS` of them,
+    the preview controller's cart there and the multibody corrections of the reference from there on (R, 2) [m],
+    the pendulum's height [m]."""
+
+    state: WalkState
+    rows: RowBuffer
+    history: History
+    cart: CartState
+    delta: np.ndarray
+    com_height: float
+
+
 class RollingPlanner:
-    """Plans a steered walk phase by phase (see the module docstring). Rows are numbered from the walk's first."""
+    """Plans a steered walk phase by phase (see the module docstring). Rows are numbered from the walk's first;
+    with a :class:`Seed` the planner goes on from a walk planned so far (its rows, extended in place)."""
 
     def __init__(self, params: GaitParams, spec: Spec, envelope: Envelope, legs: Mapping[str, Leg],
-                 action: ActionFile | None = None):
+                 action: ActionFile | None = None, seed: Seed | None = None):
         self.params, self.spec, self.envelope, self.legs, self.action = params, spec, envelope, dict(legs), action
         self.pending_kick: Side | None = None                    # a kick asked for (right or left), not yet planned
         self.row_now = -1                                       # the last row handed to the controller
         self.stop_row: int | None = None                        # the row a stop was asked at
-        self.state: WalkState = initial_state(params, spec)
+        self.state: WalkState = initial_state(params, spec) if seed is None else seed.state
         self.height = standing_height(params, spec)
-        self.rows = RowBuffer(len(spec.joints))
+        self.rows = RowBuffer(len(spec.joints)) if seed is None else seed.rows
         self.phases: list[tuple[int, Phase]] = []              # (first row, phase) of the phases planned
         self.task: Iterator[None] | None = None
         self.keep_all = False                                   # keep every row and phase (a dry run's plan)
         self.stand_since: int | None = None                     # first row of the standing that was planned last
-        self._standing_rows()
+        if seed is None:
+            self._standing_rows()
+        else:
+            self.com_height, self.cart, self._delta, self.history = seed.com_height, seed.cart, seed.delta, seed.history
+            self.gains = preview_gains(CONTROL_PERIOD_S, self.com_height, params.preview_s, params.zmp_weight,
+                                       params.jerk_weight)
 
     def _standing_rows(self) -> None:
         """The robot standing where the feet are (before the first phase, and after a kick): the history that leads
@@ -129,7 +150,7 @@ class RollingPlanner:
         self.cart = CartState.rest(middle)
         self._delta = np.zeros((0, 2))
         window.ref = np.repeat(middle[None], HISTORY_ROWS, axis=0)
-        self.history = _History.of(window, slice(0, HISTORY_ROWS))
+        self.history = History.of(window, slice(0, HISTORY_ROWS))
 
     @property
     def standing_goals(self) -> np.ndarray:
@@ -279,7 +300,7 @@ class RollingPlanner:
         elif self.stand_since is None:
             self.stand_since = start
         self.state, self.cart = after, self._next_cart
-        self.history = _History.of(w, slice(h0 + n - HISTORY_ROWS, h0 + n))
+        self.history = History.of(w, slice(h0 + n - HISTORY_ROWS, h0 + n))
 
     def _kick(self, side: Side) -> None:
         """Commit a kick phase (:mod:`.kick`) from the standing robot; afterwards it stands where it stood."""

@@ -75,6 +75,14 @@ class RowBuffer:
                 del self.objects[name][:drop]
             self.first += drop
 
+    def truncate(self, end: int) -> None:
+        """Forget the rows from ``end`` (absolute) on: a walk planned again from there (:mod:`.planned_stop`)."""
+        keep = max(0, min(end, self.end) - self.first)
+        for name in NUMERIC:
+            self.numeric[name] = self.numeric[name][:keep]
+        for name in OBJECTS:
+            del self.objects[name][keep:]
+
     def _index(self, k: int) -> int:
         i = k - self.first
         if not 0 <= i < len(self.objects["contact"]):                  # (the rows kept: read every tick)

@@ -42,7 +42,7 @@ from op2motion.gait.rolling import RollingPlanner
 from op2motion.gait.steer_feedback import RollingCalibration, RollingLearner, RollingOdometry
 from op2motion.gait.timeline import ticks
 from op2motion.kinematics import small
-from op2motion.physics import RAMP_S, ControllerHooks, Plan, WalkClock
+from op2motion.physics import RAMP_S, Plan, WalkClock
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Side, Support
@@ -53,7 +53,7 @@ STAND_PLAN_S = 5.0                  # the plan of a walk given no commands: stan
 SETTLE_AFTER_STOP_S = 0.5           # a planned walk ends this long after it stands again after its stop [s]
 
 
-class SteerableWalk(WalkController, ControllerHooks):
+class SteerableWalk(WalkController):
     """A walk planned while it walks, from commands (see the module docstring); it stops itself and resumes (the
     hooks of :class:`~op2motion.physics.controller.ControllerHooks`)."""
 
