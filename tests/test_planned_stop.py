@@ -74,7 +74,11 @@ def test_a_stop_closes_the_feet_within_two_steps_without_a_jump(fresh, spec, whe
     assert behind <= CLOSED_M and turned <= CLOSED_RAD
     margin = planned_zmp_margins(controller.rows, spec, controller.rows.end)[first:]
     assert margin.min() >= MARGIN_FLOOR_M
-    assert controller._plan_over(controller.stopper.stand_since)
+    ends = [f for f, p in controller.stopper.phases if p.kind == "end"]
+    controller._k = ends[0]
+    assert not controller.done                                   # on its feet, not yet settled
+    controller._k = controller.rows.end - 1
+    assert controller.done
 
 
 def test_a_stop_before_the_first_step_holds_the_walk_on_both_feet(fresh):

@@ -17,8 +17,8 @@ from op2motion.robot.controller import hooks_of
 from op2motion.robot.support import Support
 
 STOP_HOLD_S = 0.3                  # after a stop, the held goals are sent this long before the loop ends
-SOFT_STOP_MAX_S = 2.5              # a controller that stops itself gets this long to be done (a walk: up to two steps
-                                   # and still: about 2.1 s, docs/robot.md); then its goals freeze where they are
+SOFT_STOP_MAX_S = 2.0              # a controller that stops itself gets this long to be done (a walk: up to two steps
+                                   # and standing: about 1.5 s, docs/robot.md); then its goals freeze where they are
 
 
 def stop_row(plan: Any, row: int) -> int:

@@ -64,6 +64,9 @@ MAX_CORRECTION_RAD = 0.25          # the stabiliser turns the body at most this 
 STIFF_FROM = 1.1                   # servos measured this much stiffer than the model begin to lose the standing damping
 STIFF_FULL = 1.25                  # ... and lose all of it from here on (the family's x1.6 servos read 1.28)
 LANDING_ROWS = 2                   # a landing is measured this many rows past the latency into its double support
+STOPPED_SETTLE_S = 0.4             # a walk stopped early is done this long after the step that closed its feet [s]: its
+                                   # CoM on its way back between them, on both feet (waiting until it is still took
+                                   # 0.6 s more, and Ctrl-C must end the command within 3 s)
 
 
 def attitude_of(rot: np.ndarray) -> np.ndarray:
@@ -181,14 +184,15 @@ class WalkController(LegTargets, ControllerHooks):
 
     @property
     def done(self) -> bool:
-        """The plan has run out and the body has kept still (see the class docstring)."""
+        """The plan has run out and the body has kept still (see the class docstring); stopped early, once the feet
+        are closed and it has stood on both :data:`STOPPED_SETTLE_S` (the servos hold it there)."""
+        if self.stopper is not None:
+            ends = [first for first, phase in self.stopper.phases if phase.kind == "end"]
+            return bool(ends) and self._k >= ends[0] + int(round(STOPPED_SETTLE_S / CONTROL_PERIOD_S))
         return self._plan_over(self._k) and self.stillness.still
 
     def _plan_over(self, k: int) -> bool:
-        """Has the plan run out at gait row ``k``? (Stopped early: is the walk standing again?)"""
-        if self.stopper is not None:
-            since = self.stopper.stand_since
-            return since is not None and k >= since
+        """Has the plan run out at gait row ``k``? (Stopped before the first step: at once.)"""
         return self.held_row is not None or k >= self.rows.end - 1
 
     def stop(self) -> None:
