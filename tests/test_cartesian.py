@@ -143,7 +143,10 @@ def test_cli_bad_input_is_one_line_exit_2_nothing_written(tmp_path, capsys, argv
 @pytest.mark.physics
 @pytest.mark.parametrize("pose, axis", [("walkready", "-Z"), ("walkready", "+Y"), ("standing", "+Z"),
                                         ("standing", "-Z")])
-def test_a_line_and_back_stands_in_both_engines(spec, pose, axis):
+def test_a_line_and_back_stands(spec, pose, axis):
+    """In MuJoCo, and in PyBullet too for the first case (PyBullet costs seven times MuJoCo's CPU per simulated
+    second; each stood in both when measured)."""
     move = _move(spec, pose, "right", AXES[axis])
-    report = check(move.trajectory().schedule(spec), spec, ("pybullet", "mujoco"))
+    engines = ("pybullet", "mujoco") if (pose, axis) == ("walkready", "-Z") else ("mujoco",)
+    report = check(move.trajectory().schedule(spec), spec, engines)
     assert report.agree and report.stable, [e.run.reasons for e in report.engines.values()]

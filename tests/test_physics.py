@@ -17,7 +17,7 @@ from op2motion.formats.posefile import read_pose
 from op2motion.model.dynamics import dynamics_for
 from op2motion.model.servo import ServoModel
 from op2motion.model.urdf import FRAME_LINK_MASS_KG, link_inertial
-from op2motion.physics import ENGINES, MIN_SECONDS, Pushes, Schedule, Setup, check, make_engine
+from op2motion.physics import ENGINES, MIN_SECONDS, CheckReport, Pushes, Schedule, Setup, check, make_engine
 from op2motion.physics.body import Body, placement
 from op2motion.physics.pybullet_engine import PyBulletEngine, load_robot, quiet_c_output
 from op2motion.physics.sweeps import ARMS_FORWARD, FOLDED_SWING, balanced, servo_pose
@@ -28,6 +28,7 @@ STOCK_STANDING = ["init", "walkready", "sit_down", "stand_up"]
 PUSH_N = 2.0
 PUSH_RUN_S = 3.0                # 1.5 s after the push
 ENGINE_MARGIN_M = 0.002         # the two engines' settled margins agree this well on standing poses
+PUSHED_IN_BOTH = "walkready"    # the stock page pushed in both engines (the others: in MuJoCo)
 KP_P32_NM_RAD = 0.158 * 32 * 2.5
 
 
@@ -68,12 +69,20 @@ def test_compliance_byte_sets_the_p_gain(slope, p):
 @pytest.mark.physics
 @pytest.mark.parametrize("name", STOCK_STANDING)
 def test_stock_standing_pages_stand_in_both_engines_and_survive_pushes(spec, name):
+    """Each page stands in both engines (their margins agree) and survives a push each way: in both engines for the
+    page every walk starts from, in MuJoCo for the others (PyBullet costs seven times its CPU per simulated second;
+    all four survived in both when measured)."""
     pose = read_pose(pose_path(name), spec)
-    report = check(Schedule.hold(pose.servo, pose.support, spec, PUSH_RUN_S), spec, ENGINES, Pushes(PUSH_N))
+    pushed = ENGINES if name == PUSHED_IN_BOTH else ("mujoco",)
+    hold = Schedule.hold(pose.servo, pose.support, spec, PUSH_RUN_S)
+    report = check(hold, spec, pushed, Pushes(PUSH_N))
+    if pushed != ENGINES:
+        report = CheckReport({**check(hold, spec, ("pybullet",)).engines, **report.engines})
     for engine, e in report.engines.items():
         v = e.run
         assert v.stable, (engine, v.reason)
-        assert [p.direction for p in e.pushes if p.stable] == ["forward", "backward", "left", "right"], engine
+        if engine in pushed:
+            assert [p.direction for p in e.pushes if p.stable] == ["forward", "backward", "left", "right"], engine
         assert v.support_margin_m > 0.01 and v.max_tilt_deg < 10 and v.self_collisions == ()
         assert v.cop_xy is not None
     assert report.agree and report.stable and report.pushes_stood

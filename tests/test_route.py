@@ -43,6 +43,8 @@ ROUTE_PAIRS = json.loads((DATA / "route_pairs.json").read_text(encoding="utf-8")
 PAIRS = {name: {joint: tuple(v) for joint, v in p["joints_deg"].items()} for name, p in ROUTE_PAIRS.items()}
 ONE_FOOT = {name: (p["base"], p["support"]) for name, p in ROUTE_PAIRS.items() if p["support"] != "double"}
 ARM_THROUGH_TORSO, ARM_THROUGH_ARM = PAIRS["arm through torso"], PAIRS["arm through the other arm"]
+#: The planned motions played in PyBullet as well as MuJoCo: one on both feet, the one on one foot.
+BOTH_ENGINES_PAIRS = ("arm through torso", "crossed leg through the floor")
 
 
 def _pair(spec, change: dict, duration_s: float = 2.0) -> tuple[Waypoint, Waypoint]:
@@ -192,7 +194,10 @@ def test_planned_rows_clearance_agrees_with_pybullets_closest_points(spec, pybul
 
 @pytest.mark.physics
 @pytest.mark.parametrize("name", sorted(PAIRS))
-def test_planned_motions_stand_in_both_engines(spec, name):
+def test_planned_motions_stand(spec, name):
+    """In MuJoCo, and in PyBullet too for :data:`BOTH_ENGINES_PAIRS` (PyBullet costs seven times MuJoCo's CPU per
+    simulated second; each stood in both when measured)."""
     traj = _planned(name)
-    report = check(traj.schedule(spec), spec, ("pybullet", "mujoco"))
+    engines = ("pybullet", "mujoco") if name in BOTH_ENGINES_PAIRS else ("mujoco",)
+    report = check(traj.schedule(spec), spec, engines)
     assert report.agree and report.stable, [e.run.reasons for e in report.engines.values()]
