@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import subprocess
 import sys
 
 #: One BLAS thread per test process (and the subprocesses it starts): the test processes fill the cores already, and
@@ -16,6 +17,7 @@ for _threads in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np
 import pytest
+import warm_kernels
 from helpers import ROOT, SEED, STOCK, compile_package
 
 from op2motion.robot.spec import Spec
@@ -92,8 +94,21 @@ def pytest_configure(config: pytest.Config) -> None:
             os.nice(WORKER_NICE)
 
 
+_WARMING: list[subprocess.Popen] = []
+
+
 def pytest_sessionstart(session: pytest.Session) -> None:
     compile_package(ROOT)
+    if not os.environ.get("PYTEST_XDIST_WORKER") and not warm_kernels.cached():
+        # a fresh checkout: the kernels compile beside the first tests (which need none), not inside the tests that
+        # need them while the other test processes wait for the compile's lock (tests/warm_kernels.py)
+        _WARMING.append(subprocess.Popen([sys.executable, str(ROOT / "tests" / "warm_kernels.py")],
+                                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    for process in _WARMING:
+        process.wait()
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:

@@ -20,6 +20,7 @@ from op2motion.gait.controller import WalkController
 from op2motion.gait.generator import Gait
 from op2motion.gait.presets import load_preset
 from op2motion.gait.speeds import gait_within_speed
+from op2motion.gait.steer import SteerableWalk
 from op2motion.model.urdf import build_urdf
 from op2motion.robot.specfile import default_spec, load_spec
 
@@ -163,7 +164,7 @@ def test_a_steered_walk_in_the_foreign_simulator(member):
 
     official = load_spec(FOREIGN_BODY)
     chosen = next(m for m in family(official) if m.name == member)
-    walk = WalkController.steerable(default_spec())
+    walk = SteerableWalk.make(default_spec())
     result = simulate(build_urdf(chosen.body(official)), _Commanded(walk, STEER_SEQUENCE), STEER_SECONDS,
                       friction=chosen.friction, servo=ServoModel(kp_nm_rad=chosen.stiffness * ServoModel().kp_nm_rad),
                       latency_ticks=2, until=lambda t: walk.done)

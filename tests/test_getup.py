@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from helpers import STOCK
 
-from op2motion.gait import WalkController, timeline_of
+from op2motion.gait import SteerableWalk, timeline_of
 from op2motion.motion import GetUp, Supervisor
 from op2motion.motion.lying import lying_side, tilt_deg
 from op2motion.physics import LYING, Plan, Pushes, Setup, check
@@ -153,7 +153,7 @@ WALKED_ON_M = 0.15          # after resuming, the torso gets at least this far [
 @pytest.mark.physics
 @pytest.mark.parametrize("engine", ["mujoco"])      # PyBullet and every push direction: tools/getup_table.py falls
 def test_a_pushed_walk_falls_is_caught_gets_up_and_walks_on(spec, engine):
-    walk = WalkController.steerable(spec, commands=timeline_of(WALK))
+    walk = SteerableWalk.make(spec, commands=timeline_of(WALK))
     supervisor = Supervisor(walk, spec=spec, extra_s=0.0)
     # the pushed run alone, as check() plays it after its main run (the unpushed 27-s walk, which nothing here
     # looks at: half the test's time)

@@ -31,7 +31,7 @@ def _names() -> list[tuple[str, str]]:
 
 
 def test_the_readme_shows_python_examples():
-    assert len(BLOCKS) >= 2 and any("steerable" in b for b in BLOCKS) and any("GetUp" in b for b in BLOCKS)
+    assert len(BLOCKS) >= 2 and any("SteerableWalk" in b for b in BLOCKS) and any("GetUp" in b for b in BLOCKS)
 
 
 @pytest.mark.parametrize("module, name", _names(), ids=lambda v: v or "module")

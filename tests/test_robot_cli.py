@@ -22,6 +22,7 @@ from op2motion.bus.tasks import Limp, Options, limp_question, setup, teach
 from op2motion.bus.walks import walk
 from op2motion.errors import CheckFailed, InputError
 from op2motion.formats.posefile import read_pose, write_pose
+from op2motion.gait.closing import CLOSED_M, apart
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.imu import FALL_TILT_RAD
 from op2motion.robot.limbs import limb_groups, select_joints
@@ -340,7 +341,7 @@ def test_a_stop_mid_walk_closes_the_feet_and_leaves_no_closing_step_to_take(spec
     side, standing, done before the loop would freeze it; its leg odometry says how far it walked (not the whole
     plan); the next motion needs no closing step (the test below has a next walk close the feet)."""
     from op2motion.bus.stopping import SOFT_STOP_MAX_S
-    from op2motion.gait.closing import CLOSED_M, CLOSED_RAD, apart, closing_gait
+    from op2motion.gait.closing import CLOSED_RAD, closing_gait
     from op2motion.gait.footsteps import step_width
     from op2motion.gait.presets import load_preset
 
@@ -361,23 +362,28 @@ def test_a_stop_mid_walk_closes_the_feet_and_leaves_no_closing_step_to_take(spec
 
 
 @pytest.mark.physics
-def test_a_walk_frozen_with_a_foot_ahead_is_closed_by_the_next_walk_unforced(spec):
-    """A plan played open loop and stopped freezes on both feet with one foot ahead; the next walk, not forced,
-    starts with the step that closes the feet (checked in physics) and walks (it was refused: "slip: a supporting
-    sole slid 19 mm")."""
+def test_a_walk_frozen_with_a_foot_ahead_is_closed_by_the_next_motion_unforced(spec):
+    """A plan played open loop and stopped freezes on both feet with one foot ahead; the next motion (``robot
+    stand``, as every motion starts), not forced, starts with the step that closes the feet (checked in physics) and
+    moves on (it was refused: "slip: a supporting sole slid 19 mm")."""
+    from op2motion.bus.stand import stand
     from op2motion.bus.walks import run_on_robot
     from op2motion.gait.controller import WalkController
+    from op2motion.gait.footsteps import step_width
+    from op2motion.gait.presets import load_preset
 
     with lockstep(spec) as (emulator, port):
         stop, on_tick, _ = _stop_after(emulator, WALKED_M)
-        frozen = run_on_robot(port, spec, _OpenLoopStop(WalkController.from_preset("forward", 20, spec)),
+        frozen = run_on_robot(port, spec, _OpenLoopStop(WalkController.from_preset("forward", 8, spec)),
                               options=Options(stop=stop, on_tick=on_tick))
-        again = walk(port, spec, steps=4)
+        apart_before = apart(emulator.body.joint_angles(), spec, step_width(load_preset("forward"), spec))
+        again = stand(port, spec)
         after = emulator.truth()
-    assert dict(frozen.runs)["run"].ended == "stopped"
-    assert again.ended == "done" and [name for name, _ in again.runs] == ["close the feet", "approach", "walk"], (
-        again.runs)
+        apart_after = apart(emulator.body.joint_angles(), spec, step_width(load_preset("forward"), spec))
+    assert dict(frozen.runs)["run"].ended == "stopped" and apart_before[1] > CLOSED_M     # one foot ahead
+    assert again.ended == "done" and [name for name, _ in again.runs] == ["close the feet", "motion"], again.runs
     assert "checked in physics" in again.checked and math.degrees(after["tilt_rad"]) < STANDING_TILT_DEG
+    assert apart_after[1] <= CLOSED_M
 
 
 @pytest.mark.physics

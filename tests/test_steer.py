@@ -202,7 +202,7 @@ def _drive(walk: SteerableWalk, seconds: float, spec, at=None) -> dict[int, np.n
 @pytest.mark.slow
 def test_the_rolling_rows_have_no_seams_and_the_dry_run_is_the_walk(spec):
     timeline = timeline_of([(0.0, 0.0, 0.0, 0.0), (1.0, 0.2, 0.0, 0.3), (4.0, 0.0, 0.05, 0.0), (6.0, "stop")])
-    walk = WalkController.steerable(spec, commands=timeline)
+    walk = SteerableWalk.make(spec, commands=timeline)
     plan = walk.plan
     twin = walk.dry
     assert twin is not None and walk.dry_rows > 700
@@ -211,7 +211,7 @@ def test_the_rolling_rows_have_no_seams_and_the_dry_run_is_the_walk(spec):
     assert np.abs(np.diff(joints, axis=0)).max() < JOINT_JUMP_RAD
     assert np.abs(np.diff(com, axis=0)).max() < COM_JUMP_M
     assert len(plan.goals) == walk.lead + walk.dry_rows
-    online = WalkController.steerable(spec, commands=timeline)
+    online = SteerableWalk.make(spec, commands=timeline)
     _drive(online, LEAD_S + 4.0, spec)
     k = online._row(LEAD_S + 4.0) - 1
     assert np.allclose(online.rows.get("goals", k), rows.get("goals", k), atol=1e-12)
@@ -219,7 +219,7 @@ def test_the_rolling_rows_have_no_seams_and_the_dry_run_is_the_walk(spec):
 
 @pytest.mark.slow
 def test_a_command_takes_effect_from_the_next_step_and_stop_ends_in_done(spec):
-    walk = WalkController.steerable(spec)
+    walk = SteerableWalk.make(spec)
     _drive(walk, LEAD_S + 2.0, spec)
     assert not [p for _, p in walk.planner.phases if p.kind == "step"]        # zero command: it stands
     issued = walk._row(LEAD_S + 2.0)
@@ -241,7 +241,7 @@ BRANCH_LEAD_S = 0.32        # the stop tests' shared walk ends this long before 
 def walking(spec) -> SteerableWalk:
     """A walk commanded forward at LEAD_S + 1 s, driven to :data:`BRANCH_LEAD_S` before LEAD_S + 4 s, at a tick
     with no planning in progress (so that a copy of it walks on exactly as it would have)."""
-    walk = WalkController.steerable(spec)
+    walk = SteerableWalk.make(spec)
     _drive(walk, LEAD_S + 1.0, spec)
     _drive_more(walk, LEAD_S + 1.0, 3.0 - BRANCH_LEAD_S, spec, lambda w: w.command(0.25, 0.0, 0.0))
     assert walk.planner.task is None
@@ -263,7 +263,7 @@ def test_a_stop_at_any_tick_ends_within_two_steps(spec, walking, late):
 
 def test_a_copied_walk_walks_on_as_the_original(spec, walking):
     """The stop tests branch from one walk: a copy steps exactly as a walk driven from the start."""
-    walk = WalkController.steerable(spec)
+    walk = SteerableWalk.make(spec)
     _drive(walk, LEAD_S + 1.0, spec)
     _drive_more(walk, LEAD_S + 1.0, 3.0, spec, lambda w: w.command(0.25, 0.0, 0.0))
     copied = copy.deepcopy(walking)

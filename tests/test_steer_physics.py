@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from op2motion.gait import WalkController, timeline_of
+from op2motion.gait import SteerableWalk, timeline_of
 from op2motion.gait.robust import MAX_COMMANDED_HEADING_DEG
 from op2motion.physics import check
 from op2motion.robot.specfile import default_spec
@@ -31,12 +31,12 @@ def spec():
 @pytest.fixture(scope="module")
 def plan(spec):
     """The sequence's plan, made once (a dry run)."""
-    return WalkController.steerable(spec, commands=timeline_of(SEQUENCE)).plan
+    return SteerableWalk.make(spec, commands=timeline_of(SEQUENCE)).plan
 
 
 @pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
 def test_a_command_sequence_walks_without_a_fall_and_ends_done(spec, plan, engine):
-    walk = WalkController.steerable(spec, commands=timeline_of(SEQUENCE))
+    walk = SteerableWalk.make(spec, commands=timeline_of(SEQUENCE))
     walk._plan = plan
     run = check(walk, spec, (engine,)).run
     assert not run.fell, run.reasons
@@ -52,7 +52,7 @@ def test_a_command_sequence_walks_without_a_fall_and_ends_done(spec, plan, engin
 @pytest.fixture(scope="module")
 def kick_walk(spec):
     """The kick sequence's walk, planned once."""
-    walk = WalkController.steerable(spec, commands=timeline_of(KICK))
+    walk = SteerableWalk.make(spec, commands=timeline_of(KICK))
     walk.plan
     return walk
 
@@ -63,7 +63,7 @@ def test_a_kick_inside_a_walk_keeps_the_robot_up_and_it_walks_on(spec, kick_walk
     kinds = [p.kind for _, p in kick_walk.dry.planner.phases]
     kick = kinds.index("kick")
     assert "step" in kinds[kick:]                      # walks on after the kick
-    walk = WalkController.steerable(spec, commands=timeline_of(KICK))
+    walk = SteerableWalk.make(spec, commands=timeline_of(KICK))
     walk._plan = plan
     run = check(walk, spec, (engine,)).run
     assert not run.fell, run.reasons

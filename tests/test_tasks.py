@@ -35,10 +35,11 @@ def test_a_result_has_a_problem_exactly_when_it_is_a_no():
 @pytest.mark.slow
 def test_a_page_played_is_a_result_and_writes_nothing_itself(spec, tmp_path):
     from op2motion.formats.action import ActionFile
-    from op2motion.tasks.motion import MotionCheck, play_page
+    from op2motion.tasks.motion import MotionCheck, play_page_task
 
     plot, csv = tmp_path / "p.png", tmp_path / "p.csv"
-    result = play_page(ActionFile.read(DATA / "motion_4096.bin"), 9, spec, MotionCheck(plot=str(plot), csv=str(csv)))
+    check = MotionCheck(plot=str(plot), csv=str(csv))
+    result = play_page_task(ActionFile.read(DATA / "motion_4096.bin"), 9, spec, check)
     assert result.ok and result.problem is None and result.checked
     assert set(result.outputs) == {"plot", "csv"} and not plot.exists() and not csv.exists()
     assert result.outputs["plot"].content[:8] == b"\x89PNG\r\n\x1a\n"

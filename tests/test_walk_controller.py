@@ -196,12 +196,12 @@ def test_a_steady_unplanned_turn_is_steered_back_and_its_sideways_error_counted(
 def test_the_learner_feeds_a_swing_legs_miss_forward_to_the_next_step_of_that_side(longer):
     """What the swing leg missed in one left step, shifted by the servo lag, is added to the goals of the next left
     step (smoothed, bounded); the stance leg learns nothing; a reset forgets."""
-    from op2motion.gait.learning import MAX_LEARNED_RAD, StepLearner
+    from op2motion.gait.learning import MAX_LEARNED_RAD, PlannedLearner
 
     ctl = longer
     legs = {side: np.array(leg.index) for side, leg in ctl.legs.items()}
     shift, gain, miss_rad = 2, 0.5, 0.02
-    learner = StepLearner.of(ctl.gait, legs, gain, shift)
+    learner = PlannedLearner.of(ctl.gait, legs, gain, shift)
     first, side = int(learner.first_row[1]), learner.side_of_step[1]
     other = "right" if side == "left" else "left"
     miss = np.full(learner.size, miss_rad)
@@ -232,10 +232,10 @@ WALK_BIAS_RAD = 0.02        # each raw sample's tilt, averaged, is off by more t
 def test_the_standing_calibration_measures_the_servos_stiffness(controller, stiffness):
     """Joints that sag by the feed-forward over the stiffness give that stiffness back; a softer servo gets the
     feed-forward it lacks (ramped in before the first step), a stiffer one nothing taken away."""
-    from op2motion.gait.calibration import StiffnessCalibration
+    from op2motion.gait.calibration import PlannedCalibration
 
     gait = controller.gait
-    cal = StiffnessCalibration.of(gait, controller.leg_index)
+    cal = PlannedCalibration.of(gait, controller.leg_index)
     assert cal.start_row < cal.end_row < cal.first_step
     size = gait.joints.shape[1]
     for k in range(cal.first_step):
@@ -284,7 +284,7 @@ def test_leg_odometry_measures_a_landing_miss_and_moves_the_next_swing_across_th
     """Joints exactly as planned measure no miss; a foot that landed 10 mm to the left measures 10 mm; the next
     swing foot moves against the part across the direction of travel only (a forward walk: y), at most 20 mm; the
     closing step's miss is kept to hold that foot where it landed."""
-    from op2motion.gait.odometry import MAX_PLACEMENT_M, FootOdometry, across, landing_rows
+    from op2motion.gait.odometry import MAX_PLACEMENT_M, PlannedOdometry, across, landing_rows
     from op2motion.kinematics.leg_ik import leg_ik
 
     gait = controller.gait
@@ -292,7 +292,7 @@ def test_leg_odometry_measures_a_landing_miss_and_moves_the_next_swing_across_th
     assert len(rows) == len(gait.footsteps.steps)
     for k, (stance, landed) in rows.items():
         assert gait.timeline.contact[k] == "double" and stance != landed
-    odo = FootOdometry.of(gait, controller.legs, 4)
+    odo = PlannedOdometry.of(gait, controller.legs, 4)
     k, (stance, landed) = next(iter(rows.items()))
     odo.observe(k, gait.joints[k])
     assert np.allclose(odo.error, 0.0, atol=ODOMETRY_TOL_M)

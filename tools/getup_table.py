@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from op2motion.gait import WalkController, timeline_of
+from op2motion.gait import SteerableWalk, timeline_of
 from op2motion.motion import GetUp, Supervisor
 from op2motion.physics import ENGINES, Pushes, Setup, check, family
 from op2motion.robot.specfile import default_spec
@@ -92,7 +92,7 @@ def falls_table() -> None:
     print("|---|---|---|---|---|")
     for direction in ("forward", "backward", "left", "right"):
         for engine in ENGINES:
-            walk = WalkController.steerable(spec, commands=timeline_of(WALK))
+            walk = SteerableWalk.make(spec, commands=timeline_of(WALK))
             supervisor = Supervisor(walk, spec=spec, extra_s=0.0)
             report = check(supervisor, spec, (engine,), Pushes(PUSH_N, (direction,), at_s=PUSH_AT_S),
                            setup=Setup(keep_track=True, full_length=True)).engines[engine]

@@ -14,7 +14,7 @@ import numpy as np
 
 from op2motion.formats.action import ActionFile
 from op2motion.formats.motionfile import read_motion
-from op2motion.gait import WalkController, timeline_of
+from op2motion.gait import SteerableWalk, timeline_of
 from op2motion.motion.pipeline import plan_motion, play_page
 from op2motion.motion.ways import motion_path
 from op2motion.physics import ENGINES, Setup, check
@@ -61,7 +61,7 @@ def main() -> None:
             standing = check(trajectory.schedule(spec), spec, ENGINES, setup=Setup(keep_track=True))
             timeline = timeline_of([(0.0, 0.0, 0.0, 0.0), (1.5, 0.12, 0.0, 0.0), (3.0, f"kick_{side}"),
                                     (22.0, "stop")])
-            walk = WalkController.steerable(spec, commands=timeline, action=action)
+            walk = SteerableWalk.make(spec, commands=timeline, action=action)
             window = kick_window(walk) if walk.plan is not None else (0.0, np.inf)
             walking = check(walk, spec, ENGINES, setup=Setup(keep_track=True))
             cells = [cell(standing.engines[e], side) for e in ENGINES] + [cell(walking.engines[e], side, window)

@@ -70,13 +70,13 @@ def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion motion play``."""
     from op2motion.formats.action import ActionFile
     from op2motion.formats.posefile import read_pose
-    from op2motion.tasks.motion import play_page
+    from op2motion.tasks.motion import play_page_task
 
     action = ActionFile.read(args.file)
     start = read_pose(args.start, spec) if args.start else None
     outputs = motion_outputs(args)
     with physics_progress(args) as on_progress:
-        return deliver(args, play_page(action, args.page, spec, motion_check(args), start, on_progress), outputs)
+        return deliver(args, play_page_task(action, args.page, spec, motion_check(args), start, on_progress), outputs)
 
 
 def _broadcast(values: Sequence[T] | None, n: int, default: T | None, flag: str) -> list[T]:
@@ -122,12 +122,12 @@ def _motion_from_args(args: argparse.Namespace, spec: Spec) -> Any:
 
 def cmd_plan(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion motion plan``."""
-    from op2motion.tasks.motion import plan_motion
+    from op2motion.tasks.motion import plan_motion_task
 
     motion = _motion_from_args(args, spec)
     outputs = motion_outputs(args)
     with physics_progress(args) as on_progress:
-        result = plan_motion(motion, spec, motion_check(args), args.planner, args.seed, on_progress)
+        result = plan_motion_task(motion, spec, motion_check(args), args.planner, args.seed, on_progress)
     return deliver(args, result, outputs)
 
 

@@ -60,7 +60,7 @@ def cmd_line(args: argparse.Namespace, spec: Spec) -> int:
 
     from op2motion.formats.posefile import read_pose
     from op2motion.motion.cartesian import LineRequest
-    from op2motion.tasks.motion import line_move
+    from op2motion.tasks.motion import line_move_task
 
     pose = read_pose(args.pose, spec)
     request = LineRequest(args.hand, args.duration, tuple(args.to) if args.to else None,
@@ -68,5 +68,5 @@ def cmd_line(args: argparse.Namespace, spec: Spec) -> int:
     name = args.name or (Path(args.out).stem if args.out else "line")
     outputs = motion_outputs(args)
     with physics_progress(args) as on_progress:
-        result = line_move(pose, request, spec, motion_check(args), name, on_progress)
+        result = line_move_task(pose, request, spec, motion_check(args), name, on_progress)
     return deliver(args, result, outputs)

@@ -80,7 +80,7 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.fileio import OutputSet
     from op2motion.gait import preset_path, read_preset
     from op2motion.physics import Trials
-    from op2motion.tasks.walk import WalkRequest, walk
+    from op2motion.tasks.walk import WalkRequest, walk_task
 
     if not args.validate and (args.push or args.trials or args.robust or args.open_loop):
         raise InputError("expected --validate with --push, --trials, --robust or --open-loop", "validate")
@@ -107,4 +107,4 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
                         args.seed or 0)
     request = WalkRequest(params, target, args.retime, args.validate, args.open_loop, args.robust,
                           engines_of(args), args.push, trials, args.plot, tables)
-    return deliver(args, walk(request, spec, lambda what, unit: progress(args, what, unit)), outputs)
+    return deliver(args, walk_task(request, spec, lambda what, unit: progress(args, what, unit)), outputs)

@@ -29,7 +29,7 @@ def commanded_walk(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.fileio import OutputSet
     from op2motion.formats.action import ActionFile
     from op2motion.gait.commands import read_commands
-    from op2motion.tasks.steered import SteeredRequest, steered_walk
+    from op2motion.tasks.steered import SteeredRequest, steered_walk_task
 
     _refuse_others(args)
     outputs = OutputSet({"plot": args.plot} if args.plot else {})
@@ -37,4 +37,4 @@ def commanded_walk(args: argparse.Namespace, spec: Spec) -> int:
     action = ActionFile.read(args.action) if args.action else None
     request = SteeredRequest(timeline, action, args.preset, args.validate, args.robust, engines_of(args), args.push,
                              args.plot)
-    return deliver(args, steered_walk(request, spec, lambda what, unit: progress(args, what, unit)), outputs)
+    return deliver(args, steered_walk_task(request, spec, lambda what, unit: progress(args, what, unit)), outputs)

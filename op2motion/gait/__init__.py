@@ -3,7 +3,7 @@
 :func:`generate_gait` turns :class:`GaitParams` (or a preset, :func:`read_preset`) into a :class:`Gait`: joint goals
 every 8 ms with the planned CoM, ZMP and feet; :func:`gait_schedule` makes it the controller that
 :func:`op2motion.physics.check` plays in PyBullet and/or MuJoCo, and :func:`walk_summary` reports the walk.
-:class:`WalkController` plays a plan with feedback; ``WalkController.steerable()`` is the walk you steer while it
+:class:`WalkController` plays a plan with feedback; ``SteerableWalk.make()`` is the walk you steer while it
 walks (:mod:`.steer`), fed by :meth:`~.steer.SteerableWalk.command` or a :class:`CommandTimeline`.
 """
 

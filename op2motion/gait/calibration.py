@@ -20,7 +20,7 @@ of its stiffness, 1.28 at 1.6, 0.60 and 1.39 in the corners where the torso is h
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -35,39 +35,30 @@ MIN_FEED_FORWARD_RAD2 = 1e-8  # below this summed squared feed-forward there is 
 
 @dataclass
 class StiffnessCalibration:
-    """The servos' stiffness relative to the model, from the standing rows of a planned gait.
+    """The servos' stiffness relative to the model, from the standing rows before the first step; the feed-forward
+    of a row is the kind of walk's (:meth:`_ff`: :class:`PlannedCalibration` from a whole plan,
+    :class:`~.steer_feedback.RollingCalibration` from the rows as they are planned).
 
     Attributes:
-        feed_forward: per gait row (K, n), the plan's servo feed-forward of the calibrated joints [rad].
         index: the calibrated joints (n,) (indices into the servos).
-        start_row, end_row: the gait rows sampled (before the first step).
-        first_step: the gait row the first step starts.
+        start_row, end_row: the walk rows sampled (before the first step).
+        first_step: the walk row the first step starts.
         sums: the least-squares sums (feed-forward · sag, feed-forward²) [rad²].
     """
 
-    feed_forward: np.ndarray
     index: np.ndarray
     start_row: int
     end_row: int
     first_step: int
-    sums: np.ndarray
-
-    @classmethod
-    def of(cls, gait: Gait, index: np.ndarray) -> "StiffnessCalibration":
-        """The calibration of ``gait`` over the servos ``index`` (the legs)."""
-        first = int(np.argmax(gait.timeline.step >= 0)) if np.any(gait.timeline.step >= 0) else len(gait.joints)
-        end = first - int(round(RAMP_S / CONTROL_PERIOD_S))
-        start = int(round(SETTLE_S / CONTROL_PERIOD_S))
-        ff = (gait.goals - gait.joints)[:, index]
-        return cls(ff, np.asarray(index, dtype=int), start, max(start, end), first, np.zeros(2))
+    sums: np.ndarray = field(default_factory=lambda: np.zeros(2))
 
     def reset(self) -> None:
         """Forget the samples."""
         self.sums = np.zeros(2)
 
     def _ff(self, k: int) -> np.ndarray | None:
-        """The feed-forward (n,) [rad] of the calibrated joints at gait row ``k`` (None beyond the plan)."""
-        return self.feed_forward[k] if 0 <= k < len(self.feed_forward) else None
+        """The feed-forward (n,) [rad] of the calibrated joints at walk row ``k`` (None where there is none)."""
+        raise NotImplementedError
 
     def observe(self, k: int, goals: np.ndarray, measured: np.ndarray) -> None:
         """Gait row ``k``'s goals sent and joint angles measured (20,) [rad]: a sample while standing."""
@@ -100,3 +91,23 @@ class StiffnessCalibration:
         if ff is not None:
             out[self.index] = weight * lack * ff
         return out
+
+
+@dataclass(kw_only=True)
+class PlannedCalibration(StiffnessCalibration):
+    """The :class:`StiffnessCalibration` of a planned gait; ``feed_forward``: per gait row (K, n), the plan's servo
+    feed-forward of the calibrated joints [rad]."""
+
+    feed_forward: np.ndarray
+
+    @classmethod
+    def of(cls, gait: Gait, index: np.ndarray) -> "PlannedCalibration":
+        """The calibration of ``gait`` over the servos ``index`` (the legs)."""
+        first = int(np.argmax(gait.timeline.step >= 0)) if np.any(gait.timeline.step >= 0) else len(gait.joints)
+        end = first - int(round(RAMP_S / CONTROL_PERIOD_S))
+        start = int(round(SETTLE_S / CONTROL_PERIOD_S))
+        return cls(np.asarray(index, dtype=int), start, max(start, end), first,
+                   feed_forward=(gait.goals - gait.joints)[:, index])
+
+    def _ff(self, k: int) -> np.ndarray | None:
+        return self.feed_forward[k] if 0 <= k < len(self.feed_forward) else None

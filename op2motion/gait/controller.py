@@ -33,16 +33,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Mapping, Sequence
+from typing import TYPE_CHECKING, Mapping, Sequence
 
 import numpy as np
 
-from op2motion.gait.calibration import StiffnessCalibration
+from op2motion.gait.calibration import PlannedCalibration, StiffnessCalibration
 from op2motion.gait.feedback import GYRO_GAINS_S, OPEN_LOOP, STOCK_GYRO_GAINS_S, Feedback
 from op2motion.gait.generator import Gait
-from op2motion.gait.learning import StepLearner
+from op2motion.gait.learning import PlannedLearner, StepLearner
 from op2motion.gait.leg_targets import LegTargets
-from op2motion.gait.odometry import FootOdometry, left_of
+from op2motion.gait.odometry import FootOdometry, PlannedOdometry, left_of
 from op2motion.gait.phases import Intent
 from op2motion.gait.presets import load_preset
 from op2motion.gait.rows import RowBuffer, rows_of_gait, swing_phase
@@ -120,7 +120,7 @@ class WalkController(LegTargets, ControllerHooks):
     ``done`` says when the walk is over: its plan has run out (the last row held) and the body has kept still for
     :data:`op2motion.motion.stillness.STILL_S` (then the servos may hold the last goals); until then the stabiliser
     keeps balancing. :meth:`stop` ends it early, on both feet side by side (:mod:`.planned_stop`).
-    :meth:`steerable` makes the walk you steer while it walks (:mod:`.steer`)."""
+    The walk you steer while it walks is :class:`.steer.SteerableWalk`."""
 
     stops_itself = True
 
@@ -131,10 +131,10 @@ class WalkController(LegTargets, ControllerHooks):
         self.lead = len(self.plan.goals) - len(gait.goals)
         self._setup_legs(spec, feedback)
         self.rows: RowBuffer = rows_of_gait(gait, self.legs)
-        self.learner = StepLearner.of(gait, {side: np.array(leg.index) for side, leg in self.legs.items()},
-                                      feedback.learn_gain, feedback.learn_shift_rows)
-        self.calibration = StiffnessCalibration.of(gait, self.leg_index)
-        self.odometry = FootOdometry.of(gait, self.legs, self.delay_rows + LANDING_ROWS)
+        self.learner: StepLearner = PlannedLearner.of(gait, dict(self._leg_servos), feedback.learn_gain,
+                                                      feedback.learn_shift_rows)
+        self.calibration: StiffnessCalibration = PlannedCalibration.of(gait, self.leg_index)
+        self.odometry: FootOdometry = PlannedOdometry.of(gait, self.legs, self.delay_rows + LANDING_ROWS)
 
     def _setup_legs(self, spec: Spec, feedback: Feedback) -> None:
         """What both kinds of walk share: the legs, the latency in rows, the state."""
@@ -167,20 +167,6 @@ class WalkController(LegTargets, ControllerHooks):
         from op2motion.gait.speeds import gait_within_speed
 
         return cls(gait_within_speed(load_preset(preset).with_steps(steps), spec), spec, feedback)
-
-    #: Makes the steerable walk (set by :mod:`.steer` when the package loads: the steered walk is a walk controller,
-    #: so this module cannot import it).
-    _steerable: Any = None
-
-    @classmethod
-    def steerable(cls, spec: Spec | None = None, preset: str | None = None, feedback: Feedback = Feedback(),
-                  commands: Any = None, action: Any = None) -> Any:
-        """A walk steered while it walks (:class:`.steer.SteerableWalk`): :meth:`~.steer.SteerableWalk.command`
-        (vx [m/s], vy [m/s], yaw rate [rad/s]) at any tick, :meth:`~.steer.SteerableWalk.stop`; it stands while the
-        command is zero. ``preset`` (default ``steer``) gives the step's timing and shape; ``commands`` (a
-        :class:`.commands.CommandTimeline`) feeds it by itself and gives :attr:`plan` for a physics check; kicks are
-        the stock pages of ``action`` (an :class:`~op2motion.formats.action.ActionFile`) when it has them."""
-        return WalkController._steerable(spec, preset, feedback, commands, action)
 
     @property
     def done(self) -> bool:

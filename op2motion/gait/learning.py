@@ -29,14 +29,11 @@ SMOOTH_ROWS = 3                    # the moving average across rows that keeps t
 
 @dataclass
 class StepLearner:
-    """Per swing side, the learned correction of each row of a step (see the module docstring).
+    """Per swing side, the learned correction of each row of a step (see the module docstring); where a row lies in
+    a step, and whether that step learns, is the kind of walk's (:meth:`_where`: :class:`PlannedLearner` from a
+    whole plan, :class:`~.steer_feedback.RollingLearner` from the rows as they are planned).
 
     Attributes:
-        step_of_row: per gait row (K,), the step it belongs to (-1 before the first, n after the last).
-        first_row: per step (n,), its first gait row.
-        alike: per step (n,), whether it swings its foot as the step of the same side before it did (the first and
-            the closing steps do not): only those learn and use what was learnt.
-        side_of_step: per step (n,), the swinging side.
         rows: rows in one step (single support and the double support after it).
         joints: per side, the indices (into the servos) of that leg's joints.
         size: the number of servos.
@@ -45,10 +42,6 @@ class StepLearner:
         forget: share of the correction kept from one step of a side to the next.
     """
 
-    step_of_row: np.ndarray
-    first_row: np.ndarray
-    alike: np.ndarray
-    side_of_step: tuple[Side, ...]
     rows: int
     joints: dict[str, np.ndarray]
     size: int
@@ -58,19 +51,8 @@ class StepLearner:
     memory: dict[str, np.ndarray] = field(default_factory=dict)
     _pending: dict[str, np.ndarray] = field(default_factory=dict)
 
-    @classmethod
-    def of(cls, gait: Gait, joints: dict[str, np.ndarray], gain: float, shift: int) -> "StepLearner":
-        """The learner of a planned gait; ``joints`` per side the indices of that leg's servos."""
-        step = gait.timeline.step
-        n = len(gait.footsteps.steps)
-        first = np.array([int(np.argmax(step == s)) for s in range(n)], dtype=int)
-        ends = np.append(first, int(np.argmax(step == n))) if n else np.zeros(1, dtype=int)
-        rows = max(int(np.min(np.diff(ends))), 1) if n else 1
-        learner = cls(step, first, _alike(gait), tuple(s.side for s in gait.footsteps.steps), rows,
-                      {side: np.asarray(index, dtype=int) for side, index in joints.items()}, gait.joints.shape[1],
-                      gain, shift)
-        learner.reset()
-        return learner
+    def __post_init__(self) -> None:
+        self.reset()
 
     def reset(self) -> None:
         """Forget everything learned."""
@@ -78,14 +60,8 @@ class StepLearner:
         self._pending = {side: np.zeros((self.rows, self.size)) for side in self.joints}
 
     def _where(self, k: int) -> tuple[Side, int] | None:
-        """(swing side, row in the step) of gait row ``k``, or None outside the steps."""
-        if not 0 <= k < len(self.step_of_row):
-            return None
-        s = int(self.step_of_row[k])
-        if not 0 <= s < len(self.first_row):
-            return None
-        r = k - int(self.first_row[s])
-        return (self.side_of_step[s], r) if r < self.rows and self.alike[s] else None
+        """(swing side, row in the step) of walk row ``k`` when that step learns, else None."""
+        raise NotImplementedError
 
     def correction(self, k: int) -> np.ndarray:
         """The learned change (size,) [rad] of the goals of gait row ``k`` (zero outside the steps). Call it once
@@ -116,6 +92,45 @@ class StepLearner:
         smooth = np.stack([np.convolve(padded[:, j], kernel, mode="valid") for j in range(self.size)], axis=1)
         self.memory[side] = np.clip(self.forget * self.memory[side] + smooth, -MAX_LEARNED_RAD, MAX_LEARNED_RAD)
         pending[:] = 0.0
+
+
+@dataclass(kw_only=True)
+class PlannedLearner(StepLearner):
+    """The :class:`StepLearner` of a planned gait, which knows every step before the first.
+
+    Attributes:
+        step_of_row: per gait row (K,), the step it belongs to (-1 before the first, n after the last).
+        first_row: per step (n,), its first gait row.
+        alike: per step (n,), whether it swings its foot as the step of the same side before or after it (the
+            first and the closing steps do not): only those learn and use what was learnt.
+        side_of_step: per step (n,), the swinging side.
+    """
+
+    step_of_row: np.ndarray
+    first_row: np.ndarray
+    alike: np.ndarray
+    side_of_step: tuple[Side, ...]
+
+    @classmethod
+    def of(cls, gait: Gait, joints: dict[str, np.ndarray], gain: float, shift: int) -> "PlannedLearner":
+        """The learner of a planned gait; ``joints`` per side the indices of that leg's servos."""
+        step = gait.timeline.step
+        n = len(gait.footsteps.steps)
+        first = np.array([int(np.argmax(step == s)) for s in range(n)], dtype=int)
+        ends = np.append(first, int(np.argmax(step == n))) if n else np.zeros(1, dtype=int)
+        rows = max(int(np.min(np.diff(ends))), 1) if n else 1
+        return cls(rows, {side: np.asarray(index, dtype=int) for side, index in joints.items()},
+                   gait.joints.shape[1], gain, shift, step_of_row=step, first_row=first, alike=_alike(gait),
+                   side_of_step=tuple(s.side for s in gait.footsteps.steps))
+
+    def _where(self, k: int) -> tuple[Side, int] | None:
+        if not 0 <= k < len(self.step_of_row):
+            return None
+        s = int(self.step_of_row[k])
+        if not 0 <= s < len(self.first_row):
+            return None
+        r = k - int(self.first_row[s])
+        return (self.side_of_step[s], r) if r < self.rows and self.alike[s] else None
 
 
 def _shape(gait: Gait, k: int) -> np.ndarray:

@@ -65,38 +65,27 @@ def across(error: np.ndarray, velocity: np.ndarray) -> np.ndarray:
 
 @dataclass
 class FootOdometry:
-    """The feet's placement error from the measured joints (see the module docstring).
+    """The feet's placement error from the measured joints (see the module docstring); where the landings are is the
+    kind of walk's (:meth:`observe`: :class:`PlannedOdometry` from a whole plan,
+    :class:`~.steer_feedback.RollingOdometry` from the rows as they are planned).
 
     Attributes:
-        gait: the planned walk.
         legs: per side, the leg's geometry.
-        rows: per measuring row, (the foot stepped from, the foot that landed).
         error: the feet's running placement error (2,) [m], plan frame.
         last: after the closing step is measured, (the landed side, its position miss (2,) [m], yaw miss [rad]).
     """
 
-    gait: Gait
     legs: dict[str, Leg]
-    rows: dict[int, tuple[Side, Side]]
     error: np.ndarray = field(default_factory=lambda: np.zeros(2))
     last: tuple[str, np.ndarray, float] | None = None
-
-    @classmethod
-    def of(cls, gait: Gait, legs: dict[str, Leg], after: int) -> "FootOdometry":
-        """The odometry of ``gait``, each landing measured ``after`` rows into its double support."""
-        return cls(gait, legs, landing_rows(gait.timeline.contact, after))
 
     def reset(self) -> None:
         """Forget the measurements."""
         self.error, self.last = np.zeros(2), None
 
     def observe(self, k: int, measured: np.ndarray) -> None:
-        """At a measuring row ``k``, the joint angles (20,) [rad]: add the landing's miss to the running error."""
-        if k not in self.rows:
-            return
-        stance, landed = self.rows[k]
-        feet = self.gait.timeline.feet
-        self._landing(measured, stance, landed, feet[stance][k], feet[landed][k], k == max(self.rows))
+        """Walk row ``k``'s joint angles (20,) [rad]: measure a landing that is due there."""
+        raise NotImplementedError
 
     def _landing(self, measured: np.ndarray, stance: Side, landed: str, stance_plan: np.ndarray,
                  landed_plan: np.ndarray, closing: bool) -> None:
@@ -121,3 +110,25 @@ class FootOdometry:
         if norm > MAX_PLACEMENT_M:
             move = move * (MAX_PLACEMENT_M / norm)
         return np.array([move[0], move[1], 0.0])
+
+
+@dataclass(kw_only=True)
+class PlannedOdometry(FootOdometry):
+    """The :class:`FootOdometry` of a planned gait: ``rows``, per measuring row, (the foot stepped from, the foot
+    that landed)."""
+
+    gait: Gait
+    rows: dict[int, tuple[Side, Side]]
+
+    @classmethod
+    def of(cls, gait: Gait, legs: dict[str, Leg], after: int) -> "PlannedOdometry":
+        """The odometry of ``gait``, each landing measured ``after`` rows into its double support."""
+        return cls(dict(legs), gait=gait, rows=landing_rows(gait.timeline.contact, after))
+
+    def observe(self, k: int, measured: np.ndarray) -> None:
+        """At a measuring row ``k``, the joint angles (20,) [rad]: add the landing's miss to the running error."""
+        if k not in self.rows:
+            return
+        stance, landed = self.rows[k]
+        feet = self.gait.timeline.feet
+        self._landing(measured, stance, landed, feet[stance][k], feet[landed][k], k == max(self.rows))

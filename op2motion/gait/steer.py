@@ -1,4 +1,4 @@
-"""A walk you steer while it walks: :class:`SteerableWalk` (``WalkController.steerable()``).
+"""A walk you steer while it walks: :class:`SteerableWalk` (``SteerableWalk.make()``).
 
 It is the walk controller (:mod:`.controller`: gyro damping, attitude, heading and line, leg odometry, sag trims, the
 servos' stiffness measured while standing, the swing leg's learnt feed-forward) on rows that the rolling planner
@@ -288,6 +288,5 @@ def planned_summary(walk: SteerableWalk) -> dict[str, Any]:
             "zmp_margin_min_during": during}
 
 
-WalkController._steerable = SteerableWalk.make
 
 __all__ = ["LEAD_S", "STEER_PRESET", "SteerableWalk", "dry_run", "dry_run_plan", "planned_summary"]

@@ -13,6 +13,7 @@ fed from the rows as the rolling planner writes them (:mod:`.rolling`), not from
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
@@ -26,23 +27,20 @@ from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.support import Side
 
 
+@dataclass(kw_only=True)
 class RollingLearner(StepLearner):
     """A :class:`~.learning.StepLearner` over rolling rows (see the module docstring)."""
 
     source: RowBuffer
-    alike_of: dict[int, bool]
-    last_shape: dict[str, np.ndarray]
+    alike_of: dict[int, bool] = field(default_factory=dict)
+    last_shape: dict[str, np.ndarray] = field(default_factory=dict)
 
     @classmethod
     def rolling(cls, source: RowBuffer, rows_per_step: int, joints: Mapping[str, np.ndarray], size: int,
                 gain: float, shift: int) -> "RollingLearner":
         """The learner of a rolling walk whose steps are ``rows_per_step`` rows long."""
-        empty = np.zeros(0, dtype=int)
-        learner = cls(empty, empty, np.zeros(0, dtype=bool), (), rows_per_step,
-                      {side: np.asarray(index, dtype=int) for side, index in joints.items()}, size, gain, shift)
-        learner.source = source
-        learner.reset()
-        return learner
+        return cls(rows_per_step, {side: np.asarray(index, dtype=int) for side, index in joints.items()}, size, gain,
+                   shift, source=source)
 
     def reset(self) -> None:
         """Forget everything learned, and the steps' shapes."""
@@ -69,19 +67,18 @@ class RollingLearner(StepLearner):
         return (side, r) if r < self.rows and self.alike_of[step] else None
 
 
+@dataclass(kw_only=True)
 class RollingOdometry(FootOdometry):
     """A :class:`~.odometry.FootOdometry` over rolling rows (see the module docstring)."""
 
     source: RowBuffer
     after: int
-    due: dict[int, tuple[Side, Side, bool]]
+    due: dict[int, tuple[Side, Side, bool]] = field(default_factory=dict)
 
     @classmethod
     def rolling(cls, source: RowBuffer, legs: Mapping[str, Leg], after: int) -> "RollingOdometry":
         """The odometry of a rolling walk, each landing measured ``after`` rows into its double support."""
-        odometry = cls(None, dict(legs), {})      # type: ignore[arg-type]
-        odometry.source, odometry.after, odometry.due = source, after, {}
-        return odometry
+        return cls(dict(legs), source=source, after=after)
 
     def reset(self) -> None:
         """Forget the measurements."""
@@ -103,6 +100,7 @@ class RollingOdometry(FootOdometry):
             self._landing(measured, stance, landed, self.source.feet(stance, k), self.source.feet(landed, k), closing)
 
 
+@dataclass(kw_only=True)
 class RollingCalibration(StiffnessCalibration):
     """A :class:`~.calibration.StiffnessCalibration` over rolling rows (see the module docstring)."""
 
@@ -113,10 +111,7 @@ class RollingCalibration(StiffnessCalibration):
         """The calibration over the standing rows before ``first_step_row`` (the first step's earliest row)."""
         start = int(round(SETTLE_S / CONTROL_PERIOD_S))
         end = max(start, first_step_row - int(round(RAMP_S / CONTROL_PERIOD_S)))
-        calibration = cls(np.zeros((0, len(index))), np.asarray(index, dtype=int), start, end, first_step_row,
-                          np.zeros(2))
-        calibration.source = source
-        return calibration
+        return cls(np.asarray(index, dtype=int), start, end, first_step_row, source=source)
 
     def _ff(self, k: int) -> np.ndarray | None:
         if not self.source.has(k):

@@ -1,11 +1,11 @@
 """User tasks, one function each, every one returning a :class:`~.result.TaskResult` (``ok``, ``problem``,
 ``warnings``, the outputs to write, ``as_dict()``): the command line parses, calls one task, prints and writes.
 
-* :mod:`.motion`: ``play_page``, ``plan_motion``, ``line_move`` (an action page, a motion through poses, a hand in a
-  straight line), each checked along its trajectory and optionally in physics (``check_motion``);
+* :mod:`.motion`: ``play_page_task``, ``plan_motion_task``, ``line_move_task`` (an action page, a motion through
+  poses, a hand in a straight line), each checked along its trajectory and optionally in physics (``check_motion``);
 * :mod:`.posture`: ``reach`` (``optimize``: a balanced pose that reaches a hand target);
-* :mod:`.walk`: ``walk`` (a walk planned from a preset, checked in physics, pushed, on the family);
-* :mod:`.steered`: ``steered_walk`` (a walk steered by a command timeline, checked and drawn);
+* :mod:`.walk`: ``walk_task`` (a walk planned from a preset, checked in physics, pushed, on the family);
+* :mod:`.steered`: ``steered_walk_task`` (a walk steered by a command timeline, checked and drawn);
 * :mod:`.kinematics`: ``fk``, ``convert``, ``plot``, ``arm_ik`` (the kinematic models, the figure, the arm IK);
 * :mod:`.files`: ``export_poses``, ``import_page``, ``list_pages``, ``export_motion``, ``urdf`` (action files,
   Webots, CSV, the URDF);

@@ -144,14 +144,14 @@ def _chain(pages: list[int]) -> str:
     return " -> ".join(f"{p} x{n}" if n > 1 else str(p) for p, n in runs)
 
 
-def play_page(action: ActionFile, page: int, spec: Spec, how: MotionCheck, start: Pose | None = None,
+def play_page_task(action: ActionFile, page: int, spec: Spec, how: MotionCheck, start: Pose | None = None,
               on_progress: Progress | None = None) -> TaskResult:
     """``motion play``: action page ``page`` played tick for tick as the framework does, from ``start`` (default:
     page 1's last step, the stock init pose), checked (:func:`check_motion`)."""
-    from op2motion.motion.pipeline import play_page as played_page
+    from op2motion.motion.pipeline import play_page
     from op2motion.motion.player import IDS
 
-    played = played_page(action, page, spec, start)
+    played = play_page(action, page, spec, start)
     playback, name, duration = played.playback, played.page.name, played.trajectory.duration_s
     data = {"page": page, "name": name, "start": played.start.name, "ticks": playback.calls,
             "duration_s": round(duration, 3), "pages_played": list(playback.pages), "ids": list(IDS),
@@ -162,15 +162,15 @@ def play_page(action: ActionFile, page: int, spec: Spec, how: MotionCheck, start
                         on_progress=on_progress)
 
 
-def plan_motion(motion: Any, spec: Spec, how: MotionCheck, planner: PlannerName = "rrt", seed: int = 0,
+def plan_motion_task(motion: Any, spec: Spec, how: MotionCheck, planner: PlannerName = "rrt", seed: int = 0,
                 on_progress: Progress | None = None) -> TaskResult:
     """``motion plan``: ``motion`` (a :class:`~op2motion.formats.motionfile.Motion`) planned (weight shifts, lifts,
     segments around collisions with ``planner`` seeded by ``seed``), checked (:func:`check_motion`); its notes are
     the result's warnings, the motion file its ``out`` output when ``how.motion_file`` names one."""
     from op2motion.formats.motionfile import motion_to_json
-    from op2motion.motion.pipeline import plan_motion as planned_motion
+    from op2motion.motion.pipeline import plan_motion
 
-    trajectory = planned_motion(motion, spec, planner, seed)
+    trajectory = plan_motion(motion, spec, planner, seed)
     data = {"name": motion.name, "profile": motion.profile, "ticks": len(trajectory.goals) - 1,
             "duration_s": round(trajectory.duration_s, 3), "segments": list(trajectory.segment_names),
             "notes": list(trajectory.notes), "motion_file": how.motion_file}
@@ -181,15 +181,15 @@ def plan_motion(motion: Any, spec: Spec, how: MotionCheck, planner: PlannerName 
     return result.with_warnings(tuple(trajectory.notes))
 
 
-def line_move(pose: Pose, request: LineRequest, spec: Spec, how: MotionCheck, name: str = "line",
+def line_move_task(pose: Pose, request: LineRequest, spec: Spec, how: MotionCheck, name: str = "line",
               on_progress: Progress | None = None) -> TaskResult:
     """``motion line``: the ``request``'s hand in a straight line from ``pose`` with the whole body balancing,
     checked (:func:`check_motion`), the figure its path."""
     from op2motion.figures.paths import render_line
     from op2motion.formats.motionfile import motion_to_json
-    from op2motion.motion.cartesian import line_move as moved_line
+    from op2motion.motion.cartesian import line_move
 
-    move: LineMove = moved_line(pose, request, spec)
+    move: LineMove = line_move(pose, request, spec)
     motion = move.motion(name)
     trajectory = move.trajectory(motion.p_gain)
     summary = move.as_dict(spec)

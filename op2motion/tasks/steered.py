@@ -99,7 +99,7 @@ def _figure(walk: Any, report: Any) -> bytes:
     return render_steered(commanded, times, planned, planned_t, walked, f"walk --commands {walk.commands.source}")
 
 
-def steered_walk(request: SteeredRequest, spec: Spec, progress: ProgressFor | None = None) -> TaskResult:
+def steered_walk_task(request: SteeredRequest, spec: Spec, progress: ProgressFor | None = None) -> TaskResult:
     """``walk --commands``: see the module docstring; ``progress`` gives each stage's progress."""
     from op2motion.gait.steer import SteerableWalk, planned_summary
 

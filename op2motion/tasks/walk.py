@@ -151,7 +151,7 @@ def _refuse_work_early(request: WalkRequest, spec: Spec) -> None:
     check_work(runs, request.params.steps * request.params.step_s)
 
 
-def walk(request: WalkRequest, spec: Spec, progress: ProgressFor | None = None) -> TaskResult:
+def walk_task(request: WalkRequest, spec: Spec, progress: ProgressFor | None = None) -> TaskResult:
     """``walk``: plan ``request``'s walk and check it (see the module docstring); ``progress`` gives each stage's
     progress (the plan's passes, the physics' simulated seconds, the family's runs)."""
     from op2motion.gait import gait_summary
