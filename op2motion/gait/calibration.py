@@ -20,6 +20,7 @@ of its stiffness, 1.28 at 1.6, 0.60 and 1.39 in the corners where the torso is h
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -34,7 +35,7 @@ MIN_FEED_FORWARD_RAD2 = 1e-8  # below this summed squared feed-forward there is 
 
 
 @dataclass
-class StiffnessCalibration:
+class StiffnessCalibration(ABC):
     """The servos' stiffness relative to the model, from the standing rows before the first step; the feed-forward
     of a row is the kind of walk's (:meth:`_ff`: :class:`PlannedCalibration` from a whole plan,
     :class:`~.steer_feedback.RollingCalibration` from the rows as they are planned).
@@ -56,9 +57,9 @@ class StiffnessCalibration:
         """Forget the samples."""
         self.sums = np.zeros(2)
 
+    @abstractmethod
     def _ff(self, k: int) -> np.ndarray | None:
         """The feed-forward (n,) [rad] of the calibrated joints at walk row ``k`` (None where there is none)."""
-        raise NotImplementedError
 
     def observe(self, k: int, goals: np.ndarray, measured: np.ndarray) -> None:
         """Gait row ``k``'s goals sent and joint angles measured (20,) [rad]: a sample while standing."""

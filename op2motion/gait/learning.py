@@ -14,6 +14,7 @@ accumulating.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -28,7 +29,7 @@ SMOOTH_ROWS = 3                    # the moving average across rows that keeps t
 
 
 @dataclass
-class StepLearner:
+class StepLearner(ABC):
     """Per swing side, the learned correction of each row of a step (see the module docstring); where a row lies in
     a step, and whether that step learns, is the kind of walk's (:meth:`_where`: :class:`PlannedLearner` from a
     whole plan, :class:`~.steer_feedback.RollingLearner` from the rows as they are planned).
@@ -59,9 +60,9 @@ class StepLearner:
         self.memory = {side: np.zeros((self.rows, self.size)) for side in self.joints}
         self._pending = {side: np.zeros((self.rows, self.size)) for side in self.joints}
 
+    @abstractmethod
     def _where(self, k: int) -> tuple[Side, int] | None:
         """(swing side, row in the step) of walk row ``k`` when that step learns, else None."""
-        raise NotImplementedError
 
     def correction(self, k: int) -> np.ndarray:
         """The learned change (size,) [rad] of the goals of gait row ``k`` (zero outside the steps). Call it once

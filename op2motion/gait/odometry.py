@@ -19,6 +19,7 @@ the feet's running placement error in the plan's frame (x forward, y left of the
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -64,7 +65,7 @@ def across(error: np.ndarray, velocity: np.ndarray) -> np.ndarray:
 
 
 @dataclass
-class FootOdometry:
+class FootOdometry(ABC):
     """The feet's placement error from the measured joints (see the module docstring); where the landings are is the
     kind of walk's (:meth:`observe`: :class:`PlannedOdometry` from a whole plan,
     :class:`~.steer_feedback.RollingOdometry` from the rows as they are planned).
@@ -83,9 +84,9 @@ class FootOdometry:
         """Forget the measurements."""
         self.error, self.last = np.zeros(2), None
 
+    @abstractmethod
     def observe(self, k: int, measured: np.ndarray) -> None:
         """Walk row ``k``'s joint angles (20,) [rad]: measure a landing that is due there."""
-        raise NotImplementedError
 
     def _landing(self, measured: np.ndarray, stance: Side, landed: str, stance_plan: np.ndarray,
                  landed_plan: np.ndarray, closing: bool) -> None:
