@@ -99,11 +99,15 @@ _WARMING: list[subprocess.Popen] = []
 
 def pytest_sessionstart(session: pytest.Session) -> None:
     compile_package(ROOT)
-    if not os.environ.get("PYTEST_XDIST_WORKER") and not warm_kernels.cached():
-        # a fresh checkout: the kernels compile beside the first tests (which need none), not inside the tests that
-        # need them while the other test processes wait for the compile's lock (tests/warm_kernels.py)
-        _WARMING.append(subprocess.Popen([sys.executable, str(ROOT / "tests" / "warm_kernels.py")],
-                                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        return
+    for copy in (ROOT, warm_kernels.installed_root()):
+        if copy is not None and not warm_kernels.cached(copy):
+            # a fresh checkout (or install): the kernels compile beside the first tests (which need none), not
+            # inside the tests that need them while the other processes wait for the compile's lock
+            # (tests/warm_kernels.py)
+            _WARMING.append(subprocess.Popen([sys.executable, str(ROOT / "tests" / "warm_kernels.py"), str(copy)],
+                                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
 
 
 def pytest_sessionfinish(session: pytest.Session) -> None:

@@ -68,7 +68,7 @@ def _sweep(pool, support: str, kind: str, direction: int) -> tuple[list[float], 
             reports[abs(deg), engine] = report
 
     def next_leans(engine: str) -> set[float]:
-        falls = sorted(d for d, v in verdicts.items() if not v[engine][0])
+        falls = sorted(d for d, v in verdicts.items() if not v[engine].stable)
         if not falls:                                       # not fallen yet in this engine: lean on
             return {max(verdicts) + COARSE_DEG}
         below = max((d for d in verdicts if d < falls[0]), default=falls[0])
@@ -78,7 +78,7 @@ def _sweep(pool, support: str, kind: str, direction: int) -> tuple[list[float], 
         return {max(verdicts) + STEP_DEG * k for k in range(1, FALLS_PAST_SWITCH - past + 1)}
 
     coarse = 0.0
-    while coarse <= MAX_DEG and all(v[0] for d in verdicts.values() for v in d.values()):
+    while coarse <= MAX_DEG and all(v.stable for d in verdicts.values() for v in d.values()):
         run({coarse})
         coarse += COARSE_DEG
     while True:
@@ -98,7 +98,7 @@ def _edges(pool, sweep: tuple[str, str, int], verdicts: dict, reports: dict) -> 
     support, kind, direction = sweep
     early = {}
     for engine in ENGINES:
-        fall = min(d for d, v in verdicts.items() if not v[engine][0])
+        fall = min(d for d, v in verdicts.items() if not v[engine].stable)
         for d in sorted({fall, max((d for d in verdicts if d < fall), default=fall)}):
             early[d, engine] = reports[d, engine]
     again = [key for key, report in early.items() if report.ended != FULL]
@@ -127,31 +127,32 @@ def sweeps():
         return {(s, k, d): _sweep(pool, s, k, d) for s, k, d, _ in SWEEPS}
 
 
-def _switch_margin(angles: list[float], verdicts: list, index: int = 1) -> float:
+def _switch_margin(angles: list[float], verdicts: list, field: str = "margin_m") -> float:
     """The margin halfway between the last standing lean and the next :data:`STEP_DEG` (the margin lost per step
     taken from the last standing lean and the one before it)."""
-    stable = [v[0] for v in verdicts]
+    stable = [v.stable for v in verdicts]
     last = stable.index(False) - 1
     assert last >= 1, "the sweep must start standing"
     assert abs(angles[last + 1] - angles[last]) <= STEP_DEG + 1e-9, "the switch must be bracketed by a fine step"
-    per_step = (verdicts[last - 1][index] - verdicts[last][index]) * STEP_DEG / abs(angles[last] - angles[last - 1])
-    return verdicts[last][index] - 0.5 * per_step
+    margin = [getattr(v, field) for v in verdicts]
+    per_step = (margin[last - 1] - margin[last]) * STEP_DEG / abs(angles[last] - angles[last - 1])
+    return margin[last] - 0.5 * per_step
 
 
 @pytest.mark.parametrize("support, kind, direction, criterion", SWEEPS,
                          ids=[f"{s}-{k}-{d:+d}" for s, k, d, _ in SWEEPS])
 def test_lean_sweep(sweeps, support, kind, direction, criterion):
     angles, by_engine, _ = sweeps[(support, kind, direction)]
-    assert any(not v[0] for v in by_engine["mujoco"]), "the sweep never fell"
+    assert any(not v.stable for v in by_engine["mujoco"]), "the sweep never fell"
     for engine, verdicts in by_engine.items():
-        stable = [v[0] for v in verdicts]
+        stable = [v.stable for v in verdicts]
         first_fall = stable.index(False)
         assert not any(stable[first_fall:]), f"{engine}: stands again after falling at {angles[first_fall]}°"
-        switch = _switch_margin(angles, verdicts, 1 if criterion == "com" else 3)
+        switch = _switch_margin(angles, verdicts, "margin_m" if criterion == "com" else "foot_margin_m")
         assert abs(switch) <= SWITCH_TOL_M, (engine, criterion, switch)
     for deg, mj, pb in zip(angles, by_engine["mujoco"], by_engine["pybullet"]):
-        if min(abs(mj[1]), abs(pb[1])) > AGREE_BEYOND_M:
-            assert mj[0] == pb[0], f"{deg}°: MuJoCo {mj}, PyBullet {pb}"
+        if min(abs(mj.margin_m), abs(pb.margin_m)) > AGREE_BEYOND_M:
+            assert mj.stable == pb.stable, f"{deg}°: MuJoCo {mj}, PyBullet {pb}"
 
 
 @pytest.mark.parametrize("support, kind, direction", [s[:3] for s in SWEEPS],

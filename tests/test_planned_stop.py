@@ -70,8 +70,8 @@ def test_a_stop_closes_the_feet_within_two_steps_without_a_jump(fresh, spec, whe
     angles = np.zeros(len(spec.joints))
     for side in ("left", "right"):
         angles[list(controller.legs[side].index)] = controller.rows.legs(side, end)
-    _, behind, _, turned = apart(angles, spec, step_width(controller.params, spec))
-    assert behind <= CLOSED_M and turned <= CLOSED_RAD
+    stance = apart(angles, spec, step_width(controller.params, spec))
+    assert stance.closed and stance.behind_m <= CLOSED_M and stance.turned_rad <= CLOSED_RAD
     margin = planned_zmp_margins(controller.rows, spec, controller.rows.end)[first:]
     assert margin.min() >= MARGIN_FLOOR_M
     ends = [f for f, p in controller.stopper.phases if p.kind == "end"]

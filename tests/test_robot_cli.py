@@ -351,12 +351,12 @@ def test_a_stop_mid_walk_closes_the_feet_and_leaves_no_closing_step_to_take(spec
         result = walk(port, spec, steps=20, options=Options(stop=stop, on_tick=on_tick))
         truth = emulator.truth()
         angles = emulator.body.joint_angles()
-    front, behind, _, turned = apart(angles, spec, step_width(load_preset("forward"), spec))
+    stance = apart(angles, spec, step_width(load_preset("forward"), spec))
     walked = dict(result.runs)["walk"]
     assert result.ended == "stopped" and result.fault is None and walked.ended == "stopped"
     assert (walked.ticks - asked[0]) * CONTROL_PERIOD_S < SOFT_STOP_MAX_S     # done, not frozen by the loop
     assert math.degrees(truth["tilt_rad"]) < STANDING_TILT_DEG and WALKED_M < truth["x_m"] - start < 0.6
-    assert behind <= CLOSED_M and turned <= CLOSED_RAD, (front, behind, turned)
+    assert stance.behind_m <= CLOSED_M and stance.turned_rad <= CLOSED_RAD, stance
     assert abs(result.travel["x_m"] - (truth["x_m"] - start)) < ODOMETRY_TOL_M, (result.travel, truth)
     assert closing_gait(angles, spec, load_preset("forward")) is None      # the next motion needs no closing step
 
@@ -380,10 +380,10 @@ def test_a_walk_frozen_with_a_foot_ahead_is_closed_by_the_next_motion_unforced(s
         again = stand(port, spec)
         after = emulator.truth()
         apart_after = apart(emulator.body.joint_angles(), spec, step_width(load_preset("forward"), spec))
-    assert dict(frozen.runs)["run"].ended == "stopped" and apart_before[1] > CLOSED_M     # one foot ahead
+    assert dict(frozen.runs)["run"].ended == "stopped" and apart_before.behind_m > CLOSED_M     # one foot ahead
     assert again.ended == "done" and [name for name, _ in again.runs] == ["close the feet", "motion"], again.runs
     assert "checked in physics" in again.checked and math.degrees(after["tilt_rad"]) < STANDING_TILT_DEG
-    assert apart_after[1] <= CLOSED_M
+    assert apart_after.closed
 
 
 @pytest.mark.physics

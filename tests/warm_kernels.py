@@ -2,7 +2,9 @@
 (``conftest.pytest_sessionstart``): each kernel compiles under its machine-wide lock
 (:mod:`op2motion.processes.compiled`), so the test processes that need one later load it from the cache, or wait
 for the compile already under way, instead of starting it themselves in the middle of the run while the others idle.
-Run as ``python tests/warm_kernels.py``; small problems, the kernels' own argument types."""
+Run as ``python tests/warm_kernels.py [FOLDER]``: the copy of the package in FOLDER (default: this checkout's; a
+non-editable install's programs, which the tests start from other folders, run the copy in site-packages, whose
+kernels numba caches apart); small problems, the kernels' own argument types."""
 
 from __future__ import annotations
 
@@ -11,6 +13,20 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 KERNELS = ("posture/__pycache__/kernel._swarm-*.nbi", "motion/__pycache__/whole_body_kernel._servo_rows-*.nbi")
+
+
+def installed_root() -> Path | None:
+    """The folder holding the installed copy of op2motion, when that is not this checkout's (a non-editable install,
+    as the README's quickstart makes); None otherwise."""
+    from importlib.metadata import PackageNotFoundError, distribution
+
+    try:
+        package = Path(str(distribution("op2motion").locate_file("op2motion")))
+    except PackageNotFoundError:
+        return None
+    if package.is_dir() and package.resolve() != (ROOT / "op2motion").resolve():
+        return package.parent
+    return None
 
 
 def cached(root: Path = ROOT) -> bool:
@@ -37,5 +53,5 @@ def warm() -> None:
 
 
 if __name__ == "__main__":
-    sys.path.insert(0, str(ROOT))
+    sys.path.insert(0, sys.argv[1] if len(sys.argv) > 1 else str(ROOT))
     warm()

@@ -24,8 +24,8 @@ def sweep(task: tuple[str, str, int, str]) -> tuple[tuple, list]:
     for k in range(MAX_STEPS):
         deg = direction * STEP_DEG * k
         verdict = sweep_verdict((support, kind, deg, engine, SECONDS))
-        out.append((deg, *verdict))
-        if not verdict[0]:
+        out.append((deg, verdict.stable, verdict.margin_m, verdict.reasons, verdict.foot_margin_m))
+        if not verdict.stable:
             break
     return task, out
 

@@ -16,6 +16,7 @@ world is the feet's midpoint on the floor, X along their mean heading, Y left.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -58,14 +59,30 @@ def placements(servo: np.ndarray, spec: Spec) -> dict[Side, np.ndarray]:
     return {side: np.array([*(back @ (p[:2] - mid)), yaws[side] - heading]) for side, (p, _) in feet.items()}
 
 
-def apart(servo: np.ndarray, spec: Spec, width_m: float) -> tuple[Side, float, float, float]:
-    """(the front foot, how far the other is behind it [m], how far the feet are from ``width_m`` apart across [m],
-    how far they are turned from each other [rad])."""
+@dataclass(frozen=True)
+class Stance:
+    """How two soles stand: the ``front`` foot, how far the other is behind it (``behind_m`` [m]), how far the feet
+    are from the step width apart across (``across_m`` [m]), how far they are turned from each other
+    (``turned_rad`` [rad])."""
+
+    front: Side
+    behind_m: float
+    across_m: float
+    turned_rad: float
+
+    @property
+    def closed(self) -> bool:
+        """Side by side: no step needed (within :data:`CLOSED_M` and :data:`CLOSED_RAD`)."""
+        return self.behind_m <= CLOSED_M and self.turned_rad <= CLOSED_RAD
+
+
+def apart(servo: np.ndarray, spec: Spec, width_m: float) -> Stance:
+    """How the soles stand for servo angles (20,) [rad], the feet meant to be ``width_m`` [m] apart across."""
     at = placements(servo, spec)
     dx, dy = at["left"][:2] - at["right"][:2]
     front: Side = "left" if dx >= 0.0 else "right"
     turned = abs(math.remainder(float(at["left"][2] - at["right"][2]), 2 * math.pi))
-    return front, abs(float(dx)), abs(float(dy) - width_m), turned
+    return Stance(front, abs(float(dx)), abs(float(dy) - width_m), turned)
 
 
 def closing_gait(servo: np.ndarray, spec: Spec, params: GaitParams) -> Gait | None:
@@ -75,12 +92,13 @@ def closing_gait(servo: np.ndarray, spec: Spec, params: GaitParams) -> Gait | No
     from op2motion.gait.generator import generate_gait
 
     width = step_width(params, spec)
-    front, behind, _, turned = apart(servo, spec, width)
-    if behind <= CLOSED_M and turned <= CLOSED_RAD:
+    stance = apart(servo, spec, width)
+    if stance.closed:
         return None
     at = placements(servo, spec)
     start: dict[str, Footstep] = {side: Footstep(side, float(p[0]), float(p[1]), float(p[2]))
                                   for side, p in at.items()}
+    front = stance.front
     back: Side = "right" if front == "left" else "left"
     centre = moved(at[front], 0.0, -width / 2.0 if front == "left" else width / 2.0, 0.0)
     step = foot_at(back, centre, width)

@@ -74,23 +74,33 @@ class StartFacts:
     ended: str = FULL
 
 
-def start_pose(body: Body, controller: Controller[Plan], servo: ServoModel, lying: str | None = None
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, PlannedStates, bool]:
-    """Where a run starts (see the module docstring): joint angles (20,) [rad], torso position [m] and rotation,
-    the planned states (with the start's flat foot and gap), and whether gravity must be ramped in."""
+@dataclass(frozen=True)
+class StartPose:
+    """Where a run starts: joint angles ``q`` (20,) [rad], the torso's position ``pos`` [m] and rotation ``rot``
+    (world frame), the planned states (with the start's flat foot and gap), and whether gravity must be ramped in."""
+
+    q: np.ndarray
+    pos: np.ndarray
+    rot: np.ndarray
+    planned: PlannedStates
+    ramp: bool
+
+
+def start_pose(body: Body, controller: Controller[Plan], servo: ServoModel, lying: str | None = None) -> StartPose:
+    """Where a run starts (see the module docstring)."""
     plan = controller.plan
     planned = planned_states(body, plan)
     if lying is not None:
         pos, rot = lying_placement(body, plan.goals[0], lying)
-        return plan.goals[0], pos, rot, planned, False
+        return StartPose(plan.goals[0], pos, rot, planned, False)
     if plan.base is None:
         q0 = sagged_angles(plan.goals[0], plan.supports[0], body.spec, servo.kp_of(plan.p_gains[0]),
                            servo.torque_max)
         if q0 is not None:
             pos, rot, flat, gap = placement(body, q0, plan.supports[0])
             if gap <= planned.gap + SAGGED_GAP_TOL_M:
-                return q0, pos, rot, replace(planned, flat_foot=flat, gap=gap), False
-    return plan.goals[0], planned.start_pos, planned.start_rot, planned, True
+                return StartPose(q0, pos, rot, replace(planned, flat_foot=flat, gap=gap), False)
+    return StartPose(plan.goals[0], planned.start_pos, planned.start_rot, planned, True)
 
 
 class _Servos:
@@ -134,7 +144,8 @@ def simulate(engine: Engine, body: Body, controller: Controller[Plan], servo: Se
     with ``setup.full_length``); ``on_tick`` gets the simulated time [s] after every control period. Returns the
     samples and where the run started (with why it ended)."""
     plan = controller.plan
-    q0, base_pos, base_rot, planned, ramp = start_pose(body, controller, servo, setup.lying)
+    begin = start_pose(body, controller, servo, setup.lying)
+    q0, base_pos, base_rot, planned, ramp = begin.q, begin.pos, begin.rot, begin.planned, begin.ramp
     engine.reset(base_pos, base_rot, q0 + (0.0 if setup.start_offset is None else setup.start_offset))
     dt = engine.time_step
     per_tick, every = max(1, int(round(CONTROL_PERIOD_S / dt))), max(1, int(round(SAMPLE_S / dt)))

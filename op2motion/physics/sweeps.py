@@ -9,6 +9,7 @@ roll (outward for the left foot; on two feet the legs lean as a parallelogram, t
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
@@ -133,16 +134,27 @@ def sweep_run(task: SweepTask, full_length: bool = False) -> RunReport:
                  setup=Setup(full_length=full_length)).run
 
 
-def sweep_outcome(v: RunReport) -> tuple[bool, float, list[str], float]:
-    """(stable, margin [m], reasons, foot margin [m]) of a sweep's run: the margin is the settled one for a standing
-    pose, the one when gravity reached full strength for a falling one; the foot margin is the least margin of a
-    foot's own CoP to its sole among the feet carrying at least a tenth of the load (NaN for a falling pose)."""
+@dataclass(frozen=True)
+class SweepOutcome:
+    """A sweep's pose in one engine: whether it stood, its margin [m] (the settled one for a standing pose, the one
+    when gravity reached full strength for a falling one), the run's reasons, and the loaded feet's own CoP margin
+    [m] (the least margin of a foot's CoP to its sole among the feet carrying at least a tenth of the load; NaN for
+    a falling pose)."""
+
+    stable: bool
+    margin_m: float
+    reasons: list[str]
+    foot_margin_m: float
+
+
+def sweep_outcome(v: RunReport) -> SweepOutcome:
+    """The :class:`SweepOutcome` of a sweep's run."""
     feet = [f.cop_margin_m for f in v.feet.values() if f.load_share >= 0.1]
     foot = min(feet) if v.stable and feet else float("nan")
-    return v.stable, (v.support_margin_m if v.stable else v.margin_at_load_m), v.reasons, foot
+    return SweepOutcome(v.stable, v.support_margin_m if v.stable else v.margin_at_load_m, list(v.reasons), foot)
 
 
-def sweep_verdict(task: SweepTask) -> tuple[bool, float, list[str], float]:
+def sweep_verdict(task: SweepTask) -> SweepOutcome:
     """One pose of a sweep, (support, kind, degrees, engine, seconds) -> :func:`sweep_outcome` of its run. A worker
     for process pools (the shipped spec)."""
     return sweep_outcome(sweep_run(task))
