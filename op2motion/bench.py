@@ -176,8 +176,8 @@ def _walk_figures(spec: Spec, repeat: int) -> dict[str, Any]:
 
 def _robot_figures(spec: Spec) -> dict[str, Any]:
     """``robot_loop_p99_ms`` and ``robot_status_ms``: the 8 ms loop and a status read through the emulated OP2 in a
-    process beside this one (:mod:`op2motion.bus.bench`)."""
-    from op2motion.bus.bench import robot_figures
+    process beside this one (:mod:`op2motion.onrobot.bench`)."""
+    from op2motion.onrobot.bench import robot_figures
 
     return robot_figures(spec)
 

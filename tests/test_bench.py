@@ -14,7 +14,7 @@ PSO_REACH_M = 0.01            # the default problem's swarm lands the hand withi
 STANDING_CLEARANCE_M = 0.010   # standing, the forearms hang 8 mm beside the thighs
 WALK_SPEED_MPS = 0.20        # the forward preset's steady speed in PyBullet (issue "Walking": >= 0.20 m/s)
 SMALL_GRID_TARGETS = 2        # the library figure's mechanism on a small grid (bench itself builds the default one)
-LOCKSTEP_LOOP_S = 3.0          # the bench's lockstep loop runs the hold this long [simulated s] (bus/bench.py LOOP_S)
+LOCKSTEP_LOOP_S = 3.0          # the bench's lockstep loop holds this long [simulated s] (onrobot/bench.py LOOP_S)
 LOCKSTEP_LOOP_TOL_S = 0.02     # ... to within a few ticks (it once ran 0.01 s: a hold is done at once)
 FULL_COM_VS_PINOCCHIO_M = 1e-5  # the URDF's six 10-mg frame links are the only difference (2 µm)
 

@@ -19,8 +19,8 @@ from bus_support import WIRE_1MS, cli, emulator_process, finish, lockstep, robot
 from op2motion.bus import protocol as p
 from op2motion.bus.client import Bus
 from op2motion.bus.robot import POWER_ON_WAIT_S
-from op2motion.bus.tasks import Options
-from op2motion.bus.walks import walk
+from op2motion.onrobot.tasks import Options
+from op2motion.onrobot.walks import walk
 
 SPEED_TOL = 0.10               # the walk through the bus: distance within 10 % of walk --validate's
 HEADING_TOL_DEG = 5.0          # ... heading within 5°
@@ -96,7 +96,7 @@ def test_lockstep_runs_are_deterministic(spec):
 
 def test_the_robot_follows_a_target_at_a_capped_speed(spec):
     """Once moved to a pose by a checked move, an edit within a jog step is followed at the capped speed."""
-    from op2motion.bus.follow import FOLLOW_SPEED_RAD_S, JOG_STEP_RAD, Follower
+    from op2motion.onrobot.follow import FOLLOW_SPEED_RAD_S, JOG_STEP_RAD, Follower
     from op2motion.robot.pose import Pose
 
     joint = spec.joint_names.index("r_sho_pitch")        # an arm: a knee alone would tip the robot over
@@ -183,9 +183,9 @@ def test_a_controller_from_python_starts_with_the_checked_approach_or_is_refused
     from the joints is refused before any goal is sent (the first tick used to ask for 119° at the elbows)."""
     from op2motion.bus.loop import run_controller
     from op2motion.bus.session import Session
-    from op2motion.bus.walks import run_on_robot
     from op2motion.errors import CheckFailed
     from op2motion.gait.controller import WalkController
+    from op2motion.onrobot.walks import run_on_robot
 
     with lockstep(spec) as (emulator, port):
         result = run_on_robot(port, spec, WalkController.from_preset("forward", steps=PYTHON_STEPS))

@@ -73,7 +73,8 @@ def test_tilts_are_seen_from_the_plan_and_counted_from_the_loaded_attitude():
     track = _track(rot=rot)
     plan = Plan.hold(np.zeros(20), "left", RUN_S, np.full(20, 32.0))
     start = StartFacts(None, PlannedStates(np.eye(3)[None], (), "left", 0.0, np.zeros(3), np.eye(3)), False)  # type: ignore[arg-type]
-    from_start, tilt, loaded = tilts(track, start, plan)
+    turned = tilts(track, start, plan)
+    from_start, tilt, loaded = turned.from_start, turned.tilt, turned.loaded
     assert loaded == LOADED
     assert from_start == pytest.approx(np.degrees(angle), abs=1e-6)
     assert tilt[loaded:] == pytest.approx(np.degrees(angle[loaded:] - angle[loaded]), abs=1e-6)

@@ -26,6 +26,7 @@ LAYERS = [
     {"motion"},
     {"gait"},
     {"bus"},
+    {"onrobot"},
     {"workflow"},
     {"studio"},
     {"figures", "library", "bench"},

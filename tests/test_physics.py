@@ -209,7 +209,8 @@ def test_non_parallel_feet_start_on_the_floor_not_in_it(spec, splay):
     at its lowest corner, no corner below the floor."""
     servo = servo_pose(spec, r_ank_roll=splay)
     body = Body(spec)
-    pos, rot, flat, gap = placement(body, servo, "double")
+    placed = placement(body, servo, "double")
+    pos, rot, flat, gap = placed.pos, placed.rot, placed.flat, placed.gap
     state = body.state(pos, rot, servo)
     lowest = min(c[:, 2].min() for c in state.corners.values())
     assert lowest == pytest.approx(0.0, abs=FLOOR_M)                                      # touching, not below
@@ -277,7 +278,8 @@ def test_trap_the_torso_frame_is_not_its_centre_of_mass(spec, engine_name):
     engine = make_engine(engine_name, spec, ServoModel.of(spec))
     body = Body(spec)
     servo = servo_pose(spec)
-    pos, rot, _, _ = placement(body, servo, "double")
+    placed = placement(body, servo, "double")
+    pos, rot = placed.pos, placed.rot
     engine.reset(pos, rot, servo)
     got_pos, got_rot = engine.base()
     engine.close()

@@ -17,12 +17,12 @@ from helpers import POSES, STOCK, run_cli
 
 from op2motion.bus.emulator.faults import Faults
 from op2motion.bus.safety import FALL_TORQUE_LIMIT, WrongModel
-from op2motion.bus.stand import play
-from op2motion.bus.tasks import Limp, Options, limp_question, setup, teach
-from op2motion.bus.walks import walk
 from op2motion.errors import CheckFailed, InputError
 from op2motion.formats.posefile import read_pose, write_pose
 from op2motion.gait.closing import CLOSED_M, apart
+from op2motion.onrobot.stand import play
+from op2motion.onrobot.tasks import Limp, Options, limp_question, setup, teach
+from op2motion.onrobot.walks import walk
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.imu import FALL_TILT_RAD
 from op2motion.robot.limbs import limb_groups, select_joints
@@ -366,11 +366,11 @@ def test_a_walk_frozen_with_a_foot_ahead_is_closed_by_the_next_motion_unforced(s
     """A plan played open loop and stopped freezes on both feet with one foot ahead; the next motion (``robot
     stand``, as every motion starts), not forced, starts with the step that closes the feet (checked in physics) and
     moves on (it was refused: "slip: a supporting sole slid 19 mm")."""
-    from op2motion.bus.stand import stand
-    from op2motion.bus.walks import run_on_robot
     from op2motion.gait.controller import WalkController
     from op2motion.gait.footsteps import step_width
     from op2motion.gait.presets import load_preset
+    from op2motion.onrobot.stand import stand
+    from op2motion.onrobot.walks import run_on_robot
 
     with lockstep(spec) as (emulator, port):
         stop, on_tick, _ = _stop_after(emulator, WALKED_M)

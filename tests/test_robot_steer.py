@@ -14,10 +14,10 @@ import pytest
 from bus_support import cli, finish, lockstep, robot_json, stderr_until
 from helpers import run_cli
 
-from op2motion.bus.tasks import Options
-from op2motion.bus.teleop import VX_STEP_M_S, YAW_STEP_RAD_S, Teleop, signed
-from op2motion.bus.walks import MAX_TELEOP_S, getup, steered_walk
 from op2motion.gait.envelope import STEER_ENVELOPE
+from op2motion.onrobot.tasks import Options
+from op2motion.onrobot.teleop import VX_STEP_M_S, YAW_STEP_RAD_S, Teleop, signed
+from op2motion.onrobot.walks import MAX_TELEOP_S, getup, steered_walk
 
 STANDING_TILT_DEG = 15.0       # a torso tilted less than this stands
 UPRIGHT_TILT_DEG = 25.0        # the issue's "upright" after getting up ...
@@ -255,8 +255,8 @@ def test_a_pushed_robot_walk_gets_up_and_walks_on(tmp_path, capsys):
 def test_forward_speed_comes_back_when_a_turn_ends():
     """Turning while walking forward shortens the stride (the envelope's combined limit); once the turn is keyed
     off, the forward speed the keys asked for is back (it stayed clamped: 0.15 -> 0.12 m/s)."""
-    from op2motion.bus.teleop import Teleop
     from op2motion.gait.envelope import STEER_ENVELOPE
+    from op2motion.onrobot.teleop import Teleop
 
     keys = Teleop(STEER_ENVELOPE)
     keys.feed("www")

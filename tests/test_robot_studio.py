@@ -10,8 +10,8 @@ import pytest
 from bus_support import lockstep
 from helpers import POSES, wait_for
 
-from op2motion.bus.follow import Follower
 from op2motion.formats.posefile import read_pose
+from op2motion.onrobot.follow import Follower
 from op2motion.studio.folder import Workspace
 from op2motion.studio.session import PoseEdit
 

@@ -87,3 +87,12 @@ print("ticks", int(servo_to_ticks(np.zeros(len(spec.joints)), spec)[0]))
 """
     done = subprocess.run([python, "-I", "-c", program], capture_output=True, text=True, cwd=tmp_path, timeout=60)
     assert done.returncode == 0 and done.stdout.split() == ["ticks", "2048"], done.stdout + done.stderr[-2000:]
+
+
+def test_the_bus_holds_the_transport_and_the_emulator_only():
+    """What runs on the robot through the transport (moves checked in physics, the walks, the robot commands) lives
+    in op2motion/onrobot, not beside it."""
+    modules = {p.stem for p in (ROOT / "op2motion" / "bus").glob("*.py")} - {"__init__"}
+    assert modules == set(TRANSPORT) | {"realtime"}, sorted(modules ^ (set(TRANSPORT) | {"realtime"}))
+    assert {p.name for p in (ROOT / "op2motion" / "bus").iterdir() if p.is_dir() and p.name != "__pycache__"} == {
+        "emulator"}

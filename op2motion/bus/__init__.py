@@ -1,5 +1,7 @@
-"""The real OP2 on its own bus: Dynamixel Protocol 1.0 to the CM-730 and the 20 MX-28, the framework's 8 ms loop,
-safety, and an emulated OP2 on a pseudo-terminal to develop without a robot.
+"""The real OP2 on its own bus, the transport: Dynamixel Protocol 1.0 to the CM-730 and the 20 MX-28, the framework's
+8 ms loop, safety, and an emulated OP2 to develop without a robot. It imports nothing of the physics, the gait, the
+motions or the postures but the emulator (the robot's own PC needs numpy and pyserial only); what runs on the robot
+through it (moves checked in physics, the walks, the ``op2motion robot`` commands) is :mod:`op2motion.onrobot`.
 
 Layers inside the wing, lowest first:
 
@@ -19,10 +21,7 @@ Layers inside the wing, lowest first:
   jump);
 * :mod:`.loop` (:func:`.loop.run_controller`: any physics :class:`~op2motion.physics.Controller` on the robot, one
   bulk read and one sync write every 8 ms, at real-time priority where allowed: :mod:`.realtime`; how a run ends:
-  :mod:`.stopping`), :mod:`.plans` (moves from where the robot is, checked in physics), :mod:`.tasks` (what the
-  ``op2motion robot`` commands do; the walks and getting up: :mod:`.walks`, keys steering a walk: :mod:`.teleop`),
-  :mod:`.follow` (a target pose followed at a capped speed: the studio's), and
-  :mod:`.bench` (the loop's and the status's speed through the emulator);
+  :mod:`.stopping`);
 * :mod:`.emulator` (the emulated OP2: the control tables byte for byte, the wire's time, physics and the servo model
   behind them; on a pseudo-terminal in real time, or in this process in lockstep).
 

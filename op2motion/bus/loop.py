@@ -287,7 +287,7 @@ def jump(goals: Any, run: _Run) -> None:
     if worst > START_JUMP_RAD:
         raise CheckFailed(f"refused: the controller's first goal for {joint} is {math.degrees(worst):.0f}° from "
                           f"where the joint is (at most {math.degrees(START_JUMP_RAD):.0f}°): nothing was moved; start "
-                          f"it with a path or port (run_controller(controller, port), op2motion.bus.walks."
+                          f"it with a path or port (run_controller(controller, port), op2motion.onrobot.walks."
                           f"run_on_robot), which moves the robot there first, checked in physics")
 
 
@@ -296,9 +296,9 @@ def run_controller(controller: Controller, port: RobotPort | OP2, spec: Spec | N
                    on_tick: Callable[[Tick], None] | None = None, watch: bool = True,
                    until_done: bool = False) -> LoopReport:
     """Run ``controller`` on ``port``, an :class:`~.robot.OP2` already taken control of (a session's; a controller
-    on a path or an open port starts with :func:`~.walks.run_on_robot`, as every robot command starts one: read,
-    preflighted, moved to the controller's first goals first by a planned move checked in physics); a controller
-    whose first goals are more than :data:`START_JUMP_RAD` from where the joints are is refused
+    on a path or an open port starts with :func:`~op2motion.onrobot.walks.run_on_robot`, as every robot command starts
+    one: read, preflighted, moved to the controller's first goals first by a planned move checked in physics); a
+    controller whose first goals are more than :data:`START_JUMP_RAD` from where the joints are is refused
     (:class:`~op2motion.errors.CheckFailed`, exit 1) before a goal is sent. Every 8 ms on the port's clock
     for ``duration_s`` (default: its plan's duration; with ``until_done`` also ending as soon as the controller is
     done, e.g. a steered walk standing still after its stop, a get-up standing), until ``stop`` is set or a fault
@@ -306,8 +306,8 @@ def run_controller(controller: Controller, port: RobotPort | OP2, spec: Spec | N
     goals afterwards. The controller's hooks (:class:`~op2motion.physics.controller.ControllerHooks`) are honoured."""
     if not isinstance(port, OP2):
         raise InputError(f"expected an OP2 already taken control of, got {type(port).__name__}: a controller on a "
-                         f"port starts with op2motion.bus.walks.run_on_robot(port, spec, controller), which moves the "
-                         f"robot to its first goals first, checked in physics", "port")
+                         f"port starts with op2motion.onrobot.walks.run_on_robot(port, spec, controller), which "
+                         f"moves the robot to its first goals first, checked in physics", "port")
     with steady(), realtime(LOOP_PRIORITY) as report_realtime:        # the collection before the priority
         report = _loop(_Run(controller, port, watch), controller.plan.duration_s if duration_s is None else duration_s,
                        stop, on_tick, until_done)

@@ -259,6 +259,15 @@ def vec3(values: Sequence[float] | None, name: str) -> tuple[float, float, float
     return (float(values[0]), float(values[1]), float(values[2]))
 
 
+def walk_target(args: argparse.Namespace) -> tuple[float, float, float] | None:
+    """A walk's ``--target X Y YAW_DEG`` as (x [m], y [m], yaw [rad]), or None; refused with ``--steps`` (a target
+    sets the number of steps) or when not finite. The one rule of ``walk`` and ``robot walk``."""
+    if args.target is not None and args.steps is not None:
+        raise InputError("expected --steps or --target, not both (a target sets the number of steps)", "steps")
+    target = vec3(args.target, "target")
+    return None if target is None else (target[0], target[1], math.radians(target[2]))
+
+
 def _parse_float(text: str) -> float:
     try:
         return float(text)

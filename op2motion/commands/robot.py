@@ -1,17 +1,16 @@
 """CLI command ``op2motion robot``: the real OP2 on its bus (status, read, play, walk) and the emulated one
-(emulate). Thin: each calls :mod:`op2motion.bus.tasks` or the emulator and prints."""
+(emulate). Thin: each calls :mod:`op2motion.onrobot.tasks` or the emulator and prints."""
 
 from __future__ import annotations
 
 import argparse
 import contextlib
-import math
 import signal
 import sys
 import threading
 from typing import TYPE_CHECKING, Any, Callable, Iterator
 
-from op2motion.commands.common import add_command, number, output_path, pose_name, say, ticker, whole
+from op2motion.commands.common import add_command, number, output_path, pose_name, say, ticker, walk_target, whole
 from op2motion.commands.deliver import deliver
 from op2motion.errors import InputError
 from op2motion.robot.spec import Spec
@@ -247,8 +246,8 @@ def cmd_read(args: argparse.Namespace, spec: Spec) -> int:
     to wait for the user: exit 2, nothing done)."""
     from pathlib import Path
 
-    from op2motion.bus.tasks import Limp
     from op2motion.fileio import OutputSet
+    from op2motion.onrobot.tasks import Limp
     from op2motion.robot.limbs import describe_joints, select_joints
     from op2motion.tasks.robot import robot_read
 
@@ -292,7 +291,7 @@ def pose_name_of(stem: str) -> str:
 
 def _motion(args: argparse.Namespace, spec: Spec, run: Any) -> int:
     """Run a motion task with Ctrl-C handling and progress; print; the exit code."""
-    from op2motion.bus.tasks import Options
+    from op2motion.onrobot.tasks import Options
     from op2motion.tasks.robot import robot_motion
 
     with stop_on_signals() as stop, ticker(args, "robot", "s", bar_format=ROBOT_BAR) as bar, \
@@ -312,14 +311,14 @@ def _motion(args: argparse.Namespace, spec: Spec, run: Any) -> int:
 
 def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot play``."""
-    from op2motion.bus.stand import play
+    from op2motion.onrobot.stand import play
 
     return _motion(args, spec, lambda options: play(_robot(args), spec, args.file, args.page, options))
 
 
 def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot walk``."""
-    from op2motion.bus.walks import walk
+    from op2motion.onrobot.walks import walk
 
     if args.commands is not None or args.teleop:
         return _steered(args, spec)
@@ -327,23 +326,17 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
         if getattr(args, flag):
             raise InputError(f"expected --{flag.replace('_', '-')} only with --commands or --teleop (a steered walk)",
                              flag)
-    if args.target is not None and args.steps is not None:
-        raise InputError("expected --steps or --target, not both (a target sets the number of steps)", "steps")
-    target = None
-    if args.target is not None:
-        if not all(math.isfinite(v) for v in args.target):
-            raise InputError(f"expected finite numbers, got {args.target}", "target")
-        target = (args.target[0], args.target[1], math.radians(args.target[2]))
+    target = walk_target(args)
     return _motion(args, spec, lambda options: walk(_robot(args), spec, args.preset, args.steps, target, options))
 
 
 def _steered(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot walk --commands FILE | --teleop``."""
-    from op2motion.bus.teleop import HELP, Teleop, read_keys
-    from op2motion.bus.walks import steered_walk
     from op2motion.formats.action import ActionFile
     from op2motion.gait.commands import read_commands
     from op2motion.gait.envelope import STEER_ENVELOPE
+    from op2motion.onrobot.teleop import HELP, Teleop, read_keys
+    from op2motion.onrobot.walks import steered_walk
 
     for flag in ("steps", "target"):
         if getattr(args, flag) is not None:
@@ -379,15 +372,15 @@ def _stdin_kind() -> str:
 
 def cmd_stand(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot stand``."""
-    from op2motion.bus.stand import stand
+    from op2motion.onrobot.stand import stand
 
     return _motion(args, spec, lambda options: stand(_robot(args), spec, options))
 
 
 def cmd_getup(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot getup``."""
-    from op2motion.bus.walks import getup
     from op2motion.formats.action import ActionFile
+    from op2motion.onrobot.walks import getup
 
     action = ActionFile.read(args.action) if args.action is not None else None
     return _motion(args, spec, lambda options: getup(_robot(args), spec, action, options))

@@ -153,8 +153,8 @@ def _follower(port: str | None, shared: bool, spec: Spec) -> Any:
     where its joints are), or None. An error about the robot's port names ``--robot`` (``--port`` is the page's)."""
     if port is None:
         return None
-    from op2motion.bus.follow import Follower
     from op2motion.commands.robot import port_of
+    from op2motion.onrobot.follow import Follower
 
     follower = Follower(port_of(port, shared), spec)
     try:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import math
 from typing import Any
 
 from op2motion.commands.common import (
@@ -14,6 +13,7 @@ from op2motion.commands.common import (
     physics_args,
     png_path,
     progress,
+    walk_target,
     whole,
 )
 from op2motion.errors import InputError
@@ -89,8 +89,7 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
     if not args.trials and (args.seed is not None or args.perturb_deg is not None):
         raise InputError("expected --trials N with --seed or --perturb-deg (they set the perturbed starts)",
                          "seed" if args.seed is not None else "perturb_deg")
-    if args.target is not None and args.steps is not None:
-        raise InputError("expected --steps or --target, not both (a target sets the number of steps)", "steps")
+    target = walk_target(args)
     if args.preset is not None and not args.preset.strip():
         raise InputError("expected a gait preset file or a shipped name, got an empty string", "preset")
     if args.commands is not None or args.action is not None:
@@ -100,7 +99,6 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
     tables = _tables(args)
     outputs = OutputSet({**dict(tables), **({"plot": args.plot} if args.plot else {})})
     params = read_preset(preset_path(args.preset)).with_steps(args.steps)
-    target = None if args.target is None else (args.target[0], args.target[1], math.radians(args.target[2]))
     trials = None
     if args.trials:
         trials = Trials(args.trials, Trials.perturb_deg if args.perturb_deg is None else args.perturb_deg,

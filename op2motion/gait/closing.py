@@ -5,7 +5,7 @@ the one step that brings the back foot beside the front one, with the walk's own
 preview walk of the default preset, so the step is a walk's closing step, 2.4 s with its lead-in and settling;
 played by a :class:`~op2motion.gait.controller.WalkController`, with its feedback: open loop, the swing foot
 scuffed the floor in physics). The robot commands step so before any move from feet that stand apart
-(:func:`op2motion.bus.tasks.close_feet`). Feet side by side (one no more than
+(:func:`op2motion.onrobot.tasks.close_feet`). Feet side by side (one no more than
 :data:`CLOSED_M` ahead of the other, turned no more than :data:`CLOSED_RAD` from it) need no step: None; a stance
 only wider or narrower than the walk's is left as it is.
 

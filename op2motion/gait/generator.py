@@ -171,7 +171,8 @@ class _Body:
         """CoM (K, 3) and multibody ZMP (K, 2) [m]; the robot rests before the first row and after the last (the
         rows are padded with copies for the differences)."""
         pad = np.vstack([np.repeat(configs[:1], REST_PAD, axis=0), configs, np.repeat(configs[-1:], REST_PAD, axis=0)])
-        com, zmp, v, a = multibody_zmp(self.dyn, pad, CONTROL_PERIOD_S)
+        track = multibody_zmp(self.dyn, pad, CONTROL_PERIOD_S)
+        com, zmp, v, a = track.com, track.zmp, track.v, track.a
         inner = slice(REST_PAD, -REST_PAD)
         self.last_motion = (configs, v[inner], a[inner])
         return com[inner], zmp[inner]

@@ -114,11 +114,20 @@ def smoothed(values: np.ndarray, width: int) -> np.ndarray:
     return np.apply_along_axis(lambda c: np.convolve(c, kernel, mode="valid"), 0, pad)
 
 
-def multibody_zmp(dyn: Any, configs: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray,
-                                                                      np.ndarray]:
-    """The whole body's centre of mass (K, 3) [m] and ZMP (K, 2) [m] (world frame, floor at z = 0) of pinocchio
-    configurations (K, nq) one ``dt`` [s] apart, from the CoM's acceleration and the rate of the centroidal
-    angular momentum; also the velocities and accelerations (K, nv) taken by differences."""
+@dataclass(frozen=True)
+class ZmpTrack:
+    """A motion's whole-body centre of mass ``com`` (K, 3) [m] and ZMP ``zmp`` (K, 2) [m] (world frame, floor at
+    z = 0), and the velocities ``v`` and accelerations ``a`` (K, nv) of its configurations, taken by differences."""
+
+    com: np.ndarray
+    zmp: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+
+
+def multibody_zmp(dyn: Any, configs: np.ndarray, dt: float) -> ZmpTrack:
+    """The :class:`ZmpTrack` of pinocchio configurations (K, nq) one ``dt`` [s] apart: the ZMP from the CoM's
+    acceleration and the rate of the centroidal angular momentum."""
     pin, model, data = dyn.pin, dyn.model, dyn.data
     k = len(configs)
     v = np.zeros((k, model.nv))
@@ -138,7 +147,7 @@ def multibody_zmp(dyn: Any, configs: np.ndarray, dt: float) -> tuple[np.ndarray,
     mass = dyn.total_mass
     zmp = com[:, :2] - com[:, 2:3] / vertical[:, None] * ddc[:, :2] + np.column_stack([-dl[:, 1], dl[:, 0]]) / (
         mass * vertical[:, None])
-    return com, zmp, v, a
+    return ZmpTrack(com, zmp, v, a)
 
 
 def contact_torques(dyn: Any, configs: np.ndarray, v: np.ndarray, a: np.ndarray,
@@ -174,7 +183,8 @@ def check_trajectory(trajectory: Trajectory, spec: Spec, servo: ServoModel | Non
     smooth = smoothed(goals, SMOOTH_ROWS)
     configs = np.array([dyn.level_configuration(g, side) for g in smooth])
     k = len(goals)
-    com, zmp, v, a = multibody_zmp(dyn, configs, dt)
+    track = multibody_zmp(dyn, configs, dt)
+    com, zmp, v, a = track.com, track.zmp, track.v, track.a
     polygons: list[np.ndarray] = []
     joint_speed = np.gradient(smooth, dt, axis=0) if k > 1 else np.zeros_like(goals)
     torques = contact_torques(dyn, configs, v, a, trajectory.supports)

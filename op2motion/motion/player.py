@@ -65,13 +65,22 @@ def _ramp(last: int, speed_step: int, c: int) -> int:
     return _tdiv((last + (speed_step >> 1)) * c * 144, 15) >> 9
 
 
-def step_timing(time: int, pause: int, speed: int, accel: int) -> tuple[int, int, int]:
-    """A time-base step's movement T, ramp A and pause P in calls: T = max(1, time x speed >> 5), A = accel or
-    (T - 1) >> 1 when T <= 2 accel (a step whose A is then 0 does not move: T = 0), P = (pause << 5) / speed."""
+@dataclass(frozen=True)
+class StepTiming:
+    """A time-base step's movement ``total`` (T), ramp ``accel`` (A) and ``pause`` (P), in ``Process()`` calls."""
+
+    total: int
+    accel: int
+    pause: int
+
+
+def step_timing(time: int, pause: int, speed: int, accel: int) -> StepTiming:
+    """A time-base step's :class:`StepTiming`: T = max(1, time x speed >> 5), A = accel or (T - 1) >> 1 when
+    T <= 2 accel (a step whose A is then 0 does not move: T = 0), P = (pause << 5) / speed."""
     if speed == 0:
         raise InputError("a page has speed 0 (the robot's firmware divides by it)", "page")
     total = ((time * speed) >> 5) & 0xFFFF or 1
-    return (*_ramps(total, accel), _tdiv(pause << 5, speed) & 0xFFFF)
+    return StepTiming(*_ramps(total, accel), _tdiv(pause << 5, speed) & 0xFFFF)
 
 
 def _ramps(total: int, accel: int) -> tuple[int, int]:
@@ -84,7 +93,8 @@ def _ramps(total: int, accel: int) -> tuple[int, int]:
 
 def step_calls(time: int, pause: int, speed: int = 32, accel: int = 32) -> int:
     """``Process()`` calls a time-base step takes: T + 3, plus P + 1 with a pause."""
-    total, _, pause_ticks = step_timing(time, pause, speed, accel)
+    timing = step_timing(time, pause, speed, accel)
+    total, pause_ticks = timing.total, timing.pause
     return total + 3 + (pause_ticks + 1 if pause_ticks else 0)
 
 
@@ -266,7 +276,8 @@ class ActionPlayer:
         if last_step:
             self._choose_follower(page)
         k = self.step_index - 1
-        ticks, _, self.pause_ticks = step_timing(page.time[k], page.pause[k], page.speed, page.accel)
+        timing = step_timing(page.time[k], page.pause[k], page.speed, page.accel)
+        ticks, self.pause_ticks = timing.total, timing.pause
         largest = 0
         for j, ident in enumerate(IDS):
             self.accel_angle[j] = 0

@@ -175,7 +175,8 @@ class WholeBodyIk:
         from op2motion.posture.kernel import body_features
 
         angles = servo_to_book(q, self.frame, self.spec)
-        pts, com, clearance = body_features(self._plan, angles.vector(), CLEARANCE_EXACT_M)
+        features = body_features(self._plan, angles.vector(), CLEARANCE_EXACT_M)
+        pts, com, clearance = features.points, features.com, features.clearance
         hand, elbow = pts[:, self._hand_row], pts[:, self._elbow_row]
         forearm = hand - elbow
         axes = torso_axes(pts.transpose(1, 2, 0), self.spec)

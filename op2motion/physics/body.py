@@ -87,10 +87,20 @@ def sole_flat(body: Body, q: np.ndarray, side: Side) -> tuple[np.ndarray, np.nda
     return -base_rot @ pos, base_rot
 
 
-def placement(body: Body, q: np.ndarray, support: Support | SupportName) -> tuple[np.ndarray, np.ndarray, Side, float]:
-    """Where a pose starts: torso (position [m], rotation), the sole laid level, and the settling gap [m]: how
-    high the supporting foot that does not touch starts above the floor (0 when every supporting foot touches).
-    See the module docstring."""
+@dataclass(frozen=True)
+class Placement:
+    """Where a pose starts: the torso's position ``pos`` [m] and rotation ``rot`` (world frame), the sole laid level
+    (``flat``), and the settling gap [m]: how high the supporting foot that does not touch starts above the floor
+    (0 when every supporting foot touches)."""
+
+    pos: np.ndarray
+    rot: np.ndarray
+    flat: Side
+    gap: float
+
+
+def placement(body: Body, q: np.ndarray, support: Support | SupportName) -> Placement:
+    """Where a pose starts (:class:`Placement`; see the module docstring)."""
     options = []
     for side in Support.of(support).feet:
         pos, rot = sole_flat(body, q, side)
@@ -99,7 +109,7 @@ def placement(body: Body, q: np.ndarray, support: Support | SupportName) -> tupl
         gap = max(float(state.corners[s][:, 2].min()) + lift for s in Support.of(support).feet)
         options.append((gap, side, pos + np.array([0.0, 0.0, lift]), rot))
     gap, side, pos, rot = min(options, key=lambda o: o[0])   # the lower, more level sole: the smallest gap
-    return pos, rot, side, gap
+    return Placement(pos, rot, side, gap)
 
 
 def margin_to(state: BodyState, support: Support, xy: np.ndarray) -> float:

@@ -183,9 +183,19 @@ def supporting_soles(track: Track, plan: Plan) -> dict[str, np.ndarray]:
     return out
 
 
-def tilts(track: Track, start: StartFacts, plan: Plan) -> tuple[np.ndarray, np.ndarray, int]:
-    """The torso's turn [deg] from the planned attitude: from the start (n,), and from the loaded attitude (n,),
-    counted afresh :data:`SUPPORT_SETTLE_S` after every change of support; and the loaded sample's index."""
+@dataclass(frozen=True)
+class Tilts:
+    """The torso's turn [deg] from the planned attitude: ``from_start`` (n,), and ``tilt`` (n,) from the loaded
+    attitude, counted afresh :data:`SUPPORT_SETTLE_S` after every change of support; ``loaded``: the loaded sample's
+    index."""
+
+    from_start: np.ndarray
+    tilt: np.ndarray
+    loaded: int
+
+
+def tilts(track: Track, start: StartFacts, plan: Plan) -> Tilts:
+    """The torso's :class:`Tilts` along a run."""
     times = track.times
     loaded = min(int(np.searchsorted(times, RAMP_S)), len(times) - 1)
     ups = np.einsum("kji,kj->ki", start.planned.rot[track.rows], track.rot[:, :, 2])   # up axis, planned frame
@@ -197,7 +207,7 @@ def tilts(track: Track, start: StartFacts, plan: Plan) -> tuple[np.ndarray, np.n
         if pending is not None and times[k] >= pending - 1e-9:
             reference, pending = ups[k], None
         tilt[k] = math.degrees(math.acos(min(max(float(ups[k] @ reference), -1.0), 1.0)))
-    return from_start, tilt, loaded
+    return Tilts(from_start, tilt, loaded)
 
 
 @dataclass(frozen=True)
@@ -215,7 +225,8 @@ class Judgement:
 def judge(track: Track, start: StartFacts, plan: Plan, spec: Spec, tilt_limit_deg: float) -> Judgement:
     """Every failure of a run (see the module docstring); tilt beyond ``tilt_limit_deg`` [deg] is a fall."""
     t = track.times
-    from_start, tilt, loaded = tilts(track, start, plan)
+    turned = tilts(track, start, plan)
+    from_start, tilt, loaded = turned.from_start, turned.tilt, turned.loaded
     planned_z = np.array([start.planned.states[r].com[2] for r in track.rows])
     foot_links = {link: side for side, link in _foot_links(spec).items()}
     lifted = [frozenset({"left", "right"} - set(plan.supports[r].feet)) for r in track.rows]

@@ -97,9 +97,10 @@ def start_pose(body: Body, controller: Controller[Plan], servo: ServoModel, lyin
         q0 = sagged_angles(plan.goals[0], plan.supports[0], body.spec, servo.kp_of(plan.p_gains[0]),
                            servo.torque_max)
         if q0 is not None:
-            pos, rot, flat, gap = placement(body, q0, plan.supports[0])
-            if gap <= planned.gap + SAGGED_GAP_TOL_M:
-                return StartPose(q0, pos, rot, replace(planned, flat_foot=flat, gap=gap), False)
+            placed = placement(body, q0, plan.supports[0])
+            if placed.gap <= planned.gap + SAGGED_GAP_TOL_M:
+                return StartPose(q0, placed.pos, placed.rot, replace(planned, flat_foot=placed.flat, gap=placed.gap),
+                                 False)
     return StartPose(plan.goals[0], planned.start_pos, planned.start_rot, planned, True)
 
 

@@ -184,7 +184,8 @@ def planned_states(body: Body, plan: Plan) -> PlannedStates:
         along = tuple(body.state(p, r, g) for p, r, g in zip(positions, rotations, plan.goals))
         gap = max(0.0, max(float(along[0].corners[s][:, 2].min()) for s in plan.supports[0].feet))
         return PlannedStates(rotations, along, "left", gap, positions[0], rotations[0])
-    pos0, rot0, flat, gap = placement(body, plan.goals[0], plan.supports[0])
+    placed = placement(body, plan.goals[0], plan.supports[0])
+    pos0, rot0, flat, gap = placed.pos, placed.rot, placed.flat, placed.gap
     if not plan.is_motion:
         return PlannedStates(rot0[None], (body.state(pos0, rot0, plan.goals[0]),), flat, gap, pos0, rot0)
     side = fixed_foot(plan.supports) if len(set(plan.supports)) > 1 else flat

@@ -15,6 +15,7 @@ seconds, then cached beside the module or in numba's user cache).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
@@ -247,7 +248,17 @@ def swarm_terms(plan: KernelPlan, q: np.ndarray, only_below: np.ndarray | None =
     return out
 
 
-def body_features(plan: KernelPlan, q: np.ndarray, within_m: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+@dataclass(frozen=True)
+class BodyFeatures:
+    """Poses' body ``points`` (N, R, 3) [m] (rows as :mod:`op2motion.kinematics.points`), full-inertia ``com``
+    (N, 3) [m] and least self-``clearance`` (N,) [m]."""
+
+    points: np.ndarray
+    com: np.ndarray
+    clearance: np.ndarray
+
+
+def body_features(plan: KernelPlan, q: np.ndarray, within_m: float) -> BodyFeatures:
     """Body points (N, R, 3) [m] (rows as :mod:`op2motion.kinematics.points`), full-inertia CoM (N, 3) [m] and least
     self-clearance (N,) [m] (exact below ``within_m``, a lower bound above it) of poses ``q`` (N, 20) [rad, book
     variables] in the frame of ``plan``'s support sole (a plan of the full-inertia body): the numbers of
@@ -259,4 +270,4 @@ def body_features(plan: KernelPlan, q: np.ndarray, within_m: float) -> tuple[np.
     out = np.empty((q.shape[0], len(TERMS)))
     pts, com = np.empty((q.shape[0], plan.row_slot.shape[0], 3)), np.empty((q.shape[0], 3))
     _SWARM(q, np.full(q.shape[0], np.inf), plan, float(within_m), out, pts, com)
-    return pts, com, out[:, _T_CLEARANCE]
+    return BodyFeatures(pts, com, out[:, _T_CLEARANCE])

@@ -1,8 +1,8 @@
 """The pose studio on a real (or emulated) OP2 (``op2motion studio --robot PORT``), under the robot's safety contract
-(:class:`op2motion.bus.follow.Follower`): opening the studio moves nothing; "move the robot to the pose" makes the
+(:class:`op2motion.onrobot.follow.Follower`): opening the studio moves nothing; "move the robot to the pose" makes the
 same planned move ``robot play`` makes, checked in physics from where the robot stands, and from then on the robot
 follows edits within a jog step of the pose it was checked to (goals clipped to the mechanical ranges, at most
-:data:`~op2motion.bus.follow.FOLLOW_SPEED_RAD_S` per joint); a larger edit is planned and checked again. "read the
+:data:`~op2motion.onrobot.follow.FOLLOW_SPEED_RAD_S` per joint); a larger edit is planned and checked again. "read the
 pose from the robot" makes the robot's present joint angles the pose. Both buttons are edits like any other: refused
 from a tab that does not edit. What the robot does (holding, checking, moving, refused, a fault and what it does
 now) shows on the page in words as it happens; editing goes on without the robot. A mixin of

@@ -53,7 +53,7 @@ class Studio(Edits, LongWork, ActionPanel, RobotPanel):
         action_path: An action file opened with the studio (inside ``workspace``), or "".
         workspace: The folder the page may read and write (default: the current folder).
         pose_path: The pose file the session came from (inside ``workspace``), the save box's default.
-        follower: A robot following the pose (:class:`op2motion.bus.follow.Follower`, started), or None.
+        follower: A robot following the pose (:class:`op2motion.onrobot.follow.Follower`, started), or None.
     """
 
     def __init__(self, spec: Spec, session: PoseEdit, host: str = "127.0.0.1", port: int = 0, action_path: str = "",

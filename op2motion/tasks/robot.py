@@ -15,7 +15,7 @@ from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
     from op2motion.bus.port import RobotPort
-    from op2motion.bus.tasks import Limp, MotionResult, Options
+    from op2motion.onrobot.tasks import Limp, MotionResult, Options
     from op2motion.physics import EngineName
     from op2motion.robot.support import Support, SupportName
 
@@ -23,7 +23,7 @@ if TYPE_CHECKING:
 def robot_status(port: RobotPort, spec: Spec) -> TaskResult:
     """``robot status``: the board, the IMU and every servo; a "no" when a servo is missing, reports an error, is hot
     or the supply is low (the first problem named, and how many more)."""
-    from op2motion.bus.tasks import status
+    from op2motion.onrobot.tasks import status
 
     state = status(port, spec)
     problem = None if state.ok else state.problems[0].describe() + (
@@ -35,7 +35,7 @@ def robot_status(port: RobotPort, spec: Spec) -> TaskResult:
 def robot_setup(port: RobotPort, spec: Spec, return_delay: int, confirm: Callable[[str], bool]) -> TaskResult:
     """``robot setup --return-delay N``: every device's Return Delay Time set to N where it differs (EEPROM), after
     ``confirm``; a "no" when a device did not take it."""
-    from op2motion.bus.tasks import setup
+    from op2motion.onrobot.tasks import setup
 
     done = setup(port, spec, return_delay, confirm)
     data = {"register": done.register, "value": done.value, "written": {str(d): v for d, v in done.written.items()},
@@ -51,9 +51,9 @@ def robot_read(port: RobotPort, spec: Spec, name: str, output: Path, support: Su
                limp: Limp | None = None, force: bool = False) -> TaskResult:
     """``robot read``: the present joint angles as pose ``name`` on ``support``, for ``output`` (``limp``: the chosen
     joints limp after its confirmation while the user moves them, then holding them; a robot found fallen is refused
-    unless ``force``: see :func:`~op2motion.bus.tasks.teach`)."""
-    from op2motion.bus.tasks import teach
+    unless ``force``: see :func:`~op2motion.onrobot.tasks.teach`)."""
     from op2motion.formats.posefile import pose_to_json
+    from op2motion.onrobot.tasks import teach
 
     pose, notes = teach(port, spec, name, support, limp, force)
     joints = list(pose.provenance["limp_joints"])

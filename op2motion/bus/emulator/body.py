@@ -111,7 +111,8 @@ class EmulatedBody:
         from op2motion.physics.body import Body, lying_placement, placement
 
         if self.start == "standing":
-            pos, rot, _, _ = placement(Body(self.spec), self.pose, "double")
+            placed = placement(Body(self.spec), self.pose, "double")
+            pos, rot = placed.pos, placed.rot
         else:
             pos, rot = lying_placement(Body(self.spec), self.pose, self.start.removeprefix("lying_"))
         self.engine.reset(pos, rot, self.pose)

@@ -15,11 +15,11 @@ from pathlib import Path
 from typing import Any
 
 from op2motion.bus.loop import run_controller
-from op2motion.bus.plans import CHECK_ENGINE, LYING_TILT_RAD, move, page_start, page_trajectory, ready_pose, then
 from op2motion.bus.port import RobotPort
 from op2motion.bus.session import RobotStatus, Session
-from op2motion.bus.tasks import ACTION_FILE_BYTES, MotionResult, Options, checked, run_planned, take_control
 from op2motion.errors import CheckFailed, InputError
+from op2motion.onrobot.plans import CHECK_ENGINE, LYING_TILT_RAD, move, page_start, page_trajectory, ready_pose, then
+from op2motion.onrobot.tasks import ACTION_FILE_BYTES, MotionResult, Options, checked, run_planned, take_control
 from op2motion.robot.spec import Spec
 
 CLOSE_RUN = "close the feet"

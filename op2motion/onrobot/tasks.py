@@ -3,13 +3,13 @@ delay), :func:`teach` (read a pose; chosen joints limp first, after a confirmati
 (:class:`MotionResult`, :class:`Options`, :func:`checked`, :func:`run_planned`); playing a pose, a motion file or an
 action page and standing: :mod:`.stand`; the walks and getting up: :mod:`.walks`.
 
-Each opens a :class:`~.session.Session` on the port, reads the whole robot, and (for a motion) refuses to start an
-unfit robot (:mod:`.safety`), builds the motion from where the robot is (:mod:`.plans`), refuses what fails
-op2motion's own checks unless forced, switches the torque on without a jump and runs the 8 ms loop
-(:func:`~.loop.run_controller`). A ``stop`` event (the commands set it on Ctrl-C) ends a motion safely: a walk on
-its next double support. The result is a :class:`MotionResult`; a fault is in it, not raised: a port that fails once
-the motion is under way too (from the torque switched on: the run ends as the fault ``port failed``), while one that
-fails before (while the robot is read and checked) raises :class:`~op2motion.errors.PortFailed` (exit 1).
+Each opens a :class:`~op2motion.bus.session.Session` on the port, reads the whole robot, and (for a motion) refuses to
+start an unfit robot (:mod:`op2motion.bus.safety`), builds the motion from where the robot is (:mod:`.plans`), refuses
+what fails op2motion's own checks unless forced, switches the torque on without a jump and runs the 8 ms loop
+(:func:`~op2motion.bus.loop.run_controller`). A ``stop`` event (the commands set it on Ctrl-C) ends a motion safely: a
+walk on its next double support. The result is a :class:`MotionResult`; a fault is in it, not raised: a port that fails
+once the motion is under way too (from the torque switched on: the run ends as the fault ``port failed``), while one
+that fails before (while the robot is read and checked) raises :class:`~op2motion.errors.PortFailed` (exit 1).
 """
 
 from __future__ import annotations
@@ -23,18 +23,18 @@ import numpy as np
 
 from op2motion.bus.clock import sleep
 from op2motion.bus.loop import LoopReport, Tick, run_controller
-from op2motion.bus.plans import (
+from op2motion.bus.port import RobotPort
+from op2motion.bus.safety import clip_goals, mechanical_bounds, port_fault
+from op2motion.bus.session import RobotStatus, Session
+from op2motion.bus.tables import CM730_ID, MX28
+from op2motion.errors import CheckFailed, InputError, PortFailed
+from op2motion.onrobot.plans import (
     CHECK_ENGINE,
     LYING_TILT_RAD,
     physics_problem,
     robot_schedule,
 )
-from op2motion.bus.port import RobotPort
-from op2motion.bus.safety import clip_goals, mechanical_bounds, port_fault
-from op2motion.bus.session import RobotStatus, Session
-from op2motion.bus.tables import CM730_ID, MX28
-from op2motion.bus.teleop import signed
-from op2motion.errors import CheckFailed, InputError, PortFailed
+from op2motion.onrobot.teleop import signed
 from op2motion.robot.imu import FALL_TILT_RAD
 from op2motion.robot.limbs import describe_joints, limb_groups
 from op2motion.robot.pose import Pose
@@ -84,8 +84,8 @@ class MotionResult:
 
     def emulated(self) -> dict[str, Any] | None:
         """What the emulated OP2 the motion ran on did (an in-process one, ``--port lockstep``): its report once the
-        robot held its last goals :data:`~.session.HOLD_AFTER_S` more (the torso's position, heading and tilt, the
-        servos' goals and torque limits); None on a real robot."""
+        robot held its last goals :data:`~op2motion.bus.session.HOLD_AFTER_S` more (the torso's position, heading and
+        tilt, the servos' goals and torque limits); None on a real robot."""
         return None if self.emulator is None else self.emulator.report()
 
     @property
@@ -336,8 +336,8 @@ def run_planned(session: Session, state: RobotStatus, trajectory: Any, result: M
 
 
 def take_control(session: Session, state: RobotStatus, result: MotionResult, name: str) -> bool:
-    """:meth:`~.session.Session.take_control` as the run ``name`` of ``result`` begins; whether it did (a port that
-    fails there ends the run as the fault ``port failed``, in ``result``)."""
+    """:meth:`~op2motion.bus.session.Session.take_control` as the run ``name`` of ``result`` begins; whether it did (a
+    port that fails there ends the run as the fault ``port failed``, in ``result``)."""
     try:
         session.take_control(state)
     except PortFailed as exc:

@@ -5,13 +5,14 @@
 * :func:`steered_walk`: a walk steered while it walks (:class:`~op2motion.gait.steer.SteerableWalk`), by a command
   timeline (``--commands``), by keys (``--teleop``, :mod:`.teleop`) or both; optionally inside a
   :class:`~op2motion.motion.fall.Supervisor` (``get_up``): a fall lowers the torque limits, the robot lies still,
-  gets up and walks on (the bus's watch leaves that fall to it); otherwise a fall stops the walk (:mod:`.safety`);
+  gets up and walks on (the bus's watch leaves that fall to it); otherwise a fall stops the walk
+  (:mod:`op2motion.bus.safety`);
 * :func:`getup`: :class:`~op2motion.motion.getup.GetUp` from where the robot lies, checked first in physics from the
   same side (:data:`~.plans.CHECK_ENGINE`), until it stands.
 
 Each walk starts standing: a planned move from the present pose to the walk's first, checked in physics, then the
-walk in the 8 ms loop (:func:`~.loop.run_controller`). Ctrl-C stops a walk within two steps, on both feet side by
-side (a planned one: :mod:`~op2motion.gait.planned_stop`).
+walk in the 8 ms loop (:func:`~op2motion.bus.loop.run_controller`). Ctrl-C stops a walk within two steps, on both feet
+side by side (a planned one: :mod:`~op2motion.gait.planned_stop`).
 """
 
 from __future__ import annotations
@@ -23,12 +24,12 @@ from typing import Any, Callable
 import numpy as np
 
 from op2motion.bus.loop import START_JUMP_RAD, LoopReport, run_controller
-from op2motion.bus.plans import CHECK_ENGINE, LYING_TILT_RAD, move
 from op2motion.bus.port import RobotPort
 from op2motion.bus.session import Session
-from op2motion.bus.stand import close_feet
-from op2motion.bus.tasks import MotionResult, Options, checked, run_planned, take_control
 from op2motion.errors import CheckFailed
+from op2motion.onrobot.plans import CHECK_ENGINE, LYING_TILT_RAD, move
+from op2motion.onrobot.stand import close_feet
+from op2motion.onrobot.tasks import MotionResult, Options, checked, run_planned, take_control
 from op2motion.robot.imu import FALL_TILT_RAD
 from op2motion.robot.pose import Pose
 from op2motion.robot.spec import Spec
@@ -92,8 +93,8 @@ def steered_walk(port: RobotPort, spec: Spec, preset: str | None = None, command
 def run_on_robot(port: RobotPort, spec: Spec, controller: Any, what: str = "controller",
                  options: Options = Options(), duration_s: float | None = None, name: str = "run") -> MotionResult:
     """Any controller on the robot, the way every robot command starts one: the robot read and preflighted; if the
-    controller's first goals are more than :data:`~.loop.START_JUMP_RAD` from where the joints are, the feet
-    closed if they stand apart (:func:`~.stand.close_feet`) and a planned move there first (refused lying), each
+    controller's first goals are more than :data:`~op2motion.bus.loop.START_JUMP_RAD` from where the joints are, the
+    feet closed if they stand apart (:func:`~.stand.close_feet`) and a planned move there first (refused lying), each
     checked in physics (refused if it fails, unless ``options.force``); then the controller in the 8 ms loop (the
     run ``name`` of the result) until its plan is over (or ``duration_s``), or it is done. The Python way to run a
     controller on the robot (docs/robot.md)."""

@@ -1,9 +1,9 @@
 """The robot following a pose someone edits (the pose studio's robot, ``studio --robot PORT``), under the robot's
 safety contract: nothing moves unchecked, nothing jumps.
 
-A :class:`Follower` runs the 8 ms loop (:func:`~.loop.run_controller`, with its safety watch) in a thread of its
-own. Opened, it holds the robot where it stands (torque on with goals where the joints are) and moves nothing until
-the user asks (:meth:`Follower.move_to`). Every move to a pose is the same planned move ``robot play`` makes
+A :class:`Follower` runs the 8 ms loop (:func:`~op2motion.bus.loop.run_controller`, with its safety watch) in a thread
+of its own. Opened, it holds the robot where it stands (torque on with goals where the joints are) and moves nothing
+until the user asks (:meth:`Follower.move_to`). Every move to a pose is the same planned move ``robot play`` makes
 (:func:`~.plans.move`: within the servos' speed, weight shifts where the support changes), checked in physics from
 where the robot is (:func:`~.plans.physics_problem`) before a goal is sent; a refused move leaves the robot holding
 and says why. Once a pose has been reached that way, edits that keep the target within :data:`JOG_STEP_RAD` (the
@@ -199,7 +199,7 @@ class Follower:
     def _plan_and_play(self) -> None:
         """Plan the move from where the robot is to the latest pose asked for, check it, play it; again if the
         pose changed meanwhile by more than a jog step."""
-        from op2motion.bus.plans import CHECK_ENGINE, move, physics_problem
+        from op2motion.onrobot.plans import CHECK_ENGINE, move, physics_problem
 
         while self.wanted is not None and self.controller is not None and self.running():
             pose, here = self.wanted, self.pose()
