@@ -40,7 +40,7 @@ from op2motion.bus.tables import (
     signed,
 )
 from op2motion.errors import InputError
-from op2motion.robot.imu import FallWatch, attitude, decode, encode, imu_of
+from op2motion.robot.imu import FallWatch, attitude, decode_imu, encode_imu, imu_of
 from op2motion.robot.spec import GRAVITY_M_S2
 
 GYRO_TOL_RAD_S = 0.03          # half a count of the gyro (0.0545 rad/s a count)
@@ -101,23 +101,23 @@ def test_tables_match_the_notes():
 def test_imu_round_trip_and_signs(spec):
     imu = imu_of(spec)
     gyro, accel = np.array([0.4, -1.2, 2.0]), np.array([1.0, -2.0, 9.5])
-    back_g, back_a = decode(imu, encode(imu, gyro, accel))
+    back_g, back_a = decode_imu(imu, encode_imu(imu, gyro, accel))
     assert np.allclose(back_g, gyro, atol=GYRO_TOL_RAD_S) and np.allclose(back_a, accel, atol=ACCEL_TOL_M_S2)
-    pitching_forward = encode(imu, np.array([0.0, 1.0, 0.0]), np.zeros(3))
+    pitching_forward = encode_imu(imu, np.array([0.0, 1.0, 0.0]), np.zeros(3))
     assert pitching_forward[40] < imu.centre_count             # FB_GYRO falls as the torso pitches forward
-    lying_down = encode(imu, np.zeros(3), np.array([-GRAVITY_M_S2, 0.0, 0.0]))
+    lying_down = encode_imu(imu, np.zeros(3), np.array([-GRAVITY_M_S2, 0.0, 0.0]))
     assert lying_down[46] < imu.fallen_front_count              # face down reads as the framework's FALLEN_F
-    saturated = encode(imu, np.array([100.0, 0.0, 0.0]), np.zeros(3))
+    saturated = encode_imu(imu, np.array([100.0, 0.0, 0.0]), np.zeros(3))
     assert saturated[42] in (0, imu.max_count)
 
 
 def test_fall_watch_is_the_frameworks_test(spec):
     imu = imu_of(spec)
     watch = FallWatch(imu)
-    face_up = encode(imu, np.zeros(3), np.array([GRAVITY_M_S2, 0.0, 0.0]))
+    face_up = encode_imu(imu, np.zeros(3), np.array([GRAVITY_M_S2, 0.0, 0.0]))
     verdicts = [watch.add(face_up) for _ in range(imu.fallen_window)]
     assert verdicts[:-1] == [None] * (imu.fallen_window - 1) and verdicts[-1] == "back"
-    upright = encode(imu, np.zeros(3), np.array([0.0, 0.0, GRAVITY_M_S2]))
+    upright = encode_imu(imu, np.zeros(3), np.array([0.0, 0.0, GRAVITY_M_S2]))
     watch = FallWatch(imu)
     assert [watch.add(upright) for _ in range(imu.fallen_window)][-1] is None
 
@@ -191,14 +191,14 @@ def test_watch_blind_errors_heat_and_falls(spec):
     assert watch.status(13, (), HOT_STOP_C).kind == "overheating"
     assert watch.status(13, (), HOT_STOP_C - 1) is None
     upright = np.array([0.0, 0.0, GRAVITY_M_S2])
-    words = encode(imu, np.zeros(3), upright)
+    words = encode_imu(imu, np.zeros(3), upright)
     assert watch.body(upright, words) is None                     # arms: upright
     tipped = np.array([-math.sin(FALL_TILT_RAD + 0.3), 0.0, math.cos(FALL_TILT_RAD + 0.3)]) * GRAVITY_M_S2
-    faults = [watch.body(tipped, encode(imu, np.zeros(3), tipped)) for _ in range(60)]
+    faults = [watch.body(tipped, encode_imu(imu, np.zeros(3), tipped)) for _ in range(60)]
     assert any(f is not None and f.kind == "fell" for f in faults)
     lying = Watch(spec, imu, 0.008, [j.id for j in spec.joints], spec.joint_names)
     down = np.array([-GRAVITY_M_S2, 0.0, 0.0])
-    assert all(lying.body(down, encode(imu, np.zeros(3), down)) is None for _ in range(60))   # never upright
+    assert all(lying.body(down, encode_imu(imu, np.zeros(3), down)) is None for _ in range(60))   # never upright
 
 
 def test_goals_clipped_to_mechanical_ranges(spec):
@@ -308,7 +308,7 @@ def test_gyro_centres_only_from_a_still_robot(spec):
     biased = [{c.register: 515 + int(rng.integers(0, 2)) for c in imu.gyro} for _ in range(100)]
     centres = gyro_centres(imu, biased)
     assert all(515.0 <= v <= 516.0 for v in centres.values())
-    gyro, _ = decode(imu, {**biased[0], **{c.register: 512 for c in imu.accel}}, centres)
+    gyro, _ = decode_imu(imu, {**biased[0], **{c.register: 512 for c in imu.accel}}, centres)
     assert np.all(np.abs(gyro) <= imu.gyro[0].scale)                      # the bias is gone
     moving = [{c.register: 512 + int(4 * GYRO_STILL_SD * math.sin(k)) for c in imu.gyro} for k in range(100)]
     assert gyro_centres(imu, moving) is None

@@ -55,13 +55,13 @@ def test_a_lying_start_touches_the_floor_with_that_side_down(spec, side):
 
 def test_the_framework_fall_test_in_counts_and_the_tilt(spec):
     # the framework's test in the board's counts (the spec's [imu] mapping, as on the robot: robot.imu.FallWatch)
-    from op2motion.robot.imu import FallWatch, encode
+    from op2motion.robot.imu import FallWatch, encode_imu
 
     board = spec.imu
     for accel, verdict in (((-GRAVITY_M_S2, 0.0, 0.0), "front"), ((GRAVITY_M_S2, 0.0, 0.0), "back"),
                            ((0.0, 0.0, GRAVITY_M_S2), None)):
         watch = FallWatch(board)
-        verdicts = [watch.add(encode(board, np.zeros(3), np.array(accel))) for _ in range(board.fallen_window)]
+        verdicts = [watch.add(encode_imu(board, np.zeros(3), np.array(accel))) for _ in range(board.fallen_window)]
         assert verdicts[-2] is None and verdicts[-1] == verdict
     assert tilt_deg(np.array([0.0, 0.0, GRAVITY_M_S2])) == pytest.approx(0.0)
     assert tilt_deg(np.array([GRAVITY_M_S2, 0.0, 0.0])) == pytest.approx(90.0)

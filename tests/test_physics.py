@@ -20,7 +20,7 @@ from op2motion.model.urdf import FRAME_LINK_MASS_KG, link_inertial
 from op2motion.physics import ENGINES, MIN_SECONDS, CheckReport, Pushes, Schedule, Setup, check, make_engine
 from op2motion.physics.body import Body, placement
 from op2motion.physics.pybullet_engine import PyBulletEngine, load_robot, quiet_c_output
-from op2motion.physics.sweeps import ARMS_FORWARD, FOLDED_SWING, balanced, servo_pose
+from op2motion.physics.sweeps import ARMS_FORWARD, FOLDED_SWING, balanced_pose, servo_pose
 from op2motion.robot.framework import p_gain_of_slope
 from op2motion.robot.variant import spec_variant
 
@@ -120,7 +120,7 @@ def test_a_plans_own_measurements_come_back_in_the_walk_slot(spec):
 # --- every failure mode has a pose that fails with exactly that reason -----------------------------------------
 
 def _one_leg(spec, **joints):
-    return balanced(spec, servo_pose(spec, "left", **{**ARMS_FORWARD, **joints}), "left", (0.0, 0.011))
+    return balanced_pose(spec, servo_pose(spec, "left", **{**ARMS_FORWARD, **joints}), "left", (0.0, 0.011))
 
 
 @pytest.mark.physics
@@ -157,7 +157,7 @@ def test_one_leg_squat_beyond_stall_is_torque_saturation(spec, engine):
     stiff = np.full(20, p_gain_of_slope(0x33))
     available = ServoModel.of(spec, voltage=11.1).torque_max
     for body, stands in ((spec, True), (spec_variant(spec, torso_mass_scale=1.4), False)):
-        servo = balanced(body, servo_pose(body, "left", **{**ARMS_FORWARD, **squat}), "left", (-0.02, 0.011))
+        servo = balanced_pose(body, servo_pose(body, "left", **{**ARMS_FORWARD, **squat}), "left", (-0.02, 0.011))
         needed = abs(dynamics_for(body).static_torques(servo, "left").torques[body.joint_names.index("l_knee")])
         assert (needed < available) == stands, (needed, available)
         v = _run(servo, "left", body, 3.0, engine, p_gains=stiff, voltage=11.1)

@@ -20,7 +20,7 @@ from op2motion.bus.safety import FALL_TORQUE_LIMIT, WrongModel
 from op2motion.errors import CheckFailed, InputError
 from op2motion.formats.posefile import read_pose, write_pose
 from op2motion.gait.closing import CLOSED_M, apart
-from op2motion.onrobot.stand import play
+from op2motion.onrobot.stand import play_on_robot
 from op2motion.onrobot.tasks import Limp, Options, limp_question, setup, teach
 from op2motion.onrobot.walks import walk
 from op2motion.robot.framework import CONTROL_PERIOD_S
@@ -115,7 +115,7 @@ def test_a_return_delay_of_250_is_named_refused_and_set_to_0(capsys, spec):
         assert len(done.written) == 20 and done.already == (200,) and not done.failed and "EEPROM" in asked[0]
         assert {s.get("return_delay_time") for s in emulator.servos} == {0}
         assert setup(port, spec, 0, lambda question: False).written == {}    # nothing to change: not asked
-        result = play(port, spec, str(POSES / "walkready.json"))
+        result = play_on_robot(port, spec, str(POSES / "walkready.json"))
     assert result.ended == "done" and result.runs[-1][1].plan["servos_per_tick"] >= 10
 
 
@@ -293,9 +293,9 @@ def test_refused_unless_forced_and_a_fall_lowers_the_torque(spec, tmp_path):
     with lockstep(spec) as (emulator, port):
         before = emulator.report()["goal_ticks"]
         with pytest.raises(CheckFailed, match="refused.*--force"):
-            play(port, spec, str(tmp_path / "tipping.json"))
+            play_on_robot(port, spec, str(tmp_path / "tipping.json"))
         assert emulator.report()["goal_ticks"] == before                        # nothing moved
-        result = play(port, spec, str(tmp_path / "tipping.json"), options=Options(force=True))
+        result = play_on_robot(port, spec, str(tmp_path / "tipping.json"), options=Options(force=True))
         port.clock.sleep_until(port.clock.now() + 0.3)
         report = emulator.report()
     assert result.fault is not None and result.fault.kind == "fell"
@@ -471,7 +471,7 @@ def test_a_servo_of_another_model_is_named_and_nothing_moves_even_forced(spec, c
     with lockstep(spec, faults=Faults(models={14: 12})) as (emulator, port):
         before = emulator.report()
         with pytest.raises(WrongModel, match=r"l_knee \(ID 14\) reports model 12"):
-            play(port, spec, str(POSES / "walkready.json"), options=Options(force=True))
+            play_on_robot(port, spec, str(POSES / "walkready.json"), options=Options(force=True))
         with pytest.raises(WrongModel):
             teach(port, spec, "here", limp=True)
         after = emulator.report()

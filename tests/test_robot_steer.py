@@ -16,7 +16,7 @@ from helpers import run_cli
 
 from op2motion.gait.envelope import STEER_ENVELOPE
 from op2motion.onrobot.tasks import Options
-from op2motion.onrobot.teleop import VX_STEP_M_S, YAW_STEP_RAD_S, Teleop, signed
+from op2motion.onrobot.teleop import VX_STEP_M_S, YAW_STEP_RAD_S, Teleop, signed_text
 from op2motion.onrobot.walks import MAX_TELEOP_S, getup, steered_walk
 
 STANDING_TILT_DEG = 15.0       # a torso tilted less than this stands
@@ -164,7 +164,7 @@ def test_keys_that_cancel_command_an_exact_zero_and_read_so():
     assert teleop.describe() == "walking: vx -0.15 m/s, vy +0.00 m/s, turn +0 °/s"
     teleop.feed("qqewwwe")                               # every step taken back (-0.15 + 3 x 0.05 is 7e-18): zeros
     assert teleop.command == (0.0, 0.0, 0.0) and "-0" not in teleop.describe()
-    assert signed(-1e-17, 2) == "+0.00" and signed(-0.4, 0) == "+0" and signed(-0.6, 0) == "-1"
+    assert signed_text(-1e-17, 2) == "+0.00" and signed_text(-0.4, 0) == "+0" and signed_text(-0.6, 0) == "-1"
 
 
 def test_lines_said_during_a_run_are_not_drawn_over_by_its_bar(capsys, monkeypatch):

@@ -10,7 +10,7 @@ import pytest
 
 from op2motion.physics import Schedule, Setup, check
 from op2motion.physics.stopping import FELL
-from op2motion.physics.sweeps import ARMS_FORWARD, FOLDED_SWING, balanced, servo_pose
+from op2motion.physics.sweeps import ARMS_FORWARD, FOLDED_SWING, balanced_pose, servo_pose
 
 pytestmark = pytest.mark.physics
 WEAK_STALL_NM = 1.0           # the OP2's knee needs about 2 N·m in this squat
@@ -26,7 +26,7 @@ def _weak(spec):
 @pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
 def test_a_weak_servo_squat_names_its_saturation(spec, engine):
     squat = dict(l_knee=-100, l_hip_pitch=50, l_ank_pitch=-50, **FOLDED_SWING)
-    servo = balanced(spec, servo_pose(spec, "left", **{**ARMS_FORWARD, **squat}), "left", (-0.02, 0.011))
+    servo = balanced_pose(spec, servo_pose(spec, "left", **{**ARMS_FORWARD, **squat}), "left", (-0.02, 0.011))
     weak = _weak(spec)
     early, full = (check(Schedule.hold(servo, "left", weak, SECONDS), weak, (engine,),
                          setup=Setup(full_length=length)).run for length in (False, True))

@@ -52,7 +52,7 @@ from op2motion.bus.tables import (
 from op2motion.errors import CheckFailed, InputError, PortFailed
 from op2motion.robot.controller import Controller, GoalMerger
 from op2motion.robot.framework import CONTROL_PERIOD_S
-from op2motion.robot.imu import decode
+from op2motion.robot.imu import decode_imu
 from op2motion.robot.joints import servo_to_ticks
 from op2motion.robot.spec import Spec
 
@@ -187,7 +187,7 @@ class _Run:
         if board is not None:
             data = board.params
             self.words = {r: data[r - board_address] | (data[r - board_address + 1] << 8) for r in self.words}
-            self.gyro, self.accel = decode(self.robot.imu, self.words, self.robot.gyro_centre)
+            self.gyro, self.accel = decode_imu(self.robot.imu, self.words, self.robot.gyro_centre)
         for i, d in enumerate(self.ids):
             packet = got.get(d)
             if packet is not None:

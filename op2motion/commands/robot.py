@@ -311,9 +311,9 @@ def _motion(args: argparse.Namespace, spec: Spec, run: Any) -> int:
 
 def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot play``."""
-    from op2motion.onrobot.stand import play
+    from op2motion.onrobot.stand import play_on_robot
 
-    return _motion(args, spec, lambda options: play(_robot(args), spec, args.file, args.page, options))
+    return _motion(args, spec, lambda options: play_on_robot(_robot(args), spec, args.file, args.page, options))
 
 
 def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:

@@ -15,7 +15,7 @@ import numpy as np
 
 from op2motion.figures.draw import PoseCanvas, PoseFigure, TitleBlock, render_cost_curve
 from op2motion.kinematics import ModelName, forward
-from op2motion.kinematics.report import PoseReport, evaluate
+from op2motion.kinematics.report import PoseReport, pose_report
 from op2motion.physics import RunReport
 from op2motion.robot.joints import BookAngles
 from op2motion.robot.spec import Spec
@@ -78,7 +78,7 @@ def pose_canvas(name: str, angles: BookAngles, spec: Spec, drawing: Drawing = Dr
         note, shown = "", angles
         if model == "pb" and np.any(angles.psi != 0.0):
             note, shown = PB_PSI_NOTE, replace(angles, psi=np.zeros_like(angles.psi))
-        report = evaluate(shown, spec, model, br)
+        report = pose_report(shown, spec, model, br)
         reports.append(report)
         label = MODEL_LABELS[model]
         rows.append(PoseFigure(report.points, label, report.com, report.com_full, br, target,

@@ -28,7 +28,7 @@ from op2motion.gait.stock_walking import ARM_POSE_DEG, StockTick, StockWalking, 
 from op2motion.kinematics.leg_ik import leg_fk, leg_of
 from op2motion.physics import RAMP_S, Plan, WalkClock
 from op2motion.robot.framework import CONTROL_PERIOD_S
-from op2motion.robot.imu import encode, imu_of
+from op2motion.robot.imu import encode_imu, imu_of
 from op2motion.robot.joints import ticks_to_servo
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import LIFTED_M, SIDES, Support
@@ -212,7 +212,7 @@ class StockWalkController:
         self._t = t_s
         rl = fb = 0.0
         if self.balance:
-            words = encode(self._imu, np.asarray(gyro_rad_s, dtype=float), np.asarray(accel_m_s2, dtype=float))
+            words = encode_imu(self._imu, np.asarray(gyro_rad_s, dtype=float), np.asarray(accel_m_s2, dtype=float))
             rl, fb = words[self._rl] - self._imu.centre_count, words[self._fb] - self._imu.centre_count
         self._player.tick(rl, fb)
         return self._goals()

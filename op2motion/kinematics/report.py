@@ -93,7 +93,7 @@ class PoseReport:
         return "\n".join(lines)
 
 
-def evaluate(angles: BookAngles, spec: Spec, model: ModelName = "dh", br: float = 1.0,
+def pose_report(angles: BookAngles, spec: Spec, model: ModelName = "dh", br: float = 1.0,
              sp: Sequence[float] = (0.0, 0.0, 0.0), gamma: float = 0.0, double: bool = False) -> PoseReport:
     """Forward kinematics and balance of the first pose of ``angles`` (``double``: standing on both feet, measured
     in the support sole's frame, its margin to the hull of both soles)."""

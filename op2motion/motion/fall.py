@@ -36,7 +36,7 @@ from op2motion.motion.lying import FALL_TILT_DEG
 from op2motion.motion.stillness import Stillness
 from op2motion.physics import Controller, ControllerHooks, Plan, hooks_of
 from op2motion.robot.framework import CONTROL_PERIOD_S
-from op2motion.robot.imu import FallWatch, board_of, encode
+from op2motion.robot.imu import FallWatch, board_of, encode_imu
 from op2motion.robot.spec import GRAVITY_M_S2, Spec
 
 FALLING_TORQUE_SHARE = 0.3      # the servos' torque limit while the robot falls and lies
@@ -151,7 +151,7 @@ class Supervisor(ControllerHooks):
         self.attitude.update(gyro_rad_s, accel_m_s2)
         self.stillness.update(np.asarray(gyro_rad_s, dtype=float), joints)
         if self.attitude.angles is not None:
-            self.fallen = self.fall_watch.add(encode(self.board, np.asarray(gyro_rad_s, dtype=float),
+            self.fallen = self.fall_watch.add(encode_imu(self.board, np.asarray(gyro_rad_s, dtype=float),
                                                      np.asarray(accel_m_s2, dtype=float)))
         if self.phase == "run":
             armed = self.attitude.angles is not None

@@ -58,8 +58,8 @@ def _there_and_back(rows: np.ndarray, back: bool) -> np.ndarray:
     return np.concatenate([rows, rows[-2::-1]]) if back else rows
 
 
-def forward(ik: WholeBodyIk, targets: np.ndarray, points: np.ndarray | None, give_up_m: float,
-            tips: Callable[[np.ndarray], bool] | None = None) -> np.ndarray:
+def sweep_forward(ik: WholeBodyIk, targets: np.ndarray, points: np.ndarray | None, give_up_m: float,
+                  tips: Callable[[np.ndarray], bool] | None = None) -> np.ndarray:
     """Goals (k <= K, 20) [rad]: each row solved from the one before, from the start pose, up to the first row
     whose hand is more than ``give_up_m`` [m] from its target or, looked at every :data:`WATCH_EVERY` rows, whose
     goals (20,) ``tips`` says the robot would tip over (that way has failed)."""
@@ -154,11 +154,11 @@ def ways(ik: WholeBodyIk, crouching: WholeBodyIk, targets: np.ndarray, points: n
          back: bool, give_up_m: float, search: EndSearch,
          tips: Callable[[np.ndarray], bool] | None = None) -> Iterator[Rows]:
     """The ways in the order to try them, lazily (the later ones cost more); ``targets`` and ``points`` one way; a
-    forward way stops at the first row more than ``give_up_m`` [m] off or where ``tips`` (see :func:`forward`)
+    forward way stops at the first row more than ``give_up_m`` [m] off or where ``tips`` (see :func:`sweep_forward`)
     (its rows end there); ``search`` counts the end configurations tried."""
     all_targets, all_points = _there_and_back(targets, back), None if points is None else _there_and_back(points, back)
     for solver, how in ((ik, "forward"), (crouching, "crouching")):
-        goals = forward(solver, all_targets, all_points, give_up_m, tips)
+        goals = sweep_forward(solver, all_targets, all_points, give_up_m, tips)
         k = len(goals)
         yield Rows(goals, all_targets[:k], None if all_points is None else all_points[:k], how)
     yield from from_the_end(ik, targets, points, back, search, give_up_m)

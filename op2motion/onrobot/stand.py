@@ -5,7 +5,7 @@
   planner and controller), checked in physics first (:data:`~.plans.CHECK_ENGINE`); every motion from such a stance
   starts with it (no move starts there without sliding a sole);
 * :func:`stand`: the robot standing on both feet side by side in the walk-ready pose, from wherever it stands;
-* :func:`play`: a pose, a motion file or an action page, from where the robot is.
+* :func:`play_on_robot`: a pose, a motion file or an action page, from where the robot is.
 """
 
 from __future__ import annotations
@@ -99,7 +99,7 @@ def load_motion(path: str, page: int | None, spec: Spec) -> tuple[str, Any]:
     return "pose", read_pose(path, spec)
 
 
-def play(port: RobotPort, spec: Spec, path: str, page: int | None = None,
+def play_on_robot(port: RobotPort, spec: Spec, path: str, page: int | None = None,
          options: Options = Options()) -> MotionResult:
     """A pose, a motion file or an action page on the robot: a planned move from where it is to the first pose,
     then the motion or the page tick for tick (see the module docstring)."""

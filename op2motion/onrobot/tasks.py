@@ -1,5 +1,5 @@
-"""What the ``op2motion robot`` commands do, as library functions: :func:`status`, :func:`setup` (the servos' return
-delay), :func:`teach` (read a pose; chosen joints limp first, after a confirmation), and what every motion shares
+"""What the ``op2motion robot`` commands do, as library functions: :func:`read_status`, :func:`setup` (the servos'
+return delay), :func:`teach` (read a pose; chosen joints limp first, after a confirmation), and what every motion shares
 (:class:`MotionResult`, :class:`Options`, :func:`checked`, :func:`run_planned`); playing a pose, a motion file or an
 action page and standing: :mod:`.stand`; the walks and getting up: :mod:`.walks`.
 
@@ -34,7 +34,7 @@ from op2motion.onrobot.plans import (
     physics_problem,
     robot_schedule,
 )
-from op2motion.onrobot.teleop import signed
+from op2motion.onrobot.teleop import signed_text
 from op2motion.robot.imu import FALL_TILT_RAD
 from op2motion.robot.limbs import describe_joints, limb_groups
 from op2motion.robot.pose import Pose
@@ -141,8 +141,9 @@ class MotionResult:
         emulated = self.emulated()
         if emulated is not None:
             truth = emulated["truth"]
-            out.append(f"  emulated OP2 (lockstep): torso at x {signed(truth['x_m'], 3)} m, y "
-                       f"{signed(truth['y_m'], 3)} m, heading {signed(math.degrees(truth['yaw_rad']), 1)}°, tilt "
+            heading = signed_text(math.degrees(truth["yaw_rad"]), 1)
+            out.append(f"  emulated OP2 (lockstep): torso at x {signed_text(truth['x_m'], 3)} m, y "
+                       f"{signed_text(truth['y_m'], 3)} m, heading {heading}°, tilt "
                        f"{math.degrees(truth['tilt_rad']):.1f}°")
         if self.fault is not None:
             out.append(f"  STOPPED: {self.fault.describe()}")
@@ -156,11 +157,11 @@ class MotionResult:
         if "distance_m" in t:
             out.append(f"  leg odometry: x {t['x_m']:+.3f} m, y {t['y_m']:+.3f} m, {t['distance_m']:.3f} m in all")
         if "gyro_heading_deg" in t:
-            out.append(f"  heading by the gyro: {signed(t['gyro_heading_deg'], 1)}°")
+            out.append(f"  heading by the gyro: {signed_text(t['gyro_heading_deg'], 1)}°")
         return out
 
 
-def status(port: RobotPort, spec: Spec) -> RobotStatus:
+def read_status(port: RobotPort, spec: Spec) -> RobotStatus:
     """The board and every servo (switching the servos' power on if it was off)."""
     with Session(port, spec) as session:
         return session.status()

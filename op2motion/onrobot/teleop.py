@@ -107,7 +107,8 @@ class Teleop:
         """The command for people: vx, vy [m/s], yaw rate [deg/s]."""
         vx, vy, yaw = self.command
         state = "ending" if self.ended else "walking"
-        return f"{state}: vx {signed(vx, 2)} m/s, vy {signed(vy, 2)} m/s, turn {signed(math.degrees(yaw), 0)} °/s"
+        return (f"{state}: vx {signed_text(vx, 2)} m/s, vy {signed_text(vy, 2)} m/s, "
+                f"turn {signed_text(math.degrees(yaw), 0)} °/s")
 
 
 def _exact(values: Any) -> tuple[float, ...]:
@@ -115,7 +116,7 @@ def _exact(values: Any) -> tuple[float, ...]:
     return tuple(0.0 if abs(v) < ZERO else float(v) for v in values)
 
 
-def signed(value: float, digits: int) -> str:
+def signed_text(value: float, digits: int) -> str:
     """``value`` with its sign and ``digits`` decimals, never a negative zero (a command whose keys cancelled to
     -1e-17, or a heading of -0.01° shown to a degree, reads ``+0``)."""
     return f"{round(value, digits) + 0.0:+.{digits}f}"

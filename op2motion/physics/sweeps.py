@@ -40,7 +40,7 @@ def servo_pose(spec: Spec, support: Support | SupportName = "left", **degrees: f
     return servo
 
 
-def balanced(spec: Spec, servo: np.ndarray, support: Support | Side, target_xy: Sequence[float] = (0.0, 0.0),
+def balanced_pose(spec: Spec, servo: np.ndarray, support: Support | Side, target_xy: Sequence[float] = (0.0, 0.0),
              iterations: int = 20) -> np.ndarray:
     """The pose with its full-inertia CoM over ``target_xy`` [m] of the support sole frame: the support ankle's
     roll and pitch tilt the whole body, the support hip roll turns back by the same roll (torso level)."""
@@ -101,7 +101,7 @@ def sweep_base(spec: Spec, support: Support | SupportName) -> np.ndarray:
     """The start of a lean sweep (see the module docstring) on ``left`` or ``double`` support."""
     if support == "double":
         return centred(spec, servo_pose(spec, "double", **ARMS_FORWARD))
-    return balanced(spec, servo_pose(spec, "left", **ARMS_FORWARD, **FOLDED_SWING), "left", ONE_LEG_COM_XY_M)
+    return balanced_pose(spec, servo_pose(spec, "left", **ARMS_FORWARD, **FOLDED_SWING), "left", ONE_LEG_COM_XY_M)
 
 
 def leaned(spec: Spec, base: np.ndarray, support: Support | SupportName, kind: str, degrees: float) -> np.ndarray:

@@ -2,8 +2,8 @@
 
 Each channel of :class:`~op2motion.robot.spec.ImuSpec` says which register measures what along which torso axis
 (x forward, y left, z up), with which sign and scale, and why (``specs/op2.toml``); nothing about the board's
-mounting is written here. :func:`decode` gives the gyro [rad/s] and the accelerometer's specific force [m/s²] a
-controller takes (:class:`~op2motion.physics.Controller`); :func:`encode` is its inverse for the emulated board.
+mounting is written here. :func:`decode_imu` gives the gyro [rad/s] and the accelerometer's specific force [m/s²] a
+controller takes (:class:`~op2motion.physics.Controller`); :func:`encode_imu` is its inverse for the emulated board.
 :func:`attitude` is the pitch and roll the gravity in a still accelerometer implies, and :class:`FallWatch` the
 framework's own fall test (the fore-aft count averaged over 30 ticks beyond FALLEN_F_LIMIT / FALLEN_B_LIMIT).
 """
@@ -35,7 +35,7 @@ def registers(imu: ImuSpec) -> tuple[int, ...]:
     return tuple(c.register for c in (*imu.gyro, *imu.accel))
 
 
-def decode(imu: ImuSpec, words: Mapping[int, int], centres: Mapping[int, float] | None = None
+def decode_imu(imu: ImuSpec, words: Mapping[int, int], centres: Mapping[int, float] | None = None
            ) -> tuple[np.ndarray, np.ndarray]:
     """Gyro (3,) [rad/s] and accelerometer (3,) [m/s²] in the torso frame from the board's words {register: count};
     ``centres`` {register: count} replaces the nominal centre where a channel was calibrated (:func:`gyro_centres`)."""
@@ -49,9 +49,9 @@ def decode(imu: ImuSpec, words: Mapping[int, int], centres: Mapping[int, float] 
 
 
 def decode_span(imu: ImuSpec, data: bytes, start: int) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`decode` from a block of the board's table read from address ``start``."""
+    """:func:`decode_imu` from a block of the board's table read from address ``start``."""
     words = {r: data[r - start] | (data[r - start + 1] << 8) for r in registers(imu)}
-    return decode(imu, words)
+    return decode_imu(imu, words)
 
 
 GYRO_SAMPLES = 100                 # the framework's GYRO_WINDOW_SIZE: samples averaged for the gyro's centres
@@ -73,7 +73,7 @@ def gyro_centres(imu: ImuSpec, samples: Sequence[Mapping[int, int]]) -> dict[int
     return out
 
 
-def encode(imu: ImuSpec, gyro_rad_s: np.ndarray, accel_m_s2: np.ndarray) -> dict[int, int]:
+def encode_imu(imu: ImuSpec, gyro_rad_s: np.ndarray, accel_m_s2: np.ndarray) -> dict[int, int]:
     """The board's words {register: count} that read as ``gyro_rad_s`` and ``accel_m_s2`` (torso frame), rounded to
     the nearest count and held within 0..max (the sensors saturate)."""
     out = {}

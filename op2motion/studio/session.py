@@ -24,7 +24,7 @@ from op2motion.errors import InputError
 from op2motion.fileio import write_atomic
 from op2motion.formats.posefile import pose_to_json
 from op2motion.kinematics.dh_chain import matrix_frames
-from op2motion.kinematics.report import evaluate
+from op2motion.kinematics.report import pose_report
 from op2motion.kinematics.shapes import self_clearance, shape_set
 from op2motion.model.compliance import Compliance
 from op2motion.robot.balance import (
@@ -152,7 +152,7 @@ class PoseEdit:
         """What the page shows for the pose as it is (see :class:`Readout`)."""
         spec, stance = self.spec, self.support.stance
         angles = servo_to_book(self.servo[None], stance, spec)
-        report = evaluate(angles, spec, "dh")
+        report = pose_report(angles, spec, "dh")
         points, full = report.points, report.com_full
         frames = matrix_frames(angles.vector(), spec, stance)
         clearance, pair = self_clearance(frames, shape_set(spec, stance))

@@ -25,9 +25,9 @@ def fk(angles: BookAngles, spec: Spec, model: ModelName = "dh", br: float = 1.0,
        ) -> TaskResult:
     """``fk``: every body point, both CoMs and the balance of ``angles`` on ``model``, the support sole at ``sole``
     [m] turned by ``heading_rad``; ``double``: measured on both feet."""
-    from op2motion.kinematics.report import evaluate
+    from op2motion.kinematics.report import pose_report
 
-    report = evaluate(angles, spec, model, br, sole, heading_rad, double)
+    report = pose_report(angles, spec, model, br, sole, heading_rad, double)
     return TaskResult(True, data=report.as_dict(spec), lines=(report.human(),), file_keys={})
 
 
@@ -116,7 +116,7 @@ def arm_ik(request: ArmMove, spec: Spec) -> TaskResult:
     result leaves a servo's cable-safe range (unless allowed) or misses the target beyond the tolerance."""
     from op2motion.figures.pose import Drawing, pose_figure
     from op2motion.kinematics.arm_ik import ARMS, solve_arm_ik
-    from op2motion.kinematics.report import evaluate
+    from op2motion.kinematics.report import pose_report
     from op2motion.robot.joints import book_to_servo, servo_dict
 
     tol = request.tol_mm / 1000.0
@@ -145,7 +145,7 @@ def arm_ik(request: ArmMove, spec: Spec) -> TaskResult:
                    f"{res.model.upper()} model")
     outputs = {}
     if request.plot and problem is None:
-        start = evaluate(res.initial, spec, res.model)
+        start = pose_report(res.initial, spec, res.model)
         target = start.points.point(arm.hand)[0] + res.requested
         lines = [f"{request.hand} hand moved by ({', '.join(f'{v * 1000:+.1f}' for v in res.requested)}) mm with "
                  f"{res.mode} arm IK: {deltas}; error {res.error_m * 1000:.3f} mm"]

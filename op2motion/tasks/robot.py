@@ -23,9 +23,9 @@ if TYPE_CHECKING:
 def robot_status(port: RobotPort, spec: Spec) -> TaskResult:
     """``robot status``: the board, the IMU and every servo; a "no" when a servo is missing, reports an error, is hot
     or the supply is low (the first problem named, and how many more)."""
-    from op2motion.onrobot.tasks import status
+    from op2motion.onrobot.tasks import read_status
 
-    state = status(port, spec)
+    state = read_status(port, spec)
     problem = None if state.ok else state.problems[0].describe() + (
         f" (and {len(state.problems) - 1} more)" if len(state.problems) > 1 else "")
     return TaskResult(problem is None, problem, tuple(state.warnings), {}, state.as_dict(), ("\n".join(state.lines()),),
@@ -68,7 +68,7 @@ def robot_read(port: RobotPort, spec: Spec, name: str, output: Path, support: Su
 
 
 def robot_motion(run: Callable[[Options], MotionResult], options: Options) -> TaskResult:
-    """A motion on the robot (``run``: a :mod:`op2motion.bus` motion, e.g. ``lambda o: play(port, spec, file,
+    """A motion on the robot (``run``: a :mod:`op2motion.bus` motion, e.g. ``lambda o: play_on_robot(port, spec, file,
     page, o)``) with ``options``: a fault that stopped it is a "no"; a stop asked for (``options.stop``) an
     interrupted one; a motion refused before it started (a check that ran and failed: the physics check, the
     preflight, a lying robot) a "no" too, its result saying so (``ended``: ``refused``)."""

@@ -8,8 +8,9 @@ limit (the active torque clipped at that share of the model's most torque, and s
 rated voltage). Back to the tables: present position, speed and load, voltage, temperature (a first-order thermal
 model: :data:`RISE_AT_STALL_C` above :data:`AMBIENT_C` at sustained stall torque, time constant
 :data:`THERMAL_TAU_S`), moving; and the board's gyro and accelerometer (:class:`~op2motion.physics.sensors.Imu`,
-sampled every 8 ms of simulated time) through the spec's IMU mapping (:func:`op2motion.robot.imu.encode`), its supply
-voltage. A servo held at its torque limit for :data:`OVERLOAD_S` latches the overload error.
+sampled every 8 ms of simulated time) through the spec's IMU mapping
+(:func:`~op2motion.robot.imu.encode_imu`), its supply voltage. A servo held at its torque limit for
+:data:`OVERLOAD_S` latches the overload error.
 
 Starts (:data:`STARTS`): ``standing`` (the book's standing pose on both feet, torque on), ``lying_front`` (face
 down), ``lying_back`` (face up), ``lying_left`` and ``lying_right`` (on that side; the physics check's lying
@@ -27,7 +28,7 @@ import numpy as np
 from op2motion.bus.emulator.bank import ServoTables
 from op2motion.bus.emulator.devices import Board, EmulatedServo
 from op2motion.bus.tables import SPEED_RAD_S_PER_UNIT, TORQUE_LIMIT_FULL, magnitudes
-from op2motion.robot.imu import encode, imu_of
+from op2motion.robot.imu import encode_imu, imu_of
 from op2motion.robot.spec import Spec
 
 if TYPE_CHECKING:
@@ -217,7 +218,7 @@ class EmulatedBody:
         overloaded = [servo.overloaded for servo in servos]
         tables.enforce_alarms(volts, temperature, any(overloaded) and np.array(overloaded))
         if self._imu_unsent:                           # the board's IMU words change when the IMU is read
-            for register, count in encode(self.imu, self.gyro, self.accel).items():
+            for register, count in encode_imu(self.imu, self.gyro, self.accel).items():
                 board.table[register:register + 2] = count.to_bytes(2, "little")
             self._imu_unsent = False
         board.set("voltage", volts)
