@@ -44,9 +44,11 @@ from op2motion.gait.learning import PlannedLearner, StepLearner
 from op2motion.gait.leg_targets import LegTargets
 from op2motion.gait.odometry import FootOdometry, PlannedOdometry, left_of
 from op2motion.gait.phases import Intent
+from op2motion.gait.planned_stop import splice_row, stop_planner
 from op2motion.gait.presets import load_preset
 from op2motion.gait.rows import RowBuffer, rows_of_gait, swing_phase
 from op2motion.gait.schedule import plan_of_gait
+from op2motion.gait.steer_feedback import RollingCalibration, RollingOdometry
 from op2motion.kinematics.leg_ik import leg_of
 from op2motion.motion.stillness import Stillness
 from op2motion.physics import Plan, Schedule
@@ -186,9 +188,6 @@ class WalkController(LegTargets, ControllerHooks):
         at half the stride and the one that closes the feet, then standing; before the first step, held where it
         is (on both feet); :attr:`done` once still. The leg odometry measures on; the step learner's corrections
         end there (a closing step learns nothing)."""
-        from op2motion.gait.planned_stop import splice_row, stop_planner
-        from op2motion.gait.steer_feedback import RollingCalibration
-
         if self.stopper is not None or self.held_row is not None:
             return
         at = splice_row(self.gait, self._k)
@@ -206,8 +205,6 @@ class WalkController(LegTargets, ControllerHooks):
     def _stopping_rows(self, k: int) -> None:
         """Stopped early: plan on (a stage a tick) and, at the first row planned again, measure the landings
         where the new rows say they happen."""
-        from op2motion.gait.steer_feedback import RollingOdometry
-
         if self.stopper is None or self.stopped_from is None or k < 0:
             return
         self.stopper.tick(k, _stopping)
