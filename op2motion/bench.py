@@ -16,6 +16,7 @@ import numpy as np
 from op2motion import book
 from op2motion.bench_wall import wall_figures
 from op2motion.formats.action import ActionFile
+from op2motion.jsonout import JsonObject
 from op2motion.kinematics import forward
 from op2motion.kinematics.dh_chain import matrix_frames
 from op2motion.kinematics.shapes import clearances, shape_set
@@ -69,7 +70,7 @@ def _full_com_vs_pinocchio_m(spec: Spec, poses: BookAngles) -> float:
     return max(float(np.linalg.norm(full[:, i] - dyn.com(servo[i], poses.support))) for i in range(n))
 
 
-def _studio_figures(spec: Spec, repeat: int) -> dict[str, Any]:
+def _studio_figures(spec: Spec, repeat: int) -> JsonObject:
     """``studio_update_ms``: one joint edit in the pose studio and everything the page shows after it (both CoMs,
     margins, the settled CoM, swing-foot clearance, self-clearance, ticks); the check: the readout of the edit."""
     from op2motion.robot.pose import Pose
@@ -104,7 +105,7 @@ def check_bench_action(action: ActionFile, spec: Spec) -> ActionFile:
     return action
 
 
-def _motion_figures(spec: Spec, action: ActionFile | None, repeat: int) -> dict[str, Any]:
+def _motion_figures(spec: Spec, action: ActionFile | None, repeat: int) -> JsonObject:
     """``motion_play_ms``: the page player on one stock page (emulation only); ``motion_validate_ms``: that
     page's goals played into the servo model in PyBullet (plus settling and the final hold). None without a file."""
     if action is None:
@@ -126,7 +127,7 @@ def _motion_figures(spec: Spec, action: ActionFile | None, repeat: int) -> dict[
 BENCH_ARM_SWING_DEG = {"r_sho_pitch": (69.0, -178.0), "r_sho_roll": (-63.0, -51.0), "r_el": (-29.0, -24.0)}
 
 
-def _planning_figures(spec: Spec, action: ActionFile | None, repeat: int) -> dict[str, Any]:
+def _planning_figures(spec: Spec, action: ActionFile | None, repeat: int) -> JsonObject:
     """``route_plan_ms``: planning around a collision (the right arm swung from in front of the hip to behind the
     shoulder, from the stock init pose; the straight line puts the elbow through the hip); ``line_move_ms``: the
     right hand 5 cm forward in 1 s from the stock walk-ready pose (page 9) with the whole-body IK (126 rows).
@@ -156,7 +157,7 @@ def _planning_figures(spec: Spec, action: ActionFile | None, repeat: int) -> dic
             "check_line_deviation_m": round(float(out["m"].deviation_m.max()), 6)}
 
 
-def _walk_figures(spec: Spec, repeat: int) -> dict[str, Any]:
+def _walk_figures(spec: Spec, repeat: int) -> JsonObject:
     """``walk_plan_ms``: planning the shipped ``forward`` gait (20 steps: footsteps, preview control, multibody
     correction passes, IK); ``walk_validate_ms``: playing it into the servo model in PyBullet."""
     from op2motion.gait import gait_schedule, generate_gait, preset_path, read_preset
@@ -174,7 +175,7 @@ def _walk_figures(spec: Spec, repeat: int) -> dict[str, Any]:
             "check_walk_speed_mps": round(min(run.walk.mean_speed_mps, other.walk.mean_speed_mps), 4)}
 
 
-def _robot_figures(spec: Spec) -> dict[str, Any]:
+def _robot_figures(spec: Spec) -> JsonObject:
     """``robot_loop_p99_ms`` and ``robot_status_ms``: the 8 ms loop and a status read through the emulated OP2 in a
     process beside this one (:mod:`op2motion.onrobot.bench`)."""
     from op2motion.onrobot.bench import robot_figures
@@ -184,7 +185,7 @@ def _robot_figures(spec: Spec) -> dict[str, Any]:
 
 def run_bench(spec: Spec, n: int = BENCH_POSES, repeat: int = 9, seed: int = 0,
               action: ActionFile | None = None, wall_runs: int = 0, wall_library: bool = True,
-              wall_grid: Sequence[str] = ()) -> dict[str, Any]:
+              wall_grid: Sequence[str] = ()) -> JsonObject:
     """Time batched forward kinematics + CoM for ``n`` poses with each model, one physics validation, one PSO
     solve and (given an action file's bytes) one page played and validated; figures in milliseconds (scaled to
     40 000 poses), with their correctness checks. The physics validations and the PSO solve are timed

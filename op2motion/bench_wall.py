@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from op2motion.errors import Op2MotionError
+from op2motion.jsonout import JsonObject
 
 WALL_TIMEOUT_S = 600.0
 
@@ -42,7 +43,7 @@ def _environment() -> dict[str, str]:
     return {**os.environ, "PYTHONPATH": here + (os.pathsep + path if path else "")}
 
 
-def _timed(argv: list[str], cwd: Path) -> tuple[float, subprocess.CompletedProcess]:
+def _timed(argv: list[str], cwd: Path) -> tuple[float, subprocess.CompletedProcess[str]]:
     t0 = time.perf_counter()
     done = subprocess.run([*program(), *argv], cwd=cwd, capture_output=True, text=True, timeout=WALL_TIMEOUT_S,
                           env=_environment())
@@ -112,7 +113,7 @@ def shell_runs(argv: list[str], runs: int, files: bool = False, folders: Sequenc
     return out
 
 
-def wall_figures(runs: int = 3, library: bool = True, grid: Sequence[str] = ()) -> dict[str, Any]:
+def wall_figures(runs: int = 3, library: bool = True, grid: Sequence[str] = ()) -> JsonObject:
     """``cli_start_s`` (``--help``), ``main_job_s`` (``optimize``, the default problem, its figures written) and
     ``main_job_validate_s`` (``optimize --validate``), each the best of ``runs`` to the command's exit, beside the
     median and the best time to the first line of the answer (``*_answer_s``: the result is printed while the

@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Any, Callable, Literal
+from typing import Callable, Literal
+
+from op2motion.jsonout import JsonObject
 
 #: A joint range: the ``mechanical`` (hard) stops or the ``cable-safe`` (advice) range.
 LimitKind = Literal["mechanical", "cable-safe"]
@@ -124,7 +126,7 @@ class LimitViolation:
         return (f"{self.joint} = {self.value_deg:.1f}° is outside its {self.kind} range "
                 f"[{self.lower_deg:g}°, {self.upper_deg:g}°]")
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """JSON-ready dict."""
         return {"joint": self.joint, "value_deg": self.value_deg, "lower_deg": self.lower_deg,
                 "upper_deg": self.upper_deg, "kind": self.kind}

@@ -13,6 +13,7 @@ from functools import partial
 from typing import Any, Callable
 
 from op2motion.errors import ref
+from op2motion.jsonout import JsonObject
 from op2motion.physics import DEFAULT_SECONDS, EngineName, RunReport, Schedule, check
 from op2motion.posture.cost import PostureProblem
 from op2motion.posture.pso import PSOSettings
@@ -59,7 +60,7 @@ class Outcome:
                     f"{r.problem.br:g}): the pose is likely to fall; check it in physics ({ref('validate')})"]
         return []
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """JSON-ready: the metrics, the verdict and the validation."""
         r = self.result
         out = {"reached": r.reached, "message": r.message, **r.as_dict(), "iterations": int(len(r.pso.history)),

@@ -33,6 +33,11 @@ INVOCATIONS: dict[str, list[str]] = {
                       "--time", "0.5", "-o", "OUT.motion"],
     "urdf": ["urdf", "-o", "OUT.urdf"],
     "motion play": ["motion", "play", str(DATA / "motion_4096.bin"), "--page", "9"],
+    "walk": ["walk", "--steps", "4", "--plot", "OUT.png", "--out", "OUT.csv"],
+    "walk commands": ["walk", "--commands", str(ROOT / "examples" / "steer_commands.csv")],
+    "optimize": ["optimize", "--out", "OUT.json", "--plot", "OUT.png", "--iters", "20", "--particles", "20"],
+    "list pages": ["import-action", str(DATA / "motion_4096.bin")],
+    "urdf shown": ["urdf"],
 }
 
 

@@ -17,6 +17,7 @@ from helpers import source_tree
 PACKAGE = Path(__file__).resolve().parents[1] / "op2motion"
 #: Layers, lowest first. A module may import modules of lower layers and of its own package; never higher ones.
 LAYERS = [
+    {"jsonout"},
     {"errors", "version", "processes"},
     {"book", "fileio", "bench_wall"},
     {"robot"},

@@ -21,9 +21,13 @@ STILL_BUILDING: set[str] = set()
 
 
 def test_a_result_has_a_problem_exactly_when_it_is_a_no():
-    assert TaskResult(True).as_dict() == {"files": {}}
-    no = TaskResult(False, "page 9: does not get through", (), {"plot": Output("a.png", b"png")}, {"page": 9})
+    assert TaskResult(True).as_dict() == {}
+    assert TaskResult(True, data={"files": {}}).as_dict() == {"files": {}}
+    no = TaskResult(False, "page 9: does not get through", (), {"plot": Output("a.png", b"png")},
+                    {"page": 9, "files": {}})
     assert no.as_dict({"plot": "a.png"}) == {"page": 9, "warnings": [], "files": {"plot": "a.png"}}
+    keyed = TaskResult(True, outputs={"gui_png": Output("b.png", b"png", key="png")}, data={"pose": "x"})
+    assert keyed.as_dict({"gui_png": "b.png"}) == {"pose": "x", "png": "b.png"}
     for ok, problem in ((True, "why"), (False, None)):
         with pytest.raises(ValueError, match="problem exactly when"):
             TaskResult(ok, problem)

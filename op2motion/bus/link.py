@@ -25,6 +25,7 @@ from op2motion.bus.port import BAUD, sysfs_timer_path
 from op2motion.bus.protocol import MIN_PACKET_BYTES
 from op2motion.bus.tables import BOARD_SPAN, CM730_ID, MX28, SERVO_STATE_SPAN
 from op2motion.errors import InputError, shown
+from op2motion.jsonout import JsonObject
 
 BYTE_S = 10.0 / BAUD               # one byte on the wire: start, 8 data, stop bits [s]
 ASSUMED_TAIL_S = 0.017             # before the link is measured: the kernel's 16 ms latency timer, and 1 ms more
@@ -93,13 +94,19 @@ class LinkCheck:
     round_trips_s: tuple[float, ...]
     tail_s: float
 
-    def as_dict(self) -> dict[str, Any]:
-        """JSON-ready (milliseconds)."""
+    @property
+    def median_round_trip_s(self) -> float | None:
+        """The median ping round trip [s] (None: no ping answered)."""
         trips = sorted(self.round_trips_s)
+        return trips[len(trips) // 2] if trips else None
+
+    def as_dict(self) -> JsonObject:
+        """JSON-ready (milliseconds)."""
+        median = self.median_round_trip_s
         return {"latency_timer_ms": self.latency_timer_ms, "low_latency": self.low_latency,
-                "ping_round_trip_ms": {"median": round(trips[len(trips) // 2] * 1000, 3) if trips else None,
-                                       "max": round(trips[-1] * 1000, 3) if trips else None},
-                "tail_ms": round(self.tail_s * 1000, 3)}
+                "ping_round_trip_ms": {"median": None if median is None else median * 1000,
+                                       "max": max(self.round_trips_s) * 1000 if self.round_trips_s else None},
+                "tail_ms": self.tail_s * 1000}
 
     def describe(self) -> str:
         """One line for people."""
@@ -165,7 +172,7 @@ class ReadPlan:
             rotating = servos[(k // math.ceil(n / m)) % m]
         return tick_spans(servos, rotating), rotating
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """JSON-ready (milliseconds)."""
         return {"servos_per_tick": self.servos_per_tick, "servos": self.count,
                 "bulk_read_ms": round(self.tick_s * 1000, 3), "bulk_read_wire_ms": round(self.wire_s * 1000, 3)}

@@ -50,6 +50,7 @@ from op2motion.bus.tables import (
     TORQUE_LIMIT_FULL,
 )
 from op2motion.errors import CheckFailed, InputError, PortFailed
+from op2motion.jsonout import JsonObject
 from op2motion.robot.controller import Controller, GoalMerger
 from op2motion.robot.framework import CONTROL_PERIOD_S
 from op2motion.robot.imu import decode_imu
@@ -107,7 +108,7 @@ class LoopReport:
     plan: dict[str, Any] = field(default_factory=dict)
     last_row: int = -1
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """JSON-ready (angles in degrees)."""
         return {"ticks": self.ticks, "seconds": round(self.seconds, 3),
                 "period_ms": {"p50": round(self.period_p50_ms, 3), "p99": round(self.period_p99_ms, 3),
@@ -139,7 +140,7 @@ def controller_time(k: int, phase_s: float) -> float:
 class _Run:
     """The state of one loop run."""
 
-    def __init__(self, controller: Controller, robot: OP2, watch: bool):
+    def __init__(self, controller: Controller[Any], robot: OP2, watch: bool):
         self.controller, self.robot = controller, robot
         self.spec: Spec = robot.spec
         self.names = self.spec.joint_names
@@ -221,7 +222,8 @@ class _Run:
         for i in np.flatnonzero(where):
             self.report.clipped[self.names[i]] = self.report.clipped.get(self.names[i], 0) + 1
         self.goals = clipped
-        return np.clip(np.rint(self.merger.p_gains(row)), 0, MAX_P_GAIN).astype(int)
+        gains: np.ndarray = np.clip(np.rint(self.merger.p_gains(row)), 0, MAX_P_GAIN).astype(int)
+        return gains
 
     def limit(self) -> None:
         """The controller's torque limits, written when they change (a supervisor lowers them while the robot
@@ -291,7 +293,7 @@ def jump(goals: Any, run: _Run) -> None:
                           f"run_on_robot), which moves the robot there first, checked in physics")
 
 
-def run_controller(controller: Controller, port: RobotPort | OP2, spec: Spec | None = None, *,
+def run_controller(controller: Controller[Any], port: RobotPort | OP2, spec: Spec | None = None, *,
                    duration_s: float | None = None, stop: threading.Event | None = None,
                    on_tick: Callable[[Tick], None] | None = None, watch: bool = True,
                    until_done: bool = False) -> LoopReport:

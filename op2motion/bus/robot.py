@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Sequence
 
 import numpy as np
 
@@ -34,6 +34,7 @@ from op2motion.bus.tables import (
     signed,
 )
 from op2motion.errors import CheckFailed, InputError, shown
+from op2motion.jsonout import JsonObject
 from op2motion.robot.framework import DEFAULT_P_GAIN
 from op2motion.robot.imu import GYRO_SAMPLES, attitude, decode_span, gyro_centres, imu_of
 from op2motion.robot.joints import servo_to_ticks, ticks_to_servo
@@ -64,7 +65,7 @@ class BoardState:
     errors: tuple[str, ...]
     return_delay: int = 0
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """JSON-ready (angles in degrees)."""
         return {"id": CM730_ID, "model_number": self.model_number,
                 "model": model_name(self.model_number) or f"model {self.model_number:#06x}",
@@ -103,7 +104,7 @@ class ServoState:
     errors: tuple[str, ...] = field(default=())
     return_delay: int = 0
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """JSON-ready (angles in degrees)."""
         if not self.answers:
             return {"id": self.id, "joint": self.joint, "answers": False}

@@ -39,6 +39,7 @@ import numpy as np
 
 from op2motion.bus.tables import BOARD_MODELS, CM730_ID, MX28_MODEL_NUMBER, model_name
 from op2motion.errors import CheckFailed, InputError, PortFailed
+from op2motion.jsonout import JsonObject
 from op2motion.robot.imu import ARM_TILT_RAD, FALL_TILT_RAD, FallWatch, attitude
 from op2motion.robot.joints import joint_range
 from op2motion.robot.spec import ImuSpec, Spec
@@ -82,7 +83,7 @@ class Fault:
             return f"{who} reports {self.reports}"
         return f"{who}: {self.kind}" + (f" ({self.detail})" if self.detail else "")
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """JSON-ready."""
         return {"kind": self.kind, "joint": self.joint, "id": self.id, "detail": self.detail,
                 "text": self.describe()}

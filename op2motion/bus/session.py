@@ -29,6 +29,7 @@ from op2motion.bus.safety import (
 )
 from op2motion.bus.tables import CM730_ID, model_name
 from op2motion.errors import CheckFailed
+from op2motion.jsonout import JsonObject
 from op2motion.robot.spec import Spec
 
 HOLD_AFTER_S = 0.5                 # an emulated OP2 of the session's own holds its last goals this long at its end
@@ -73,7 +74,7 @@ class RobotStatus:
         """All well: every servo answers, none reports an error, none is hot, the supply is within rating."""
         return not self.problems
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """JSON-ready."""
         return {"ok": self.ok, "board": self.board.as_dict(), "servos": [s.as_dict() for s in self.servos],
                 "problems": [p.as_dict() for p in self.problems], "powered_now": self.powered_now,

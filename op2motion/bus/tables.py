@@ -261,5 +261,6 @@ def magnitude(value: float) -> int:
 def magnitudes(values: np.ndarray) -> np.ndarray:
     """:func:`magnitude` of each of ``values`` (finite), as an int64 array."""
     m = np.minimum(np.rint(np.abs(values)), DIRECTION_BIT - 1).astype(np.int64)
-    return np.where(values < -0.5, m | DIRECTION_BIT, m)      # negative and a magnitude of 1 or more (0.5 rounds
-    #                                                           to the even 0, as round does)
+    # negative and a magnitude of 1 or more (0.5 rounds to the even 0, as round does)
+    out: np.ndarray = np.where(values < -0.5, m | DIRECTION_BIT, m)
+    return out

@@ -13,12 +13,14 @@ import math
 import os
 import re
 import sys
-from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Mapping, Sequence
 
 from op2motion.errors import InputError, OutputError, one_line, ref, render_refs
 
 if TYPE_CHECKING:
     from op2motion.physics import EngineName
+    from op2motion.robot.joints import BookAngles
+    from op2motion.robot.pose import Pose
     from op2motion.robot.spec import Spec
 
 Handler = Callable[[argparse.Namespace, "Spec"], int]
@@ -97,16 +99,19 @@ class _Registered:
 
 def add_command(sub: Any, name: str, handler: Handler, help_: str, description: str | None = None) -> Parser:
     """A subcommand with ``--json`` whose parsed arguments call ``handler``."""
-    p = sub.add_parser(name, help=help_, description=description or help_)
+    p: Parser = sub.add_parser(name, help=help_, description=description or help_)
     p.add_argument("--json", action="store_true", help="print the result as JSON on stdout (nothing else there)")
     p.set_defaults(func=handler, parser=p)
     return p
 
 
-def emit(args: argparse.Namespace, result: dict[str, Any], text: str) -> None:
-    """Print ``result`` as JSON with ``--json``, else ``text`` for people."""
+def emit(args: argparse.Namespace, result: Mapping[str, object], text: str) -> None:
+    """Print ``result`` as JSON with ``--json`` (through the one encoder, :func:`op2motion.jsonout.to_json`), else
+    ``text`` for people."""
     if args.json:
-        json.dump(result, sys.stdout, indent=2, allow_nan=False)
+        from op2motion.jsonout import to_json
+
+        json.dump(to_json(result), sys.stdout, indent=2, allow_nan=False)
         sys.stdout.write("\n")
     elif text:
         print(text)
@@ -229,7 +234,8 @@ def book_args(p: argparse.ArgumentParser, pose_flag: bool = True) -> None:
         p.add_argument("--pose", metavar="FILE", help="a pose file instead of --th/--phi")
 
 
-def angles_from(args: argparse.Namespace, spec: Spec, pose_path: str | None = None, default_standing: bool = False):
+def angles_from(args: argparse.Namespace, spec: Spec, pose_path: str | None = None, default_standing: bool = False
+                ) -> tuple[BookAngles, str, Pose | None]:
     """Book angles and a name from a pose file, or ``--th``/``--phi``[/``--psi``] ``--support``, or (when
     ``default_standing``) the book's standing pose. Returns ``(BookAngles, name, Pose | None)``."""
     from op2motion.formats.posefile import read_pose

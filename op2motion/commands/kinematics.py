@@ -82,7 +82,7 @@ def cmd_fk(args: argparse.Namespace, spec: Spec) -> int:
     return deliver(args, fk(angles, spec, args.model, args.br, sp, math.radians(args.gamma), double))
 
 
-def _servo_mapping(text: str) -> dict:
+def _servo_mapping(text: str) -> dict[str, Any]:
     """``--servo-deg``: JSON text, a JSON file of {joint: deg}, or a pose file (its ``servo_deg``)."""
     from op2motion.fileio import read_text
 
@@ -94,7 +94,8 @@ def _servo_mapping(text: str) -> dict:
         raise InputError(f"not valid JSON: {exc.msg}", "servo_deg") from None
     if isinstance(doc, dict) and "servo_deg" in doc and "schema" in doc:   # a pose file
         doc = doc["servo_deg"]
-    return doc
+    mapping: dict[str, Any] = doc
+    return mapping
 
 
 def cmd_convert(args: argparse.Namespace, spec: Spec) -> int:

@@ -77,9 +77,9 @@ class _Job:
 
     conn: Any
     fn: Callable[..., Any]
-    args: tuple
+    args: tuple[Any, ...]
     staged: bool
-    later: tuple = ()
+    later: tuple[Any, ...] = ()
 
 
 class Renderers:
@@ -124,7 +124,7 @@ class Renderers:
         ``finish(*later)`` is the job's result, called when :meth:`finish` gives ``later``."""
         return self._hand(make, args, True)
 
-    def _hand(self, fn: Callable[..., Any], args: tuple, staged: bool) -> int:
+    def _hand(self, fn: Callable[..., Any], args: tuple[Any, ...], staged: bool) -> int:
         conn = None
         if self._idle:
             _, conn = self._idle.pop(0)

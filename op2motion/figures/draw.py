@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import io
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from types import ModuleType
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
@@ -20,6 +21,9 @@ from op2motion.kinematics.points import BodyPoints
 from op2motion.robot.balance import COM_MODEL_FULL, support_polygon
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import SIDES, Side, Support, as_side
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 LEFT_COLOUR, RIGHT_COLOUR, BODY_COLOUR = "tab:blue", "tab:red", "black"
 SIDE_COLOURS: tuple[tuple[Side, str], ...] = (("left", LEFT_COLOUR), ("right", RIGHT_COLOUR))
@@ -68,7 +72,7 @@ class TitleBlock:
     extra: dict[str, Any] = field(default_factory=dict)
 
 
-def _pyplot():
+def _pyplot() -> ModuleType:
     """matplotlib's pyplot on the Agg backend (no display needed)."""
     import matplotlib
 
@@ -86,8 +90,9 @@ def _png(fig: Any) -> bytes:
     return buf.getvalue()
 
 
-def _draw(ax, xyz: dict[str, np.ndarray], fig: PoseFigure, spec: Spec, h: int | None, v: int | None) -> None:
-    def line(pts: np.ndarray, **kw) -> None:
+def _draw(ax: Any, xyz: dict[str, np.ndarray], fig: PoseFigure, spec: Spec, h: int | None, v: int | None) -> None:
+    """The pose on ``ax`` (a matplotlib Axes: 3D when ``h`` is None, else the plane of axes ``h``, ``v``)."""
+    def line(pts: np.ndarray, **kw: Any) -> None:
         if h is None:
             ax.plot(pts[:, 0], pts[:, 1], pts[:, 2], **kw)
         else:
@@ -127,7 +132,7 @@ def _draw(ax, xyz: dict[str, np.ndarray], fig: PoseFigure, spec: Spec, h: int | 
              markeredgecolor="black", linestyle="none")
 
 
-def _legend_handles(figures: Sequence[PoseFigure]) -> list:
+def _legend_handles(figures: Sequence[PoseFigure]) -> list[Artist]:
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 

@@ -37,7 +37,9 @@ def verdict_of(validation: RunReport | None, metrics: Mapping[str, Any] | None =
 
 
 def _numbers(report: PoseReport, double: bool = False) -> list[str]:
-    mm = lambda v: f"{v * 1000:+6.1f} mm"  # noqa: E731
+    def mm(v: float) -> str:
+        return f"{v * 1000:+6.1f} mm"
+
     com, full = report.com, report.com_full
     if double:
         return [f"CoM lumped (book)  ({com[0]:+.3f}, {com[1]:+.3f}, {com[2]:.3f}) m",
@@ -114,7 +116,7 @@ def _outcome_drawing(outcome: Outcome) -> Drawing:
     return Drawing(br=p.br, target=p.target, lines=lines)
 
 
-def _pose_key(outcome: Outcome) -> tuple:
+def _pose_key(outcome: Outcome) -> tuple[object, ...]:
     """Everything the pose figure of an outcome shows but the physics verdict."""
     a, d = outcome.result.angles, _outcome_drawing(outcome)
     return (a.th.tobytes(), a.phi.tobytes(), a.psi.tobytes(), str(a.support), d.br, tuple(d.target or ()),
@@ -143,7 +145,12 @@ def outcome_pose_figure(outcome: Outcome, name: str, spec: Spec) -> tuple[bytes,
     return StagedPoseFigure(outcome, name, spec).finish(outcome)
 
 
-def _cost_curve_args(outcome: Outcome, name: str) -> tuple:
+#: :func:`.render_cost_curve`'s arguments: each attempt's costs and hand errors, the threshold [m], the title, the
+#: kept attempt, and (final cost, hand error [m], method).
+_CostCurveArgs = tuple[list[np.ndarray], list[np.ndarray], float, str, int, tuple[float, float, str]]
+
+
+def _cost_curve_args(outcome: Outcome, name: str) -> _CostCurveArgs:
     """What :func:`.render_cost_curve` is given for an ``optimize`` outcome (every attempt)."""
     r = outcome.result
     attempts = r.attempt_pso or (r.pso,)
@@ -152,7 +159,7 @@ def _cost_curve_args(outcome: Outcome, name: str) -> tuple:
             (float(r.terms.total[0]), r.hand_error_m, r.method))
 
 
-def _cost_key(outcome: Outcome, name: str) -> tuple:
+def _cost_key(outcome: Outcome, name: str) -> tuple[object, ...]:
     histories, errors, *rest = _cost_curve_args(outcome, name)
     return (tuple(np.asarray(h).tobytes() for h in histories), tuple(np.asarray(e).tobytes() for e in errors),
             *rest)

@@ -319,7 +319,8 @@ class WalkController(LegTargets, ControllerHooks):
         error = self.rows.get("joints", k)[self.leg_index] - measured
         trim = s.joint_integral[self.leg_index] + self.feedback.joint_ki * error * CONTROL_PERIOD_S
         s.joint_integral[self.leg_index] = np.minimum(np.maximum(trim, -MAX_TRIM_RAD), MAX_TRIM_RAD)   # np.clip
-        return s.joint_integral
+        trims: np.ndarray = s.joint_integral
+        return trims
 
     def _estimate(self, gyro: Sequence[float], accel: np.ndarray | Sequence[float], k: int) -> tuple[float, float]:
         """Update the attitude estimate and the error integral from the (pitch, roll) rates [rad/s] and the

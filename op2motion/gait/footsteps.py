@@ -162,7 +162,8 @@ def sole_rectangle(spec: Spec, step: Footstep, grow: float = 0.0) -> np.ndarray:
     local = np.array([[front + grow, left + grow], [-back - grow, left + grow], [-back - grow, -right - grow],
                       [front + grow, -right - grow]])
     c, s = math.cos(step.yaw), math.sin(step.yaw)
-    return local @ np.array([[c, s], [-s, c]]) + np.array([step.x, step.y])
+    corners: np.ndarray = local @ np.array([[c, s], [-s, c]]) + np.array([step.x, step.y])
+    return corners
 
 
 def _overlap(a: np.ndarray, b: np.ndarray) -> bool:

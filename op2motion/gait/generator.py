@@ -202,14 +202,16 @@ def servo_feedforward(spec: Spec, configs: np.ndarray, v: np.ndarray, a: np.ndar
     dq, ddq = v[:, dyn.v_index], a[:, dyn.v_index]
     torques += servo.damping * dq + servo.armature * ddq + servo.friction * np.tanh(dq / FRICTION_SMOOTH_RAD_S)
     linear = servo.torque_max / servo.kp
-    return np.clip(smoothed(torques / servo.kp, SMOOTH_ROWS), -linear, linear)
+    sag: np.ndarray = np.clip(smoothed(torques / servo.kp, SMOOTH_ROWS), -linear, linear)
+    return sag
 
 
 def torso_rotations(feet: dict[str, np.ndarray], params: GaitParams) -> np.ndarray:
     """The torso's rotation (K, 3, 3) at each row of the soles (K, 4): the feet's mean heading, the preset's lean."""
     yaw = feet["left"][:, 3] + 0.5 * np.remainder(feet["right"][:, 3] - feet["left"][:, 3] + np.pi, 2 * np.pi) - (
         0.5 * np.pi)
-    return rot_z(yaw) @ rot_y(math.radians(params.torso_pitch_deg))
+    rotations: np.ndarray = rot_z(yaw) @ rot_y(math.radians(params.torso_pitch_deg))
+    return rotations
 
 
 def standing_height(params: GaitParams, spec: Spec) -> float:

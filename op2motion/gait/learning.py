@@ -71,7 +71,7 @@ class StepLearner(ABC):
         if where is None:
             return np.zeros(self.size)
         side, r = where
-        out = self.memory[side][r].copy()
+        out: np.ndarray = self.memory[side][r].copy()
         if r == self.rows - 1:
             self._commit(side)
         return out

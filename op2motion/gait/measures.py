@@ -22,11 +22,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from op2motion.errors import InputError
+from op2motion.jsonout import JsonObject
 from op2motion.physics import Plan, StartFacts, Track, WalkClock, WorstTorque, margin_to
 from op2motion.robot.spec import Spec
 
@@ -51,7 +51,7 @@ class WalkMeasures:
     cop_inside_fraction: float
     worst_torque: WorstTorque
 
-    def robust_row(self) -> dict[str, Any]:
+    def robust_row(self) -> JsonObject:
         """The walk's columns in the robustness family's JSON (:func:`op2motion.physics.robust_summary`): steady
         speed [m/s], lateral drift [m], heading error [deg], distance [m], rounded."""
         return {"mean_speed_mps": round(self.mean_speed_mps, 4), "lateral_drift_m": round(self.lateral_drift_m, 4),

@@ -57,13 +57,18 @@ left), so the mean speed is about ``step_length_m / step_s``. Keys (defaults in 
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
 from op2motion.errors import InputError
 from op2motion.robot.framework import CONTROL_PERIOD_S, DEFAULT_P_GAIN
-from op2motion.robot.specfile import tomllib
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
 
 MIN_STEP_WIDTH_M = 0.06     # narrower side-by-side feet would overlap (the OP2's soles reach 23 mm inwards)
 

@@ -6,13 +6,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict
-from typing import Any
 
 import numpy as np
 
 from op2motion.errors import InputError
 from op2motion.formats.tables import goals_csv, webots_rows
 from op2motion.gait.generator import Gait
+from op2motion.gait.measures import WalkMeasures
+from op2motion.jsonout import JsonObject
 from op2motion.physics import CheckReport, EngineReport, Pushes, RunReport
 from op2motion.physics.report import OPPOSITE
 from op2motion.robot.spec import Spec
@@ -21,7 +22,7 @@ STILL_M = 1e-3       # a plan that ends this close to where it started walks in 
 #                      sway alone would show one over a short window)
 
 
-def gait_summary(gait: Gait) -> dict[str, Any]:
+def gait_summary(gait: Gait) -> JsonObject:
     """The plan's figures: steps, durations, distance and speed, ZMP margin, CoM height, footsteps, parameters."""
     end = gait.end_pose()
     distance = float(np.hypot(end[0], end[1]))
@@ -56,12 +57,22 @@ def gait_webots(gait: Gait, spec: Spec) -> str:
     return webots_rows(gait.times, gait.goals, spec, names)
 
 
-def _run_summary(run: RunReport) -> dict[str, Any]:
-    """One walking run's JSON: its setup, verdict and walking measurements."""
+def measured_walk(run: RunReport) -> WalkMeasures:
+    """A walking run's walking measurements.
+
+    Raises:
+        InputError: ``run`` is not a walk's (its plan had no walking clock).
+    """
     w = run.walk
-    if w is None:
+    if not isinstance(w, WalkMeasures):
         raise InputError(f"expected the run of a walk (with walking measurements), got a {run.engine} run of a plan "
                          "without a walking clock", "report")
+    return w
+
+
+def _run_summary(run: RunReport) -> JsonObject:
+    """One walking run's JSON: its setup, verdict and walking measurements."""
+    w = measured_walk(run)
     return {"engine": run.engine, "servo": run.servo, "time_step_s": run.time_step_s, "seconds": run.seconds,
             "fell": run.fell, "reasons": run.reasons, "distance_m": round(w.distance_m, 4),
             "mean_speed_mps": round(w.mean_speed_mps, 4), "overall_speed_mps": round(w.overall_speed_mps, 4),
@@ -72,7 +83,7 @@ def _run_summary(run: RunReport) -> dict[str, Any]:
             "failures": [{"reason": f.reason, "time_s": round(f.time_s, 3), "detail": f.detail} for f in run.failures]}
 
 
-def engine_summary(report: EngineReport, walk_start_s: float) -> dict[str, Any]:
+def engine_summary(report: EngineReport, walk_start_s: float) -> JsonObject:
     """One engine's walk JSON: the main run, the side pushes (``from`` the side the push comes from, ``at_s`` [s]
     into the walk) and the perturbed trials."""
     out = _run_summary(report.run)
@@ -87,7 +98,7 @@ def engine_summary(report: EngineReport, walk_start_s: float) -> dict[str, Any]:
     return out
 
 
-def walk_summary(report: CheckReport, walk_start_s: float) -> dict[str, Any]:
+def walk_summary(report: CheckReport, walk_start_s: float) -> JsonObject:
     """The walk's physics JSON: each engine's summary, ``fell`` (any engine's main run), ``agree`` and whether
     every push was survived."""
     return {"engines": {name: engine_summary(e, walk_start_s) for name, e in report.engines.items()},

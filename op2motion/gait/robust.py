@@ -48,8 +48,9 @@ def walk_badness(run: RobustRun) -> float:
     if run.report.run.fell or walk is None:
         return 1e6
     distance = max(walk.distance_m, MIN_DISTANCE_M)
-    return max(walk.lateral_drift_m / distance / MAX_DRIFT_SHARE, abs(walk.heading_error_deg) / MAX_HEADING_DEG,
-               -walk.mean_speed_mps)
+    badness: float = max(walk.lateral_drift_m / distance / MAX_DRIFT_SHARE,
+                         abs(walk.heading_error_deg) / MAX_HEADING_DEG, -walk.mean_speed_mps)
+    return badness
 
 
 def _walk_cells(run: RobustRun) -> list[str]:

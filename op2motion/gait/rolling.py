@@ -155,7 +155,8 @@ class RollingPlanner:
     @property
     def standing_goals(self) -> np.ndarray:
         """The planned joints (20,) [rad] of the standing robot before the first phase."""
-        return self.history.joints[-1].copy()
+        goals: np.ndarray = self.history.joints[-1].copy()
+        return goals
 
     def _window(self, feet: dict[str, np.ndarray], contact: tuple[SupportName, ...], ref: np.ndarray, history: int,
                 rows: int) -> _Window:
@@ -331,7 +332,8 @@ class RollingPlanner:
         before = self.rows.value("damping", self.rows.end - 1) if self.rows.end > self.rows.first else 1.0
         step = CONTROL_PERIOD_S / DAMPING_FADE_S
         ramp = before + step * np.arange(1, n + 1) * (1.0 if on else -1.0)
-        return np.clip(ramp, 0.0, 1.0)
+        share: np.ndarray = np.clip(ramp, 0.0, 1.0)
+        return share
 
     def _velocity(self, phase: Phase) -> np.ndarray:
         """The planned stride velocity (2,) [m/s] of a phase in the world frame (zero unless stepping)."""

@@ -91,7 +91,8 @@ class RowBuffer:
 
     def get(self, name: str, k: int) -> np.ndarray:
         """Row ``k`` of a numeric field."""
-        return self.numeric[name][self._index(k)]
+        row: np.ndarray = self.numeric[name][self._index(k)]
+        return row
 
     def value(self, name: str, k: int) -> float:
         """Row ``k`` of a scalar numeric field."""
@@ -151,7 +152,7 @@ def planned_legs(legs: Mapping[str, Leg], feet: Mapping[str, np.ndarray], pos: n
 def torso_yaw(rot: np.ndarray, before: float | None = None) -> np.ndarray:
     """The torso's heading (K,) [rad] of rotations (K, 3, 3), unwrapped (turns pass ±180°), continuing from the
     heading ``before`` the first row if given."""
-    yaw = np.unwrap(np.arctan2(rot[:, 1, 0], rot[:, 0, 0]))
+    yaw: np.ndarray = np.unwrap(np.arctan2(rot[:, 1, 0], rot[:, 0, 0]))
     if before is not None and len(yaw):
         yaw = yaw + 2.0 * math.pi * round((before - yaw[0]) / (2.0 * math.pi))
     return yaw

@@ -24,7 +24,8 @@ run of the same planner with the same commands, so the judge knows what the walk
 from __future__ import annotations
 
 import math
-from typing import Any, Mapping
+from dataclasses import dataclass
+from typing import Mapping
 
 import numpy as np
 
@@ -144,7 +145,8 @@ class SteerableWalk(WalkController):
         if k >= 0:
             return self.rows.get("goals", k).copy()
         joints, goals = self.planner.standing_goals, self.rows.get("goals", 0)
-        return joints + min(1.0, max(t_s, 0.0) / RAMP_S) * (goals - joints)
+        ramped: np.ndarray = joints + min(1.0, max(t_s, 0.0) / RAMP_S) * (goals - joints)
+        return ramped
 
     def _plan_over(self, k: int) -> bool:
         since = self.planner.stand_since
@@ -261,7 +263,34 @@ def plan_of_rows(twin: SteerableWalk, count: int) -> Plan:
                 (contact[0],) * lead + contact, clock, measure=walk_measures)
 
 
-def planned_summary(walk: SteerableWalk) -> dict[str, Any]:
+@dataclass(frozen=True)
+class EndPose:
+    """Where a walk ends: the torso at ``x_m``, ``y_m`` [m] (world: the start's support-foot frame) turned by
+    ``yaw_deg`` [deg]."""
+
+    x_m: float
+    y_m: float
+    yaw_deg: float
+
+
+@dataclass(frozen=True)
+class PlannedWalk:
+    """A steered walk's plan in figures (:func:`planned_summary`): its rows, duration [s], steps and kicks, the
+    torso's path length [m] and end pose, the planned ZMP's least margin to the soles [m], when [s] (the
+    controller's time) and in which kind of phase."""
+
+    rows: int
+    duration_s: float
+    steps: int
+    kicks: int
+    path_m: float
+    end_pose: EndPose
+    zmp_margin_min_m: float
+    zmp_margin_min_at_s: float
+    zmp_margin_min_during: str
+
+
+def planned_summary(walk: SteerableWalk) -> PlannedWalk:
     """The figures of ``walk``'s planned commands (its dry run): steps, kicks, length, the torso's path and end pose,
     the planned ZMP's least margin to the soles on the floor, when (the controller's time [s]) and in which kind of
     phase (a step, a kick, ...)."""
@@ -278,15 +307,13 @@ def planned_summary(walk: SteerableWalk) -> dict[str, Any]:
     margin = planned_zmp_margins(rows, walk.spec, n)
     worst = int(np.argmin(margin))
     during = next((phase.kind for first, phase in reversed(twin.planner.phases) if first <= rows.first + worst), "")
-    return {"rows": n, "duration_s": round(walk.plan.duration_s, 3), "steps": kinds.count("step"),
-            "kicks": kinds.count("kick"), "path_m": round(float(np.sum(np.hypot(*np.diff(pos, axis=0).T))), 4),
-            "end_pose": {"x_m": round(float(rows.numeric["torso_pos"][n - 1, 0]), 4),
-                         "y_m": round(float(rows.numeric["torso_pos"][n - 1, 1]), 4),
-                         "yaw_deg": round(math.degrees(yaw), 2)},
-            "zmp_margin_min_m": round(float(margin.min()), 4),
-            "zmp_margin_min_at_s": round(LEAD_S + worst * CONTROL_PERIOD_S, 3),
-            "zmp_margin_min_during": during}
+    end = EndPose(float(rows.numeric["torso_pos"][n - 1, 0]), float(rows.numeric["torso_pos"][n - 1, 1]),
+                  math.degrees(yaw))
+    return PlannedWalk(n, walk.plan.duration_s, kinds.count("step"), kinds.count("kick"),
+                       float(np.sum(np.hypot(*np.diff(pos, axis=0).T))), end, float(margin.min()),
+                       LEAD_S + worst * CONTROL_PERIOD_S, during)
 
 
 
-__all__ = ["LEAD_S", "STEER_PRESET", "SteerableWalk", "dry_run", "dry_run_plan", "planned_summary"]
+__all__ = ["LEAD_S", "STEER_PRESET", "EndPose", "PlannedWalk", "SteerableWalk", "dry_run", "dry_run_plan",
+           "planned_summary"]

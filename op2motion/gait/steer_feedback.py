@@ -116,4 +116,5 @@ class RollingCalibration(StiffnessCalibration):
     def _ff(self, k: int) -> np.ndarray | None:
         if not self.source.has(k):
             return None
-        return (self.source.get("goals", k) - self.source.get("joints", k))[self.index]
+        ff: np.ndarray = (self.source.get("goals", k) - self.source.get("joints", k))[self.index]
+        return ff

@@ -271,7 +271,8 @@ class StockWalking:
         except Exception:  # noqa: BLE001 (the framework keeps the last goals when its IK has no solution)
             return None
         first = 0 if side == "right" else 6
-        return np.degrees(servo) * np.array(DIRECTION[first:first + 6])
+        degrees: np.ndarray = np.degrees(servo) * np.array(DIRECTION[first:first + 6])
+        return degrees
 
     def _ticks(self, rl_gyro: float, fb_gyro: float) -> tuple[dict[str, int], str | None]:
         c = self.config

@@ -28,7 +28,8 @@ LEAD_S = 0.5             # standing still before the start ramp: the preview mov
 def quintic_blend(s: np.ndarray) -> np.ndarray:
     """0 -> 1 with zero first and second derivatives at both ends, for ``s`` in [0, 1]."""
     s = np.clip(s, 0.0, 1.0)
-    return s ** 3 * (10.0 - 15.0 * s + 6.0 * s * s)
+    blend: np.ndarray = s ** 3 * (10.0 - 15.0 * s + 6.0 * s * s)
+    return blend
 
 
 def cruise_blend(s: np.ndarray, ramp: float) -> np.ndarray:
@@ -101,7 +102,7 @@ def swing_path(params: GaitParams, start: np.ndarray, step: Footstep) -> np.ndar
     s = np.arange(1, n_single + 1) / n_single
     blend = cruise_blend(s / (1.0 - params.swing_settle), params.swing_ramp)[:, None]
     goal = landing(start, step)
-    path = start + blend * (goal - start)
+    path: np.ndarray = start + blend * (goal - start)
     path[:, 2] = params.step_height_m * lift_profile(s)
     return path
 

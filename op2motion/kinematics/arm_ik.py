@@ -87,8 +87,13 @@ def book_step(angles: BookAngles, hand: Side, delta: object, spec: Spec) -> np.n
     l_up, l_low = g.upper_arm, g.lower_arm
     a, b, f = _arm_angles(angles, arm)
     s = np.sign(math.cos(f))
-    p_cs = lambda x, y: math.cos(x) * math.sin(y)  # noqa: E731  (book P_cs)
-    p_cc = lambda x, y: math.cos(x) * math.cos(y)  # noqa: E731  (book P_cc)
+
+    def p_cs(x: float, y: float) -> float:          # book P_cs
+        return math.cos(x) * math.sin(y)
+
+    def p_cc(x: float, y: float) -> float:          # book P_cc
+        return math.cos(x) * math.cos(y)
+
     m = np.array([[-s * (l_up * p_cs(f, a) + l_low * p_cs(f, b)), -s * l_low * p_cs(f, b)],
                   [s * (l_up * p_cc(f, a) + l_low * p_cc(f, b)), s * l_low * p_cc(f, b)]])
     det = float(np.linalg.det(m))
@@ -209,7 +214,8 @@ class _ArmSolve:
 
     def hand_at(self, q: np.ndarray) -> np.ndarray:
         """The hand's position [m] (3,) with the arm at ``q`` (3,) [rad]."""
-        return _hands(self.angles, self.arm, q, self.spec, self.model)[0]
+        hand: np.ndarray = _hands(self.angles, self.arm, q, self.spec, self.model)[0]
+        return hand
 
     def multi_start(self, q0: np.ndarray, d: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, int]:
         """Damped Newton from the start pose; if that stalls (a local minimum near a singular arm), again from the
@@ -286,4 +292,5 @@ def _jacobian(angles: BookAngles, arm: Arm, q: np.ndarray, spec: Spec, model: Mo
     h = FD_STEP_RAD
     probes = np.vstack([q + h * e for e in np.eye(3)] + [q - h * e for e in np.eye(3)])
     hands = _hands(angles, arm, probes, spec, model)
-    return ((hands[:3] - hands[3:]) / (2 * h)).T
+    jacobian: np.ndarray = ((hands[:3] - hands[3:]) / (2 * h)).T
+    return jacobian

@@ -34,4 +34,5 @@ def mass_weights(spec: Spec) -> np.ndarray:
 def slab_com(slab: np.ndarray, spec: Spec) -> np.ndarray:
     """Lumped CoM (3, N) [m] of a (rows, 3, N) point slab."""
     w = mass_weights(spec)
-    return np.einsum("k,kij->ij", w / w.sum(), slab)  # no BLAS: its threads would fight the chunk threads
+    com: np.ndarray = np.einsum("k,kij->ij", w / w.sum(), slab)  # no BLAS: its threads would fight the chunk threads
+    return com

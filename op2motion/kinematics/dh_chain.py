@@ -135,8 +135,8 @@ class MatrixPlan:
     fixed_slots: np.ndarray  # slot index - 1 of the fixed-only steps
     fixed_local: np.ndarray  # (F, 4, 4) their constant transforms
     root: np.ndarray         # (4, 4) frame 0
-    levels: tuple            # ((start, stop, parent start, parent stop), ...) slot ranges per level
-    slots: dict              # frame name -> slot
+    levels: tuple[tuple[int, int, int, int], ...]  # ((start, stop, parent start, parent stop), ...) per level
+    slots: dict[str, int]    # frame name -> slot
 
 
 def matrix_plan(spec: Spec, support: Support | Side) -> MatrixPlan:
@@ -209,12 +209,16 @@ def matrix_frames(q: np.ndarray, spec: Spec, support: Support | Side) -> np.ndar
     return frames
 
 
-def point_layout(spec: Spec, support: Support | Side) -> tuple:
+#: The matrix evaluator's point gathering: (None, origin rows, their slots, offset rows, their slots, offsets).
+PointLayout = tuple[None, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+
+def point_layout(spec: Spec, support: Support | Side) -> PointLayout:
     """Index arrays for the matrix evaluator's point gathering (cached per spec and support)."""
     return cached("layout", spec, support, _build_point_layout)
 
 
-def _build_point_layout(spec: Spec, support: Support | Side) -> tuple:
+def _build_point_layout(spec: Spec, support: Support | Side) -> PointLayout:
     slots = matrix_plan(spec, support).slots
     points = chain_points(spec, support)
     origin = [(ROW[r], slots[f]) for r, f, p in points if p == (0.0, 0.0, 0.0)]

@@ -52,7 +52,10 @@ class Frame:
     def constant(cls, rotation: Sequence[Sequence[float]], origin: Sequence[float], n: int) -> "Frame":
         """The same transform N times (rotation given as a 3x3 matrix, origin [m])."""
         r = np.asarray(rotation, dtype=float)
-        rep = lambda v: np.broadcast_to(np.asarray(v, dtype=float)[:, None], (3, n))  # noqa: E731  (read-only)
+
+        def rep(v: Sequence[float] | np.ndarray) -> np.ndarray:      # a read-only view, N times
+            return np.broadcast_to(np.asarray(v, dtype=float)[:, None], (3, n))
+
         return cls(rep(r[:, 0]), rep(r[:, 1]), rep(r[:, 2]), rep(origin))
 
     def dh(self, cos_d: np.ndarray, sin_d: np.ndarray, d: float, a: float, alpha: float) -> "Frame":

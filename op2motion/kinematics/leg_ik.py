@@ -155,7 +155,8 @@ def leg_ik(leg: Leg, sole: np.ndarray, rot: np.ndarray) -> np.ndarray:
     out[:, 1] = np.arctan2(m[:, 2, 1], np.hypot(m[:, 2, 0], m[:, 2, 2]))               # roll
     out[:, 2] = np.arctan2(-m[:, 2, 0], m[:, 2, 2])                                    # pitch
     out[:, 3], out[:, 4], out[:, 5] = knee, ank, ank_roll
-    return out * leg.sign
+    servo: np.ndarray = out * leg.sign
+    return servo
 
 
 def within_reach_pose(leg: Leg, sole: Sequence[float], rot: Sequence[Sequence[float]], share: float = 1.0

@@ -67,7 +67,7 @@ class BodyPoints:
     @property
     def n(self) -> int:
         """Number of poses."""
-        return self.data.shape[2]
+        return int(self.data.shape[2])
 
     def full(self) -> np.ndarray:
         """The full-inertia centre of mass (3, N) [m]; the points must have been made with ``full_com``."""
@@ -82,7 +82,8 @@ class BodyPoints:
 
     def point(self, name: str) -> np.ndarray:
         """Point ``name`` for every pose, (N, 3) [m]."""
-        return self.data[row_of(name)].T
+        rows: np.ndarray = self.data[row_of(name)].T
+        return rows
 
     def foot_corners(self, side: Support | Side) -> np.ndarray:
         """Corners of the ``left`` or ``right`` foot sole, (N, 4, 3) [m] (front-left, front-right, back-right,
@@ -99,7 +100,8 @@ class BodyPoints:
     def swing_foot_min_z(self) -> np.ndarray:
         """Lowest swing-foot corner height, (N,) [m] (book code 2.11 ``sft_z_min``)."""
         start = ROW[f"{self.swing}_foot_0"]
-        return self.data[start:start + 4, 2].min(axis=0)
+        lowest: np.ndarray = self.data[start:start + 4, 2].min(axis=0)
+        return lowest
 
     def placed(self, sp: Iterable[float] = (0.0, 0.0, 0.0), gamma: float = 0.0) -> "BodyPoints":
         """The same points with the support sole centre moved to ``sp`` [m] and turned by ``gamma`` [rad] about Z."""
@@ -109,7 +111,8 @@ class BodyPoints:
         def move(v: np.ndarray) -> np.ndarray:      # (..., 3, N) points
             out = v.copy()
             out[..., 0, :], out[..., 1, :] = c * v[..., 0, :] - s * v[..., 1, :], s * v[..., 0, :] + c * v[..., 1, :]
-            return out + shift[:, None]
+            moved: np.ndarray = out + shift[:, None]
+            return moved
 
         return BodyPoints(move(self.data), move(self.com), self.support, self.model,
                           None if self.com_full is None else move(self.com_full))

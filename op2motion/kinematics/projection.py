@@ -113,7 +113,11 @@ def _chunk(th: np.ndarray, phi: np.ndarray, out: np.ndarray, spec: Spec, left: b
     s, w = ("l", "r") if left else ("r", "l")
     support_side: Side = "left" if left else "right"
     swing_side = other_side(support_side)
-    row = lambda name: out[ROW[name]]  # noqa: E731
+
+    def row(name: str) -> np.ndarray:
+        view: np.ndarray = out[ROW[name]]        # (3, N), written in place
+        return view
+
     ankle = row(f"{s}_ankle")
     ankle[0], ankle[1], ankle[2] = 0.0, 0.0, g.ankle_to_sole
     knee = calf.add(ankle, g.calf, row(f"{s}_knee"))

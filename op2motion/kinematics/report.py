@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Iterable, Sequence
 
 import numpy as np
 
 from op2motion.errors import InputError, LimitViolation
+from op2motion.jsonout import JsonObject
 from op2motion.kinematics import BodyPoints, ModelName, forward
 from op2motion.robot.balance import COM_MODEL_FULL, check_br, polygon_margin, stability_margin
 from op2motion.robot.joints import (
@@ -55,9 +56,9 @@ class PoseReport:
         """Height of the swing foot's lowest corner [m]."""
         return float(self.points.swing_foot_min_z[0])
 
-    def as_dict(self, spec: Spec) -> dict[str, Any]:
+    def as_dict(self, spec: Spec) -> JsonObject:
         """JSON-ready dict (the ``fk --json`` keys)."""
-        double = {"frame": f"{self.support} sole", "double_support_margin_m": self.double_support_margin_m}
+        double: JsonObject = {"frame": f"{self.support} sole", "double_support_margin_m": self.double_support_margin_m}
         return {
             "model": self.model, "support": "double" if self.double else self.support,
             **(double if self.double else {}), "points": self.points.as_dict(0), "com": _vec(self.com),
@@ -73,7 +74,9 @@ class PoseReport:
 
     def human(self) -> str:
         """A short multi-line text summary."""
-        fmt = lambda v: "(" + ", ".join(f"{x:+.4f}" for x in v) + ")"  # noqa: E731
+        def fmt(v: Iterable[float]) -> str:
+            return "(" + ", ".join(f"{x:+.4f}" for x in v) + ")"
+
         margin = (f"stability margin {self.double_support_margin_m * 1000:+.1f} mm full inertia, to the hull of both "
                   f"soles (positive = inside)" if self.double else
                   f"stability margin {self.stability_margin_m * 1000:+.1f} mm lumped, "

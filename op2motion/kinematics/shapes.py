@@ -115,7 +115,8 @@ def _build(spec: Spec, support: Support | Side) -> ShapeSet:
 
 def _box_distance(x: np.ndarray, y: np.ndarray, z: np.ndarray, half: np.ndarray) -> np.ndarray:
     """Signed distance [m] of points (x, y, z each (K,), in a box's frame) to the box of half extents (3, K)."""
-    qx, qy, qz = np.abs(x), np.abs(y), np.abs(z)          # in place from here: fewer temporaries, less time
+    qx: np.ndarray = np.abs(x)                            # in place from here: fewer temporaries, less time
+    qy, qz = np.abs(y), np.abs(z)
     qx -= half[0]
     qy -= half[1]
     qz -= half[2]
@@ -165,12 +166,14 @@ def _segment_segment(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndar
     s = np.where(t > 1.0, np.where(a > tiny, np.clip((b - c) / np.maximum(a, tiny), 0.0, 1.0), 0.0), s)
     t = np.clip(t, 0.0, 1.0)
     gap = (p1 + s[:, None] * d1) - (p2 + t[:, None] * d2)
-    return np.sqrt(np.sum(gap * gap, axis=-1))
+    dist: np.ndarray = np.sqrt(np.sum(gap * gap, axis=-1))
+    return dist
 
 
 def shape_frames(frames: np.ndarray, shapes: ShapeSet) -> np.ndarray:
     """Every shape's frame (S, m, 4, 4) in the support-sole frame, from the chain frames (slots, m, 4, 4)."""
-    return frames[shapes.slots] @ shapes.local[:, None]
+    world: np.ndarray = frames[shapes.slots] @ shapes.local[:, None]
+    return world
 
 
 def clearances(frames: np.ndarray, shapes: ShapeSet, within: float = BROAD_PHASE_M) -> np.ndarray:
@@ -199,7 +202,8 @@ def clearances(frames: np.ndarray, shapes: ShapeSet, within: float = BROAD_PHASE
         at_src, at_box = src * m + pose, box * m + pose                     # np.take: the fast gather
         r_src, r_box = np.take(flat_rot, at_src, axis=0), np.take(flat_rot, at_box, axis=0)
         shift = np.take(flat_origin, at_src, axis=0) - np.take(flat_origin, at_box, axis=0)
-        return np.einsum("kji,knj->kni", r_box, np.einsum("kij,knj->kni", r_src, points) + shift[:, None])
+        local: np.ndarray = np.einsum("kji,knj->kni", r_box, np.einsum("kij,knj->kni", r_src, points) + shift[:, None])
+        return local
 
     pieces = []                                   # (pair, pose, ends a and b (K, 3), box half extents, radius)
     live, pose = np.nonzero(near[shapes.box_box[:, 0]])                      # box-box: the 8 corners, then edges

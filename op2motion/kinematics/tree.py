@@ -19,7 +19,8 @@ def axis_rotation(axis: tuple[float, float, float], angle: float) -> np.ndarray:
     """Rotation by ``angle`` [rad] about a unit ``axis`` (Rodrigues)."""
     a = np.asarray(axis, dtype=float)
     k = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-    return np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * k @ k
+    rotation: np.ndarray = np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * k @ k
+    return rotation
 
 
 def link_frames(spec: Spec, servo: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
 from op2motion.errors import InputError, Interrupted
+from op2motion.jsonout import JsonObject
 from op2motion.library.grid import Job
 from op2motion.library.index import INDEX_JSON, IndexRow, load_index, reconcile, write_index
 from op2motion.library.jobs import BuildSettings, JobRecorder, solve_job
@@ -63,7 +64,7 @@ class BuildSummary:
     robust_checked: int = 0
     robust_failed: int = 0
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """JSON-ready dict."""
         return dict(self.__dict__)
 

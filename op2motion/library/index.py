@@ -17,6 +17,7 @@ from typing import Any
 from op2motion.errors import InputError, Op2MotionError
 from op2motion.fileio import write_atomic
 from op2motion.formats.posefile import read_pose
+from op2motion.jsonout import JsonObject
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Side, Support
 
@@ -50,7 +51,7 @@ class IndexRow:
     robust_runs: int | None = None
     robust_worst: str = ""
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """JSON-ready dict."""
         return asdict(self)
 

@@ -58,8 +58,13 @@ class _Joint:
     name: str           # servo joint
     point: str          # body point of its axis
     kp: float           # [N·m/rad]
-    below: tuple        # ((mass [kg], points to average, how many chain joints below it move it), ...) of the
-                        # support leg's links below this joint
+    # ((mass [kg], points to average, how many chain joints below it move it), ...) of the support leg's links
+    # below this joint
+    below: tuple[tuple[float, tuple[str, ...], int], ...]
+
+
+#: One chain's system (:meth:`Compliance._plan`): its body points' rows, s0, sz, rx, and its joints' point rows.
+_ChainPlan = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
 class Compliance:
@@ -70,7 +75,7 @@ class Compliance:
         self.mass = sum(i.mass for i in spec.inertials)
         masses = {i.link: i.mass for i in spec.inertials}
         index = {n: i for i, n in enumerate(spec.joint_names)}
-        self.chains: dict[str, tuple[tuple, tuple]] = {}
+        self.chains: dict[str, tuple[_ChainPlan, _ChainPlan]] = {}     # side -> (pitch, roll)
         for side in ("left", "right"):
             s = side[0]
 
@@ -81,7 +86,10 @@ class Compliance:
             # body points; the last number counts the joints of the chain below them (whose sag moves them).
             foot, ankle = (f"{s}_ankle",), (f"{s}_ankle",)
             shank, thigh, hip = (f"{s}_knee", f"{s}_ankle"), (f"{s}_hip", f"{s}_knee"), (f"{s}_hip",)
-            kp = lambda j: float(servo.kp[index[f"{s}_{j}"]])  # noqa: E731
+
+            def kp(j: str) -> float:
+                return float(servo.kp[index[f"{s}_{j}"]])
+
             pitch = [_Joint(f"{s}_ank_pitch", f"{s}_ankle", kp("ank_pitch"),
                             ((link("ank_roll"), foot, 0), (link("ank_pitch"), ankle, 0))),
                      _Joint(f"{s}_knee", f"{s}_knee", kp("knee"),
@@ -95,7 +103,7 @@ class Compliance:
                             (link("hip_pitch"), thigh, 1), (link("hip_roll"), hip, 1)))]
             self.chains[side] = (self._plan(pitch), self._plan(roll))
 
-    def _plan(self, chain: list[_Joint]) -> tuple:
+    def _plan(self, chain: list[_Joint]) -> _ChainPlan:
         """The system of the module docstring as constant tensors: with v = the coordinates [z or x] of the chain's
         body points followed by the centre of mass, system = s0 + v_z . sz and rhs = v_x . rx (both linear)."""
         names = sorted({p for j in chain for _, where, _ in j.below for p in where} | {j.point for j in chain})
@@ -133,7 +141,7 @@ class Compliance:
                     sz[col[chain[i].point], 1 + j, 1 + i] -= mb
         return np.array([row_of(n) for n in names]), s0, sz, rx, np.array([row_of(j.point) for j in chain])
 
-    def _system(self, points: BodyPoints, com: np.ndarray, plan: tuple, k: int,
+    def _system(self, points: BodyPoints, com: np.ndarray, plan: _ChainPlan, k: int,
                 size: int) -> tuple[np.ndarray, np.ndarray]:
         """The system of one chain for every pose, padded to ``size`` unknowns (an identity on the extra ones)."""
         rows, s0, sz, rx, _ = plan
@@ -226,5 +234,6 @@ class SwingLegSag:
         rel = xyz.transpose(0, 2, 1)[None] - origin[:, None]                         # (J, k, N, 3)
         # z of a x rel = a_x rel_y - a_y rel_x
         dz = axis[:, None, :, 0] * rel[..., 1] - axis[:, None, :, 1] * rel[..., 0]
-        return np.einsum("jn,jkn->kn", theta, dz)
+        drop: np.ndarray = np.einsum("jn,jkn->kn", theta, dz)
+        return drop
 

@@ -58,7 +58,7 @@ class Dynamics:
         servo = np.asarray(servo, dtype=float).reshape(-1)
         if servo.size != len(self.spec.joints) or not np.isfinite(servo).all():
             raise InputError(f"expected {len(self.spec.joints)} finite values, got {servo.size}", "servo angles")
-        q = self._neutral.copy()
+        q: np.ndarray = self._neutral.copy()
         q[self.q_index] = servo
         return q
 
@@ -97,13 +97,15 @@ class Dynamics:
         sole = pin.getFrameJacobian(self.model, self.data, self.sole_ids[Support.of(support).stance], world)
         # Hold the sole still: the free-flyer velocity is whatever cancels the sole's motion (J_sole v = 0).
         base = -np.linalg.solve(sole[:, :6], sole[:, 6:])
-        return (jac[:, 6:] + jac[:, :6] @ base)[:, self.v_index - 6]
+        joints: np.ndarray = (jac[:, 6:] + jac[:, :6] @ base)[:, self.v_index - 6]
+        return joints
 
     def com(self, servo: np.ndarray, support: Support | SupportName) -> np.ndarray:
         """Full-inertia centre of mass [m] in the support sole frame."""
         q = self.configuration(servo)
         c = self.pin.centerOfMass(self.model, self.data, q)
-        return self._sole_frame(q, support).inverse().act(c)
+        com: np.ndarray = self._sole_frame(q, support).inverse().act(c)
+        return com
 
     def static_torques(self, servo: np.ndarray, support: Support | SupportName) -> TorqueReport:
         """Joint torques [N·m] that hold the pose still on ``support`` ("left", "right" or "double").

@@ -102,7 +102,8 @@ def _sagged(goal: np.ndarray, support: Support | SupportName, spec: Spec, kp: np
         x0 = np.concatenate([goal, np.zeros(6)])
     else:
         def residual(x: np.ndarray) -> np.ndarray:
-            return kp * (goal - x) - dyn.static_torques(x, support).torques
+            unbalanced: np.ndarray = kp * (goal - x) - dyn.static_torques(x, support).torques
+            return unbalanced
 
         x0 = goal.copy()
     r0 = residual(x0)

@@ -85,7 +85,8 @@ class ServoModel:
         given (the servo's torque-limit register)."""
         torque = (self.kp if kp is None else kp) * (goal - q)
         cap = self.torque_max if limit is None else np.minimum(limit, self.torque_max)
-        return np.minimum(np.maximum(torque, -cap), cap)    # np.clip, at a third the cost
+        active: np.ndarray = np.minimum(np.maximum(torque, -cap), cap)    # np.clip, at a third the cost
+        return active
 
     def motor_torque(self, goal: np.ndarray, q: np.ndarray, dq: np.ndarray, kp: np.ndarray | None = None,
                      limit: np.ndarray | None = None) -> np.ndarray:
@@ -98,7 +99,8 @@ class ServoModel:
         falls linearly to zero near the no-load speed when the torque drives the motion and grows when it brakes
         it (the back-EMF then adds to the drive: a braking servo is not at its limit). Not below 0."""
         along = np.abs(dq) if torque is None else np.sign(torque) * dq
-        return np.maximum(self.torque_max - self.kd_emf * along, 0.0)
+        most: np.ndarray = np.maximum(self.torque_max - self.kd_emf * along, 0.0)
+        return most
 
     def describe(self) -> str:
         """One line naming the model and its numbers."""

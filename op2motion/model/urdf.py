@@ -12,11 +12,12 @@ Frame links carry a tiny inertial (:data:`FRAME_LINK_MASS_KG`): a link without o
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Iterable
 
 import numpy as np
 
 from op2motion.errors import InputError
-from op2motion.robot.spec import Inertial, Spec
+from op2motion.robot.spec import Collision, Inertial, Spec
 from op2motion.robot.support import Side, Support
 
 FRAME_LINK_MASS_KG = 1e-5      # named frames (hands, soles, ...): tiny mass so no tool invents 1 kg for them
@@ -89,7 +90,7 @@ def _f(v: float) -> str:
     return f"{v:.9g}"
 
 
-def _vec(v) -> str:
+def _vec(v: Iterable[float]) -> str:
     return " ".join(_f(float(x)) for x in v)
 
 
@@ -107,7 +108,7 @@ def build_urdf(spec: Spec) -> str:
     from xml.sax.saxutils import quoteattr
 
     inertials = {i.link: link_inertial(i) for i in spec.inertials}
-    collisions: dict[str, list] = {}
+    collisions: dict[str, list[Collision]] = {}
     for c in spec.collisions:
         collisions.setdefault(c.link, []).append(c)
     links = [spec.root_link] + [j.child for j in spec.joints]

@@ -111,4 +111,5 @@ class BodyChecks:
     def within_joint_limits(self, servo: np.ndarray) -> np.ndarray:
         """Which poses (N,) keep every joint inside its mechanical range."""
         servo = np.atleast_2d(servo)
-        return np.all((servo >= self.lower - 1e-9) & (servo <= self.upper + 1e-9), axis=1)
+        within: np.ndarray = np.all((servo >= self.lower - 1e-9) & (servo <= self.upper + 1e-9), axis=1)
+        return within

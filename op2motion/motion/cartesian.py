@@ -20,12 +20,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Any
 
 import numpy as np
 
 from op2motion.errors import CheckFailed, InputError
 from op2motion.formats.motionfile import Motion, MotionStep
+from op2motion.jsonout import JsonObject, json_object
 from op2motion.motion.body_checks import BodyChecks
 from op2motion.motion.checks import check_trajectory, clearance
 from op2motion.motion.line_solve import END_SEEDS_RAD, END_TOL_M, EndSearch, Rows, ways
@@ -93,6 +93,27 @@ class LineRequest:
 
 
 @dataclass(frozen=True)
+class LineFigures:
+    """A line move's figures: the hand, where it starts and ends [m], the line's length [m], the hand's largest
+    deviation from it [m], the least CoM margin [m] and clearance [m] along it, the fastest joint's speed [rad/s],
+    how it was solved, the time spent changing the arm's branch first [s], and the largest pointing error [deg]
+    (None: the hand's direction was not held)."""
+
+    hand: Side
+    hand_start_m: tuple[float, ...]
+    hand_end_m: tuple[float, ...]
+    length_m: float
+    line_deviation_max_m: float
+    com_margin_min_m: float
+    min_clearance_m: float
+    joint_speed_max_rad_s: float
+    joint_speed_joint: str
+    solved: str
+    reconfigure_s: float
+    pointing_error_max_deg: float | None
+
+
+@dataclass(frozen=True)
 class LineMove:
     """A planned line: the goals (K, 20) [rad] every 8 ms, the hand's line (start, end) [m], its path (K, 3) [m]
     and distance from the line (K,) [m], the CoM margin (K,) [m] and least clearance (K,) [m] along the way, the
@@ -117,20 +138,22 @@ class LineMove:
         """Time of each row [s] (K,)."""
         return np.arange(len(self.goals)) * CONTROL_PERIOD_S
 
-    def as_dict(self, spec: Spec) -> dict[str, Any]:
-        """The figures of the move, for reports and ``--json`` (joint names from ``spec``)."""
+    def figures(self, spec: Spec) -> LineFigures:
+        """The figures of the move (joint names from ``spec``)."""
         worst = np.unravel_index(int(np.argmax(np.abs(self.speeds))), self.speeds.shape)
-        out = {"hand": self.hand, "hand_start_m": [round(float(v), 5) for v in self.start_m],
-               "hand_end_m": [round(float(v), 5) for v in self.end_m],
-               "length_m": round(float(np.linalg.norm(self.end_m - self.start_m)), 5),
-               "line_deviation_max_m": round(float(self.deviation_m.max()), 6),
-               "com_margin_min_m": round(float(self.com_margin_m.min()), 5),
-               "min_clearance_m": round(float(self.clearance_m.min()), 5),
-               "joint_speed_max_rad_s": round(float(abs(self.speeds[worst])), 4),
-               "joint_speed_joint": spec.joint_names[int(worst[1])], "solved": self.how,
-               "reconfigure_s": round(self.reconfigure_s, 3)}
-        if self.pointing_error_rad is not None:
-            out["pointing_error_max_deg"] = round(math.degrees(float(self.pointing_error_rad.max())), 3)
+        pointing = self.pointing_error_rad
+        return LineFigures(self.hand, tuple(float(v) for v in self.start_m), tuple(float(v) for v in self.end_m),
+                           float(np.linalg.norm(self.end_m - self.start_m)), float(self.deviation_m.max()),
+                           float(self.com_margin_m.min()), float(self.clearance_m.min()),
+                           float(abs(self.speeds[worst])), spec.joint_names[int(worst[1])], self.how,
+                           self.reconfigure_s, None if pointing is None else math.degrees(float(pointing.max())))
+
+    def as_dict(self, spec: Spec) -> JsonObject:
+        """:meth:`figures` for reports and ``--json`` (the pointing error only where the hand's direction was
+        held)."""
+        out = json_object(self.figures(spec))
+        if out["pointing_error_max_deg"] is None:
+            del out["pointing_error_max_deg"]
         return out
 
     def trajectory(self, p_gain: int = DEFAULT_P_GAIN) -> Trajectory:
@@ -165,7 +188,8 @@ def _slerp_directions(a: np.ndarray, b: np.ndarray, s: np.ndarray) -> np.ndarray
         return np.repeat(a[None], len(s), axis=0)
     axis, angle = axis / sin, math.atan2(sin, cos)
     theta = s[:, None] * angle                  # slerp(1, q, s) = cos(s θ/2) + sin(s θ/2) u
-    return (a * np.cos(theta) + np.cross(axis, a) * np.sin(theta) + axis * (axis @ a) * (1 - np.cos(theta)))
+    out: np.ndarray = a * np.cos(theta) + np.cross(axis, a) * np.sin(theta) + axis * (axis @ a) * (1 - np.cos(theta))
+    return out
 
 
 def _progress(k: int) -> np.ndarray:
@@ -176,7 +200,8 @@ def _progress(k: int) -> np.ndarray:
 def _distance_to_segment(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     span = b - a
     t = np.clip((points - a) @ span / max(float(span @ span), 1e-18), 0.0, 1.0)
-    return np.linalg.norm(points - (a + t[:, None] * span), axis=1)
+    out: np.ndarray = np.linalg.norm(points - (a + t[:, None] * span), axis=1)
+    return out
 
 
 def _targets(request: LineRequest, start: np.ndarray, end: np.ndarray, pointing: np.ndarray

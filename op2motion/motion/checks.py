@@ -24,6 +24,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from op2motion.errors import CheckFailed
+from op2motion.jsonout import JsonObject, json_object
 from op2motion.kinematics import forward
 from op2motion.kinematics.dh import MATRIX_BELOW, forward_dh_frames
 from op2motion.kinematics.shapes import self_clearance, shape_set
@@ -39,6 +40,22 @@ from op2motion.robot.support import Side, Support, SupportName, fixed_foot
 MAX_RATIO = 99.0          # a torque ratio is reported up to this (a goal faster than the no-load speed has none)
 SMOOTH_ROWS = 5           # 40 ms: the goals' derivatives are taken after this moving average
 OVERLAP_TOL_M = 0.003     # the shapes on the chain match the engines' to 2.8 mm: deeper overlaps are real
+
+
+@dataclass(frozen=True)
+class ChecksWorst:
+    """The worst row of each check along a trajectory: the least clearance [m] between ``min_clearance_links``, the
+    least ZMP margin [m] and the share of rows with the ZMP inside, the largest torque ratio and torque [N·m] at
+    ``torque_joint``; the foot that stays on the floor (the checks' frame)."""
+
+    min_clearance_m: float
+    min_clearance_links: tuple[str, str]
+    zmp_margin_min_m: float
+    zmp_inside_fraction: float
+    torque_ratio_max: float
+    torque_max_nm: float
+    torque_joint: str
+    fixed_foot: str
 
 
 @dataclass(frozen=True)
@@ -58,15 +75,16 @@ class MotionChecks:
     torque_nm: np.ndarray
     torque_joint: tuple[str, ...]
 
-    def summary(self) -> dict[str, Any]:
-        """The worst of each check, for reports."""
+    def worst(self) -> ChecksWorst:
+        """The worst of each check."""
         c, z, t = int(np.argmin(self.clearance_m)), int(np.argmin(self.zmp_margin_m)), int(np.argmax(self.torque_ratio))
-        return {"min_clearance_m": round(float(self.clearance_m[c]), 5), "min_clearance_links": self.clearance_links[c],
-                "zmp_margin_min_m": round(float(self.zmp_margin_m[z]), 5),
-                "zmp_inside_fraction": round(float(np.mean(self.zmp_margin_m >= 0.0)), 4),
-                "torque_ratio_max": round(float(self.torque_ratio[t]), 4),
-                "torque_max_nm": round(float(self.torque_nm[t]), 4),
-                "torque_joint": self.torque_joint[t], "fixed_foot": self.fixed_foot}
+        return ChecksWorst(float(self.clearance_m[c]), self.clearance_links[c], float(self.zmp_margin_m[z]),
+                           float(np.mean(self.zmp_margin_m >= 0.0)), float(self.torque_ratio[t]),
+                           float(self.torque_nm[t]), self.torque_joint[t], self.fixed_foot)
+
+    def summary(self) -> JsonObject:
+        """The worst of each check, for reports (:meth:`worst` as JSON)."""
+        return json_object(self.worst())
 
 
 def clearance(goals: np.ndarray, spec: Spec, side: Support | Side = "left") -> tuple[np.ndarray, list[tuple[str, str]]]:

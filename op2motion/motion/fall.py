@@ -90,7 +90,7 @@ class Supervisor(ControllerHooks):
 
     handles_falls = True        # on the robot, the bus's safety watch leaves falls to it (op2motion.bus.loop)
 
-    def __init__(self, controller: Controller, getup: GetUp | None = None, spec: Spec | None = None,
+    def __init__(self, controller: Controller[Plan], getup: GetUp | None = None, spec: Spec | None = None,
                  resume: bool = True, extra_s: float = EXTRA_S):
         self.inner, self.hooks, self.resumes = controller, hooks_of(controller), resume
         self.stops_itself = self.hooks.stops_itself

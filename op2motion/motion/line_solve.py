@@ -101,7 +101,8 @@ def _reconfiguration(ik: WholeBodyIk, x_to: np.ndarray) -> np.ndarray:
     count = max(2, int(math.ceil(seconds / CONTROL_PERIOD_S)) + 1)
     tau = np.linspace(0.0, 1.0, count)
     s = 10 * tau ** 3 - 15 * tau ** 4 + 6 * tau ** 5
-    return ik.x0 + s[:, None] * (x_to - ik.x0)
+    states: np.ndarray = ik.x0 + s[:, None] * (x_to - ik.x0)
+    return states
 
 
 @dataclass

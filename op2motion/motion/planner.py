@@ -68,12 +68,14 @@ def _quintic(q0: np.ndarray, q1: np.ndarray, v0: np.ndarray, v1: np.ndarray, len
     c4 = (-30 * h + (14 * v1 + 16 * v0) * length) / (2 * length ** 4)
     c5 = (12 * h - 6 * (v1 + v0) * length) / (2 * length ** 5)
     t = t[:, None]
-    return q0 + v0 * t + c3 * t ** 3 + c4 * t ** 4 + c5 * t ** 5
+    q: np.ndarray = q0 + v0 * t + c3 * t ** 3 + c4 * t ** 4 + c5 * t ** 5
+    return q
 
 
 def _peak_speed(q0: np.ndarray, q1: np.ndarray, v0: np.ndarray, v1: np.ndarray, length: float) -> np.ndarray:
     t = np.linspace(0.0, length, 65)
-    return np.abs(np.gradient(_quintic(q0, q1, v0, v1, length, t), t, axis=0)).max(axis=0)
+    peak: np.ndarray = np.abs(np.gradient(_quintic(q0, q1, v0, v1, length, t), t, axis=0)).max(axis=0)
+    return peak
 
 
 def _timed(waypoints: Sequence[Waypoint], v_max: float, peak: Callable[[np.ndarray], np.ndarray]

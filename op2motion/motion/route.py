@@ -99,7 +99,7 @@ class _Segment:
     def servo(self, states: np.ndarray) -> np.ndarray:
         """Poses (N, 20) [rad] of search states (N, d)."""
         states = np.atleast_2d(states)
-        out = self.a.servo + states[:, -1:] * (self.b.servo - self.a.servo)
+        out: np.ndarray = self.a.servo + states[:, -1:] * (self.b.servo - self.a.servo)
         out[:, self.free] = states[:, :-1]
         return out
 
@@ -109,7 +109,8 @@ class _Segment:
     def line(self) -> np.ndarray:
         """States along the straight segment, :data:`LINE_STEP_RAD` of the fastest joint apart."""
         n = max(2, int(math.ceil(float(np.abs(self.b.servo - self.a.servo).max()) / LINE_STEP_RAD)) + 1)
-        return self.start + np.linspace(0.0, 1.0, n)[:, None] * (self.goal - self.start)
+        states: np.ndarray = self.start + np.linspace(0.0, 1.0, n)[:, None] * (self.goal - self.start)
+        return states
 
 
 def _collision(seg: _Segment, ends: Limits) -> str | None:
@@ -138,7 +139,8 @@ def _plan(seg: _Segment, limits: Limits, rng: np.random.Generator, search: RrtSe
 
     def valid(states: np.ndarray) -> np.ndarray:
         poses = seg.servo(states)
-        return seg.checks.within_joint_limits(poses) & limits.allows(seg.checks.measure(poses))
+        ok: np.ndarray = seg.checks.within_joint_limits(poses) & limits.allows(seg.checks.measure(poses))
+        return ok
 
     path = _search(planner)(seg.start, seg.goal, valid, seg.box, rng, search)
     return None if path is None else shortcut(path, valid, seg.box, rng, settings)

@@ -48,7 +48,8 @@ class Box:
     def distance(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Weighted distance between states (..., d) and (..., d)."""
         d = (np.asarray(a) - np.asarray(b)) * self.weight
-        return np.sqrt(np.sum(d * d, axis=-1))
+        dist: np.ndarray = np.sqrt(np.sum(d * d, axis=-1))
+        return dist
 
 
 class _Tree:
@@ -82,7 +83,8 @@ def edge_points(a: np.ndarray, b: np.ndarray, box: Box, resolution: float) -> np
     """Points (n + 1, d) from ``a`` to ``b`` (both included), at most ``resolution`` apart in the metric."""
     n = max(1, int(math.ceil(float(box.distance(a, b)) / resolution)))
     t = np.linspace(0.0, 1.0, n + 1)[:, None]
-    return a + t * (b - a)
+    points: np.ndarray = a + t * (b - a)
+    return points
 
 
 def valid_prefix(a: np.ndarray, b: np.ndarray, valid: Validity, box: Box, resolution: float) -> tuple[float, bool]:

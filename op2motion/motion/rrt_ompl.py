@@ -73,13 +73,15 @@ def _search(start: np.ndarray, goal: np.ndarray, valid: Validity, box: Box, seed
     si = ob.SpaceInformation(space)
 
     def state_of(s: Any) -> np.ndarray:            # an OMPL state (scaled) -> ours
-        return np.array([s[i] for i in range(dim)]) / weight
+        state: np.ndarray = np.array([s[i] for i in range(dim)]) / weight
+        return state
 
-    class Valid(ob.StateValidityChecker):
+    # OMPL ships no type information: its bases are Any, which only --strict (disallow_subclassing_any) rejects
+    class Valid(ob.StateValidityChecker):          # type: ignore[misc, unused-ignore]
         def isValid(self, s: Any) -> bool:   # OMPL's name
             return bool(valid(state_of(s)[None])[0])
 
-    class Edge(ob.MotionValidator):
+    class Edge(ob.MotionValidator):                # type: ignore[misc, unused-ignore]  # as Valid
         def checkMotion(self, a: Any, b: Any) -> bool:   # OMPL's name
             return edge_valid(state_of(a), state_of(b), valid, box, settings.resolution)
 

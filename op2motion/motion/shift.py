@@ -61,7 +61,8 @@ def settled_coms(servo: np.ndarray, side: Support | Side, spec: Spec, model: Com
 
 def settled_com(servo: np.ndarray, side: Support | Side, spec: Spec, model: Compliance | None = None) -> np.ndarray:
     """:func:`settled_coms` of one pose (20,): [m] (2,)."""
-    return settled_coms(servo, side, spec, model)[0]
+    com: np.ndarray = settled_coms(servo, side, spec, model)[0]
+    return com
 
 
 def weight_shift(servo: np.ndarray, side: Support | Side, spec: Spec,
@@ -145,7 +146,8 @@ def lift_swing(servo: np.ndarray, side: Support | Side, spec: Spec, clear_m: flo
                           f"the leg up to {np.degrees(MAX_FOLD_RAD):.0f}° at the hip")
     k = int(clear[0])
     fold = folds[k] if k == 0 else np.interp(clear_m, heights[k - 1:k + 1], folds[k - 1:k + 1])
-    return _folded(spec, servo, swing, np.array([fold]))[0]
+    folded: np.ndarray = _folded(spec, servo, swing, np.array([fold]))[0]
+    return folded
 
 
 def with_weight_shifts(waypoints: Sequence[Waypoint], spec: Spec) -> tuple[list[Waypoint], list[str]]:

@@ -213,7 +213,8 @@ class WholeBodyIk:
         batch = np.repeat(trial[None], len(shares), axis=0)
         batch[:, :6] = x[:6] + shares * (trial[:6] - x[:6])      # the legs follow the torso alone
         turn = np.abs(self.servo(batch)[:, self._leg_joints] - legs).max(axis=1)
-        return batch[int(np.flatnonzero(turn <= rows * JOINT_ROW_STEP)[0])]
+        bounded: np.ndarray = batch[int(np.flatnonzero(turn <= rows * JOINT_ROW_STEP)[0])]
+        return bounded
 
     def solve(self, x: np.ndarray, hand: np.ndarray, point: np.ndarray | None = None, rows: float = 1.0,
               before: np.ndarray | None = None) -> tuple[np.ndarray, float]:

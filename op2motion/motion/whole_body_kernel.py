@@ -10,14 +10,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from op2motion.posture.jit import njit_cached
 from op2motion.processes.compiled import CompileOnce
 
 OK, OUT_OF_REACH, HIP_BELOW = 0, 1, 2      # what a leg's IK found
 
 
-@njit(cache=True, error_model="numpy")
+@njit_cached
 def _mul(a: np.ndarray, b: np.ndarray, out: np.ndarray, a_transposed: bool = False) -> None:
     """out = a @ b (or a.T @ b) for 3 x 3 matrices (no BLAS call: it compiled slowly for matrices this small)."""
     for i in range(3):
@@ -28,7 +28,7 @@ def _mul(a: np.ndarray, b: np.ndarray, out: np.ndarray, a_transposed: bool = Fal
             out[i, j] = acc
 
 
-@njit(cache=True, error_model="numpy")
+@njit_cached
 def _rodrigues(v: np.ndarray, out: np.ndarray) -> None:
     """The rotation matrix (3, 3) of a rotation vector (3,) [rad]: I + sin(a) K + (1 - cos(a)) K²."""
     angle = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
@@ -42,7 +42,7 @@ def _rodrigues(v: np.ndarray, out: np.ndarray) -> None:
             out[i, j] = (1.0 if i == j else 0.0) + s * k[i][j] + c1 * kk
 
 
-@njit(cache=True, error_model="numpy")
+@njit_cached
 def _leg(hip: np.ndarray, lengths: np.ndarray, sole: np.ndarray, rot: np.ndarray, share: float,
          out: np.ndarray) -> int:
     """Leg servo angles (6,) [rad, before the leg's signs] for the sole at ``sole`` (3,) [m] turned ``rot``
@@ -83,8 +83,9 @@ def _leg(hip: np.ndarray, lengths: np.ndarray, sole: np.ndarray, rot: np.ndarray
     return OK
 
 
-@njit(cache=True, error_model="numpy")
-def _servo_rows(x: np.ndarray, body: tuple, legs: tuple, limits: tuple, out: np.ndarray) -> int:
+@njit_cached
+def _servo_rows(x: np.ndarray, body: tuple[np.ndarray, ...], legs: tuple[np.ndarray, ...],
+                limits: tuple[np.ndarray, ...], out: np.ndarray) -> int:
     """Poses ``out`` (N, 20) [rad] of unknowns ``x`` (N, 9): the torso shift [m] and rotation vector [rad] from
     ``body`` = (torso rotation (3, 3), torso position (3,) in the stance sole's frame, the start pose (20,), the arm
     joints' indices (3,)), the other joints from the start; each leg l of ``legs`` = (hips (L, 3), thigh, calf and

@@ -21,8 +21,9 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from op2motion.jsonout import JsonObject
 from op2motion.robot.spec import Spec
 
 if TYPE_CHECKING:
@@ -33,7 +34,7 @@ STATUS_REPEAT = 5
 START_TIMEOUT_S = 60.0             # the emulator must serve within this long
 
 
-def robot_figures(spec: Spec, engine: EngineName = "mujoco") -> dict[str, Any]:
+def robot_figures(spec: Spec, engine: EngineName = "mujoco") -> JsonObject:
     """The figures (see the module docstring), the emulator (``engine``) in a process of its own."""
     from op2motion.bus.loop import run_controller
     from op2motion.bus.session import Session
@@ -67,7 +68,7 @@ def robot_figures(spec: Spec, engine: EngineName = "mujoco") -> dict[str, Any]:
                 emulator.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 emulator.kill()
-    measured = status.link.as_dict() if status.link is not None else {}
+    median = status.link.median_round_trip_s if status.link is not None else None
     lockstep_s, lockstep_speedup = _lockstep_speedup(spec, engine)
     return {"robot_loop_p50_ms": round(report.period_p50_ms, 3), "robot_loop_p99_ms": round(report.period_p99_ms, 3),
             "robot_loop_max_ms": round(report.period_max_ms, 3), "robot_loop_ticks": report.ticks,
@@ -75,7 +76,7 @@ def robot_figures(spec: Spec, engine: EngineName = "mujoco") -> dict[str, Any]:
             "robot_bulk_read_wire_ms": report.plan.get("bulk_read_wire_ms"),
             "robot_bulk_read_ms": report.plan.get("bulk_read_ms"),
             "robot_servos_per_tick": report.plan.get("servos_per_tick"),
-            "robot_ping_ms": measured.get("ping_round_trip_ms", {}).get("median"),
+            "robot_ping_ms": None if median is None else median * 1000.0,
             "robot_lockstep_speedup": lockstep_speedup, "check_robot_lockstep_s": round(lockstep_s, 3),
             "check_robot_loop_missed_reads": report.missed_reads, "check_robot_status_servos": answered}
 

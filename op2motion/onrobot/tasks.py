@@ -28,6 +28,7 @@ from op2motion.bus.safety import clip_goals, mechanical_bounds, port_fault
 from op2motion.bus.session import RobotStatus, Session
 from op2motion.bus.tables import CM730_ID, MX28
 from op2motion.errors import CheckFailed, InputError, PortFailed
+from op2motion.jsonout import JsonObject
 from op2motion.onrobot.plans import (
     CHECK_ENGINE,
     LYING_TILT_RAD,
@@ -82,7 +83,7 @@ class MotionResult:
     until_stopped_s: float | None = None
     ends_when: str = "stopped"
 
-    def emulated(self) -> dict[str, Any] | None:
+    def emulated(self) -> JsonObject | None:
         """What the emulated OP2 the motion ran on did (an in-process one, ``--port lockstep``): its report once the
         robot held its last goals :data:`~op2motion.bus.session.HOLD_AFTER_S` more (the torso's position, heading and
         tilt, the servos' goals and torque limits); None on a real robot."""
@@ -112,7 +113,7 @@ class MotionResult:
             return None
         return float(np.degrees(np.max(np.abs(self.last.goals - self.target))))
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """JSON-ready."""
         err = self.target_error_deg()
         return {"what": self.what, "planned_s": round(self.planned_s, 3), "ended": self.ended,
@@ -138,9 +139,8 @@ class MotionResult:
         if err is not None:
             out.append(f"  last goals within {err:.2f}° of the target pose")
         out += self._travel_lines()
-        emulated = self.emulated()
-        if emulated is not None:
-            truth = emulated["truth"]
+        if self.emulator is not None:
+            truth: dict[str, float] = self.emulator.truth()
             heading = signed_text(math.degrees(truth["yaw_rad"]), 1)
             out.append(f"  emulated OP2 (lockstep): torso at x {signed_text(truth['x_m'], 3)} m, y "
                        f"{signed_text(truth['y_m'], 3)} m, heading {heading}°, tilt "

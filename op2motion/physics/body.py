@@ -121,7 +121,8 @@ def _axis_rotation(axis: tuple[float, float, float], angle: float) -> np.ndarray
     """The rotation (3, 3) by ``angle`` [rad] about a unit ``axis``."""
     a = np.asarray(axis, dtype=float)
     k = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-    return np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
+    rotation: np.ndarray = np.eye(3) + np.sin(angle) * k + (1.0 - np.cos(angle)) * (k @ k)
+    return rotation
 
 
 def shape_bottom(shape: Collision, link_pos: np.ndarray, link_rot: np.ndarray) -> float:

@@ -61,7 +61,8 @@ class Schedule:
 
     def goals_at(self, t_s: float) -> np.ndarray:
         """The goals (20,) [rad] the schedule sends at ``t_s`` [s]."""
-        return self.plan.goals[self.plan.row(t_s)]
+        goals: np.ndarray = self.plan.goals[self.plan.row(t_s)]
+        return goals
 
     def _named(self, row: np.ndarray) -> dict[str, float]:
         return dict(zip(self.joint_names, row.tolist()))

@@ -57,7 +57,8 @@ def first_held(mask: np.ndarray, times: np.ndarray, hold_s: float) -> int | None
 
 def steady_window(times: np.ndarray) -> np.ndarray:
     """The samples of the last :data:`STEADY_S` (bool (n,))."""
-    return times >= times[-1] - STEADY_S + 1e-9
+    steady: np.ndarray = times >= times[-1] - STEADY_S + 1e-9
+    return steady
 
 
 def tilt_failure(times: np.ndarray, tilt_deg: np.ndarray, from_start_deg: np.ndarray, loaded: int,
@@ -85,9 +86,14 @@ def floor_failures(times: np.ndarray, ground: Sequence[frozenset[str]], lifted: 
                    foot_links: Mapping[str, str]) -> list[Failure]:
     """``swing_foot_contact``: a foot meant to be lifted (``lifted``, sides per sample) pressed on the floor;
     ``ground_contact``: a link other than a foot (``foot_links``: link -> side) did."""
+    def lifted_foot(link: str, k: int) -> bool:
+        return foot_links.get(link) in lifted[k]
+
+    def not_a_foot(link: str, k: int) -> bool:
+        return link not in foot_links
+
     out = []
-    for reason, wanted in (("swing_foot_contact", lambda link, k: foot_links.get(link) in lifted[k]),
-                           ("ground_contact", lambda link, k: link not in foot_links)):
+    for reason, wanted in (("swing_foot_contact", lifted_foot), ("ground_contact", not_a_foot)):
         hits = [(k, sorted(link for link in g if wanted(link, k))) for k, g in enumerate(ground)]
         hits = [(k, links) for k, links in hits if links]
         if hits:

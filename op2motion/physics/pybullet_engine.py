@@ -57,7 +57,8 @@ def load_robot(client: Any, urdf_text: str, flags: int) -> int:
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as handle:
             handle.write(urdf_text)
-        return client.loadURDF(path, basePosition=(0.0, 0.0, 1.0), flags=flags)
+        body_id: int = client.loadURDF(path, basePosition=(0.0, 0.0, 1.0), flags=flags)
+        return body_id
     finally:
         os.unlink(path)
 

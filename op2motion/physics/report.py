@@ -23,6 +23,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from typing import Any, Protocol
 
+from op2motion.jsonout import JsonObject
 from op2motion.physics.scene import EngineName
 from op2motion.robot.sides import Side
 
@@ -74,12 +75,12 @@ class WorstTorque:
         """Torque over available torque."""
         return self.torque_nm / max(self.available_nm, 1e-9)
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """JSON-ready."""
-        out = {"joint": self.joint, "torque_nm": _r(self.torque_nm, 4), "available_nm": _r(self.available_nm, 4),
-               "ratio": _r(self.ratio, 4), "time_s": _r(self.time_s, 3)}
+        out: JsonObject = {"joint": self.joint, "torque_nm": self.torque_nm, "available_nm": self.available_nm,
+                           "ratio": self.ratio, "time_s": self.time_s}
         if self.limited_share is not None:
-            out["limited_share"] = _r(self.limited_share, 4)
+            out["limited_share"] = self.limited_share
         return out
 
 
@@ -99,7 +100,7 @@ class RunMeasures(Protocol):
     :attr:`.plan.Plan.measure`, e.g. a walk's :class:`op2motion.gait.measures.WalkMeasures`): only its columns in
     the robustness family's JSON (:func:`.robust_table.robust_summary`)."""
 
-    def robust_row(self) -> dict[str, Any]:
+    def robust_row(self) -> JsonObject:
         """JSON-ready columns for the family's rows."""
         ...
 
@@ -175,7 +176,7 @@ class RunReport:
             return "stands"
         return "falls" if self.fell else ", ".join(sorted(self.reasons))
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """JSON-ready (without the snapshot and the plan's own (a walk's) measurements)."""
         out = asdict(self)
         for key in ("snapshot_png", "motion", "walk", "track"):
@@ -226,7 +227,7 @@ class PushResult:
         """The run's reasons."""
         return self.run.reasons
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """JSON-ready."""
         return {"direction": self.direction, "force_n": self.force_n, "start_s": _r(self.start_s, 3),
                 "duration_s": self.duration_s, "stable": self.stable, "reasons": self.reasons}
@@ -261,7 +262,7 @@ class EngineReport:
     pushes: tuple[PushResult, ...] = ()
     trials: TrialsResult | None = None
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """The run's JSON with its pushes."""
         return {**self.run.as_dict(), "pushes": [p.as_dict() for p in self.pushes]}
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
+from op2motion.jsonout import JsonObject
 from op2motion.physics.report import RunMeasures
 from op2motion.physics.robust import RobustReport, RobustRun
 
@@ -37,7 +38,7 @@ def pose_robust_table(report: RobustReport) -> str:
                   lambda run: -run.report.run.support_margin_m + (1.0 if not run.passed else 0.0))
 
 
-def robust_summary(report: RobustReport) -> dict[str, Any]:
+def robust_summary(report: RobustReport) -> JsonObject:
     """The family's JSON: ``pass_rate``, ``passed``, ``failures`` {reason: runs}, ``disagreements`` [member] and
     ``runs`` [{``member``, ``engine``, ``passed``, ``problem``, ``reasons``, ``support_margin_m``, plus the plan's own
     measures' columns (:meth:`.report.RunMeasures.robust_row`; a walk's: speed, drift, heading, distance)}]."""

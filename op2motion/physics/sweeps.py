@@ -34,7 +34,7 @@ LEAN_STEP_RAD = 1e-4
 
 def servo_pose(spec: Spec, support: Support | SupportName = "left", **degrees: float) -> np.ndarray:
     """Servo angles (20,) [rad]: the book's standing pose with some joints set to ``degrees``."""
-    servo = book_to_servo(BookAngles.standing("left" if support == "double" else support), spec)[0]
+    servo: np.ndarray = book_to_servo(BookAngles.standing("left" if support == "double" else support), spec)[0]
     for name, value in degrees.items():
         servo[spec.joint_names.index(name)] = np.radians(value)
     return servo

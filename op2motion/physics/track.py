@@ -7,6 +7,7 @@ walk's, :mod:`op2motion.gait.measures`) read, so both can be tested on made-up t
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -95,7 +96,7 @@ class Recorder:
 
     def __init__(self, body: Body, servo: ServoModel):
         self.body, self.servo = body, servo
-        self.lists: dict[str, list] = {name: [] for name in (
+        self.lists: dict[str, list[Any]] = {name: [] for name in (
             "times", "rows", "rot", "com", "soles", "q", "goals", "torque", "available", "cop", "feet", "ground",
             "self_pairs", "states", "base_pos")}
 

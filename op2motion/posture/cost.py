@@ -106,7 +106,9 @@ class PostureProblem:
     @property
     def name(self) -> str:
         """Default pose name, e.g. ``reach-ll-100-50-70-br70`` (hand, support, target in mm, br in %)."""
-        mm = lambda v: f"{'m' if v < 0 else ''}{abs(round(v * 1000))}"  # noqa: E731
+        def mm(v: float) -> str:
+            return f"{'m' if v < 0 else ''}{abs(round(v * 1000))}"
+
         x, y, z = self.target
         return f"reach-{self.hand[0]}{self.support[0]}-{mm(x)}-{mm(y)}-{mm(z)}-br{round(self.br * 100)}"
 
@@ -152,7 +154,8 @@ def torso_axes(data: np.ndarray, spec: Spec) -> np.ndarray:
 def torso_tilt(points: BodyPoints, spec: Spec, axes: np.ndarray | None = None) -> np.ndarray:
     """Angle [rad] between the torso's z axis and the vertical, (N,) (``axes``: :func:`torso_axes`, if known)."""
     axes = torso_axes(points.data, spec) if axes is None else axes
-    return np.arccos(np.clip(axes[2, 2], -1.0, 1.0))
+    tilt: np.ndarray = np.arccos(np.clip(axes[2, 2], -1.0, 1.0))
+    return tilt
 
 
 def self_collision_penalty(frames: np.ndarray, spec: Spec, support: Support | Side) -> tuple[np.ndarray, np.ndarray]:

@@ -18,9 +18,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from op2motion.errors import ModelError
+from op2motion.posture.jit import njit_cached
 from op2motion.posture.kernel_geometry import clearance_of, mul
 from op2motion.posture.kernel_plan import KernelPlan
 from op2motion.processes.compiled import CompileOnce
@@ -34,7 +34,7 @@ TOTAL, HAND_ERROR = _T_TOTAL, _T_HAND_ERROR
 _C_PENALTY, _C_VIOL, _C_MARGIN, _C_CAP, _C_UPRIGHT, _C_SAG, _C_CLEAR, _C_LIFTED, _C_FLOOR, _C_G = range(10)
 
 
-@njit(cache=True, error_model="numpy")
+@njit_cached
 def _solve(m: np.ndarray, rhs: np.ndarray, n: int, out: np.ndarray) -> float:
     """Solve the leading n x n system in place (Gaussian elimination, partial pivoting) into ``out``; return its
     determinant."""
@@ -65,7 +65,7 @@ def _solve(m: np.ndarray, rhs: np.ndarray, n: int, out: np.ndarray) -> float:
     return det
 
 
-@njit(cache=True, error_model="numpy")
+@njit_cached
 def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, within: float, out: np.ndarray,
            body_pts: np.ndarray, body_com: np.ndarray) -> None:
     """Every cost term of poses ``q`` (N, 20) [rad] into ``out`` (N, len(TERMS)), clearances exact below
@@ -207,17 +207,17 @@ def _swarm(q: np.ndarray, only_below: np.ndarray, plan: KernelPlan, within: floa
         out[i, _T_CLEARANCE], out[i, _T_SWING_LIFT] = clearance, lift
 
 
-@njit(cache=True, error_model="numpy")
+@njit_cached
 def _margin(x: float, y: float, extents: np.ndarray) -> float:
     """:func:`op2motion.robot.balance.rectangle_margin` of one point [m]."""
     front, back, left, right = extents[0], extents[1], extents[2], extents[3]
-    inside = min(min(front - x, x + back), min(left - y, y + right))
+    inside: float = min(min(front - x, x + back), min(left - y, y + right))
     if inside >= 0.0:
         return inside
     return -math.hypot(max(max(x - front, -back - x), 0.0), max(max(y - left, -right - y), 0.0))
 
 
-@njit(cache=True, error_model="numpy")
+@njit_cached
 def _torso_tilt(pts: np.ndarray, rows: np.ndarray, ab: np.ndarray) -> float:
     """:func:`op2motion.posture.cost.torso_tilt` of one pose [rad] (``rows``: neck, pelvis, shoulders)."""
     neck, pelvis, lsho, rsho = rows[0], rows[1], rows[2], rows[3]

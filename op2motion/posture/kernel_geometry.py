@@ -10,12 +10,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from op2motion.posture.jit import njit_cached
 from op2motion.posture.kernel_plan import KernelPlan
 
 
-@njit(cache=True, error_model="numpy")
+@njit_cached
 def mul(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
     """out = a @ b for 4x4 rigid transforms (bottom rows 0 0 0 1, which stay as they are)."""
     for r in range(3):
@@ -26,16 +26,16 @@ def mul(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
     out[3, 0], out[3, 1], out[3, 2], out[3, 3] = 0.0, 0.0, 0.0, 1.0
 
 
-@njit(cache=True, error_model="numpy")
+@njit_cached
 def _box_distance(x: float, y: float, z: float, half: np.ndarray) -> float:
     """Signed distance [m] of a point in a box's frame to the box of half extents ``half``."""
     qx, qy, qz = abs(x) - half[0], abs(y) - half[1], abs(z) - half[2]
-    inside = min(max(max(qx, qy), qz), 0.0)
+    inside: float = min(max(max(qx, qy), qz), 0.0)
     ox, oy, oz = max(qx, 0.0), max(qy, 0.0), max(qz, 0.0)
     return math.sqrt(ox * ox + oy * oy + oz * oz) + inside
 
 
-@njit(cache=True, error_model="numpy")
+@njit_cached
 def _segment_box(a: np.ndarray, b: np.ndarray, half: np.ndarray, rim: float, within: float, grid: np.ndarray,
                  rounds: int) -> float:
     """Clearance [m] of a segment a-b swept by ``rim`` to a box (both in the box frame): the segment's bounding box
@@ -64,7 +64,7 @@ def _segment_box(a: np.ndarray, b: np.ndarray, half: np.ndarray, rim: float, wit
     return best - rim
 
 
-@njit(cache=True, error_model="numpy")
+@njit_cached
 def _segment_segment(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> float:
     """Distance [m] between segments p1-q1 and p2-q2 (as :func:`op2motion.kinematics.shapes._segment_segment`)."""
     tiny = 1e-15
@@ -91,7 +91,7 @@ def _segment_segment(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndar
     return math.sqrt(sq)
 
 
-@njit(cache=True, error_model="numpy")
+@njit_cached
 def _into(world: np.ndarray, box: np.ndarray, out: np.ndarray) -> None:
     """A world point into a shape's frame (4, 4): out = R^T (world - o)."""
     for k in range(3):
@@ -99,7 +99,7 @@ def _into(world: np.ndarray, box: np.ndarray, out: np.ndarray) -> None:
                   + (world[2] - box[2, 3]) * box[2, k])
 
 
-@njit(cache=True, error_model="numpy")
+@njit_cached
 def clearance_of(frames: np.ndarray, plan: KernelPlan, within: float, shape_w: np.ndarray) -> float:
     """The least clearance [m] between the collision shapes of one pose (chain ``frames``; ``shape_w`` (H, 4, 4)
     receives the shapes' frames): exact below ``within``, a lower bound above it."""
@@ -124,7 +124,7 @@ def clearance_of(frames: np.ndarray, plan: KernelPlan, within: float, shape_w: n
     return best
 
 
-@njit(cache=True, error_model="numpy")
+@njit_cached
 def _box_box(ws: np.ndarray, wb: np.ndarray, half: np.ndarray, box_half: np.ndarray, plan: KernelPlan,
              within: float, corners: np.ndarray) -> float:
     """Clearance [m] of the twelve edges of a box (frame ``ws``, half extents ``half``) to another (``wb``,
@@ -154,7 +154,7 @@ def _box_box(ws: np.ndarray, wb: np.ndarray, half: np.ndarray, box_half: np.ndar
     return value
 
 
-@njit(cache=True, error_model="numpy")
+@njit_cached
 def _with_segment(shape_w: np.ndarray, i: int, j: int, plan: KernelPlan, within: float, ends: np.ndarray,
                   a: np.ndarray, b: np.ndarray) -> float:
     """Clearance [m] of shapes ``i`` and ``j``, at least one a swept segment (``ends``, ``a``, ``b``: scratch)."""
@@ -170,4 +170,5 @@ def _with_segment(shape_w: np.ndarray, i: int, j: int, plan: KernelPlan, within:
         _into(ends[first], shape_w[box], a)
         _into(ends[first + 1], shape_w[box], b)
         return _segment_box(a, b, sh_half[box], sh_radius[seg], within, grid, rounds)
-    return _segment_segment(ends[0], ends[1], ends[2], ends[3]) - (sh_radius[i] + sh_radius[j])
+    rims: float = sh_radius[i] + sh_radius[j]
+    return _segment_segment(ends[0], ends[1], ends[2], ends[3]) - rims

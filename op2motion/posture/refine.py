@@ -67,7 +67,8 @@ def refine(x0: np.ndarray, problem: PostureProblem, spec: Spec, bounds: tuple[np
 
 
 def _hand(angles: BookAngles, problem: PostureProblem, spec: Spec) -> np.ndarray:
-    return forward(angles, spec, "dh").point(problem.hand_point)[0]
+    hand: np.ndarray = forward(angles, spec, "dh").point(problem.hand_point)[0]
+    return hand
 
 
 def _slsqp(x0: np.ndarray, model: CostModel, problem: PostureProblem,
@@ -81,9 +82,9 @@ def _slsqp(x0: np.ndarray, model: CostModel, problem: PostureProblem,
         terms = model(BookAngles.from_vector(probes, support))
         return terms, probes
 
-    cache: dict[bytes, tuple] = {}
+    cache: dict[bytes, tuple[tuple[float, np.ndarray], ...]] = {}       # (value, gradient) of each function
 
-    def values(x: np.ndarray) -> tuple:
+    def values(x: np.ndarray) -> tuple[tuple[float, np.ndarray], ...]:
         key = x.tobytes()
         if key not in cache:
             terms, _ = batch(x)

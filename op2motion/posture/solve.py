@@ -9,6 +9,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from op2motion.jsonout import JsonObject
 from op2motion.kinematics import forward
 from op2motion.posture.cost import SAG_TILT_LIMIT_RAD, CostModel, CostTerms, PostureProblem
 from op2motion.posture.pso import PSOResult, PSOSettings, SearchSpace, run_pso, variable_bounds
@@ -73,7 +74,7 @@ class PostureResult:
         """Final cost (book eq. 2.87 and the tie-breakers)."""
         return float(self.terms.total[0])
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """The metrics, JSON-ready (also the ``metrics`` of the pose file)."""
         return {
             "target": list(self.problem.target), "hand_error_m": self.hand_error_m, "br": self.problem.br,

@@ -64,7 +64,8 @@ def support_polygon(spec: Spec, support: Side, br: float = 1.0, sp: tuple[float,
     front, back, left, right = support_extents(spec, support, br, com_model)
     local = np.array([[front, left], [front, -right], [-back, -right], [-back, left]])
     c, s = np.cos(gamma), np.sin(gamma)
-    return local @ np.array([[c, s], [-s, c]]) + np.asarray(sp, dtype=float)
+    corners: np.ndarray = local @ np.array([[c, s], [-s, c]]) + np.asarray(sp, dtype=float)
+    return corners
 
 
 def _local(xy: np.ndarray, sp: tuple[float, float], gamma: float) -> tuple[np.ndarray, np.ndarray]:
@@ -103,8 +104,8 @@ def convex_hull(points: np.ndarray) -> np.ndarray:
     if len(pts) < 3:
         return np.asarray(pts, dtype=float).reshape(-1, 2)
 
-    def half(seq: list) -> list:
-        out: list = []
+    def half(seq: list[tuple[float, ...]]) -> list[tuple[float, ...]]:
+        out: list[tuple[float, ...]] = []
         for p in seq:
             while len(out) >= 2 and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1])
                                      - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])) <= 1e-15:
@@ -130,7 +131,8 @@ def polygon_margin(xy: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     t = np.clip(np.einsum("nmk,mk->nm", rel, edge) / (length ** 2)[None, :], 0.0, 1.0)
     nearest = a[None, :, :] + t[:, :, None] * edge[None, :, :]
     outside = np.hypot(*(p[:, None, :] - nearest).transpose(2, 0, 1)).min(axis=1)
-    return np.where(inside >= 0.0, inside, -outside)
+    margin: np.ndarray = np.where(inside >= 0.0, inside, -outside)
+    return margin
 
 
 def point_margin(x: float, y: float, polygon: np.ndarray) -> float:

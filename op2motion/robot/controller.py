@@ -135,7 +135,7 @@ class GoalMerger:
     """A controller's output as both loops take it: named goals into the (20,) the servos hold, and the P gains and
     torque-limit shares its hooks set over the plan's."""
 
-    def __init__(self, controller: Controller, joint_names: Sequence[str]):
+    def __init__(self, controller: Controller[RunPlan], joint_names: Sequence[str]):
         self.controller, self.hooks, self.names = controller, hooks_of(controller), tuple(joint_names)
         self.index = {n: i for i, n in enumerate(self.names)}
 
@@ -150,7 +150,7 @@ class GoalMerger:
     def p_gains(self, row: int) -> np.ndarray:
         """The P gains (20,) at plan row ``row``: the plan's, the ``p_gains`` hook's over them."""
         over = self.hooks.p_gains
-        planned = self.controller.plan.p_gains[row]
+        planned: np.ndarray = self.controller.plan.p_gains[row]
         if not over:
             return planned.copy()                  # (the plan's, as they were: nothing to merge every 8 ms)
         return np.array([over.get(n, p) for n, p in zip(self.names, planned)], dtype=float)

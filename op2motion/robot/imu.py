@@ -17,7 +17,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from op2motion.errors import SpecError
-from op2motion.robot.spec import ImuSpec, Spec
+from op2motion.robot.spec import ImuChannel, ImuSpec, Spec
 
 FALL_TILT_RAD = math.radians(45.0)  # the torso this far from upright is down (a walk's own tilt stays under 14°)
 ARM_TILT_RAD = math.radians(20.0)   # a fall watch arms once the torso is this close to upright
@@ -41,7 +41,7 @@ def decode_imu(imu: ImuSpec, words: Mapping[int, int], centres: Mapping[int, flo
     ``centres`` {register: count} replaces the nominal centre where a channel was calibrated (:func:`gyro_centres`)."""
     centres = centres or {}
 
-    def axis(channels: tuple) -> np.ndarray:
+    def axis(channels: tuple[ImuChannel, ...]) -> np.ndarray:
         return np.array([c.sign * (words[c.register] - centres.get(c.register, imu.centre_count)) * c.scale
                          for c in channels])
 

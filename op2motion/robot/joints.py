@@ -66,14 +66,20 @@ class BookAngles:
     @classmethod
     def from_deg(cls, th: object, phi: object, psi: object = None, support: Support | Side = "left") -> "BookAngles":
         """Like :meth:`make` with angles in degrees."""
-        conv = lambda v, name, n: np.radians(_angles(name, v, n))  # noqa: E731
+        def conv(v: object, name: str, n: int) -> np.ndarray:
+            radians: np.ndarray = np.radians(_angles(name, v, n))
+            return radians
+
         return cls.make(conv(th, "th", N_TH), conv(phi, "phi", N_PHI),
                         None if psi is None else conv(psi, "psi", N_PSI), support)
 
     @classmethod
     def standing(cls, support: Support | Side = "left", n: int = 1) -> "BookAngles":
         """The book's standing pose, repeated ``n`` times."""
-        rep = lambda v: np.radians(np.tile(np.array(v, dtype=float), (n, 1)))  # noqa: E731
+        def rep(v: Sequence[float]) -> np.ndarray:
+            radians: np.ndarray = np.radians(np.tile(np.array(v, dtype=float), (n, 1)))
+            return radians
+
         return cls.make(rep(book.STANDING_TH_DEG), rep(book.STANDING_PHI_DEG), rep(book.STANDING_PSI_DEG), support)
 
     @classmethod
@@ -97,7 +103,7 @@ class BookAngles:
     @property
     def n(self) -> int:
         """Number of poses in the batch."""
-        return self.th.shape[0]
+        return int(self.th.shape[0])
 
     def vector(self) -> np.ndarray:
         """The (N,20) vector [th, phi, psi] [rad]."""
@@ -122,7 +128,8 @@ def _map_arrays(spec: Spec, support: Support | Side) -> tuple[np.ndarray, np.nda
 def book_to_servo(angles: BookAngles, spec: Spec) -> np.ndarray:
     """Servo angles (N,20) [rad] in Dynamixel ID order (``spec.joint_names``)."""
     idx, sign, offset = _map_arrays(spec, angles.support)
-    return sign * angles.vector()[:, idx] + offset
+    servo: np.ndarray = sign * angles.vector()[:, idx] + offset
+    return servo
 
 
 def servo_to_book(servo: np.ndarray, support: Support | Side, spec: Spec) -> BookAngles:

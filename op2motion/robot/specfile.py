@@ -120,7 +120,10 @@ def _within_ticks(joint: Joint, servo: Servo) -> Joint:
     ``convert``, ``export``, the studio), so a range written as ±180° ends at the last tick."""
     lo, hi = (servo.min_tick - servo.center_tick) * servo.rad_per_tick, (servo.max_tick - servo.center_tick) * \
         servo.rad_per_tick
-    clip = lambda r: (max(r[0], lo), min(r[1], hi))  # noqa: E731
+
+    def clip(r: tuple[float, float]) -> tuple[float, float]:
+        return max(r[0], lo), min(r[1], hi)
+
     return dataclasses.replace(joint, mechanical=clip(joint.mechanical), safe=clip(joint.safe))
 
 

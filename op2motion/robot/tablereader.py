@@ -35,7 +35,7 @@ class TableReader:
         return value
 
     def number(self, key: str, positive: bool = False, nonnegative: bool = False) -> float:
-        value = self.get(key, float)
+        value: float = self.get(key, float)
         if not math.isfinite(value) or (positive and value <= 0) or (nonnegative and value < 0):
             need = "a positive number" if positive else "a non-negative number" if nonnegative else "a finite number"
             raise SpecError(f"{self.path}: {self._key(key)}: expected {need}, got {value!r}")

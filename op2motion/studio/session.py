@@ -82,7 +82,9 @@ class Readout:
 
     def lines(self) -> list[str]:
         """The readout in words (one fact a line)."""
-        mm = lambda v: "n/a" if not math.isfinite(v) else f"{v * 1000:+.1f} mm"  # noqa: E731
+        def mm(v: float) -> str:
+            return "n/a" if not math.isfinite(v) else f"{v * 1000:+.1f} mm"
+
         out = [f"support: {self.support}",
                f"CoM full inertia ({self.com_full[0]:+.3f}, {self.com_full[1]:+.3f}, {self.com_full[2]:.3f}) m, "
                f"margin {mm(self.margin_full_m)}" + ("" if math.isnan(self.margin_settled_m) else
@@ -198,7 +200,8 @@ class PoseEdit:
 
         played = play_page(self._opened(), int(page), self.spec)
         self.played = played.trajectory
-        return (len(self.played.goals) - 1) * self.played.dt
+        seconds: float = (len(self.played.goals) - 1) * self.played.dt
+        return seconds
 
     def scrub(self, t_s: float) -> Readout:
         """The pose at time ``t_s`` [s] of the played page (its goal of that 8 ms tick)."""
@@ -217,7 +220,7 @@ class PoseEdit:
         done = self._opened().with_poses([self.pose()], self.spec, int(page), float(seconds), overwrite)
         action, first = done.action, done.first
         self.action = action
-        return first
+        return int(first)
 
     def save_action(self, path: str | Path) -> Path:
         """Write the open action file atomically."""

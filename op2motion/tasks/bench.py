@@ -62,4 +62,4 @@ def bench(spec: Spec, poses: int, repeat: int, action: ActionFile | None = None,
 
     checked = check_bench_action(action, spec) if action is not None else None
     r = run_bench(spec, poses, repeat, action=checked, wall_runs=wall_runs)
-    return TaskResult(True, data=r, lines=("\n".join(_lines(r)),), file_keys={})
+    return TaskResult(True, data=r, lines=("\n".join(_lines(r)),))

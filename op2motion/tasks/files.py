@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Sequence
 
 from op2motion.errors import InputError
+from op2motion.jsonout import JsonObject
 from op2motion.robot.spec import Spec
 from op2motion.tasks.result import Output, TaskResult
 
@@ -66,7 +67,7 @@ def export_poses(poses: Sequence[Pose], spec: Spec, fmt: str, output: Path, seco
         text = f"{len(poses)} pose(s)"
     warnings = cable_warnings(poses, spec) + (webots_warnings(poses, spec) if fmt == "webots" else [])
     return TaskResult(True, None, tuple(warnings), {"output": Output(str(output), content)}, data,
-                      (f"wrote {output}: {text}",), file_keys={})
+                      (f"wrote {output}: {text}",))
 
 
 def import_page(action: ActionFile, page: int, spec: Spec, name: str | None = None,
@@ -80,18 +81,18 @@ def import_page(action: ActionFile, page: int, spec: Spec, name: str | None = No
     data = {"page": page, "pose": json.loads(text), "path": out_text}
     outputs = {"out": Output(str(output), text)} if output is not None else {}
     line = f"page {page} -> pose {pose.name!r}" + (f", wrote {out_text}" if output is not None else "")
-    return TaskResult(True, None, tuple(cable_warnings([pose], spec)), outputs, data, (line,), file_keys={})
+    return TaskResult(True, None, tuple(cable_warnings([pose], spec)), outputs, data, (line,))
 
 
 def list_pages(action: ActionFile, spec: Spec) -> TaskResult:
     """``import-action``: every page with its steps (goal ticks by servo ID, pause and time in the file's units)."""
     pages = action.pages(spec)
-    data = {"pages": [{"index": p.index, "name": p.name, "repeat": p.repeat, "next": p.next,
+    data: JsonObject = {"pages": [{"index": p.index, "name": p.name, "repeat": p.repeat, "next": p.next,
                        "steps": [{"ticks": {str(k): v for k, v in s.ticks.items()}, "pause": s.pause, "time": s.time}
                                  for s in p.steps]} for p in pages]}
     text = "\n".join(f"{p.index:3d} {p.name:<14} {len(p.steps)} step(s)" + (f" -> page {p.next}" if p.next else "")
                      for p in pages)
-    return TaskResult(True, None, None, {}, data, (text,), file_keys={})
+    return TaskResult(True, None, None, {}, data, (text,))
 
 
 def export_motion(motion: Motion, spec: Spec, fmt: str, output: Path, pages: PageWrite = PageWrite(),
@@ -120,7 +121,7 @@ def export_motion(motion: Motion, spec: Spec, fmt: str, output: Path, pages: Pag
         text = f"{len(trajectory.goals)} rows every {trajectory.dt * 1000:.0f} ms"
     data["path"] = str(output)
     return TaskResult(True, None, tuple(notes), {"output": Output(str(output), content)}, data,
-                      (f"wrote {output}: {motion.name}, {text}",), file_keys={})
+                      (f"wrote {output}: {motion.name}, {text}",))
 
 
 def urdf(spec: Spec, output: Path | None = None, as_json: bool = False) -> TaskResult:
@@ -132,6 +133,6 @@ def urdf(spec: Spec, output: Path | None = None, as_json: bool = False) -> TaskR
     facts = {"joints": len(spec.joints), "mass_kg": round(total_mass(spec), 6)}
     if output is not None:
         return TaskResult(True, None, None, {"output": Output(str(output), text)}, {"path": str(output), **facts},
-                          (f"wrote {output}: {len(spec.joints)} joints, {total_mass(spec):.3f} kg",), file_keys={})
+                          (f"wrote {output}: {len(spec.joints)} joints, {total_mass(spec):.3f} kg",))
     shown = (text[:-1] if text.endswith("\n") else text,) if not as_json else ()
-    return TaskResult(True, None, None, {}, {"urdf": text, **facts}, shown, file_keys={})
+    return TaskResult(True, None, None, {}, {"urdf": text, **facts}, shown)

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from op2motion.jsonout import JsonObject
 from op2motion.robot.spec import Spec
 from op2motion.tasks.result import Output, TaskResult
 
@@ -28,7 +29,7 @@ def fk(angles: BookAngles, spec: Spec, model: ModelName = "dh", br: float = 1.0,
     from op2motion.kinematics.report import pose_report
 
     report = pose_report(angles, spec, model, br, sole, heading_rad, double)
-    return TaskResult(True, data=report.as_dict(spec), lines=(report.human(),), file_keys={})
+    return TaskResult(True, data=report.as_dict(spec), lines=(report.human(),))
 
 
 def convert(angles: BookAngles, servo: Any, spec: Spec) -> TaskResult:
@@ -37,7 +38,7 @@ def convert(angles: BookAngles, servo: Any, spec: Spec) -> TaskResult:
 
     ticks = servo_to_ticks(servo, spec)
     names = spec.joint_names
-    data = {"support": angles.support,
+    data: JsonObject = {"support": angles.support,
             "servo_deg": {n: float(math.degrees(q)) for n, q in zip(names, servo)},
             "servo_rad": {n: float(q) for n, q in zip(names, servo)},
             "ticks": {str(j.id): int(t) for j, t in zip(spec.joints, ticks)},
@@ -46,7 +47,7 @@ def convert(angles: BookAngles, servo: Any, spec: Spec) -> TaskResult:
     lines += [f"{j.id:>3} {j.name:<12} {math.degrees(q):>10.3f} {t:>5}" for j, q, t in zip(spec.joints, servo, ticks)]
     b = angles.degrees()
     lines.append(f"book ({angles.support} support): th {b['th']}, phi {b['phi']}, psi {b['psi']} [deg]")
-    return TaskResult(True, data=data, lines=("\n".join(lines),), file_keys={})
+    return TaskResult(True, data=data, lines=("\n".join(lines),))
 
 
 @dataclass(frozen=True)
@@ -83,15 +84,14 @@ def plot(request: PlotRequest, spec: Spec) -> TaskResult:
     drawing = Drawing(request.models, request.br, request.target, double=Support.of(support).is_double)
     png, drawn, reports = pose_figure(request.name, angles, spec, drawing, validation,
                                       None if pose is None else pose.metrics)
-    data = {"support": support, "drawn": drawn,
+    data: JsonObject = {"support": support, "drawn": drawn,
             "models": {r.model: {k: r.as_dict(spec)[k] for k in (
                 "com", "stability_margin_m", "com_full", "stability_margin_full_m", "left_hand", "right_hand",
                 "swing_foot_min_z")} for r in reports}}
     notes = [f"note: {PB_PSI_NOTE}"] if any(row["note"] for row in drawn["rows"]) else []
     text = ("\n\n".join(r.human() for r in reports) + "\n" + "\n".join(notes)
             + f"\n{drawn['verdict']}\nwrote {request.output}")
-    return TaskResult(True, None, None, {"output": Output(str(request.output), png)}, data, (text,),
-                      file_keys={"output": "png"})
+    return TaskResult(True, None, None, {"output": Output(str(request.output), png, key="png")}, data, (text,))
 
 
 @dataclass(frozen=True)
@@ -124,7 +124,7 @@ def arm_ik(request: ArmMove, spec: Spec) -> TaskResult:
                        single_step=request.single_step, tol=tol, enforce_limits=not request.allow_limits)
     arm = ARMS[request.hand]
     converged = res.mode == "single-step" or res.error_m <= tol
-    data = {"hand": request.hand, "model": res.model, "mode": res.mode, "iterations": res.iterations,
+    data: JsonObject = {"hand": request.hand, "model": res.model, "mode": res.mode, "iterations": res.iterations,
             "joint_deltas_deg": {n: float(math.degrees(v)) for n, v in zip(arm.names, res.deltas)},
             **res.angles.degrees(),
             "requested_delta": [float(v) for v in res.requested],
@@ -151,5 +151,5 @@ def arm_ik(request: ArmMove, spec: Spec) -> TaskResult:
                  f"{res.mode} arm IK: {deltas}; error {res.error_m * 1000:.3f} mm"]
         drawing = Drawing((res.model,), target=target, lines=lines, ghost=res.initial)
         png, _, _ = pose_figure(f"{request.name} + arm IK", res.angles, spec, drawing)
-        outputs["plot"] = Output(request.plot, png)
-    return TaskResult(problem is None, problem, None, outputs, data, (text,), file_keys={"plot": "png"})
+        outputs["plot"] = Output(request.plot, png, key="png")
+    return TaskResult(problem is None, problem, None, outputs, data, (text,))

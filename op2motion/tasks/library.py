@@ -40,4 +40,4 @@ def build(request: LibraryBuild, spec: Spec, on_done: Callable[[Any], Any] | Non
     if summary.robust_checked:
         text += (f"; on the robustness family {summary.robust_checked - summary.robust_failed} of "
                  f"{summary.robust_checked} poses stood in every run")
-    return TaskResult(True, data=summary.as_dict(), lines=(text,), file_keys={})
+    return TaskResult(True, data=summary.as_dict(), lines=(text,))

@@ -123,14 +123,14 @@ def check_motion(trajectory: Trajectory, spec: Spec, how: MotionCheck, told: Tol
         outputs["csv"] = Output(how.csv, goals_csv(trajectory.times, trajectory.goals, trajectory.supports, spec))
     if how.motion_file and motion_text is not None:
         outputs["out"] = Output(how.motion_file, motion_text)
-    s = checks.summary()
-    lines = [*lines, f"  checks: least clearance {s['min_clearance_m'] * 1000:.1f} mm "
-             f"({' / '.join(s['min_clearance_links'])}), ZMP margin >= {s['zmp_margin_min_m'] * 1000:.1f} mm, "
-             f"torque <= {s['torque_ratio_max']:.0%} of available ({s['torque_joint']})",
+    s = checks.worst()
+    lines = [*lines, f"  checks: least clearance {s.min_clearance_m * 1000:.1f} mm "
+             f"({' / '.join(s.min_clearance_links)}), ZMP margin >= {s.zmp_margin_min_m * 1000:.1f} mm, "
+             f"torque <= {s.torque_ratio_max:.0%} of available ({s.torque_joint})",
              *([] if report is None else _physics_lines(report))]
     problem = None if report is None else report.problem("does not get through")
-    return TaskResult(problem is None, None if problem is None else f"{title}: {problem}", None, outputs, data,
-                      tuple(lines))
+    return TaskResult(problem is None, None if problem is None else f"{title}: {problem}", None, outputs,
+                      {**data, "files": {}}, tuple(lines))
 
 
 def _chain(pages: list[int]) -> str:
@@ -192,16 +192,16 @@ def line_move_task(pose: Pose, request: LineRequest, spec: Spec, how: MotionChec
     move: LineMove = line_move(pose, request, spec)
     motion = move.motion(name)
     trajectory = move.trajectory(motion.p_gain)
-    summary = move.as_dict(spec)
+    summary, s = move.as_dict(spec), move.figures(spec)
     data = {"name": name, "pose": pose.name, "support": str(pose.support), **summary,
             "duration_s": round(trajectory.duration_s, 3), "ticks": len(trajectory.goals) - 1,
             "motion_file": how.motion_file}
-    lines = [f"{name}: the {request.hand} hand from {pose.name}, {summary['length_m'] * 1000:.1f} mm in "
+    lines = [f"{name}: the {request.hand} hand from {pose.name}, {s.length_m * 1000:.1f} mm in "
              f"{trajectory.duration_s:.3f} s{' and back' if request.back else ''}: off the line <= "
-             f"{summary['line_deviation_max_m'] * 1000:.2f} mm, CoM margin >= {summary['com_margin_min_m'] * 1000:.1f} "
-             f"mm, fastest joint {summary['joint_speed_joint']} at {summary['joint_speed_max_rad_s']:.2f} rad/s; "
-             f"solved {summary['solved']}" + (f" (the arm changes branch first, {summary['reconfigure_s']:.2f} s)"
-                                              if summary["reconfigure_s"] else "")]
+             f"{s.line_deviation_max_m * 1000:.2f} mm, CoM margin >= {s.com_margin_min_m * 1000:.1f} "
+             f"mm, fastest joint {s.joint_speed_joint} at {s.joint_speed_max_rad_s:.2f} rad/s; "
+             f"solved {s.solved}" + (f" (the arm changes branch first, {s.reconfigure_s:.2f} s)"
+                                     if s.reconfigure_s else "")]
     title = f"{name}: {request.hand} hand line from {pose.name}"
     text = motion_to_json(motion, spec, how.motion_file) if how.motion_file else None
     return check_motion(trajectory, spec, how, Told(title, data, lines),

@@ -85,8 +85,7 @@ def reach(request: Reach, spec: Spec, renderers: Renderers | None = None,
     lines = _lines(request, outcome, data["torso_tilt_deg"])
     warnings = tuple(outcome.warnings())
     if not outcome.ok:
-        return TaskResult(False, f"{outcome.result.message}; nothing written", warnings, {}, data, tuple(lines),
-                          files_on_no=False)
+        return TaskResult(False, f"{outcome.result.message}; nothing written", warnings, {}, data, tuple(lines))
     if renderers is not None:
         jobs = begun or [renderers.begin(StagedPoseFigure, outcome, request.name, spec),
                          renderers.begin(StagedCostCurve, outcome, request.name)]
@@ -99,6 +98,7 @@ def reach(request: Reach, spec: Spec, renderers: Renderers | None = None,
         (figure, drawn), cost_curve = (outcome_pose_figure(outcome, request.name, spec),
                                        outcome_cost_curve(outcome, request.name))
     data["figure"] = drawn
+    data["files"] = {}
     outputs = {"out": Output(request.pose_path, pose_to_json(pose, spec), "pose"),
                "plot": Output(request.figure_path, figure, "png"),
                "cost curve": Output(request.cost_path, cost_curve, "cost_png")}

@@ -3,25 +3,31 @@
 A task (one function per thing a user asks for: play a page, plan a motion, move a hand in a line, ...) takes a typed
 request and returns a frozen :class:`TaskResult`: whether the answer is yes (``ok``), the one phrase that says why
 not (``problem``), what the user should know anyway (``warnings``), the files it would write (``outputs``: written by
-the caller, and only when ``ok``), its figures for a program (:meth:`TaskResult.as_dict`, what ``--json`` prints)
-and for a person (``lines``). A "no" is a result, never an exception; exceptions are for bad input and faults.
+the caller, and only when ``ok``), its figures for a program (:meth:`TaskResult.as_dict`, what ``--json`` prints,
+made by the one JSON encoder) and for a person (``lines``). A "no" is a result, never an exception; exceptions are
+for bad input and faults.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Mapping
+
+from op2motion.jsonout import Json, JsonObject, json_object
 
 
 @dataclass(frozen=True)
 class Output:
-    """A file a task would write: where (``path``, as the user named it), what (text or bytes), and the name its path
-    has in the report's ``files`` (``label``; None: its role)."""
+    """A file a task would write: where (``path``, as the user named it), what (text or bytes), and where the report
+    names it once written: under its own top-level ``key`` (``validate``'s ``png``), else in the report's ``files``
+    object by ``label`` (None: its role) when the task's figures have one (its data holds ``"files": {}``), else
+    not at all (the task's figures name it already, e.g. as ``path``)."""
 
     path: str
     content: str | bytes
     label: str | None = None
+    key: str | None = None
 
 
 @dataclass(frozen=True)
@@ -34,14 +40,11 @@ class TaskResult:
         warnings: What the user should know before trusting the result (None: the task has no warnings to report;
             an empty tuple: it has, and there are none).
         outputs: The files to write when ``ok``, by role (``plot``, ``csv``, ``out``, ...).
-        data: The task's figures (JSON-ready; no files, no warnings: :meth:`as_dict` adds them).
+        data: The task's figures as JSON (made by :func:`op2motion.jsonout.json_object`: rounded once; no
+            warnings: :meth:`as_dict` adds them; ``"files": {}`` where the report lists the files written).
         lines: The result for a person, one line each.
         checked: False when the task was refused before its checks ran (then there is nothing to report but
             ``problem``).
-        file_keys: Where :meth:`as_dict` puts the paths written: None, a ``files`` object {role: path}; else
-            {role: JSON key} (a command whose report names its one file by its own key, ``validate``'s ``png``).
-        files_on_no: Whether a "no" reports its (empty) ``files`` too (``optimize``'s report of an unreached target
-            has none).
         interrupted: The "no" is a stop the user asked for (Ctrl-C, SIGTERM: exit 130), not a failed check.
     """
 
@@ -49,18 +52,16 @@ class TaskResult:
     problem: str | None = None
     warnings: tuple[str, ...] | None = None
     outputs: Mapping[str, Output] = field(default_factory=lambda: MappingProxyType({}))
-    data: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
+    data: Mapping[str, Json] = field(default_factory=lambda: MappingProxyType({}))
     lines: tuple[str, ...] = ()
     checked: bool = True
-    file_keys: Mapping[str, str] | None = None
-    files_on_no: bool = True
     interrupted: bool = False
 
     def __post_init__(self) -> None:
         if self.ok == (self.problem is not None):
             raise ValueError(f"expected a problem exactly when not ok, got ok={self.ok} and problem={self.problem!r}")
         object.__setattr__(self, "outputs", MappingProxyType(dict(self.outputs)))
-        object.__setattr__(self, "data", MappingProxyType(dict(self.data)))
+        object.__setattr__(self, "data", MappingProxyType(json_object(self.data)))
 
     @classmethod
     def refused(cls, problem: str) -> "TaskResult":
@@ -71,16 +72,20 @@ class TaskResult:
         """This result with ``warnings`` (as the caller words them, e.g. with its flags)."""
         return replace(self, warnings=warnings)
 
-    def as_dict(self, files: Mapping[str, str] | None = None) -> dict[str, Any]:
-        """The figures as JSON: ``data``, then ``warnings`` (unless the task has none to report) and ``files`` (role
-        -> path written; given by the caller once it has written them, empty when nothing was)."""
+    def as_dict(self, files: Mapping[str, str] | None = None) -> JsonObject:
+        """The figures as JSON: ``data``, then ``warnings`` (unless the task has none to report) and the paths of the
+        ``files`` written (role -> path; given by the caller once it has written them) where each output says."""
         out = dict(self.data)
+        listed = out.pop("files", None)
         if self.warnings is not None:
             out["warnings"] = list(self.warnings)
-        written = dict(files or {})
-        if self.file_keys is None and (self.ok or self.files_on_no):
-            out["files"] = {(self.outputs[role].label if role in self.outputs else None) or role: path
-                            for role, path in written.items()}
-        elif self.file_keys is not None:
-            out.update({key: written[role] for role, key in self.file_keys.items() if role in written})
+        listed = dict(listed) if isinstance(listed, dict) else None
+        for role, path in (files or {}).items():
+            made = self.outputs.get(role)
+            if made is not None and made.key is not None:
+                out[made.key] = path
+            elif listed is not None:
+                listed[(made.label if made is not None else None) or role] = path
+        if listed is not None:
+            out["files"] = listed
         return out

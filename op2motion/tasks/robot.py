@@ -10,6 +10,7 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable
 
+from op2motion.jsonout import JsonObject
 from op2motion.robot.spec import Spec
 from op2motion.tasks.result import Output, TaskResult
 
@@ -28,8 +29,7 @@ def robot_status(port: RobotPort, spec: Spec) -> TaskResult:
     state = read_status(port, spec)
     problem = None if state.ok else state.problems[0].describe() + (
         f" (and {len(state.problems) - 1} more)" if len(state.problems) > 1 else "")
-    return TaskResult(problem is None, problem, tuple(state.warnings), {}, state.as_dict(), ("\n".join(state.lines()),),
-                      file_keys={})
+    return TaskResult(problem is None, problem, tuple(state.warnings), {}, state.as_dict(), ("\n".join(state.lines()),))
 
 
 def robot_setup(port: RobotPort, spec: Spec, return_delay: int, confirm: Callable[[str], bool]) -> TaskResult:
@@ -38,13 +38,14 @@ def robot_setup(port: RobotPort, spec: Spec, return_delay: int, confirm: Callabl
     from op2motion.onrobot.tasks import setup
 
     done = setup(port, spec, return_delay, confirm)
-    data = {"register": done.register, "value": done.value, "written": {str(d): v for d, v in done.written.items()},
-            "already": list(done.already), "failed": list(done.failed)}
+    data: JsonObject = {"register": done.register, "value": done.value,
+                        "written": {str(d): v for d, v in done.written.items()}, "already": list(done.already),
+                        "failed": list(done.failed)}
     line = (f"return delay {done.value} ({done.value * 2} µs): written to {len(done.written)} device(s)"
             f"{' (IDs ' + ', '.join(map(str, sorted(done.written))) + ')' if done.written else ''}, "
             f"{len(done.already)} already had it")
     problem = (f"IDs {', '.join(map(str, done.failed))} did not take the return delay" if done.failed else None)
-    return TaskResult(problem is None, problem, None, {}, data, (line,), file_keys={})
+    return TaskResult(problem is None, problem, None, {}, data, (line,))
 
 
 def robot_read(port: RobotPort, spec: Spec, name: str, output: Path, support: Support | SupportName = "double",
@@ -63,8 +64,7 @@ def robot_read(port: RobotPort, spec: Spec, name: str, output: Path, support: Su
             "tilt_deg": pose.provenance["tilt_deg"], "fallen": pose.provenance["fallen"]}
     lines = "\n".join([f"wrote {output}: pose {name} ({support}){' of a FALLEN robot' if data['fallen'] else ''}"]
                       + [f"  {n}" for n in notes])
-    return TaskResult(True, None, None, {"out": Output(str(output), pose_to_json(pose, spec))}, data, (lines,),
-                      file_keys={})
+    return TaskResult(True, None, None, {"out": Output(str(output), pose_to_json(pose, spec))}, data, (lines,))
 
 
 def robot_motion(run: Callable[[Options], MotionResult], options: Options) -> TaskResult:
@@ -80,15 +80,14 @@ def robot_motion(run: Callable[[Options], MotionResult], options: Options) -> Ta
         raise
     except CheckFailed as exc:
         refused: dict[str, Any] = {"ended": "refused", "refused": exc.message, "runs": {}, "fault": None}
-        return TaskResult(False, exc.message, None, {}, refused, (f"refused: {exc.message}",), file_keys={})
+        return TaskResult(False, exc.message, None, {}, refused, (f"refused: {exc.message}",))
     data, lines = result.as_dict(), ("\n".join(result.lines()),)
     if result.fault is not None:
-        return TaskResult(False, f"{result.what} stopped: {result.fault.describe()}", None, {}, data, lines,
-                          file_keys={})
+        return TaskResult(False, f"{result.what} stopped: {result.fault.describe()}", None, {}, data, lines)
     if result.ended == "stopped" or options.stopped():
         return TaskResult(False, f"{result.what} stopped on request; the robot holds its pose", None, {}, data,
-                          lines, file_keys={}, interrupted=True)
-    return TaskResult(True, None, None, {}, data, lines, file_keys={})
+                          lines, interrupted=True)
+    return TaskResult(True, None, None, {}, data, lines)
 
 
 def emulated(emulator: Any, link: str, engine: EngineName, start: str, faults: Any, interrupted: bool) -> TaskResult:
@@ -102,5 +101,5 @@ def emulated(emulator: Any, link: str, engine: EngineName, start: str, faults: A
             f"the wall clock), {emulator.stats['packets']} packets, link removed")
     if interrupted:
         return TaskResult(False, "the emulated OP2 stopped; its link is removed", None, {}, data, (line,),
-                          file_keys={}, interrupted=True)
-    return TaskResult(True, None, None, {}, data, (line,), file_keys={})
+                          interrupted=True)
+    return TaskResult(True, None, None, {}, data, (line,))

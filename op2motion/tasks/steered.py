@@ -9,6 +9,8 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from op2motion.gait.steer import EndPose, PlannedWalk, SteerableWalk
+from op2motion.jsonout import JsonObject, json_object
 from op2motion.robot.spec import Spec
 from op2motion.tasks.progress import ProgressFor, no_progress
 from op2motion.tasks.result import Output, TaskResult
@@ -36,16 +38,25 @@ class SteeredRequest:
     plot: str | None = None
 
 
-def _commanded(walk: Any) -> dict[str, Any]:
-    """The timeline in figures: its source, entries, length, events and where it ends (x, y [m], heading [deg])."""
+@dataclass(frozen=True)
+class Commanded:
+    """A command timeline in figures: its source, entries, length [s], events and where it ends."""
+
+    source: str
+    entries: int
+    duration_s: float
+    events: tuple[str, ...]
+    end_pose: EndPose
+
+
+def _commanded(timeline: CommandTimeline) -> Commanded:
+    """``timeline`` in figures (see :class:`Commanded`)."""
     from op2motion.gait.commands import commanded_path
 
-    timeline = walk.commands
     _, poses = commanded_path(timeline)
-    events = [e.event for e in timeline.entries if e.event]
-    return {"source": timeline.source, "entries": len(timeline.entries), "duration_s": timeline.duration_s,
-            "events": events, "end_pose": {"x_m": round(float(poses[-1, 0]), 4), "y_m": round(float(poses[-1, 1]), 4),
-                                           "yaw_deg": round(math.degrees(float(poses[-1, 2])), 2)}}
+    events = tuple(e.event for e in timeline.entries if e.event)
+    return Commanded(timeline.source, len(timeline.entries), timeline.duration_s, events,
+                     EndPose(float(poses[-1, 0]), float(poses[-1, 1]), math.degrees(float(poses[-1, 2]))))
 
 
 def _physics(request: SteeredRequest, walk: Any, spec: Spec, data: dict[str, Any], progress: ProgressFor
@@ -101,42 +112,46 @@ def _figure(walk: Any, report: Any) -> bytes:
 
 def steered_walk_task(request: SteeredRequest, spec: Spec, progress: ProgressFor | None = None) -> TaskResult:
     """``walk --commands``: see the module docstring; ``progress`` gives each stage's progress."""
-    from op2motion.gait.steer import SteerableWalk, planned_summary
+    from op2motion.gait.steer import planned_summary
 
     progress = progress or no_progress
     walk = SteerableWalk.make(spec, request.preset, commands=request.commands, action=request.action)
     with progress("plan", "row"):
         summary = planned_summary(walk)
-    data: dict[str, Any] = {"preset": walk.params.name, "commands": _commanded(walk), "planned": summary}
-    end = summary["end_pose"]
+    commanded = _commanded(request.commands)
+    data: JsonObject = {"preset": walk.params.name, "commands": json_object(commanded),
+                        "planned": json_object(summary)}
+    end = summary.end_pose
     timeline = request.commands
     lines = [f"walk --commands {timeline.source}: {len(timeline.entries)} entries over "
-             f"{timeline.duration_s:g} s; planned {summary['steps']} steps, {summary['kicks']} kicks, "
-             f"{summary['duration_s']:.1f} s, ending at x {end['x_m']:.3f} m, y {end['y_m']:.3f} m, heading "
-             f"{end['yaw_deg']:+.1f}° (ZMP margin >= {summary['zmp_margin_min_m'] * 1000:.1f} mm)"]
+             f"{timeline.duration_s:g} s; planned {summary.steps} steps, {summary.kicks} kicks, "
+             f"{summary.duration_s:.1f} s, ending at x {end.x_m:.3f} m, y {end.y_m:.3f} m, heading "
+             f"{end.yaw_deg:+.1f}° (ZMP margin >= {summary.zmp_margin_min_m * 1000:.1f} mm)"]
     report, table = _physics(request, walk, spec, data, progress) if request.validate else (None, None)
     if table is not None:
         lines.append(table)
     elif report is not None:
-        lines += [walk_line(e, s) for e, s in data["physics"]["engines"].items()]
-    warnings = command_warnings(walk, data["commands"]["end_pose"], summary)
+        lines += [walk_line(r) for r in report.engines.values()]
+    warnings = command_warnings(walk, request.commands, commanded.end_pose, summary)
     failed = report is not None and (not report.passed if table is not None else report.fell)
     outputs = {"plot": Output(request.plot, _figure(walk, report))} if request.plot else {}
     problem = f"the commanded walk {'failed in the robustness family' if table else 'fell in physics'}" if failed \
         else None
-    return TaskResult(problem is None, problem, warnings, outputs, data, tuple(lines))
+    return TaskResult(problem is None, problem, warnings, outputs, {**data, "files": {}}, tuple(lines))
 
 
 END_M = 0.10                       # the plan may end this far from where the commands end without a warning [m]
 END_DEG = 10.0                     # ... and turned this far from their heading [deg]
 
 
-def command_warnings(walk: Any, commanded_end: dict[str, float], planned: dict[str, Any]) -> tuple[str, ...]:
-    """What keeps the commands from being followed, in words: each command the envelope cuts (asked, and what it
-    walks), each kick (the walk stops for it), where the plan ends against where the commands end (beyond
-    :data:`END_M` or :data:`END_DEG`), and a planned ZMP outside the soles (when, during what)."""
+def command_warnings(walk: SteerableWalk, timeline: CommandTimeline, commanded_end: EndPose, planned: PlannedWalk
+                     ) -> tuple[str, ...]:
+    """What keeps the commands of ``timeline`` (``walk``'s) from being followed, in words: each command the
+    envelope cuts (asked, and what it walks), each kick (the walk stops for it), where the plan ends against where
+    the commands end (beyond :data:`END_M` or :data:`END_DEG`), and a planned ZMP outside the soles (when, during
+    what)."""
     out = []
-    for entry in walk.commands.entries:
+    for entry in timeline.entries:
         if entry.command is None:
             continue
         asked = entry.command
@@ -145,19 +160,19 @@ def command_warnings(walk: Any, commanded_end: dict[str, float], planned: dict[s
             out.append(f"{entry.t_s:g} s: the command ({_speeds(asked)}) is beyond the steered walk's envelope: it "
                        f"walks ({_speeds(kept)}) (docs/steering.md)")
     out += [f"{e.t_s:g} s: {e.event.replace('_', ' ')}: the walk stops, closes its feet and kicks, then walks on; the "
-            f"commands meanwhile are not walked" for e in walk.commands.entries if e.event and e.event != "stop"]
-    end = planned["end_pose"]
-    off_m = math.hypot(end["x_m"] - commanded_end["x_m"], end["y_m"] - commanded_end["y_m"])
-    off_deg = abs(math.remainder(end["yaw_deg"] - commanded_end["yaw_deg"], 360.0))
-    turned = abs(end["yaw_deg"] - commanded_end["yaw_deg"])
+            f"commands meanwhile are not walked" for e in timeline.entries if e.event and e.event != "stop"]
+    end = planned.end_pose
+    off_m = math.hypot(end.x_m - commanded_end.x_m, end.y_m - commanded_end.y_m)
+    off_deg = abs(math.remainder(end.yaw_deg - commanded_end.yaw_deg, 360.0))
+    turned = abs(end.yaw_deg - commanded_end.yaw_deg)
     if off_m > END_M or turned > END_DEG:
-        out.append(f"the plan ends at x {end['x_m']:.3f} m, y {end['y_m']:.3f} m, heading {end['yaw_deg']:+.1f}°; "
-                   f"the commands end at x {commanded_end['x_m']:.3f} m, y {commanded_end['y_m']:.3f} m, heading "
-                   f"{commanded_end['yaw_deg']:+.1f}° ({off_m:.2f} m and {min(off_deg, turned):.0f}° apart"
+        out.append(f"the plan ends at x {end.x_m:.3f} m, y {end.y_m:.3f} m, heading {end.yaw_deg:+.1f}°; "
+                   f"the commands end at x {commanded_end.x_m:.3f} m, y {commanded_end.y_m:.3f} m, heading "
+                   f"{commanded_end.yaw_deg:+.1f}° ({off_m:.2f} m and {min(off_deg, turned):.0f}° apart"
                    f"{', a turn of ' + format(turned, '.0f') + '° short' if turned > off_deg + 1e-6 else ''})")
-    if planned["zmp_margin_min_m"] < 0.0:
-        out.append(f"the planned ZMP leaves the soles by {-planned['zmp_margin_min_m'] * 1000:.1f} mm at "
-                   f"{planned['zmp_margin_min_at_s']:.2f} s (during a {planned['zmp_margin_min_during'] or 'phase'}): "
+    if planned.zmp_margin_min_m < 0.0:
+        out.append(f"the planned ZMP leaves the soles by {-planned.zmp_margin_min_m * 1000:.1f} mm at "
+                   f"{planned.zmp_margin_min_at_s:.2f} s (during a {planned.zmp_margin_min_during or 'phase'}): "
                    f"the plan itself would tip the robot there unless the servos' compliance and feedback catch it")
     return tuple(out)
 

@@ -9,8 +9,9 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from op2motion.jsonout import JsonObject, json_object
 from op2motion.tasks.progress import ProgressFor, no_progress
 from op2motion.tasks.result import Output, TaskResult
 
@@ -105,21 +106,22 @@ def tune(request: TuneRequest, progress: ProgressFor | None = None) -> TaskResul
 
     unit = "rad/s" if request.task.direction == "turn" else "m/s"
     result = _search(request, progress or no_progress)
-    data: dict[str, Any] = {**result_json(result), "study": request.study_path}
+    data: JsonObject = {**result_json(result), "study": request.study_path}
     outputs = {}
     if request.plot:
         outputs["plot"] = Output(request.plot, render_pareto(result, pareto(result.table), MIN_MARGIN, unit))
-    lines = [f"tune {result.kind} {result.direction}: {data['trials']['finished']} trials "
-             f"({data['trials']['pruned']} pruned, {result.ran} this run), {data['cost']['study_wall_s']:.0f} s on "
+    pruned = sum(r.state == "PRUNED" for r in result.table)
+    lines = [f"tune {result.kind} {result.direction}: {len(result.table)} trials "
+             f"({pruned} pruned, {result.ran} this run), {result.study_wall_s:.0f} s on "
              f"{result.workers} {result.executor} worker(s)"]
     lines += [f"  rejected in verification: trial {n}: {p}" for n, p in result.rejected]
     if result.settings is None or result.chosen is None:
         return TaskResult(False, f"no point held on every body of the family in both engines (verified "
                                  f"{len(result.rejected)}); nothing written: more --trials resume the study",
-                          None, outputs, data, tuple(lines))
+                          None, outputs, {**data, "files": {}}, tuple(lines))
     outputs["out"] = Output(request.out, _settings_text(request, result, unit))
-    outputs["out_json"] = Output(request.out_json, json.dumps(data, indent=2) + "\n")
+    outputs["out_json"] = Output(request.out_json, json.dumps(json_object(data), indent=2) + "\n")
     paths = ", ".join(o.path for o in outputs.values())
     lines.append(f"  chosen trial {result.chosen.number}: nominal {result.verified_speed:.3f} {unit} in both "
                  f"engines, every body held; wrote {paths}")
-    return TaskResult(True, None, None, outputs, data, tuple(lines))
+    return TaskResult(True, None, None, outputs, {**data, "files": {}}, tuple(lines))

@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from op2motion.jsonout import JsonObject
 from op2motion.physics import DEFAULT_SECONDS
 from op2motion.robot.spec import Spec
 from op2motion.tasks.progress import Progress
@@ -61,7 +62,7 @@ def validate_pose(pose: Pose, spec: Spec, how: Validation = Validation(),
                 "static_worst_joint": static.worst_joint, "static_worst_ratio": round(static.worst_ratio, 4)}
     outputs = {}
     if how.snapshot_png and report.run.snapshot_png is not None:
-        outputs["gui_png"] = Output(how.snapshot_png, report.run.snapshot_png)
+        outputs["gui_png"] = Output(how.snapshot_png, report.run.snapshot_png, key="png")
     lines = [f"{pose.name} ({pose.support} support): {e.run.summary()}" + _pushes_line(e.pushes)
              for e in report.engines.values()]
     lines.append(f"  static model (pinocchio): {abs(static.worst_torque_nm):.2f} N·m at {static.worst_joint}")
@@ -69,7 +70,7 @@ def validate_pose(pose: Pose, spec: Spec, how: Validation = Validation(),
         lines.append("  the engines agree" if report.agree else "  THE ENGINES DISAGREE")
     problem = report.problem()
     return TaskResult(problem is None, None if problem is None else f"{pose.name}: {problem}", None, outputs, data,
-                      tuple(lines), file_keys={"gui_png": "png"})
+                      tuple(lines))
 
 
 def validate_pose_robust(pose: Pose, spec: Spec, how: Validation = Validation(),
@@ -84,9 +85,9 @@ def validate_pose_robust(pose: Pose, spec: Spec, how: Validation = Validation(),
                          "robust")
     report = robust_check(lambda: Schedule.hold(pose.servo, pose.support, spec, how.seconds), spec, how.engines,
                           pushes=Pushes(how.push_n) if how.push_n else None, on_progress=on_progress)
-    data = {"pose": pose.name, "support": pose.support, "robust": robust_summary(report)}
+    data: JsonObject = {"pose": pose.name, "support": pose.support, "robust": robust_summary(report)}
     lines = (f"{pose.name} ({pose.support} support) across the robustness family:\n" + pose_robust_table(report),)
     failed = sum(not r.passed for r in report.runs)
     problem = None if report.passed else (
         f"{pose.name}: fails in {failed} of {len(report.runs)} runs of the robustness family")
-    return TaskResult(report.passed, problem, None, {}, data, lines, file_keys={})
+    return TaskResult(report.passed, problem, None, {}, data, lines)

@@ -9,13 +9,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
+from op2motion.jsonout import JsonObject
 from op2motion.robot.spec import Spec
 from op2motion.tasks.progress import ProgressFor, no_progress
 from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
     from op2motion.gait.params import GaitParams
-    from op2motion.physics import CheckReport, EngineName, Trials
+    from op2motion.physics import CheckReport, EngineName, EngineReport, Trials
 
 #: The goal tables a walk writes, by file ending.
 OUT_FORMATS = {".csv": "csv", ".motion": "webots"}
@@ -42,19 +43,25 @@ class WalkRequest:
     tables: tuple[tuple[str, str], ...] = ()
 
 
-def walk_line(engine: EngineName, s: dict[str, Any]) -> str:
-    """One engine's walk in words (``s``: its ``walk_summary`` entry)."""
-    w = s["worst_torque"]
-    line = (f"  {engine}: {'FELL' if s['fell'] else 'walked'}"
-            f"{' (' + ', '.join(s['reasons']) + ')' if s['reasons'] else ''}, {s['distance_m']:.3f} m, "
-            f"{s['mean_speed_mps']:.3f} m/s steady, drift {s['lateral_drift_m'] * 1000:.0f} mm, heading off "
-            f"the plan's by {s['heading_error_deg']:+.1f}°, turn {s['turn_rate_deg_s']:.1f}°/s, CoP inside "
-            f"{s['cop_inside_fraction']:.1%}, worst torque {w['torque_nm']:.2f} N·m at {w['joint']} "
-            f"({w['ratio']:.0%} of {w['available_nm']:.2f})")
-    if s["pushes"]:
-        line += "; pushes: " + ", ".join(f"from {p['from']} {'FELL' if p['fell'] else 'ok'}" for p in s["pushes"])
-    if "trials" in s:
-        line += f"; trials: {s['trials']['walked']}/{s['trials']['runs']} walked"
+def walk_line(report: EngineReport) -> str:
+    """One engine's walk in words (``report``: the engine's check of a walk, with its walking measurements)."""
+    from op2motion.gait.report import measured_walk
+    from op2motion.physics.report import OPPOSITE
+
+    run = report.run
+    s = measured_walk(run)
+    w = s.worst_torque
+    line = (f"  {run.engine}: {'FELL' if run.fell else 'walked'}"
+            f"{' (' + ', '.join(run.reasons) + ')' if run.reasons else ''}, {s.distance_m:.3f} m, "
+            f"{s.mean_speed_mps:.3f} m/s steady, drift {s.lateral_drift_m * 1000:.0f} mm, heading off "
+            f"the plan's by {s.heading_error_deg:+.1f}°, turn {s.turn_rate_deg_s:.1f}°/s, CoP inside "
+            f"{s.cop_inside_fraction:.1%}, worst torque {w.torque_nm:.2f} N·m at {w.joint} "
+            f"({w.ratio:.0%} of {w.available_nm:.2f})")
+    if report.pushes:
+        line += "; pushes: " + ", ".join(f"from {OPPOSITE[p.direction]} {'FELL' if p.fell else 'ok'}"
+                                         for p in report.pushes)
+    if report.trials is not None:
+        line += f"; trials: {report.trials.survived}/{len(report.trials.runs)} walked"
     return line
 
 
@@ -66,28 +73,29 @@ def _controller(request: WalkRequest, gait: Any, spec: Spec) -> Any:
     return gait_schedule(gait, spec) if request.open_loop else WalkController(gait, spec)
 
 
-def _physics(request: WalkRequest, gait: Any, spec: Spec, data: dict[str, Any], progress: ProgressFor
+def _physics(request: WalkRequest, gait: Any, spec: Spec, data: JsonObject, progress: ProgressFor
              ) -> CheckReport:
     """The walk in physics; its figures go into ``data``."""
     from op2motion.gait import side_pushes, walk_summary
+    from op2motion.gait.report import measured_walk
     from op2motion.physics import check
 
     controller = _controller(request, gait, spec)
     with progress("physics", "s") as on_progress:
         report = check(controller, spec, request.engines, side_pushes(request.push_n) if request.push_n else None,
                        request.trials, on_progress=on_progress)
-    physics = walk_summary(report, controller.plan.walk.start_s if controller.plan.walk else 0.0)
-    main = physics["engines"][next(iter(report.engines))]
-    data["physics"] = physics
+    main = measured_walk(report.run)
+    data["physics"] = walk_summary(report, controller.plan.walk.start_s if controller.plan.walk else 0.0)
     data["controller"] = "open loop" if request.open_loop else "WalkController"
-    data.update({key: main[key] for key in ("reasons", "lateral_drift_m", "heading_error_deg", "turn_rate_deg_s",
-                                            "cop_inside_fraction", "worst_torque")})
-    data["mean_speed_mps"] = min(s["mean_speed_mps"] for s in physics["engines"].values())
-    data["fell"] = physics["fell"]
+    data.update(reasons=list(report.run.reasons), lateral_drift_m=main.lateral_drift_m,
+                heading_error_deg=main.heading_error_deg, turn_rate_deg_s=main.turn_rate_deg_s,
+                cop_inside_fraction=main.cop_inside_fraction, worst_torque=main.worst_torque.as_dict(),
+                mean_speed_mps=min(measured_walk(e.run).mean_speed_mps for e in report.engines.values()),
+                fell=report.fell)
     return report
 
 
-def _robust(request: WalkRequest, gait: Any, spec: Spec, data: dict[str, Any], progress: ProgressFor
+def _robust(request: WalkRequest, gait: Any, spec: Spec, data: JsonObject, progress: ProgressFor
             ) -> tuple[Any, str]:
     """The walk over the robustness family; its summary goes into ``data``; the report and its table."""
     from op2motion.gait import side_pushes
@@ -97,8 +105,7 @@ def _robust(request: WalkRequest, gait: Any, spec: Spec, data: dict[str, Any], p
     with progress("robust", "run") as on_progress:
         report = robust_check(lambda: _controller(request, gait, spec), spec, request.engines, walk_judge,
                               side_pushes(request.push_n) if request.push_n else None, on_progress=on_progress)
-    data["robust"] = robust_summary(report)
-    data["robust"]["worst"] = report.worst(walk_badness).member.name
+    data["robust"] = {**robust_summary(report), "worst": report.worst(walk_badness).member.name}
     return report, robust_table(report)
 
 
@@ -173,9 +180,9 @@ def walk_task(request: WalkRequest, spec: Spec, progress: ProgressFor | None = N
     robust = _robust(request, gait, spec, data, progress) if request.validate and request.robust else None
     report = _physics(request, gait, spec, data, progress) if request.validate and robust is None else None
     if report is not None:
-        lines += [walk_line(e, s) for e, s in data["physics"]["engines"].items()]
+        lines += [walk_line(r) for r in report.engines.values()]
     if robust is not None:
         lines.append(robust[1])
     problem = _problem(params.name, None if robust is None else robust[0], report)
     outputs = _outputs(request, gait, spec, report)
-    return TaskResult(problem is None, problem, None, outputs, data, tuple(lines))
+    return TaskResult(problem is None, problem, None, outputs, {**data, "files": {}}, tuple(lines))

@@ -19,6 +19,7 @@ import time
 from dataclasses import dataclass, field, fields, replace
 from typing import TYPE_CHECKING, Any, Callable
 
+from op2motion.jsonout import JsonObject
 from op2motion.processes.workers import ExecutorName
 from op2motion.tune.study import TrialOutcome, TrialRow, pareto, rows
 from op2motion.tune.trial import Task, evaluate
@@ -132,7 +133,7 @@ def search_and_verify(study: Any, space: Any, task: Task, effort: Effort, trials
     return result
 
 
-def result_json(result: TuneResult) -> dict[str, Any]:
+def result_json(result: TuneResult) -> JsonObject:
     """The run's figures for the JSON beside the written settings and ``--json``."""
     complete = [r for r in result.table if r.state == "COMPLETE"]
     pruned = [r for r in result.table if r.state == "PRUNED"]
@@ -174,13 +175,14 @@ def preset_text(params: Any, header: list[str]) -> str:
 
 def header_lines(result: TuneResult, unit: str) -> list[str]:
     """What the study found, for the written file's header."""
-    data = result_json(result)
     speed = result.verified_speed or 0.0
     worst = min((o.margin for o in result.verified.values()), default=0.0)
-    return [f"Tuned by op2motion tune {result.kind} ({result.direction}): {data['trials']['finished']} trials "
-            f"({data['trials']['pruned']} pruned), {data['cost']['study_wall_s']:.0f} s wall on {result.workers} "
-            f"{result.executor} worker(s) ({data['cost']['trial_s']:.0f} s of trials; this run "
-            f"{data['cost']['wall_s']:.0f} s).",
+    pruned = sum(r.state == "PRUNED" for r in result.table)
+    trial_s = sum(r.outcome.seconds for r in result.table if r.outcome is not None)
+    return [f"Tuned by op2motion tune {result.kind} ({result.direction}): {len(result.table)} trials "
+            f"({pruned} pruned), {result.study_wall_s:.0f} s wall on {result.workers} "
+            f"{result.executor} worker(s) ({trial_s:.0f} s of trials; this run "
+            f"{result.wall_s:.0f} s).",
             f"Verified: {result.verify_steps} steps on every body of the robustness family ({len(result.verified)}) in "
             f"PyBullet and MuJoCo (MX-28 servo model, 1 kHz){', 2 N side pushes' if result.kind == 'walk' else ''}: "
             f"all hold; nominal {speed:.3f} {unit} (slowest engine), least margin {worst:.2f}.",

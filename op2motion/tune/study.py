@@ -48,6 +48,7 @@ from typing import Any, Callable, Iterable, Mapping
 
 from op2motion.errors import InputError, Interrupted, ref
 from op2motion.fileio import check_output_path, new_file_beside
+from op2motion.jsonout import JsonObject
 from op2motion.tune.space import ParameterSpace
 
 MIN_MARGIN = 0.2                # the chosen point holds everywhere with at least this share of every bound to spare
@@ -81,7 +82,7 @@ class TrialOutcome:
         """Stopped before every run was made (a failure decided the verdict)."""
         return self.runs < self.planned
 
-    def as_dict(self) -> dict[str, Any]:
+    def as_dict(self) -> JsonObject:
         """JSON-ready dict."""
         return asdict(self)
 
@@ -104,7 +105,7 @@ def check_budget(trials: int) -> int:
     return trials
 
 
-def study_mark(space: ParameterSpace, about: Mapping[str, Any] | None = None) -> dict[str, Any]:
+def study_mark(space: ParameterSpace, about: Mapping[str, Any] | None = None) -> JsonObject:
     """The mark op2motion writes on a study it makes (the study's ``op2motion`` user attribute): the schema, the
     parameters searched and their ranges when it was made, and ``about``: what else it was made for (e.g. the
     task, the spec's fingerprint: :func:`op2motion.tune.trial.identity`; a value that is a mapping with a

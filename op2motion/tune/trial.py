@@ -26,9 +26,11 @@ from functools import lru_cache
 from typing import TYPE_CHECKING, Any, Literal
 
 from op2motion.errors import InputError
+from op2motion.jsonout import JsonObject
 from op2motion.tune.study import TrialOutcome
 
 if TYPE_CHECKING:
+    from op2motion.gait.measures import WalkMeasures
     from op2motion.physics import EngineName
 
 MIN_COP_INSIDE = 0.8         # the CoP inside the planned soles for at least this share of the walk (the shipped
@@ -79,7 +81,7 @@ def spec_of(path: str | None) -> Any:
     return default_spec() if path is None else load_spec(path)
 
 
-def identity(task: Task) -> dict[str, Any]:
+def identity(task: Task) -> JsonObject:
     """What a study of ``task`` is for, recorded in its mark and compared when it is resumed
     (:func:`~op2motion.tune.study.study_mark`): the spec's fingerprint (SHA-256 of its file) and name, the task (kind
     and direction), its runs (steps, bodies, engines, pushes) and the base settings' fingerprint (SHA-256 of their
@@ -157,7 +159,7 @@ def stock_margin(report: Any, member: str) -> float:
     """The stock run's share of its heading bound left (-1 for a fall)."""
     if report.run.fell or report.run.walk is None:
         return -1.0
-    return 1.0 - abs(report.run.walk.heading_error_deg) / stock_heading_bound(member)
+    return 1.0 - abs(float(report.run.walk.heading_error_deg)) / stock_heading_bound(member)
 
 
 def hold_problem(report: Any) -> str | None:
@@ -180,7 +182,7 @@ def run_margin(report: Any) -> float:
     """The smallest share of a bound a run left (1: none used; 0: on a bound; negative: past it)."""
     from op2motion.gait.robust import MAX_DRIFT_SHARE, MAX_HEADING_DEG, MIN_DISTANCE_M
 
-    walk = report.run.walk
+    walk: WalkMeasures | None = report.run.walk
     if report.run.fell or walk is None or any(p.fell for p in report.pushes):
         return -1.0
     distance = max(walk.distance_m, MIN_DISTANCE_M)

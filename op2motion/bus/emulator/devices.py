@@ -204,8 +204,8 @@ class EmulatedServo(Device):
 
     def conditions(self) -> int:
         t = self.table
-        return alarm_conditions(round(self.voltage_v * 10), t[MIN_VOLTS], t[MAX_VOLTS], self.temperature_c,
-                                t[TEMPERATURE_LIMIT], self.overloaded)
+        return int(alarm_conditions(round(self.voltage_v * 10), t[MIN_VOLTS], t[MAX_VOLTS], self.temperature_c,
+                                    t[TEMPERATURE_LIMIT], self.overloaded))
 
     def enforce_alarms(self) -> None:
         """The alarm shutdown: a standing condition in its mask switches the torque off."""

@@ -23,6 +23,7 @@ from op2motion.bus.emulator.pty import BATCH_STEPS, PtyServing
 from op2motion.bus.emulator.timing import TimedLink, WireTiming, return_delay_s
 from op2motion.bus.emulator.wire import BOOT_S, Wire
 from op2motion.bus.tables import TORQUE_LIMIT_FULL
+from op2motion.jsonout import JsonObject
 from op2motion.robot.spec import Spec
 
 if TYPE_CHECKING:
@@ -110,7 +111,7 @@ class Emulator(PtyServing):
         """The simulated torso now: ``t_s``, ``x_m``, ``y_m``, ``z_m``, ``yaw_rad``, ``tilt_rad``."""
         return dict(self._truth)
 
-    def report(self) -> dict[str, Any]:
+    def report(self) -> JsonObject:
         """What a program did to the emulated robot, for checking it from outside: the torso now (:meth:`truth`),
         the simulated seconds since the motion started (the first SYNC_WRITE; None before), the lowest torque limit
         any servo has had, each servo's goal [tick], torque enable and torque limit, and the counters."""
