@@ -19,7 +19,7 @@ if outcome.ok:
     out = Path("out")
     pose = outcome.pose("reach", spec, {"command": "examples/optimise_a_pose.py"})
     op2.write_pose(pose, out / "reach.json", spec)
-    png, _, _ = pose_figure("reach", result.angles, spec, Drawing(br=problem.br, target=problem.target),
-                            outcome.validation)
+    png = pose_figure("reach", result.angles, spec, Drawing(br=problem.br, target=problem.target),
+                      outcome.validation).png
     (out / "reach.png").write_bytes(png)
     print(f"wrote {out / 'reach.json'} and {out / 'reach.png'}")

@@ -103,9 +103,9 @@ PLAIN_STR_ALLOWED = {
     "op2motion/kinematics/arm_ik.py:Arm:hand": "the hand's point name (left_hand), not a side; Arm.side is the side",
     "op2motion/library/index.py:IndexRow:hand": "read back as written in a pose file's provenance: narrowing would "
                                                 "drop files the index keeps today",
-    "op2motion/motion/ways.py:Ways.stock:side": "the side a robot lies on (front, back, left, right), not a Side",
-    "op2motion/motion/ways.py:Ways.own:side": "the side a robot lies on (front, back, left, right), not a Side",
-    "op2motion/motion/ways.py:Ways.way:side": "the side a robot lies on (front, back, left, right), not a Side",
+    "op2motion/motion/getup_ways.py:Ways.stock:side": "the side a robot lies on (front, back, left, right), not a Side",
+    "op2motion/motion/getup_ways.py:Ways.own:side": "the side a robot lies on (front, back, left, right), not a Side",
+    "op2motion/motion/getup_ways.py:Ways.way:side": "the side a robot lies on (front, back, left, right), not a Side",
     "op2motion/physics/report.py:PushResult:direction": "a push's direction (forward, backward, left, right), not "
                                                         "the tuned walk's Direction",
     "op2motion/robot/joints.py:hip_roll_sign:side": "a joint-name prefix (l, r) as well as a side word",

@@ -179,8 +179,8 @@ MIN_KICK_FOOT_M_S = 0.3     # the kicking foot's peak speed (ball-less): at leas
 @pytest.mark.physics
 def test_op2motions_own_kick_stands_and_swings_the_foot(spec):
     from op2motion.formats.motionfile import read_motion
+    from op2motion.motion.getup_ways import motion_path
     from op2motion.motion.pipeline import plan_motion
-    from op2motion.motion.ways import motion_path
 
     trajectory = plan_motion(read_motion(motion_path("kick_right"), spec), spec)
     run = check(trajectory.schedule(spec), spec, ("mujoco",), setup=Setup(keep_track=True)).run

@@ -191,7 +191,7 @@ def test_robot_getup_from_lying_face_down(spec, capsys, tmp_path, monkeypatch):
     planner ran in the loop's thread and held ticks 110-200 ms)."""
     import threading
 
-    from op2motion.motion.ways import Ways
+    from op2motion.motion.getup_ways import Ways
 
     planned_in: list[str] = []
     plan_way = Ways.way

@@ -23,6 +23,7 @@ from op2motion.tune.space import Param, ParameterSpace
 from op2motion.tune.spaces import walk_space
 from op2motion.tune.study import MARK, check_study, open_study, rows, run_study
 from op2motion.tune.trial import Task, identity
+from op2motion.tune.walkers import PresetWalker
 
 NAME = "tune-walk-forward"          # the study name `tune walk` uses by default
 SEED = 0
@@ -41,7 +42,7 @@ def snapshot(folder: Path) -> dict[str, tuple[int, int, str]]:
 
 def shipped_task(preset: str = "forward", spec: str | None = None) -> Task:
     """The task `tune walk` makes (forward, from a shipped preset, on ``spec``)."""
-    return Task("walk", "forward", read_preset(preset_path(preset)), spec)
+    return Task(PresetWalker(read_preset(preset_path(preset))), "forward", spec)
 
 
 def made_study(path: Path) -> None:

@@ -6,14 +6,15 @@ from __future__ import annotations
 import pytest
 from helpers import run_cli
 
-from op2motion.gait.params import params_from_mapping
+from op2motion.gait.params import params_from_mapping, preset_text
 from op2motion.gait.stock_config import StockConfig, parse_stock_config, stock_config_text
 from op2motion.robot.specfile import tomllib
 from op2motion.tune.executor import ProcessTrials
-from op2motion.tune.run import VERIFY_STEPS, Effort, preset_text, search_and_verify
+from op2motion.tune.run import VERIFY_STEPS, Effort, search_and_verify
 from op2motion.tune.space import Param, ParameterSpace
 from op2motion.tune.study import open_study, rows
 from op2motion.tune.trial import Task, evaluate
+from op2motion.tune.walkers import PresetWalker, StockWalker
 
 SEED = 1
 TRIALS = 3
@@ -42,7 +43,7 @@ def test_a_walk_study_finds_verifies_and_writes_a_preset_that_reads_back(tmp_pat
     from op2motion.gait import load_preset
 
     space = ParameterSpace((Param("step_length_m", 0.07, 0.085, "m"),))
-    task = Task("walk", "forward", load_preset("forward"), members=NOMINAL, steps=STEPS, engines=("mujoco",))
+    task = Task(PresetWalker(load_preset("forward")), "forward", members=NOMINAL, steps=STEPS, engines=("mujoco",))
     study = open_study(tmp_path / "s.db", "walk", space, SEED)
     trials = ProcessTrials(1)                 # a worker process (each one imports the package and both engines)
     try:
@@ -60,12 +61,12 @@ def test_a_walk_study_finds_verifies_and_writes_a_preset_that_reads_back(tmp_pat
 
 @pytest.mark.physics
 def test_a_stock_trial_walks_the_stock_module_and_a_bad_plan_is_pruned():
-    task = Task("stock", "forward", StockConfig(x_move_amplitude_mm=30.0), members=NOMINAL, steps=STEPS)
+    task = Task(StockWalker(StockConfig(x_move_amplitude_mm=30.0)), "forward", members=NOMINAL, steps=STEPS)
     outcome = evaluate({"period_time_ms": 600.0}, task)
     assert outcome.speed > 0.15 and not outcome.pruned                         # the stock walk at X 30 mm walks,
     assert outcome.runs == outcome.planned == len(task.engines)                 # ... in both engines,
     assert outcome.passed or "fell" not in (outcome.problem or "")              # ... judged by the walk's bounds
-    walk = Task("walk", "forward", task_base(), members=NOMINAL, steps=STEPS)
+    walk = Task(PresetWalker(task_base()), "forward", members=NOMINAL, steps=STEPS)
     refused = evaluate({"step_length_m": 0.12, "step_s": 0.2, "max_speed_share": 0.85}, walk)
     assert refused.pruned and "plan refused" in (refused.problem or "")     # past the servos' speed: no physics run
     config = parse_stock_config(stock_config_text(StockConfig(x_move_amplitude_mm=33.0)))

@@ -65,9 +65,9 @@ def family_table(action: Path | None, whole: bool = True) -> None:
 def rolls_table() -> None:
     """op2motion's rolls alone (planned, played open loop) from lying on their side: where each member ends."""
     from op2motion.formats.motionfile import read_motion
+    from op2motion.motion.getup_ways import motion_path
     from op2motion.motion.lying import lying_side
     from op2motion.motion.pipeline import plan_motion
-    from op2motion.motion.ways import motion_path
 
     spec = default_spec()
     print("| roll | engine | ends on its back | ends otherwise |")

@@ -15,8 +15,8 @@ import numpy as np
 from op2motion.formats.action import ActionFile
 from op2motion.formats.motionfile import read_motion
 from op2motion.gait import SteerableWalk, timeline_of
+from op2motion.motion.getup_ways import motion_path
 from op2motion.motion.pipeline import plan_motion, play_page
-from op2motion.motion.ways import motion_path
 from op2motion.physics import ENGINES, Setup, check
 from op2motion.robot.specfile import default_spec
 

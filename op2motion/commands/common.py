@@ -13,6 +13,7 @@ import math
 import os
 import re
 import sys
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable, Iterator, Mapping, Sequence
 
 from op2motion.errors import InputError, OutputError, one_line, ref, render_refs
@@ -234,10 +235,20 @@ def book_args(p: argparse.ArgumentParser, pose_flag: bool = True) -> None:
         p.add_argument("--pose", metavar="FILE", help="a pose file instead of --th/--phi")
 
 
+@dataclass(frozen=True)
+class NamedAngles:
+    """A pose as the command line gave it: its book ``angles``, its ``name``, and the ``pose`` file's pose (None when
+    it came from ``--th``/``--phi``)."""
+
+    angles: BookAngles
+    name: str
+    pose: Pose | None
+
+
 def angles_from(args: argparse.Namespace, spec: Spec, pose_path: str | None = None, default_standing: bool = False
-                ) -> tuple[BookAngles, str, Pose | None]:
+                ) -> NamedAngles:
     """Book angles and a name from a pose file, or ``--th``/``--phi``[/``--psi``] ``--support``, or (when
-    ``default_standing``) the book's standing pose. Returns ``(BookAngles, name, Pose | None)``."""
+    ``default_standing``) the book's standing pose."""
     from op2motion.formats.posefile import read_pose
     from op2motion.robot.joints import BookAngles
 
@@ -246,14 +257,14 @@ def angles_from(args: argparse.Namespace, spec: Spec, pose_path: str | None = No
         if args.th is not None or args.phi is not None:
             raise InputError("give either a pose file or --th/--phi, not both")
         pose = read_pose(pose_path, spec)
-        return pose.book(spec), pose.name, pose
+        return NamedAngles(pose.book(spec), pose.name, pose)
     if args.th is None and args.phi is None:
         if default_standing:
-            return BookAngles.standing(args.support), "standing", None
+            return NamedAngles(BookAngles.standing(args.support), "standing", None)
         raise InputError("expected --th (11 angles) and --phi (6 angles) in degrees, or --pose FILE")
     if args.th is None or args.phi is None:
         raise InputError("expected both --th (11 angles) and --phi (6 angles)")
-    return BookAngles.from_deg(args.th, args.phi, args.psi, args.support), "pose", None
+    return NamedAngles(BookAngles.from_deg(args.th, args.phi, args.psi, args.support), "pose", None)
 
 
 def vec3(values: Sequence[float] | None, name: str) -> tuple[float, float, float] | None:

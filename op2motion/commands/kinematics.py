@@ -76,7 +76,8 @@ def cmd_fk(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion fk``."""
     from op2motion.tasks.kinematics import fk
 
-    angles, _, pose = angles_from(args, spec)
+    given = angles_from(args, spec)
+    angles, pose = given.angles, given.pose
     sp = vec3(args.sp, "sp") or (0.0, 0.0, 0.0)
     double = pose is not None and Support.of(pose.support).is_double
     return deliver(args, fk(angles, spec, args.model, args.br, sp, math.radians(args.gamma), double))
@@ -109,7 +110,7 @@ def cmd_convert(args: argparse.Namespace, spec: Spec) -> int:
         servo = servo_from_mapping(_servo_mapping(args.servo_deg), spec)
         angles = servo_to_book(servo, args.support, spec)
     else:
-        angles, _, _ = angles_from(args, spec)
+        angles = angles_from(args, spec).angles
         servo = book_to_servo(angles, spec)[0]
     return deliver(args, convert(angles, servo, spec))
 
@@ -120,7 +121,8 @@ def cmd_plot(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.tasks.kinematics import PlotRequest, plot
 
     outputs = OutputSet({"output": args.output})
-    angles, name, pose = angles_from(args, spec, args.pose_positional, default_standing=True)
+    given = angles_from(args, spec, args.pose_positional, default_standing=True)
+    angles, name, pose = given.angles, given.name, given.pose
     target = vec3(args.target, "target")
     models = MODELS if args.model == "both" else (args.model,)
     request = PlotRequest(name, angles, outputs.paths["output"], pose, models, args.br, target,
@@ -134,7 +136,8 @@ def cmd_arm_ik(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.tasks.kinematics import ArmMove, arm_ik
 
     outputs = OutputSet({"plot": args.plot} if args.plot else {})
-    angles, name, _ = angles_from(args, spec)
+    given = angles_from(args, spec)
+    angles, name = given.angles, given.name
     delta = vec3(args.delta, "delta")
     if delta is None:                        # a required flag: argparse has it
         raise InputError("expected --delta DX DY DZ", "delta")

@@ -17,6 +17,8 @@ from op2motion.robot.spec import Spec
 
 if TYPE_CHECKING:
     from op2motion.bus.port import PortRequest
+    from op2motion.onrobot.tasks import Options
+    from op2motion.tasks.result import TaskResult
 
 MAX_WAIT_S = 600.0
 SHARED_PORT_HELP = ("open the port even though another process holds it open: the bridge that serves it (socat's "
@@ -289,10 +291,10 @@ def pose_name_of(stem: str) -> str:
     return safe_pose_name(stem, "robot")
 
 
-def _motion(args: argparse.Namespace, spec: Spec, run: Any) -> int:
-    """Run a motion task with Ctrl-C handling and progress; print; the exit code."""
+def _motion(args: argparse.Namespace, task: Callable[[Options], TaskResult]) -> int:
+    """Run a robot motion ``task`` with Ctrl-C handling and progress (its :class:`Options`); deliver its result;
+    the exit code."""
     from op2motion.onrobot.tasks import Options
-    from op2motion.tasks.robot import robot_motion
 
     with stop_on_signals() as stop, ticker(args, "robot", "s", bar_format=ROBOT_BAR) as bar, \
             ticker(args, "check", "s") as check:
@@ -304,21 +306,20 @@ def _motion(args: argparse.Namespace, spec: Spec, run: Any) -> int:
             check.close()              # the physics check is over once the loop runs: its bar goes (not left stale)
             bar.update(0.008)
 
-        result = robot_motion(run, Options(args.force, stop, on_tick, on_progress,
-                                                lambda text: say(args, text)))
+        result = task(Options(args.force, stop, on_tick, on_progress, lambda text: say(args, text)))
     return deliver(args, result)
 
 
 def cmd_play(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot play``."""
-    from op2motion.onrobot.stand import play_on_robot
+    from op2motion.tasks.robot import robot_play
 
-    return _motion(args, spec, lambda options: play_on_robot(_robot(args), spec, args.file, args.page, options))
+    return _motion(args, lambda options: robot_play(_robot(args), spec, args.file, args.page, options))
 
 
 def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot walk``."""
-    from op2motion.onrobot.walks import walk
+    from op2motion.tasks.robot import RobotWalk, robot_walk
 
     if args.commands is not None or args.teleop:
         return _steered(args, spec)
@@ -326,8 +327,8 @@ def cmd_walk(args: argparse.Namespace, spec: Spec) -> int:
         if getattr(args, flag):
             raise InputError(f"expected --{flag.replace('_', '-')} only with --commands or --teleop (a steered walk)",
                              flag)
-    target = walk_target(args)
-    return _motion(args, spec, lambda options: walk(_robot(args), spec, args.preset, args.steps, target, options))
+    request = RobotWalk(args.preset, args.steps, walk_target(args))
+    return _motion(args, lambda options: robot_walk(_robot(args), spec, request, options))
 
 
 def _steered(args: argparse.Namespace, spec: Spec) -> int:
@@ -336,7 +337,7 @@ def _steered(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.gait.commands import read_commands
     from op2motion.gait.envelope import STEER_ENVELOPE
     from op2motion.onrobot.teleop import HELP, Teleop, read_keys
-    from op2motion.onrobot.walks import steered_walk
+    from op2motion.tasks.robot import SteeredRobotWalk, robot_steered_walk
 
     for flag in ("steps", "target"):
         if getattr(args, flag) is not None:
@@ -349,13 +350,13 @@ def _steered(args: argparse.Namespace, spec: Spec) -> int:
     commands = read_commands(args.commands) if args.commands is not None else None
     action = ActionFile.read(args.action) if args.action is not None else None
     if not args.teleop:
-        return _motion(args, spec, lambda options: steered_walk(_robot(args), spec, args.preset, commands, None, action,
-                                                                args.get_up, options))
+        request = SteeredRobotWalk(args.preset, commands, None, action, args.get_up)
+        return _motion(args, lambda options: robot_steered_walk(_robot(args), spec, request, options))
     teleop = Teleop(STEER_ENVELOPE, lambda line: say(args, line))
     with read_keys(sys.stdin.fileno(), teleop):
         say(args, HELP)
-        return _motion(args, spec, lambda options: steered_walk(_robot(args), spec, args.preset, commands, teleop,
-                                                                action, args.get_up, options))
+        request = SteeredRobotWalk(args.preset, commands, teleop, action, args.get_up)
+        return _motion(args, lambda options: robot_steered_walk(_robot(args), spec, request, options))
 
 
 def _stdin_kind() -> str:
@@ -372,18 +373,18 @@ def _stdin_kind() -> str:
 
 def cmd_stand(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot stand``."""
-    from op2motion.onrobot.stand import stand
+    from op2motion.tasks.robot import robot_stand
 
-    return _motion(args, spec, lambda options: stand(_robot(args), spec, options))
+    return _motion(args, lambda options: robot_stand(_robot(args), spec, options))
 
 
 def cmd_getup(args: argparse.Namespace, spec: Spec) -> int:
     """``op2motion robot getup``."""
     from op2motion.formats.action import ActionFile
-    from op2motion.onrobot.walks import getup
+    from op2motion.tasks.robot import robot_getup
 
     action = ActionFile.read(args.action) if args.action is not None else None
-    return _motion(args, spec, lambda options: getup(_robot(args), spec, action, options))
+    return _motion(args, lambda options: robot_getup(_robot(args), spec, action, options))
 
 
 def cmd_emulate(args: argparse.Namespace, spec: Spec) -> int:

@@ -89,9 +89,11 @@ def cmd_tune_walk(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.gait import preset_path, read_preset
     from op2motion.tune.spaces import walk_space
     from op2motion.tune.trial import DIRECTIONS, Task
+    from op2motion.tune.walkers import PresetWalker
 
     base = read_preset(preset_path(args.preset or DIRECTIONS[args.direction]))
-    return _tune(args, Task("walk", args.direction, base, getattr(args, "spec", None)), walk_space(args.direction))
+    return _tune(args, Task(PresetWalker(base), args.direction, getattr(args, "spec", None)),
+                 walk_space(args.direction))
 
 
 def cmd_tune_stock(args: argparse.Namespace, spec: Spec) -> int:
@@ -99,6 +101,7 @@ def cmd_tune_stock(args: argparse.Namespace, spec: Spec) -> int:
     from op2motion.gait.stock_config import StockConfig, read_stock_config
     from op2motion.tune.spaces import stock_space
     from op2motion.tune.trial import Task
+    from op2motion.tune.walkers import StockWalker
 
     base = read_stock_config(args.config) if args.config else StockConfig()
-    return _tune(args, Task("stock", "forward", base, getattr(args, "spec", None)), stock_space())
+    return _tune(args, Task(StockWalker(base), "forward", getattr(args, "spec", None)), stock_space())

@@ -96,14 +96,23 @@ def pose_canvas(name: str, angles: BookAngles, spec: Spec, drawing: Drawing = Dr
     return PoseCanvas(rows, spec, block), reports
 
 
+@dataclass(frozen=True)
+class DrawnPose:
+    """One pose's figure: the ``png`` bytes, what was ``drawn`` (its rows and verdict, JSON-ready) and the pose
+    ``reports`` of each model drawn."""
+
+    png: bytes
+    drawn: dict[str, Any]
+    reports: list[PoseReport]
+
+
 def pose_figure(name: str, angles: BookAngles, spec: Spec, drawing: Drawing = Drawing(),
-                validation: RunReport | None = None, metrics: Mapping[str, Any] | None = None
-                ) -> tuple[bytes, dict[str, Any], list[PoseReport]]:
-    """PNG bytes, a report of what was drawn, and the pose reports of one pose (see :class:`Drawing`); the verdict
-    comes from ``validation`` (a physics run now) or from a pose file's recorded ``metrics``."""
+                validation: RunReport | None = None, metrics: Mapping[str, Any] | None = None) -> DrawnPose:
+    """The figure of one pose (see :class:`Drawing`); the verdict comes from ``validation`` (a physics run now) or
+    from a pose file's recorded ``metrics``."""
     canvas, reports = pose_canvas(name, angles, spec, drawing)
     png, drawn = canvas.finish(*verdict_of(validation, metrics))
-    return png, drawn, reports
+    return DrawnPose(png, drawn, reports)
 
 
 def _outcome_drawing(outcome: Outcome) -> Drawing:

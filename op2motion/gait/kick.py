@@ -12,6 +12,7 @@ torso poses, for the judge and the attitude estimate, stand on the foot that doe
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -21,19 +22,30 @@ from op2motion.gait.phases import WalkState
 from op2motion.kinematics.leg_ik import Leg, leg_fk, rot_z
 from op2motion.model.dynamics import dynamics_for
 from op2motion.robot.spec import Spec
-from op2motion.robot.support import Side, other_side
+from op2motion.robot.support import Side, Support, SupportName, other_side
 
 STOCK_KICKS = {"right": 12, "left": 13}     # the stock action file's kick pages (framework demos)
 OWN_KICKS = {"right": "kick_right", "left": "kick_left"}
 WALK_READY_PAGE = 9                         # the stock kicks start from walk-ready (the stock page 9's pose)
 BLEND_S = 0.8                               # the quintics into and out of the kick take at least this [s]
-_CACHE: dict[tuple[str, str, bytes | None], tuple[np.ndarray, np.ndarray, tuple[str, ...], str]] = {}
 
 
-def kick_motion(spec: Spec, side: Side, action: ActionFile | None = None
-                ) -> tuple[np.ndarray, np.ndarray, tuple[str, ...], str]:
-    """The kick with the ``side`` foot: goals (K, 20) [rad], P gains (K, 20), the support of each row, its name
-    (planned once per spec, side and action file)."""
+@dataclass(frozen=True)
+class KickMotion:
+    """A kick as rows every 8 ms: the goals (K, 20) [rad], the P gains (K, 20), the support of each row, and the
+    kick's name (the stock page, or op2motion's own motion)."""
+
+    goals: np.ndarray
+    p_gains: np.ndarray
+    supports: tuple[Support | SupportName, ...]
+    name: str
+
+
+_CACHE: dict[tuple[str, str, bytes | None], KickMotion] = {}
+
+
+def kick_motion(spec: Spec, side: Side, action: ActionFile | None = None) -> KickMotion:
+    """The kick with the ``side`` foot (planned once per spec, side and action file)."""
     key = (spec.sha256, side, None if action is None else bytes(action.data))
     if key not in _CACHE:
         page = STOCK_KICKS[side]
@@ -44,12 +56,12 @@ def kick_motion(spec: Spec, side: Side, action: ActionFile | None = None
             trajectory, name = played.trajectory, f"stock page {page}"
         else:
             from op2motion.formats.motionfile import read_motion
+            from op2motion.motion.getup_ways import motion_path
             from op2motion.motion.pipeline import plan_motion
-            from op2motion.motion.ways import motion_path
 
             trajectory = plan_motion(read_motion(motion_path(OWN_KICKS[side]), spec), spec)
             name = OWN_KICKS[side]
-        _CACHE[key] = (trajectory.goals, trajectory.p_gains, trajectory.supports, name)
+        _CACHE[key] = KickMotion(trajectory.goals, trajectory.p_gains, trajectory.supports, name)
     return _CACHE[key]
 
 
@@ -59,7 +71,8 @@ def kick_chunk(spec: Spec, legs: dict[str, Leg], state: WalkState, stand_goals: 
     fields of :class:`.rows.RowBuffer` (planned joints = goals: the rows are played open loop)."""
     from op2motion.motion.planner import blend
 
-    goals, gains, supports, _ = kick_motion(spec, side, action)
+    kick = kick_motion(spec, side, action)
+    goals, gains, supports = kick.goals, kick.p_gains, kick.supports
     into = blend(stand_goals, goals[0], spec, BLEND_S)
     back = blend(goals[-1], stand_goals, spec, BLEND_S)
     rows = np.vstack([into, goals, back])

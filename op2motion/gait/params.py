@@ -196,3 +196,22 @@ def read_preset(path: str | Path) -> GaitParams:
         raise InputError(f"expected TOML in {str(path)!r}, got an error: {e}", "preset") from None
     doc.setdefault("name", path.stem)
     return params_from_mapping(doc, str(path))
+
+
+def preset_text(params: GaitParams, header: list[str]) -> str:
+    """A gait preset TOML: ``header`` as comments, then every key of ``params`` in order."""
+    lines = [f"# {h}" if h else "#" for h in header]
+    for f in fields(params):
+        value = getattr(params, f.name)
+        if isinstance(value, bool):
+            text = "true" if value else "false"
+        elif isinstance(value, str):
+            text = '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        elif isinstance(value, int):
+            text = str(value)
+        else:
+            text = f"{value:.6g}" if "e" not in f"{value:.6g}" else repr(float(value))
+            if "." not in text and "e" not in text:
+                text += ".0"
+        lines.append(f"{f.name} = {text}")
+    return "\n".join(lines) + "\n"

@@ -120,11 +120,20 @@ def _flat(rot: np.ndarray) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
-def planned_torso(goals: np.ndarray, swinging: tuple[str | None, ...], spec: Spec
-                  ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-    """Torso positions (K, 3) [m] and rotations (K, 3, 3) where the rows' leg angles put it with the standing foot
-    flat on the floor where it landed (the feet start flat, their midpoint at the origin), and each sole's planned
-    height above the floor (K,) [m]."""
+@dataclass(frozen=True)
+class PlannedTorso:
+    """Where the rows' leg angles put the torso with the standing foot flat on the floor where it landed (the feet
+    start flat, their midpoint at the origin): its positions (K, 3) [m] and rotations (K, 3, 3), and each sole's
+    planned height above the floor (K,) [m] by side."""
+
+    positions: np.ndarray
+    rotations: np.ndarray
+    sole_heights: dict[str, np.ndarray]
+
+
+def planned_torso(goals: np.ndarray, swinging: tuple[str | None, ...], spec: Spec) -> PlannedTorso:
+    """The torso the rows ``goals`` (K, 20) [rad] plan, ``swinging`` naming each row's swing foot (see
+    :class:`PlannedTorso`)."""
     legs = {side: leg_of(spec, side) for side in SIDES}
     soles = {side: leg_fk(leg, goals[:, list(leg.index)]) for side, leg in legs.items()}   # in the torso frame
     rot0 = soles["left"][1][0].T                              # the torso over a flat left sole
@@ -149,13 +158,14 @@ def planned_torso(goals: np.ndarray, swinging: tuple[str | None, ...], spec: Spe
         for side in SIDES:
             heights[side].append(float((torso_pos + torso_rot @ soles[side][0][k])[2]))
         previous = swing
-    return np.array(positions), np.array(rotations), {side: np.array(h) for side, h in heights.items()}
+    return PlannedTorso(np.array(positions), np.array(rotations), {side: np.array(h) for side, h in heights.items()})
 
 
 def stock_plan(config: StockConfig, spec: Spec, steps: int, command: StockCommand) -> Plan:
     """The physics plan of a stock walk (see the module docstring)."""
     s = _schedule(config, spec, steps, command)
-    positions, rotations, heights = planned_torso(s.goals, s.swinging, spec)
+    torso = planned_torso(s.goals, s.swinging, spec)
+    positions, rotations, heights = torso.positions, torso.rotations, torso.sole_heights
     supports = tuple(Support.DOUBLE if w is None or heights[w][k] <= LIFTED_M else
                      Support.of("right" if w == "left" else "left") for k, w in enumerate(s.swinging))
     base = (positions, rotations)

@@ -8,7 +8,7 @@ Every 8 ms it gets what every controller gets (:mod:`op2motion.physics.controlle
    the way up is planned beside the loop (a thread) while the robot holds still :data:`PLAN_S`, so no tick waits
    for the planner (on the robot a tick must stay within 20 ms; in physics the plan is taken at the same
    simulated moment whatever the machine, so runs stay deterministic);
-3. **play** the way up from that side (:mod:`.ways`: the stock pages 10/11 when the action file given has them,
+3. **play** the way up from that side (:mod:`.getup_ways`: the stock pages 10/11 when the action file given has them,
    op2motion's own get-up motions otherwise; from a side, a roll onto the back first, after which it decides again);
 4. **check**: hold the last goal until still; upright (the torso within :data:`~.lying.UPRIGHT_TILT_DEG` of vertical
    by the accelerometer) is done; otherwise try again from 1, at most :data:`MAX_TRIES` ways in all (then it gives
@@ -30,9 +30,9 @@ import numpy as np
 
 from op2motion.errors import Op2MotionError
 from op2motion.formats.action import ActionFile
+from op2motion.motion.getup_ways import Ways
 from op2motion.motion.lying import UPRIGHT_TILT_DEG, lying_side, tilt_deg
 from op2motion.motion.stillness import Stillness
-from op2motion.motion.ways import Ways
 from op2motion.physics import ControllerHooks, Plan
 from op2motion.robot.framework import CONTROL_PERIOD_S, DEFAULT_P_GAIN
 from op2motion.robot.spec import Spec

@@ -74,16 +74,24 @@ def require_poses_clear(waypoints: list[Waypoint], spec: Spec) -> None:
                           f"the pose")
 
 
+@dataclass(frozen=True)
+class MotionPages:
+    """A motion written as chained action pages: the ``action`` file with them, the ``pages`` written (the first
+    plays the motion) and the planner's ``notes``."""
+
+    action: ActionFile
+    pages: tuple[int, ...]
+    notes: tuple[str, ...]
+
+
 def motion_to_action(motion: Motion, spec: Spec, base: ActionFile, first: int | None = None,
-                     force: bool = False, planner: PlannerName = "rrt", seed: int = 0
-                     ) -> tuple[ActionFile, list[int], list[str]]:
+                     force: bool = False, planner: PlannerName = "rrt", seed: int = 0) -> MotionPages:
     """``base`` with the motion written as chained pages (at most 7 steps each, linked by ``next``) from ``first``
     on (default: the first run of empty pages; occupied pages refused unless ``force``), colliding segments planned
-    around as :func:`plan_motion` does; the pages written and the planner's notes."""
+    around as :func:`plan_motion` does (see :class:`MotionPages`)."""
     waypoints = waypoints_of(motion)
     count = len(action_pages(waypoints, spec, motion.name, 1, motion.p_gain, planner=planner, seed=seed)[0])
     first = base.first_empty_run(count) if first is None else first
     pages, notes = action_pages(waypoints, spec, motion.name, first, motion.p_gain, planner=planner, seed=seed)
     done = base.with_pages(pages, first, force)
-    written, first = done.action, done.first
-    return written, list(range(first, first + len(pages))), notes
+    return MotionPages(done.action, tuple(range(done.first, done.first + len(pages))), tuple(notes))

@@ -91,6 +91,16 @@ def stands(report: EngineReport) -> str | None:
 
 
 @dataclass(frozen=True)
+class RunOutcome:
+    """What happened in a run, for comparing engines: it ``passed`` the judge, it ``fell``, and the ``kind`` of
+    failure (None when it passed)."""
+
+    passed: bool
+    fell: bool
+    kind: str | None
+
+
+@dataclass(frozen=True)
 class RobustRun:
     """One member in one engine: ``problem`` None when it passed."""
 
@@ -110,9 +120,9 @@ class RobustRun:
         return None if self.problem is None else self.problem.split()[0].rstrip(":")
 
     @property
-    def outcome(self) -> tuple[bool, bool, str | None]:
-        """What happened, for comparing engines: passed, fell, and the kind of failure."""
-        return self.passed, self.report.run.fell, self.kind
+    def outcome(self) -> RunOutcome:
+        """What happened, for comparing engines."""
+        return RunOutcome(self.passed, self.report.run.fell, self.kind)
 
 
 @dataclass(frozen=True)

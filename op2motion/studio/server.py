@@ -12,7 +12,7 @@ grey ghost; "save pose" writes the pose file atomically. Every edit the page mak
 Security (docs/studio.md): the page and its WebSocket only behind the per-run secret and from the studio's
 own origin (:mod:`.guard`); files only inside one folder, overwriting only files the studio opened or created,
 after confirmation (:mod:`.folder`); one editing tab, all-or-nothing edits, one check and one optimisation at a
-time (:mod:`.edits`, :mod:`.work`).
+time (:mod:`.edits`, :mod:`.long_work`).
 """
 
 from __future__ import annotations
@@ -33,10 +33,10 @@ from op2motion.studio.actions import ActionPanel
 from op2motion.studio.edits import Edits
 from op2motion.studio.folder import Workspace
 from op2motion.studio.guard import Gate, guarded_viser, new_secret
-from op2motion.studio.place import root_in_sole, wxyz
+from op2motion.studio.long_work import LongWork
 from op2motion.studio.robot_panel import RobotPanel
+from op2motion.studio.root_pose import root_in_sole, wxyz
 from op2motion.studio.session import PoseEdit, Readout
-from op2motion.studio.work import LongWork
 
 JOG_STEPS = ("-5°", "-1°", "+1°", "+5°")
 PURPLE, GREEN = (0.55, 0.25, 0.75), (0.1, 0.6, 0.1)

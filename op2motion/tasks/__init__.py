@@ -11,7 +11,8 @@
   Webots, CSV, the URDF);
 * :mod:`.library`: ``build`` (a grid of reach targets solved on workers);
 * :mod:`.bench`: ``bench`` (the speed figures, each with a check of the timed work);
-* :mod:`.robot`: ``robot_status``, ``robot_read``, ``robot_motion``, ``emulated`` (the real OP2 on its bus, the
+* :mod:`.robot`: ``robot_status``, ``robot_setup``, ``robot_read``, ``robot_play``, ``robot_walk``,
+  ``robot_steered_walk``, ``robot_stand``, ``robot_getup``, ``emulated`` (the real OP2 on its bus, the
   emulated one's report);
 * :mod:`.tune`: ``tune`` (an Optuna study of a walk or the stock module's config, verified, written);
 * :mod:`.validate`: ``validate_pose``, ``validate_pose_robust`` (does a pose stand, in one engine or both, pushed, on

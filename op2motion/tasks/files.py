@@ -105,9 +105,9 @@ def export_motion(motion: Motion, spec: Spec, fmt: str, output: Path, pages: Pag
     data: dict[str, Any] = {"name": motion.name, "format": fmt}
     content: str | bytes
     if fmt == "action":
-        written, chain, notes = motion_to_action(motion, spec, pages.start(), pages.page, pages.force, planner, seed)
-        content = written.data
-        data["pages"] = chain
+        done = motion_to_action(motion, spec, pages.start(), pages.page, pages.force, planner, seed)
+        content, chain, notes = done.action.data, done.pages, list(done.notes)
+        data["pages"] = list(chain)
         text = f"pages {chain[0]}..{chain[-1]} (play page {chain[0]})"
     else:
         trajectory = plan_motion(motion, spec, planner, seed)

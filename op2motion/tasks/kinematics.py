@@ -82,8 +82,8 @@ def plot(request: PlotRequest, spec: Spec) -> TaskResult:
         servo = pose.servo if pose is not None else book_to_servo(angles, spec)[0]
         validation = check(Schedule.hold(servo, support, spec, request.validate_s), spec).run
     drawing = Drawing(request.models, request.br, request.target, double=Support.of(support).is_double)
-    png, drawn, reports = pose_figure(request.name, angles, spec, drawing, validation,
-                                      None if pose is None else pose.metrics)
+    figure = pose_figure(request.name, angles, spec, drawing, validation, None if pose is None else pose.metrics)
+    png, drawn, reports = figure.png, figure.drawn, figure.reports
     data: JsonObject = {"support": support, "drawn": drawn,
             "models": {r.model: {k: r.as_dict(spec)[k] for k in (
                 "com", "stability_margin_m", "com_full", "stability_margin_full_m", "left_hand", "right_hand",
@@ -150,6 +150,6 @@ def arm_ik(request: ArmMove, spec: Spec) -> TaskResult:
         lines = [f"{request.hand} hand moved by ({', '.join(f'{v * 1000:+.1f}' for v in res.requested)}) mm with "
                  f"{res.mode} arm IK: {deltas}; error {res.error_m * 1000:.3f} mm"]
         drawing = Drawing((res.model,), target=target, lines=lines, ghost=res.initial)
-        png, _, _ = pose_figure(f"{request.name} + arm IK", res.angles, spec, drawing)
+        png = pose_figure(f"{request.name} + arm IK", res.angles, spec, drawing).png
         outputs["plot"] = Output(request.plot, png, key="png")
     return TaskResult(problem is None, problem, None, outputs, data, (text,))

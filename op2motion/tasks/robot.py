@@ -1,12 +1,14 @@
-"""The robot tasks: the real OP2 on its bus (``robot status``, ``read``, and the motions ``play``, ``walk``,
-``getup`` run by :mod:`op2motion.bus`), and the emulated OP2's report (``robot emulate``), each as a
-:class:`~.result.TaskResult`: a missing or faulty servo, a fault that stopped a motion, is a "no" with its phrase; a
-stop the user asked for is an interrupted one (exit 130 on the command line, the robot holding its pose).
+"""The robot tasks: the real OP2 on its bus (``robot status``, ``setup``, ``read``, and the motions ``play``,
+``walk`` (planned or steered), ``stand`` and ``getup``, run by :mod:`op2motion.onrobot` in the bus's 8 ms loop), and
+the emulated OP2's report (``robot emulate``), each as a :class:`~.result.TaskResult`: a missing or faulty servo, a
+fault that stopped a motion, is a "no" with its phrase; a stop the user asked for is an interrupted one (exit 130 on
+the command line, the robot holding its pose).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable
 
@@ -16,7 +18,10 @@ from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
     from op2motion.bus.port import RobotPort
+    from op2motion.formats.action import ActionFile
+    from op2motion.gait.commands import CommandTimeline
     from op2motion.onrobot.tasks import Limp, MotionResult, Options
+    from op2motion.onrobot.teleop import Teleop
     from op2motion.physics import EngineName
     from op2motion.robot.support import Support, SupportName
 
@@ -67,15 +72,75 @@ def robot_read(port: RobotPort, spec: Spec, name: str, output: Path, support: Su
     return TaskResult(True, None, None, {"out": Output(str(output), pose_to_json(pose, spec))}, data, (lines,))
 
 
-def robot_motion(run: Callable[[Options], MotionResult], options: Options) -> TaskResult:
-    """A motion on the robot (``run``: a :mod:`op2motion.bus` motion, e.g. ``lambda o: play_on_robot(port, spec, file,
-    page, o)``) with ``options``: a fault that stopped it is a "no"; a stop asked for (``options.stop``) an
+@dataclass(frozen=True)
+class RobotWalk:
+    """A walk on the robot: the gait ``preset`` (None: ``forward``), planned for ``steps`` steps (None: the
+    preset's) or to ``target`` (x [m], y [m], heading [rad]; None: the steps)."""
+
+    preset: str | None = None
+    steps: int | None = None
+    target: tuple[float, float, float] | None = None
+
+
+@dataclass(frozen=True)
+class SteeredRobotWalk:
+    """A steered walk on the robot: the step's ``preset`` (None: ``steer``), fed by ``commands`` (a command
+    timeline) and/or ``teleop`` (keys), kicking with ``action``'s stock pages when it has them, getting back up
+    after a fall when ``get_up``."""
+
+    preset: str | None = None
+    commands: CommandTimeline | None = None
+    teleop: Teleop | None = None
+    action: ActionFile | None = None
+    get_up: bool = False
+
+
+def robot_play(port: RobotPort, spec: Spec, path: str, page: int | None, options: Options) -> TaskResult:
+    """``robot play``: a pose, a motion file or an action page on the robot (see
+    :func:`~op2motion.onrobot.stand.play_on_robot`)."""
+    from op2motion.onrobot.stand import play_on_robot
+
+    return _motion_result(lambda: play_on_robot(port, spec, path, page, options), options)
+
+
+def robot_walk(port: RobotPort, spec: Spec, request: RobotWalk, options: Options) -> TaskResult:
+    """``robot walk``: a planned walk on the robot (see :func:`~op2motion.onrobot.walks.walk`)."""
+    from op2motion.onrobot.walks import walk
+
+    return _motion_result(lambda: walk(port, spec, request.preset, request.steps, request.target, options), options)
+
+
+def robot_steered_walk(port: RobotPort, spec: Spec, request: SteeredRobotWalk, options: Options) -> TaskResult:
+    """``robot walk --commands/--teleop``: a steered walk on the robot (see
+    :func:`~op2motion.onrobot.walks.steered_walk`)."""
+    from op2motion.onrobot.walks import steered_walk
+
+    return _motion_result(lambda: steered_walk(port, spec, request.preset, request.commands, request.teleop,
+                                               request.action, request.get_up, options), options)
+
+
+def robot_stand(port: RobotPort, spec: Spec, options: Options) -> TaskResult:
+    """``robot stand``: the robot on both feet in walk-ready (see :func:`~op2motion.onrobot.stand.stand`)."""
+    from op2motion.onrobot.stand import stand
+
+    return _motion_result(lambda: stand(port, spec, options), options)
+
+
+def robot_getup(port: RobotPort, spec: Spec, action: ActionFile | None, options: Options) -> TaskResult:
+    """``robot getup``: the robot up from where it lies (see :func:`~op2motion.onrobot.walks.getup`)."""
+    from op2motion.onrobot.walks import getup
+
+    return _motion_result(lambda: getup(port, spec, action, options), options)
+
+
+def _motion_result(run: Callable[[], MotionResult], options: Options) -> TaskResult:
+    """A motion on the robot as a result: a fault that stopped it is a "no"; a stop asked for (``options.stop``) an
     interrupted one; a motion refused before it started (a check that ran and failed: the physics check, the
     preflight, a lying robot) a "no" too, its result saying so (``ended``: ``refused``)."""
     from op2motion.errors import CheckFailed, PortFailed
 
     try:
-        result = run(options)
+        result = run()
     except PortFailed:
         raise
     except CheckFailed as exc:

@@ -88,14 +88,9 @@ def _search(request: TuneRequest, progress: ProgressFor) -> TuneResult:
 
 def _settings_text(request: TuneRequest, result: TuneResult, unit: str) -> str:
     """The chosen point as a preset (``walk``, named after its file) or a ``config.ini`` (``stock``)."""
-    from op2motion.tune.run import header_lines, preset_text
+    from op2motion.tune.run import header_lines
 
-    if request.task.kind == "walk":
-        params = result.settings.__class__(**{**result.settings.__dict__, "name": Path(request.out).stem})
-        return preset_text(params, header_lines(result, unit))
-    from op2motion.gait.stock_config import stock_config_text
-
-    return stock_config_text(result.settings, "\n".join(header_lines(result, unit)))
+    return request.task.walker.settings_text(result.settings, Path(request.out).stem, header_lines(result, unit))
 
 
 def tune(request: TuneRequest, progress: ProgressFor | None = None) -> TaskResult:

@@ -6,8 +6,8 @@
    file (stop and resume at will).
 2. **Verify**: the Pareto front's points (those with at least :data:`~.study.MIN_MARGIN` to spare first), fastest
    first, each walked :data:`VERIFY_STEPS` steps on every body of the family in both engines, with
-   :data:`VERIFY_PUSH_N` side pushes for op2motion's walk (one trial per body, on the same executor), until one holds
-   everywhere (at most ``verify`` of them).
+   :data:`~.walkers.VERIFY_PUSH_N` side pushes for op2motion's walk (one trial per body, on the same executor),
+   until one holds everywhere (at most ``verify`` of them).
 3. **Write**: that point as a preset (or a ``config.ini``), atomically, with what the study found in its header and
    a JSON beside it (:func:`result_json`): trials, pruned, wall time, workers, the verified table; and the Pareto
    figure if asked. Nothing is written when no point holds (exit 1).
@@ -16,7 +16,7 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Callable
 
 from op2motion.jsonout import JsonObject
@@ -27,19 +27,19 @@ from op2motion.tune.trial import Task, evaluate
 if TYPE_CHECKING:
     from op2motion.physics import EngineName
     from op2motion.tune.trial import Direction
+    from op2motion.tune.walkers import WalkerKind
 
 VERIFY_STEPS = 20           # the verification's walk [steps] (the acceptance's)
-VERIFY_PUSH_N = 2.0         # ... and its side pushes [N] (op2motion's walk; docs/walking.md's robustness runs)
 VERIFY_ENGINES: tuple[EngineName, ...] = ("pybullet", "mujoco")
 
 
 @dataclass
 class TuneResult:
     """What a tuning run found: the study's trials, the chosen point and its verified runs per member, the settings
-    written (or None), the verification walk's steps, and the cost (wall time [s] of this run, the trials' summed
-    time [s], workers, executor)."""
+    written (or None), the verification walk's steps and side pushes [N], and the cost (wall time [s] of this run,
+    the trials' summed time [s], workers, executor)."""
 
-    kind: str
+    kind: WalkerKind
     direction: Direction
     table: list[TrialRow]
     chosen: TrialRow | None = None
@@ -52,6 +52,7 @@ class TuneResult:
     executor: ExecutorName = "process"
     ran: int = 0
     verify_steps: int = VERIFY_STEPS
+    verify_push_n: float = 0.0
 
     @property
     def verified_speed(self) -> float | None:
@@ -68,7 +69,7 @@ def verify(point: dict[str, float], task: Task, trials: Any, on_run: Callable[[i
     from op2motion.tune.trial import spec_of
 
     names = list(members) if members is not None else [m.name for m in family(spec_of(task.spec_path))]
-    push = VERIFY_PUSH_N if task.kind == "walk" else 0.0
+    push = task.walker.verify_push_n
     out: dict[str, TrialOutcome] = {}
     pending = dict(enumerate(names))
     for number, name in pending.items():
@@ -116,7 +117,7 @@ def search_and_verify(study: Any, space: Any, task: Task, effort: Effort, trials
     ran = run_study(study, space, evaluate, (task,), effort.trials, trials, on_trial)
     table = rows(study)
     result = TuneResult(task.kind, task.direction, table, workers=trials.workers, ran=ran,
-                        verify_steps=effort.verify_steps)
+                        verify_steps=effort.verify_steps, verify_push_n=task.walker.verify_push_n)
     for row in candidates(table, effort.verify):
         runs = verify(row.params, task, trials, on_run, effort.verify_members, effort.verify_steps)
         problems = [o.problem for o in runs.values() if not o.passed]
@@ -124,8 +125,7 @@ def search_and_verify(study: Any, space: Any, task: Task, effort: Effort, trials
             result.rejected.append((row.number, str(problems[0])))
             continue
         result.chosen, result.verified = row, runs
-        result.settings = replace(settings(task, row.params), steps=effort.verify_steps) if task.kind == "walk" \
-            else settings(task, row.params)
+        result.settings = settings(replace(task, steps=effort.verify_steps), row.params)
         break
     result.wall_s = time.perf_counter() - t0
     result.study_wall_s = float(study.user_attrs.get("wall_s", 0.0)) + result.wall_s
@@ -154,36 +154,18 @@ def result_json(result: TuneResult) -> JsonObject:
             "verified_speed": result.verified_speed}
 
 
-def preset_text(params: Any, header: list[str]) -> str:
-    """A gait preset TOML: ``header`` as comments, then every key of ``params`` in order."""
-    lines = [f"# {h}" if h else "#" for h in header]
-    for f in fields(params):
-        value = getattr(params, f.name)
-        if isinstance(value, bool):
-            text = "true" if value else "false"
-        elif isinstance(value, str):
-            text = '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
-        elif isinstance(value, int):
-            text = str(value)
-        else:
-            text = f"{value:.6g}" if "e" not in f"{value:.6g}" else repr(float(value))
-            if "." not in text and "e" not in text:
-                text += ".0"
-        lines.append(f"{f.name} = {text}")
-    return "\n".join(lines) + "\n"
-
-
 def header_lines(result: TuneResult, unit: str) -> list[str]:
     """What the study found, for the written file's header."""
     speed = result.verified_speed or 0.0
     worst = min((o.margin for o in result.verified.values()), default=0.0)
     pruned = sum(r.state == "PRUNED" for r in result.table)
     trial_s = sum(r.outcome.seconds for r in result.table if r.outcome is not None)
+    pushes = f", {result.verify_push_n:g} N side pushes" if result.verify_push_n else ""
     return [f"Tuned by op2motion tune {result.kind} ({result.direction}): {len(result.table)} trials "
             f"({pruned} pruned), {result.study_wall_s:.0f} s wall on {result.workers} "
             f"{result.executor} worker(s) ({trial_s:.0f} s of trials; this run "
             f"{result.wall_s:.0f} s).",
             f"Verified: {result.verify_steps} steps on every body of the robustness family ({len(result.verified)}) in "
-            f"PyBullet and MuJoCo (MX-28 servo model, 1 kHz){', 2 N side pushes' if result.kind == 'walk' else ''}: "
+            f"PyBullet and MuJoCo (MX-28 servo model, 1 kHz){pushes}: "
             f"all hold; nominal {speed:.3f} {unit} (slowest engine), least margin {worst:.2f}.",
             "Figures: the JSON file beside this one."]

@@ -1,19 +1,14 @@
 """One tuning trial: a point of the search space walked in physics on a set of bodies, judged and measured.
 
-A :class:`Task` says what is tuned (``walk``: a gait preset under :class:`~op2motion.gait.controller.WalkController`;
-``stock``: a ``[Walking Config]`` under the stock Walking module's emulation,
-:class:`~op2motion.gait.stock_controller.StockWalkController`), in which direction, on which robot (a spec file, or
-the shipped OP2), on which bodies of its robustness family, in which engines, with which pushes.
+A :class:`Task` says what is tuned (its :class:`~.walkers.Walker`: a gait preset under
+:class:`~op2motion.gait.controller.WalkController`, or a ``[Walking Config]`` under the stock Walking module's
+emulation, :class:`~op2motion.gait.stock_controller.StockWalkController`), in which direction, on which robot (a
+spec file, or the shipped OP2), on which bodies of its robustness family, in which engines, with which pushes.
 
 :func:`evaluate` is the trial (a module-level function: it runs on worker processes and Ray). Runs go in order, the
 nominal body first (its speed is the one that counts, the slowest engine's; a task of one body counts that body's),
 then the hardest members; the first run that does not hold ends the trial (pruned: the rest would not change the
-verdict). A run holds when :func:`hold_problem` finds nothing: no fall (nor when pushed), drift and heading within
-the walk's bounds (:mod:`op2motion.gait.robust`), the CoP inside the planned soles for at least
-:data:`MIN_COP_INSIDE` of the walk, and some servo at its available torque for at most :data:`MAX_LIMITED_SHARE` of
-it. The margin is the worst run's smallest share of a bound left (:func:`run_margin`). The stock module, which has
-no heading or line feedback, is judged as the acceptance of its config states it: no fall on any body, the heading
-within 5° on the nominal one (:func:`stock_problem`; within :data:`STOCK_OTHER_HEADING_DEG` on the others).
+verdict). The walker judges each run (:meth:`~.walkers.Walker.judge`); the margin is the worst run's.
 """
 
 from __future__ import annotations
@@ -21,23 +16,17 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from dataclasses import asdict, dataclass, replace
+from dataclasses import dataclass
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any, Literal
 
 from op2motion.errors import InputError
 from op2motion.jsonout import JsonObject
 from op2motion.tune.study import TrialOutcome
+from op2motion.tune.walkers import PresetWalker, StockWalker, WalkerKind
 
 if TYPE_CHECKING:
-    from op2motion.gait.measures import WalkMeasures
     from op2motion.physics import EngineName
-
-MIN_COP_INSIDE = 0.8         # the CoP inside the planned soles for at least this share of the walk (the shipped
-                             # forward walk: 88 % at worst, light, stiff, grippy corner with the CoM forward, PyBullet)
-MAX_LIMITED_SHARE = 0.25     # some servo at its available torque for at most this share of the walk (the shipped
-                             # forward walk, which holds on the whole family: 18 % on its heavy, soft corner)
-STOCK_OTHER_HEADING_DEG = 15.0   # the stock module's heading on the family's other bodies: at most this [deg]
 SEARCH_ENGINES: tuple[EngineName, ...] = ("mujoco", "pybullet")   # the search walks each body in both, the
                                                                     # faster first
 #: Per direction: the shipped preset tuned from, and the measure that counts (speed along the walk [m/s], or turn
@@ -49,17 +38,14 @@ Direction = Literal["forward", "backward", "sideways", "turn"]
 
 @dataclass(frozen=True)
 class Task:
-    """What a trial walks (see the module docstring): ``kind`` ``walk`` or ``stock``; the base settings (a gait
-    preset's :class:`~op2motion.gait.params.GaitParams`, or a :class:`~op2motion.gait.stock_config.StockConfig`);
-    the robot's spec file (None: the shipped OP2); the members by name (None: the search's: the nominal body, then the
-    family's four corners, heavy/soft/slippery and light/stiff/grippy with the torso CoM at both ends, then the torso
-    CoM alone at both ends); engines (the search's: both, MuJoCo first: PyBullet's contacts fail walks MuJoCo
-    passes);
-    steps; the side pushes [N] (0: none)."""
+    """What a trial walks (see the module docstring): the ``walker`` (op2motion's walk from a preset, or the stock
+    module from a config) and the ``direction``; the robot's spec file (None: the shipped OP2); the members by name
+    (None: the search's: the nominal body, then the family's four corners, heavy/soft/slippery and light/stiff/grippy
+    with the torso CoM at both ends, then the torso CoM alone at both ends); engines (the search's: both, MuJoCo
+    first: PyBullet's contacts fail walks MuJoCo passes); steps; the side pushes [N] (0: none)."""
 
-    kind: str
+    walker: PresetWalker | StockWalker
     direction: Direction
-    base: Any
     spec_path: str | None = None
     members: tuple[str, ...] | None = None
     engines: tuple[EngineName, ...] = SEARCH_ENGINES
@@ -67,10 +53,13 @@ class Task:
     push_n: float = 0.0
 
     def __post_init__(self) -> None:
-        if self.kind not in ("walk", "stock"):
-            raise InputError(f"expected walk or stock, got {self.kind!r}", "kind")
         if self.direction not in DIRECTIONS:
             raise InputError(f"expected one of {', '.join(DIRECTIONS)}, got {self.direction!r}", "direction")
+
+    @property
+    def kind(self) -> WalkerKind:
+        """What is tuned: ``walk`` (op2motion's walk) or ``stock`` (the stock Walking module)."""
+        return self.walker.kind
 
 
 @lru_cache(maxsize=4)
@@ -87,11 +76,11 @@ def identity(task: Task) -> JsonObject:
     and direction), its runs (steps, bodies, engines, pushes) and the base settings' fingerprint (SHA-256 of their
     values, the preset's name aside) and name."""
     spec = spec_of(task.spec_path)
-    values = {k: v for k, v in asdict(task.base).items() if k != "name"}
+    values = task.walker.base_values()
     base = hashlib.sha256(json.dumps(values, sort_keys=True, default=repr).encode("utf-8")).hexdigest()
     bodies = ", ".join(task.members) if task.members is not None else "the search's bodies"
     pushes = f", {task.push_n:g} N side pushes" if task.push_n else ""
-    settings_from = f"preset {task.base.name}" if task.kind == "walk" else "the stock Walking config"
+    settings_from = task.walker.base_name()
     return {"spec": {"sha256": spec.sha256, "name": task.spec_path or "the shipped specs/op2.toml"},
             "task": f"{task.kind} {task.direction}",
             "runs": f"{task.steps} steps on {bodies} in {' and '.join(task.engines)}{pushes}",
@@ -116,92 +105,12 @@ def settings(task: Task, point: dict[str, float]) -> Any:
     """The base settings with the point's values (whole numbers where the setting is one; others to 6 significant
     digits, as the written preset or config.ini keeps them, so that what was walked is what is written)."""
     values = {k: (int(round(v)) if k in ("p_gain",) else float(f"{v:.6g}")) for k, v in point.items()}
-    if task.kind == "walk":
-        return replace(task.base, steps=task.steps, **values)
-    return task.base.with_values(**values)
-
-
-def controller_of(task: Task, chosen: Any, spec: Any) -> Any:
-    """A fresh controller for one run (a walk's plan is made once per trial and shared)."""
-    if task.kind == "walk":
-        from op2motion.gait.controller import WalkController
-
-        return WalkController(chosen, spec)
-    from op2motion.gait.stock_controller import StockWalkController
-
-    return StockWalkController(chosen, spec, task.steps)
+    return task.walker.settings(values, task.steps)
 
 
 def measure(task: Task, walk: Any) -> float:
     """The measure that counts: speed along the walk [m/s], or the turn rate [rad/s]."""
     return math.radians(abs(walk.turn_rate_deg_s)) if task.direction == "turn" else float(walk.mean_speed_mps)
-
-
-def stock_heading_bound(member: str) -> float:
-    """The stock module's heading bound [deg] on a body: :data:`~op2motion.gait.robust.MAX_HEADING_DEG` on the
-    nominal one, :data:`STOCK_OTHER_HEADING_DEG` on the others (it has no heading feedback: a body it was not tuned
-    on turns it)."""
-    from op2motion.gait.robust import MAX_HEADING_DEG
-
-    return MAX_HEADING_DEG if member == "nominal" else STOCK_OTHER_HEADING_DEG
-
-
-def stock_problem(report: Any, member: str) -> str | None:
-    """Why a run of the stock module does not hold: a fall, or its heading past :func:`stock_heading_bound`."""
-    if report.run.fell or report.run.walk is None:
-        return report.run.reason if report.run.fell else "no walk measured"
-    heading = report.run.walk.heading_error_deg
-    bound = stock_heading_bound(member)
-    return f"heading off by {heading:+.1f}° (at most {bound:g}°)" if abs(heading) > bound else None
-
-
-def stock_margin(report: Any, member: str) -> float:
-    """The stock run's share of its heading bound left (-1 for a fall)."""
-    if report.run.fell or report.run.walk is None:
-        return -1.0
-    return 1.0 - abs(float(report.run.walk.heading_error_deg)) / stock_heading_bound(member)
-
-
-def hold_problem(report: Any) -> str | None:
-    """Why a run does not hold (None: it holds; see the module docstring)."""
-    from op2motion.gait.robust import walk_judge
-
-    problem = walk_judge(report)
-    if problem is not None:
-        return problem
-    walk = report.run.walk
-    if walk.cop_inside_fraction < MIN_COP_INSIDE:
-        return f"CoP inside the soles {walk.cop_inside_fraction:.0%} of the walk"
-    limited = walk.worst_torque.limited_share or 0.0
-    if limited > MAX_LIMITED_SHARE:
-        return f"{walk.worst_torque.joint} at its available torque {limited:.0%} of the walk"
-    return None
-
-
-def run_margin(report: Any) -> float:
-    """The smallest share of a bound a run left (1: none used; 0: on a bound; negative: past it)."""
-    from op2motion.gait.robust import MAX_DRIFT_SHARE, MAX_HEADING_DEG, MIN_DISTANCE_M
-
-    walk: WalkMeasures | None = report.run.walk
-    if report.run.fell or walk is None or any(p.fell for p in report.pushes):
-        return -1.0
-    distance = max(walk.distance_m, MIN_DISTANCE_M)
-    return min(1.0 - walk.lateral_drift_m / (MAX_DRIFT_SHARE * distance),
-               1.0 - abs(walk.heading_error_deg) / MAX_HEADING_DEG,
-               (walk.cop_inside_fraction - MIN_COP_INSIDE) / (1.0 - MIN_COP_INSIDE),
-               1.0 - (walk.worst_torque.limited_share or 0.0) / MAX_LIMITED_SHARE)
-
-
-def plan_problem(task: Task, chosen: Any, spec: Any) -> tuple[Any, str | None]:
-    """A walk's plan within its servos' speed and ranges (the trial's gait), or why there is none."""
-    if task.kind == "stock":
-        return chosen, None
-    from op2motion.gait.speeds import gait_within_speed
-
-    try:
-        return gait_within_speed(chosen, spec), None
-    except InputError as exc:
-        return None, f"plan refused: {exc.message}"
 
 
 def evaluate(point: dict[str, float], task: Task) -> TrialOutcome:
@@ -213,7 +122,7 @@ def evaluate(point: dict[str, float], task: Task) -> TrialOutcome:
         spec = spec_of(task.spec_path)
         members = members_of(task)
         planned = len(members) * len(task.engines)
-        gait, problem = plan_problem(task, settings(task, point), spec)
+        gait, problem = task.walker.plan(settings(task, point), spec)
         if problem is not None:
             return TrialOutcome(0.0, -1.0, False, 0, planned, problem, 0.0)
         pushes = None
@@ -225,13 +134,10 @@ def evaluate(point: dict[str, float], task: Task) -> TrialOutcome:
         for member in members:
             body = member.body(spec)
             for engine in task.engines:
-                report = check(controller_of(task, gait, body), body, (engine,), pushes,
+                report = check(task.walker.controller(gait, body, task.steps), body, (engine,), pushes,
                                setup=member.setup()).engines[engine]
                 runs += 1
-                if task.kind == "stock":
-                    problem, run_slack = stock_problem(report, member.name), stock_margin(report, member.name)
-                else:
-                    problem, run_slack = hold_problem(report), run_margin(report)
+                problem, run_slack = task.walker.judge(report, member.name)
                 margin = min(margin, run_slack)
                 if report.run.walk is not None and (member.name == "nominal" or len(members) == 1):
                     speeds.append(measure(task, report.run.walk))

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from op2motion.bus.tables import CM730_MODEL_NUMBER, CM740_MODEL_NUMBER, model_name
 from op2motion.errors import InputError
@@ -108,17 +109,25 @@ class Faults:
         return sum(n for n, t in self.push if t <= since_s < t + PUSH_S)
 
 
-def parse_timed(text: str, param: str, default_value: float | None = None, first: str = "ID"
-                ) -> tuple[int, float, float]:
-    """``ID@SECONDS[:VALUE]`` (e.g. ``13@4:85``; ``first`` names the leading number in messages) -> (id, seconds,
-    value); bad input names ``param``."""
+class Timed(NamedTuple):
+    """A fault at a time, as ``ID@SECONDS[:VALUE]`` gives it: the leading ``number`` (a servo's ID, or newtons), the
+    time ``at_s`` [s] into the motion and the ``value`` (e.g. °C)."""
+
+    number: int
+    at_s: float
+    value: float
+
+
+def parse_timed(text: str, param: str, default_value: float | None = None, first: str = "ID") -> Timed:
+    """``ID@SECONDS[:VALUE]`` (e.g. ``13@4:85``; ``first`` names the leading number in messages); bad input names
+    ``param``."""
     m = _TIMED.match(text.strip())
     if not m or (m.group(3) is not None and default_value is None):
         form = f"{first}@SECONDS[:CELSIUS]" if default_value is not None else f"{first}@SECONDS"
         example = f"{30 if first == 'N' else 13}@4{':85' if default_value is not None else ''}"
         raise InputError(f"expected {form} (e.g. {example}), got {text!r}", param)
     value = float(m.group(3)) if m.group(3) is not None else float(default_value or 0.0)
-    return int(m.group(1)), float(m.group(2)), value
+    return Timed(int(m.group(1)), float(m.group(2)), value)
 
 
 def parse_pair(text: str, param: str, all_value: int | None = None) -> tuple[int, int]:

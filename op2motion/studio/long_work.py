@@ -14,7 +14,7 @@ import numpy as np
 from op2motion.errors import Op2MotionError
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Side, as_side
-from op2motion.studio.place import root_in_sole, wxyz
+from op2motion.studio.root_pose import root_in_sole, wxyz
 from op2motion.studio.session import PoseEdit, Readout
 
 CHECK_SECONDS = 3.0
