@@ -6,7 +6,7 @@ report printed (``--json``: the result's ``as_dict()``), warnings on stderr, exi
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from op2motion.commands.common import emit, warn
 from op2motion.errors import CheckFailed, Interrupted
@@ -16,7 +16,7 @@ if TYPE_CHECKING:
     from op2motion.tasks.result import TaskResult
 
 
-def deliver(args: argparse.Namespace, result: TaskResult, outputs: OutputSet | None = None,
+def deliver(args: argparse.Namespace, result: TaskResult[Any], outputs: OutputSet | None = None,
             written_as: Literal["each", "one", "none"] = "each", lines_shown: bool = False) -> int:
     """Write a yes's files (atomically, together, into ``outputs``: the command's output paths, checked before the
     task ran; None: the result's own), print the report (``--json``: :meth:`~.TaskResult.as_dict`; the files written

@@ -67,8 +67,8 @@ def cmd_validate(args: argparse.Namespace, spec: Spec) -> int:
     how = Validation(args.seconds, engines_of(args), args.push, args.stiffness, args.voltage, args.gui_png)
     if args.robust:
         with progress(args, "robust", "run") as on_progress:
-            result = validate_pose_robust(pose, spec, how, on_progress)
-        return deliver(args, result, outputs, "none")
+            family = validate_pose_robust(pose, spec, how, on_progress)
+        return deliver(args, family, outputs, "none")
     with progress(args, "physics", "s") as on_progress:
         result = validate_pose(pose, spec, how, on_progress)
     return deliver(args, result, outputs, "none")

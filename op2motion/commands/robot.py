@@ -17,7 +17,7 @@ from op2motion.robot.spec import Spec
 
 if TYPE_CHECKING:
     from op2motion.bus.port import PortRequest
-    from op2motion.onrobot.tasks import Options
+    from op2motion.onrobot.tasks import MotionResult, Options
     from op2motion.tasks.result import TaskResult
 
 MAX_WAIT_S = 600.0
@@ -291,7 +291,7 @@ def pose_name_of(stem: str) -> str:
     return safe_pose_name(stem, "robot")
 
 
-def _motion(args: argparse.Namespace, task: Callable[[Options], TaskResult]) -> int:
+def _motion(args: argparse.Namespace, task: Callable[[Options], TaskResult[MotionResult]]) -> int:
     """Run a robot motion ``task`` with Ctrl-C handling and progress (its :class:`Options`); deliver its result;
     the exit code."""
     from op2motion.onrobot.tasks import Options

@@ -13,7 +13,6 @@ torso poses, for the judge and the attitude estimate, stand on the foot that doe
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -41,6 +40,22 @@ class KickMotion:
     name: str
 
 
+@dataclass(frozen=True)
+class KickRows:
+    """A kick phase's rows (K of them): the joints (= the goals: played open loop) (K, 20) [rad], the P gains
+    (K, 20), the torso's positions (K, 3) [m] and rotations (K, 3, 3) and the whole-body CoM (K, 3) [m] in the world
+    (the start's support-foot frame), each sole's pose by side (K, 4: x, y, z [m], yaw [rad]) and each row's
+    contact."""
+
+    goals: np.ndarray
+    p_gains: np.ndarray
+    torso_pos: np.ndarray
+    torso_rot: np.ndarray
+    com: np.ndarray
+    feet: dict[str, np.ndarray]
+    contact: tuple[SupportName, ...]
+
+
 _CACHE: dict[tuple[str, str, bytes | None], KickMotion] = {}
 
 
@@ -66,9 +81,8 @@ def kick_motion(spec: Spec, side: Side, action: ActionFile | None = None) -> Kic
 
 
 def kick_chunk(spec: Spec, legs: dict[str, Leg], state: WalkState, stand_goals: np.ndarray, p_gain: float,
-               side: Side, action: ActionFile | None = None) -> dict[str, Any]:
-    """The rows of a kick phase from a robot standing at ``stand_goals`` (20,) [rad] on the feet of ``state``: the
-    fields of :class:`.rows.RowBuffer` (planned joints = goals: the rows are played open loop)."""
+               side: Side, action: ActionFile | None = None) -> KickRows:
+    """The rows of a kick phase from a robot standing at ``stand_goals`` (20,) [rad] on the feet of ``state``."""
     from op2motion.motion.planner import blend
 
     kick = kick_motion(spec, side, action)
@@ -78,7 +92,8 @@ def kick_chunk(spec: Spec, legs: dict[str, Leg], state: WalkState, stand_goals: 
     rows = np.vstack([into, goals, back])
     p_gains = np.vstack([np.full((len(into), len(stand_goals)), p_gain), gains,
                          np.full((len(back), len(stand_goals)), p_gain)])
-    contact = ("double",) * len(into) + tuple(supports) + ("double",) * len(back)
+    both: tuple[SupportName, ...] = ("double",)
+    contact = both * len(into) + tuple(Support.of(s).value for s in supports) + both * len(back)
     anchor = other_side(side)
     foot = state.foot(anchor)
     world_rot, world_pos = rot_z(foot.yaw), np.array([foot.x, foot.y, 0.0])
@@ -93,8 +108,7 @@ def kick_chunk(spec: Spec, legs: dict[str, Leg], state: WalkState, stand_goals: 
     yaw_other = np.arctan2((rot @ r_other)[:, 1, 0], (rot @ r_other)[:, 0, 0])
     feet[side] = np.column_stack([world_other, np.unwrap(yaw_other)])
     com = _coms(spec, rows, pos, rot)
-    return {"joints": rows, "goals": rows, "p_gains": p_gains, "torso_pos": pos, "torso_rot": rot,
-            "feet": feet, "contact": contact, "com": com}
+    return KickRows(rows, p_gains, pos, rot, com, feet, contact)
 
 
 def _coms(spec: Spec, rows: np.ndarray, pos: np.ndarray, rot: np.ndarray) -> np.ndarray:

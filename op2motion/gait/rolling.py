@@ -308,20 +308,21 @@ class RollingPlanner:
         from op2motion.gait.kick import kick_chunk
 
         stand = self.rows.get("goals", self.rows.end - 1).copy()
-        chunk = kick_chunk(self.spec, self.legs, self.state, stand, float(self.params.p_gain), side, self.action)
-        n = len(chunk["contact"])
-        feet, contact, pos, rot = chunk.pop("feet"), chunk["contact"], chunk["torso_pos"], chunk["torso_rot"]
+        kick = kick_chunk(self.spec, self.legs, self.state, stand, float(self.params.p_gain), side, self.action)
+        n, feet, contact, pos, rot = len(kick.contact), kick.feet, kick.contact, kick.torso_pos, kick.torso_rot
         before = float(self.rows.numeric["plan_yaw"][-1])
-        chunk.update({"plan_yaw": torso_yaw(rot, before), "velocity": np.zeros((n, 2)),
-                      "zmp_ref": chunk["com"][:, :2], "zmp": chunk["com"][:, :2], "open": np.ones(n),
-                      "damping": np.zeros(n),
-                      "support": tuple(c if c == "double" or feet[other_side(c)][i, 2] >= LIFTED_M else "double"
-                                       for i, c in enumerate(contact)),
-                      "learn": [None] * n, "landing": [None] * n, **chunk_fields(self.legs, feet, contact, pos, rot)})
+        zmp_ref = kick.com[:, :2]
+        chunk = {"joints": kick.goals, "goals": kick.goals, "p_gains": kick.p_gains, "torso_pos": pos,
+                 "torso_rot": rot, "com": kick.com, "contact": contact,
+                 "plan_yaw": torso_yaw(rot, before), "velocity": np.zeros((n, 2)),
+                 "zmp_ref": zmp_ref, "zmp": zmp_ref, "open": np.ones(n), "damping": np.zeros(n),
+                 "support": tuple(c if c == "double" or feet[other_side(c)][i, 2] >= LIFTED_M else "double"
+                                  for i, c in enumerate(contact)),
+                 "learn": [None] * n, "landing": [None] * n, **chunk_fields(self.legs, feet, contact, pos, rot)}
         start = self.rows.end
         self.rows.append(chunk)
-        where = {s: chunk[f"feet_{s}"] for s in SIDES}
-        self.phases.append((start, Phase("kick", where, tuple(contact), chunk["zmp_ref"], swing=side)))
+        where = {s: feet[s] for s in SIDES}
+        self.phases.append((start, Phase("kick", where, contact, zmp_ref, swing=side)))
         self.pending_kick, self.stand_since = None, None
         self.state = replace(self.state, row=self.state.row + n)
         self._standing_rows()

@@ -167,9 +167,9 @@ def stride_velocity(torso_pos: np.ndarray, rows_per_stride: int) -> np.ndarray:
 
 
 def chunk_fields(legs: Mapping[str, Leg], feet: Mapping[str, np.ndarray], contact: tuple[str, ...],
-                 pos: np.ndarray, rot: np.ndarray) -> dict[str, Any]:
+                 pos: np.ndarray, rot: np.ndarray) -> dict[str, np.ndarray]:
     """The derived fields of a run of rows: swing phase, support points, planned legs, and the soles by field name."""
-    fields: dict[str, Any] = {"swing_phase": swing_phase(contact), "support_point": support_points(feet, contact)}
+    fields = {"swing_phase": swing_phase(contact), "support_point": support_points(feet, contact)}
     for side, angles in planned_legs(legs, feet, pos, rot).items():
         fields[f"legs_{side}"] = angles
     for side in SIDES:

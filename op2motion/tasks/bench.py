@@ -13,6 +13,7 @@ from op2motion.tasks.result import TaskResult
 
 if TYPE_CHECKING:
     from op2motion.formats.action import ActionFile
+    from op2motion.jsonout import JsonObject
 
 
 def _lines(r: dict[str, Any]) -> list[str]:
@@ -55,11 +56,12 @@ def _lines(r: dict[str, Any]) -> list[str]:
     return lines
 
 
-def bench(spec: Spec, poses: int, repeat: int, action: ActionFile | None = None, wall_runs: int = 3) -> TaskResult:
+def bench(spec: Spec, poses: int, repeat: int, action: ActionFile | None = None, wall_runs: int = 3
+          ) -> TaskResult[JsonObject]:
     """``bench``: ``poses`` per batch, the best of ``repeat``; ``action``'s stock page for the motion figures (None:
     none); ``wall_runs`` fresh-process runs of the commands (0: none)."""
     from op2motion.bench import check_bench_action, run_bench
 
     checked = check_bench_action(action, spec) if action is not None else None
     r = run_bench(spec, poses, repeat, action=checked, wall_runs=wall_runs)
-    return TaskResult(True, data=r, lines=("\n".join(_lines(r)),))
+    return TaskResult(True, data=r, lines=("\n".join(_lines(r)),), value=r)

@@ -17,7 +17,7 @@ from op2motion.robot.spec import Spec
 from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
-    from op2motion.formats.action import ActionFile
+    from op2motion.formats.action import ActionFile, Page
     from op2motion.formats.motionfile import Motion, PlannerName
     from op2motion.robot.pose import Pose
 
@@ -47,7 +47,7 @@ def cable_warnings(poses: Sequence[Pose], spec: Spec) -> list[str]:
 
 
 def export_poses(poses: Sequence[Pose], spec: Spec, fmt: str, output: Path, seconds: float = 1.0,
-                 pages: PageWrite = PageWrite()) -> TaskResult:
+                 pages: PageWrite = PageWrite()) -> TaskResult[str | bytes]:
     """``export``: ``poses`` to ``fmt`` (``action``: each pose a one-step page of ``seconds`` [s] in ``pages``;
     ``webots`` or ``csv``: a row per pose ``seconds`` apart) at ``output``."""
     from op2motion.formats.tables import csv_table, webots_motion, webots_warnings
@@ -67,11 +67,11 @@ def export_poses(poses: Sequence[Pose], spec: Spec, fmt: str, output: Path, seco
         text = f"{len(poses)} pose(s)"
     warnings = cable_warnings(poses, spec) + (webots_warnings(poses, spec) if fmt == "webots" else [])
     return TaskResult(True, None, tuple(warnings), {"output": Output(str(output), content)}, data,
-                      (f"wrote {output}: {text}",))
+                      (f"wrote {output}: {text}",), value=content)
 
 
 def import_page(action: ActionFile, page: int, spec: Spec, name: str | None = None,
-                output: Path | None = None, out_text: str | None = None) -> TaskResult:
+                output: Path | None = None, out_text: str | None = None) -> TaskResult[Pose]:
     """``import-action --page``: the page's last step as a pose (named ``name``, default the page's), written to
     ``output`` when given (``out_text``: the path as the user typed it, for the report)."""
     from op2motion.formats.posefile import pose_to_json
@@ -81,10 +81,10 @@ def import_page(action: ActionFile, page: int, spec: Spec, name: str | None = No
     data = {"page": page, "pose": json.loads(text), "path": out_text}
     outputs = {"out": Output(str(output), text)} if output is not None else {}
     line = f"page {page} -> pose {pose.name!r}" + (f", wrote {out_text}" if output is not None else "")
-    return TaskResult(True, None, tuple(cable_warnings([pose], spec)), outputs, data, (line,))
+    return TaskResult(True, None, tuple(cable_warnings([pose], spec)), outputs, data, (line,), value=pose)
 
 
-def list_pages(action: ActionFile, spec: Spec) -> TaskResult:
+def list_pages(action: ActionFile, spec: Spec) -> TaskResult[list[Page]]:
     """``import-action``: every page with its steps (goal ticks by servo ID, pause and time in the file's units)."""
     pages = action.pages(spec)
     data: JsonObject = {"pages": [{"index": p.index, "name": p.name, "repeat": p.repeat, "next": p.next,
@@ -92,11 +92,11 @@ def list_pages(action: ActionFile, spec: Spec) -> TaskResult:
                                  for s in p.steps]} for p in pages]}
     text = "\n".join(f"{p.index:3d} {p.name:<14} {len(p.steps)} step(s)" + (f" -> page {p.next}" if p.next else "")
                      for p in pages)
-    return TaskResult(True, None, None, {}, data, (text,))
+    return TaskResult(True, None, None, {}, data, (text,), value=pages)
 
 
 def export_motion(motion: Motion, spec: Spec, fmt: str, output: Path, pages: PageWrite = PageWrite(),
-                  planner: PlannerName = "rrt", seed: int = 0) -> TaskResult:
+                  planner: PlannerName = "rrt", seed: int = 0) -> TaskResult[str | bytes]:
     """``motion export``: ``motion`` planned and written as chained action pages (``action``, into ``pages``), or
     its goals every 8 ms as Webots or CSV, at ``output``; the planner's notes as warnings."""
     from op2motion.formats.tables import goals_csv, webots_rows, webots_warnings
@@ -121,18 +121,18 @@ def export_motion(motion: Motion, spec: Spec, fmt: str, output: Path, pages: Pag
         text = f"{len(trajectory.goals)} rows every {trajectory.dt * 1000:.0f} ms"
     data["path"] = str(output)
     return TaskResult(True, None, tuple(notes), {"output": Output(str(output), content)}, data,
-                      (f"wrote {output}: {motion.name}, {text}",))
+                      (f"wrote {output}: {motion.name}, {text}",), value=content)
 
 
-def urdf(spec: Spec, output: Path | None = None, as_json: bool = False) -> TaskResult:
+def urdf(spec: Spec, output: Path | None = None, as_json: bool = False) -> TaskResult[str]:
     """``urdf``: the URDF generated from ``spec``, to ``output`` (the report: where, joints, mass), or shown (its
     text; ``as_json``: in the report)."""
     from op2motion.model.urdf import build_urdf, total_mass
 
     text = build_urdf(spec)
-    facts = {"joints": len(spec.joints), "mass_kg": round(total_mass(spec), 6)}
+    facts = {"joints": len(spec.joints), "mass_kg": total_mass(spec)}
     if output is not None:
         return TaskResult(True, None, None, {"output": Output(str(output), text)}, {"path": str(output), **facts},
-                          (f"wrote {output}: {len(spec.joints)} joints, {total_mass(spec):.3f} kg",))
+                          (f"wrote {output}: {len(spec.joints)} joints, {total_mass(spec):.3f} kg",), value=text)
     shown = (text[:-1] if text.endswith("\n") else text,) if not as_json else ()
-    return TaskResult(True, None, None, {}, {"urdf": text, **facts}, shown)
+    return TaskResult(True, None, None, {}, {"urdf": text, **facts}, shown, value=text)

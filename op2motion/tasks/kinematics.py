@@ -15,7 +15,10 @@ from op2motion.robot.spec import Spec
 from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
+    from op2motion.figures.pose import DrawnPose
+    from op2motion.kinematics.arm_ik import ArmIKResult
     from op2motion.kinematics.points import ModelName
+    from op2motion.kinematics.report import PoseReport
     from op2motion.robot.joints import BookAngles
     from op2motion.robot.pose import Pose
     from op2motion.robot.support import Side
@@ -23,16 +26,16 @@ if TYPE_CHECKING:
 
 def fk(angles: BookAngles, spec: Spec, model: ModelName = "dh", br: float = 1.0,
        sole: tuple[float, float, float] = (0.0, 0.0, 0.0), heading_rad: float = 0.0, double: bool = False
-       ) -> TaskResult:
+       ) -> TaskResult[PoseReport]:
     """``fk``: every body point, both CoMs and the balance of ``angles`` on ``model``, the support sole at ``sole``
     [m] turned by ``heading_rad``; ``double``: measured on both feet."""
     from op2motion.kinematics.report import pose_report
 
     report = pose_report(angles, spec, model, br, sole, heading_rad, double)
-    return TaskResult(True, data=report.as_dict(spec), lines=(report.human(),))
+    return TaskResult(True, data=report.as_dict(spec), lines=(report.human(),), value=report)
 
 
-def convert(angles: BookAngles, servo: Any, spec: Spec) -> TaskResult:
+def convert(angles: BookAngles, servo: Any, spec: Spec) -> TaskResult[BookAngles]:
     """``convert``: one pose as book variables (``angles``), servo angles (``servo`` (20,) [rad]) and ticks."""
     from op2motion.robot.joints import servo_to_ticks
 
@@ -47,7 +50,7 @@ def convert(angles: BookAngles, servo: Any, spec: Spec) -> TaskResult:
     lines += [f"{j.id:>3} {j.name:<12} {math.degrees(q):>10.3f} {t:>5}" for j, q, t in zip(spec.joints, servo, ticks)]
     b = angles.degrees()
     lines.append(f"book ({angles.support} support): th {b['th']}, phi {b['phi']}, psi {b['psi']} [deg]")
-    return TaskResult(True, data=data, lines=("\n".join(lines),))
+    return TaskResult(True, data=data, lines=("\n".join(lines),), value=angles)
 
 
 @dataclass(frozen=True)
@@ -66,7 +69,7 @@ class PlotRequest:
     validate_s: float | None = None
 
 
-def plot(request: PlotRequest, spec: Spec) -> TaskResult:
+def plot(request: PlotRequest, spec: Spec) -> TaskResult[DrawnPose]:
     """``plot``: the stick figure (front, side, top, 3D), both CoMs, the support drawn, the verdict (checked now, or
     as the pose file records it)."""
     from op2motion.figures.pose import PB_PSI_NOTE, Drawing, pose_figure
@@ -91,7 +94,8 @@ def plot(request: PlotRequest, spec: Spec) -> TaskResult:
     notes = [f"note: {PB_PSI_NOTE}"] if any(row["note"] for row in drawn["rows"]) else []
     text = ("\n\n".join(r.human() for r in reports) + "\n" + "\n".join(notes)
             + f"\n{drawn['verdict']}\nwrote {request.output}")
-    return TaskResult(True, None, None, {"output": Output(str(request.output), png, key="png")}, data, (text,))
+    return TaskResult(True, None, None, {"output": Output(str(request.output), png, key="png")}, data, (text,),
+                      value=figure)
 
 
 @dataclass(frozen=True)
@@ -111,7 +115,7 @@ class ArmMove:
     plot: str | None = None
 
 
-def arm_ik(request: ArmMove, spec: Spec) -> TaskResult:
+def arm_ik(request: ArmMove, spec: Spec) -> TaskResult[ArmIKResult]:
     """``arm-ik``: the hand moved with its arm's three joints (the book's Taylor-linearised IK); a "no" when the
     result leaves a servo's cable-safe range (unless allowed) or misses the target beyond the tolerance."""
     from op2motion.figures.pose import Drawing, pose_figure
@@ -152,4 +156,4 @@ def arm_ik(request: ArmMove, spec: Spec) -> TaskResult:
         drawing = Drawing((res.model,), target=target, lines=lines, ghost=res.initial)
         png = pose_figure(f"{request.name} + arm IK", res.angles, spec, drawing).png
         outputs["plot"] = Output(request.plot, png, key="png")
-    return TaskResult(problem is None, problem, None, outputs, data, (text,))
+    return TaskResult(problem is None, problem, None, outputs, data, (text,), value=res)

@@ -12,7 +12,7 @@ from op2motion.robot.spec import Spec
 from op2motion.tasks.result import TaskResult
 
 if TYPE_CHECKING:
-    from op2motion.library.build import BuildSettings, Executor
+    from op2motion.library.build import BuildSettings, BuildSummary, Executor
 
 
 @dataclass(frozen=True)
@@ -29,7 +29,7 @@ class LibraryBuild:
     spec_path: str | None = None
 
 
-def build(request: LibraryBuild, spec: Spec, on_done: Callable[[Any], Any] | None = None) -> TaskResult:
+def build(request: LibraryBuild, spec: Spec, on_done: Callable[[Any], Any] | None = None) -> TaskResult[BuildSummary]:
     """``library build``: see the module docstring; ``on_done`` is told of each target as it finishes."""
     from op2motion.library.build import build_library
 
@@ -40,4 +40,4 @@ def build(request: LibraryBuild, spec: Spec, on_done: Callable[[Any], Any] | Non
     if summary.robust_checked:
         text += (f"; on the robustness family {summary.robust_checked - summary.robust_failed} of "
                  f"{summary.robust_checked} poses stood in every run")
-    return TaskResult(True, data=summary.as_dict(), lines=(text,))
+    return TaskResult(True, data=summary.as_dict(), lines=(text,), value=summary)

@@ -21,10 +21,21 @@ if TYPE_CHECKING:
     from op2motion.formats.action import ActionFile
     from op2motion.formats.motionfile import PlannerName
     from op2motion.motion.cartesian import LineMove, LineRequest
+    from op2motion.motion.checks import MotionChecks
     from op2motion.motion.trajectory import Trajectory
     from op2motion.physics import CheckReport, EngineName
     from op2motion.robot.pose import Pose
 
+
+
+@dataclass(frozen=True)
+class CheckedMotion:
+    """A motion checked: its ``trajectory`` (goals every 8 ms), the ``checks`` along it (clearance, ZMP, torque),
+    and its physics ``report`` (None: not checked in physics)."""
+
+    trajectory: Trajectory
+    checks: MotionChecks
+    report: CheckReport | None
 
 
 @dataclass(frozen=True)
@@ -87,7 +98,7 @@ class Told:
 
 def check_motion(trajectory: Trajectory, spec: Spec, how: MotionCheck, told: Told,
                  figure: Callable[[str], bytes] | None = None, motion_text: str | None = None,
-                 on_progress: Progress | None = None) -> TaskResult:
+                 on_progress: Progress | None = None) -> TaskResult[CheckedMotion]:
     """A trajectory checked (its goals within range, clearance, ZMP and torque along it, physics when asked), what
     the task ``told`` completed by the checks. ``figure`` draws the plot from the verdict's words (default: the joint
     curves and the balance tracks); ``motion_text`` is the motion file."""
@@ -130,7 +141,7 @@ def check_motion(trajectory: Trajectory, spec: Spec, how: MotionCheck, told: Tol
              *([] if report is None else _physics_lines(report))]
     problem = None if report is None else report.problem("does not get through")
     return TaskResult(problem is None, None if problem is None else f"{title}: {problem}", None, outputs,
-                      {**data, "files": {}}, tuple(lines))
+                      {**data, "files": {}}, tuple(lines), value=CheckedMotion(trajectory, checks, report))
 
 
 def _chain(pages: list[int]) -> str:
@@ -145,7 +156,7 @@ def _chain(pages: list[int]) -> str:
 
 
 def play_page_task(action: ActionFile, page: int, spec: Spec, how: MotionCheck, start: Pose | None = None,
-              on_progress: Progress | None = None) -> TaskResult:
+              on_progress: Progress | None = None) -> TaskResult[CheckedMotion]:
     """``motion play``: action page ``page`` played tick for tick as the framework does, from ``start`` (default:
     page 1's last step, the stock init pose), checked (:func:`check_motion`)."""
     from op2motion.motion.pipeline import play_page
@@ -163,7 +174,7 @@ def play_page_task(action: ActionFile, page: int, spec: Spec, how: MotionCheck, 
 
 
 def plan_motion_task(motion: Any, spec: Spec, how: MotionCheck, planner: PlannerName = "rrt", seed: int = 0,
-                on_progress: Progress | None = None) -> TaskResult:
+                on_progress: Progress | None = None) -> TaskResult[CheckedMotion]:
     """``motion plan``: ``motion`` (a :class:`~op2motion.formats.motionfile.Motion`) planned (weight shifts, lifts,
     segments around collisions with ``planner`` seeded by ``seed``), checked (:func:`check_motion`); its notes are
     the result's warnings, the motion file its ``out`` output when ``how.motion_file`` names one."""
@@ -182,7 +193,7 @@ def plan_motion_task(motion: Any, spec: Spec, how: MotionCheck, planner: Planner
 
 
 def line_move_task(pose: Pose, request: LineRequest, spec: Spec, how: MotionCheck, name: str = "line",
-              on_progress: Progress | None = None) -> TaskResult:
+              on_progress: Progress | None = None) -> TaskResult[CheckedMotion]:
     """``motion line``: the ``request``'s hand in a straight line from ``pose`` with the whole body balancing,
     checked (:func:`check_motion`), the figure its path."""
     from op2motion.figures.paths import render_line

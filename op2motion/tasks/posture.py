@@ -17,7 +17,7 @@ if TYPE_CHECKING:
     from op2motion.figures.background import Renderers
     from op2motion.posture.cost import PostureProblem
     from op2motion.posture.pso import PSOSettings
-    from op2motion.workflow import Validate
+    from op2motion.workflow import Outcome, Validate
 
 
 @dataclass(frozen=True)
@@ -57,7 +57,7 @@ def _lines(request: Reach, outcome: Any, tilt_deg: float) -> list[str]:
 
 def reach(request: Reach, spec: Spec, renderers: Renderers | None = None,
           on_iteration: Callable[[float], Any] | None = None,
-          on_answer: Callable[[tuple[str, ...]], Any] | None = None) -> TaskResult:
+          on_answer: Callable[[tuple[str, ...]], Any] | None = None) -> TaskResult[Outcome]:
     """``optimize``: solve ``request`` (see the module docstring); the figures drawn by ``renderers`` (forked
     renderers, started before the search so that they are ready when it ends; with ``validate``, they draw the
     pose while its physics check runs and add the verdict after) or here. ``on_answer`` is given the result's lines
@@ -85,7 +85,8 @@ def reach(request: Reach, spec: Spec, renderers: Renderers | None = None,
     lines = _lines(request, outcome, data["torso_tilt_deg"])
     warnings = tuple(outcome.warnings())
     if not outcome.ok:
-        return TaskResult(False, f"{outcome.result.message}; nothing written", warnings, {}, data, tuple(lines))
+        return TaskResult(False, f"{outcome.result.message}; nothing written", warnings, {}, data, tuple(lines),
+                          value=outcome)
     if renderers is not None:
         jobs = begun or [renderers.begin(StagedPoseFigure, outcome, request.name, spec),
                          renderers.begin(StagedCostCurve, outcome, request.name)]
@@ -102,4 +103,4 @@ def reach(request: Reach, spec: Spec, renderers: Renderers | None = None,
     outputs = {"out": Output(request.pose_path, pose_to_json(pose, spec), "pose"),
                "plot": Output(request.figure_path, figure, "png"),
                "cost curve": Output(request.cost_path, cost_curve, "cost_png")}
-    return TaskResult(True, None, warnings, outputs, data, tuple(lines))
+    return TaskResult(True, None, warnings, outputs, data, tuple(lines), value=outcome)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
-from typing import Mapping
+from typing import Any, Generic, Mapping, TypeVar
 
 from op2motion.jsonout import Json, JsonObject, json_object
 
@@ -30,9 +30,13 @@ class Output:
     key: str | None = None
 
 
+#: What a task found, typed (a check's report, a solved pose, a plan, ...).
+T = TypeVar("T")
+
+
 @dataclass(frozen=True)
-class TaskResult:
-    """What a task found (see the module docstring).
+class TaskResult(Generic[T]):
+    """What a task found (see the module docstring), with its typed ``value`` for programs.
 
     Attributes:
         ok: The answer is yes (the check passed; nothing refused it).
@@ -46,6 +50,8 @@ class TaskResult:
         checked: False when the task was refused before its checks ran (then there is nothing to report but
             ``problem``).
         interrupted: The "no" is a stop the user asked for (Ctrl-C, SIGTERM: exit 130), not a failed check.
+        value: What the task found, typed (e.g. ``validate``'s :class:`~op2motion.physics.CheckReport`); None when
+            it was refused before it ran.
     """
 
     ok: bool
@@ -56,6 +62,7 @@ class TaskResult:
     lines: tuple[str, ...] = ()
     checked: bool = True
     interrupted: bool = False
+    value: T | None = None
 
     def __post_init__(self) -> None:
         if self.ok == (self.problem is not None):
@@ -64,11 +71,11 @@ class TaskResult:
         object.__setattr__(self, "data", MappingProxyType(json_object(self.data)))
 
     @classmethod
-    def refused(cls, problem: str) -> "TaskResult":
+    def refused(cls, problem: str) -> TaskResult[Any]:
         """A task refused before its checks ran (e.g. goals a servo cannot reach)."""
         return cls(False, problem, checked=False)
 
-    def with_warnings(self, warnings: tuple[str, ...] | None) -> "TaskResult":
+    def with_warnings(self, warnings: tuple[str, ...] | None) -> TaskResult[T]:
         """This result with ``warnings`` (as the caller words them, e.g. with its flags)."""
         return replace(self, warnings=warnings)
 

@@ -19,7 +19,7 @@ from op2motion.tasks.walk import walk_line
 if TYPE_CHECKING:
     from op2motion.formats.action import ActionFile
     from op2motion.gait.commands import CommandTimeline
-    from op2motion.physics import EngineName
+    from op2motion.physics import CheckReport, EngineName, RobustReport
 
 
 @dataclass(frozen=True)
@@ -110,7 +110,21 @@ def _figure(walk: Any, report: Any) -> bytes:
     return render_steered(commanded, times, planned, planned_t, walked, f"walk --commands {walk.commands.source}")
 
 
-def steered_walk_task(request: SteeredRequest, spec: Spec, progress: ProgressFor | None = None) -> TaskResult:
+@dataclass(frozen=True)
+class SteeredOutcome:
+    """A commanded walk planned and checked: the ``commanded`` timeline and the ``planned`` walk in figures, the
+    ``walk`` itself, its physics ``report`` (None: not walked, or walked over the family) and the robustness
+    family's ``robust`` report (None: not asked)."""
+
+    commanded: Commanded
+    planned: PlannedWalk
+    walk: SteerableWalk
+    report: CheckReport | None
+    robust: RobustReport | None
+
+
+def steered_walk_task(request: SteeredRequest, spec: Spec, progress: ProgressFor | None = None
+                      ) -> TaskResult[SteeredOutcome]:
     """``walk --commands``: see the module docstring; ``progress`` gives each stage's progress."""
     from op2motion.gait.steer import planned_summary
 
@@ -137,7 +151,9 @@ def steered_walk_task(request: SteeredRequest, spec: Spec, progress: ProgressFor
     outputs = {"plot": Output(request.plot, _figure(walk, report))} if request.plot else {}
     problem = f"the commanded walk {'failed in the robustness family' if table else 'fell in physics'}" if failed \
         else None
-    return TaskResult(problem is None, problem, warnings, outputs, {**data, "files": {}}, tuple(lines))
+    outcome = SteeredOutcome(commanded, summary, walk, None if table is not None else report,
+                             report if table is not None else None)
+    return TaskResult(problem is None, problem, warnings, outputs, {**data, "files": {}}, tuple(lines), value=outcome)
 
 
 END_M = 0.10                       # the plan may end this far from where the commands end without a warning [m]

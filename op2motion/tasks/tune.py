@@ -93,7 +93,7 @@ def _settings_text(request: TuneRequest, result: TuneResult, unit: str) -> str:
     return request.task.walker.settings_text(result.settings, Path(request.out).stem, header_lines(result, unit))
 
 
-def tune(request: TuneRequest, progress: ProgressFor | None = None) -> TaskResult:
+def tune(request: TuneRequest, progress: ProgressFor | None = None) -> TaskResult[TuneResult]:
     """``tune walk|stock``: see the module docstring; ``progress`` gives the trials' and the verification's."""
     from op2motion.figures.tune import render_pareto
     from op2motion.tune.run import result_json
@@ -113,10 +113,10 @@ def tune(request: TuneRequest, progress: ProgressFor | None = None) -> TaskResul
     if result.settings is None or result.chosen is None:
         return TaskResult(False, f"no point held on every body of the family in both engines (verified "
                                  f"{len(result.rejected)}); nothing written: more --trials resume the study",
-                          None, outputs, {**data, "files": {}}, tuple(lines))
+                          None, outputs, {**data, "files": {}}, tuple(lines), value=result)
     outputs["out"] = Output(request.out, _settings_text(request, result, unit))
     outputs["out_json"] = Output(request.out_json, json.dumps(json_object(data), indent=2) + "\n")
     paths = ", ".join(o.path for o in outputs.values())
     lines.append(f"  chosen trial {result.chosen.number}: nominal {result.verified_speed:.3f} {unit} in both "
                  f"engines, every body held; wrote {paths}")
-    return TaskResult(True, None, None, outputs, {**data, "files": {}}, tuple(lines))
+    return TaskResult(True, None, None, outputs, {**data, "files": {}}, tuple(lines), value=result)

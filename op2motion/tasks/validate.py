@@ -15,7 +15,7 @@ from op2motion.tasks.progress import Progress
 from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
-    from op2motion.physics import EngineName
+    from op2motion.physics import CheckReport, EngineName, RobustReport
     from op2motion.robot.pose import Pose
 
 
@@ -42,7 +42,7 @@ def _pushes_line(pushes: Any) -> str:
 
 
 def validate_pose(pose: Pose, spec: Spec, how: Validation = Validation(),
-                  on_progress: Progress | None = None) -> TaskResult:
+                  on_progress: Progress | None = None) -> TaskResult[CheckReport]:
     """``validate``: ``pose`` held as ``how`` says; its report per engine (one engine: its keys and the static model's
     torques; two: both, and whether they agree)."""
     from op2motion.model.dynamics import dynamics_for
@@ -70,11 +70,11 @@ def validate_pose(pose: Pose, spec: Spec, how: Validation = Validation(),
         lines.append("  the engines agree" if report.agree else "  THE ENGINES DISAGREE")
     problem = report.problem()
     return TaskResult(problem is None, None if problem is None else f"{pose.name}: {problem}", None, outputs, data,
-                      tuple(lines))
+                      tuple(lines), value=report)
 
 
 def validate_pose_robust(pose: Pose, spec: Spec, how: Validation = Validation(),
-                         on_progress: Progress | None = None) -> TaskResult:
+                         on_progress: Progress | None = None) -> TaskResult[RobustReport]:
     """``validate --robust``: ``pose`` held on every member of the robustness family (its stiffness and floor set
     by the member: ``how.stiffness`` and a snapshot are bad input here); the table."""
     from op2motion.errors import InputError
@@ -90,4 +90,4 @@ def validate_pose_robust(pose: Pose, spec: Spec, how: Validation = Validation(),
     failed = sum(not r.passed for r in report.runs)
     problem = None if report.passed else (
         f"{pose.name}: fails in {failed} of {len(report.runs)} runs of the robustness family")
-    return TaskResult(report.passed, problem, None, {}, data, lines)
+    return TaskResult(report.passed, problem, None, {}, data, lines, value=report)

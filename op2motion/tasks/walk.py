@@ -15,8 +15,9 @@ from op2motion.tasks.progress import ProgressFor, no_progress
 from op2motion.tasks.result import Output, TaskResult
 
 if TYPE_CHECKING:
+    from op2motion.gait.generator import Gait
     from op2motion.gait.params import GaitParams
-    from op2motion.physics import CheckReport, EngineName, EngineReport, Trials
+    from op2motion.physics import CheckReport, EngineName, EngineReport, RobustReport, Trials
 
 #: The goal tables a walk writes, by file ending.
 OUT_FORMATS = {".csv": "csv", ".motion": "webots"}
@@ -41,6 +42,16 @@ class WalkRequest:
     trials: Trials | None = None
     plot: str | None = None
     tables: tuple[tuple[str, str], ...] = ()
+
+
+@dataclass(frozen=True)
+class WalkOutcome:
+    """A walk planned and checked: the ``gait`` (its plan), its physics ``report`` (None: not walked in physics, or
+    walked over the family) and the robustness family's report ``robust`` (None: not asked)."""
+
+    gait: Gait
+    report: CheckReport | None
+    robust: RobustReport | None
 
 
 def walk_line(report: EngineReport) -> str:
@@ -96,7 +107,7 @@ def _physics(request: WalkRequest, gait: Any, spec: Spec, data: JsonObject, prog
 
 
 def _robust(request: WalkRequest, gait: Any, spec: Spec, data: JsonObject, progress: ProgressFor
-            ) -> tuple[Any, str]:
+            ) -> tuple[RobustReport, str]:
     """The walk over the robustness family; its summary goes into ``data``; the report and its table."""
     from op2motion.gait import side_pushes
     from op2motion.gait.robust import robust_table, walk_badness, walk_judge
@@ -158,7 +169,7 @@ def _refuse_work_early(request: WalkRequest, spec: Spec) -> None:
     check_work(runs, request.params.steps * request.params.step_s)
 
 
-def walk_task(request: WalkRequest, spec: Spec, progress: ProgressFor | None = None) -> TaskResult:
+def walk_task(request: WalkRequest, spec: Spec, progress: ProgressFor | None = None) -> TaskResult[WalkOutcome]:
     """``walk``: plan ``request``'s walk and check it (see the module docstring); ``progress`` gives each stage's
     progress (the plan's passes, the physics' simulated seconds, the family's runs)."""
     from op2motion.gait import gait_summary
@@ -185,4 +196,5 @@ def walk_task(request: WalkRequest, spec: Spec, progress: ProgressFor | None = N
         lines.append(robust[1])
     problem = _problem(params.name, None if robust is None else robust[0], report)
     outputs = _outputs(request, gait, spec, report)
-    return TaskResult(problem is None, problem, None, outputs, {**data, "files": {}}, tuple(lines))
+    outcome = WalkOutcome(gait, report, None if robust is None else robust[0])
+    return TaskResult(problem is None, problem, None, outputs, {**data, "files": {}}, tuple(lines), value=outcome)
