@@ -45,6 +45,16 @@ def test_the_readme_import_path_gives_the_walk_controller():
     assert WalkController is Direct
 
 
+def test_the_walk_controller_makes_the_steered_walk(spec):
+    """``WalkController.steerable()``: the way to a steered walk from the walk controller (a class method, no patched
+    attribute), the same walk as ``SteerableWalk.make()``; both walks share the stabilised walk."""
+    from op2motion.gait.stabilised import StabilisedWalk
+
+    walk = WalkController.steerable(spec, "steer")
+    assert isinstance(walk, SteerableWalk) and isinstance(walk, StabilisedWalk)
+    assert walk.params == SteerableWalk.make(spec, "steer").params and issubclass(WalkController, StabilisedWalk)
+
+
 # -- command timelines ------------------------------------------------------------------------------------------
 
 

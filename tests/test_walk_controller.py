@@ -11,8 +11,9 @@ from helpers import run_cli
 
 from op2motion.errors import InputError
 from op2motion.gait import load_preset
-from op2motion.gait.controller import OPEN_LOOP, STOCK_GYRO_GAINS_S, Feedback, WalkController, _swing_phase
+from op2motion.gait.controller import OPEN_LOOP, STOCK_GYRO_GAINS_S, Feedback, WalkController
 from op2motion.gait.speeds import SPEED_SHARE, gait_within_speed, speed_check
+from op2motion.gait.stabilised import _swing_phase
 from op2motion.kinematics.leg_ik import leg_fk
 from op2motion.physics import family
 from op2motion.physics.robust import FRICTION_RANGE, LATENCY_S, STIFFNESS_RANGE, UNSTATED_TORSO

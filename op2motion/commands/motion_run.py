@@ -15,17 +15,27 @@ if TYPE_CHECKING:
 
 
 def motion_physics_args(p: argparse.ArgumentParser) -> None:
-    """--validate, --engine, --push, --plot and --csv."""
+    """--validate, --engine, --push, --ball, --plot and --csv."""
     physics_args(p, True, "with --validate: push the torso N newtons for 0.1 s halfway through (four directions)")
+    p.add_argument("--ball", type=float, nargs=2, metavar=("X", "Y"),
+                   help="with --validate: a size-1 football on the floor at X Y [m] (the start's support sole's frame: "
+                        "X forward, Y left; e.g. 0.14 -0.086 in front of the right foot from walk-ready); the report "
+                        "says how fast and which way the motion sent it")
     p.add_argument("--plot", type=png_path, metavar="PNG", help="q, q̇, q̈ per joint and the CoM/ZMP/CoP tracks")
     p.add_argument("--csv", type=output_path, metavar="CSV", help="the goals every 8 ms as CSV")
 
 
 def motion_check(args: argparse.Namespace) -> MotionCheck:
     """The check and outputs the flags ask for (``--out`` where the command has it)."""
+    from op2motion.errors import InputError
+    from op2motion.physics import Ball
     from op2motion.tasks.motion import MotionCheck
 
-    return MotionCheck(args.validate, engines_of(args), args.push, args.plot, args.csv, getattr(args, "out", None))
+    ball = getattr(args, "ball", None)
+    if ball is not None and not args.validate:
+        raise InputError("expected --ball only with --validate (the ball lies in the physics check)", "ball")
+    return MotionCheck(args.validate, engines_of(args), args.push, args.plot, args.csv, getattr(args, "out", None),
+                       None if ball is None else Ball(*ball))
 
 
 def motion_outputs(args: argparse.Namespace) -> OutputSet:

@@ -32,7 +32,6 @@ import numpy as np
 from op2motion.errors import Op2MotionError
 from op2motion.formats.action import ActionFile
 from op2motion.gait.commands import CommandTimeline
-from op2motion.gait.controller import LANDING_ROWS, WalkController
 from op2motion.gait.envelope import STEER_ENVELOPE, Envelope
 from op2motion.gait.feedback import Feedback
 from op2motion.gait.measures import WALK_HOLD_S, WALK_SETTLE_S, walk_measures
@@ -40,6 +39,7 @@ from op2motion.gait.params import GaitParams
 from op2motion.gait.phases import Intent
 from op2motion.gait.presets import load_preset
 from op2motion.gait.rolling import RollingPlanner
+from op2motion.gait.stabilised import LANDING_ROWS, StabilisedWalk
 from op2motion.gait.steer_feedback import RollingCalibration, RollingLearner, RollingOdometry
 from op2motion.gait.timeline import ticks
 from op2motion.kinematics import small
@@ -54,7 +54,7 @@ STAND_PLAN_S = 5.0                  # the plan of a walk given no commands: stan
 SETTLE_AFTER_STOP_S = 0.5           # a planned walk ends this long after it stands again after its stop [s]
 
 
-class SteerableWalk(WalkController):
+class SteerableWalk(StabilisedWalk):
     """A walk planned while it walks, from commands (see the module docstring); it stops itself and resumes (the
     hooks of :class:`~op2motion.physics.controller.ControllerHooks`)."""
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Mapping, Sequence
+from typing import Sequence
 
 import numpy as np
 
@@ -197,14 +197,3 @@ def leg_ik_pose(leg: Leg, sole: Sequence[float], rot: Sequence[Sequence[float]])
                math.atan2(-m[2][0], m[2][2]), knee, ank, ank_roll)
     sign = leg.sign.tolist()
     return tuple([natural[i] * sign[i] for i in range(6)])
-
-
-def legs_ik(spec: Spec, soles: Mapping[Side, tuple[np.ndarray, np.ndarray]], base: np.ndarray) -> np.ndarray:
-    """Full servo rows (N, 20) [rad]: ``base`` (N, 20) or (20,) with both legs replaced by the IK of ``soles``
-    (side -> (positions (N, 3) [m], rotations (N, 3, 3)) in the torso frame)."""
-    n = len(next(iter(soles.values()))[0])
-    out = np.array(np.broadcast_to(np.asarray(base, dtype=float), (n, len(spec.joints))))
-    for side, (pos, rot) in soles.items():
-        leg = leg_of(spec, side)
-        out[:, list(leg.index)] = leg_ik(leg, pos, rot)
-    return out

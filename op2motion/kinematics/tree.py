@@ -36,9 +36,3 @@ def link_frames(spec: Spec, servo: np.ndarray) -> dict[str, tuple[np.ndarray, np
                                    origin)
             pending.remove(joint)
     return frames
-
-
-def joint_origins(spec: Spec, servo: np.ndarray) -> dict[str, np.ndarray]:
-    """Every joint's centre (3,) [m] in the torso frame (the child link's origin)."""
-    frames = link_frames(spec, servo)
-    return {j.name: frames[j.child][1] for j in spec.joints}

@@ -26,6 +26,7 @@ from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support, SupportName
 
 if TYPE_CHECKING:
+    from op2motion.formats.action import ActionFile
     from op2motion.physics import EngineName
 
 MIN_MOVE_S = 0.6                   # a move to the first pose takes at least this long (longer if the speed says so)
@@ -75,7 +76,7 @@ def then(first: Trajectory, second: Trajectory) -> Trajectory:
                       first.segment_names + second.segment_names, first.dt, first.notes + second.notes)
 
 
-def page_start(action: Any, page: int, spec: Spec, current: np.ndarray) -> Pose:
+def page_start(action: ActionFile, page: int, spec: Spec, current: np.ndarray) -> Pose:
     """The first step of action page ``page`` as a double-support pose (joints it leaves out stay where they are
     now, ``current`` (20,) [rad])."""
     from op2motion.bus.robot import angle_of
@@ -90,7 +91,7 @@ def page_start(action: Any, page: int, spec: Spec, current: np.ndarray) -> Pose:
     return Pose(f"page{page}_start", Support.DOUBLE, servo)
 
 
-def page_trajectory(action: Any, page: int, spec: Spec, start: Pose) -> Trajectory:
+def page_trajectory(action: ActionFile, page: int, spec: Spec, start: Pose) -> Trajectory:
     """Action page ``page`` played from ``start`` as the framework plays it (8 ms ticks, its own profile)."""
     from op2motion.motion.pipeline import play_page
 

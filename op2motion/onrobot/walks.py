@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
@@ -34,6 +34,11 @@ from op2motion.robot.imu import FALL_TILT_RAD
 from op2motion.robot.pose import Pose
 from op2motion.robot.spec import Spec
 from op2motion.robot.support import Support
+
+if TYPE_CHECKING:
+    from op2motion.formats.action import ActionFile
+    from op2motion.gait.commands import CommandTimeline
+    from op2motion.onrobot.teleop import Teleop
 
 MAX_TELEOP_S = 3600.0          # a walk steered by keys ends after this long at the latest [s]
 
@@ -59,8 +64,9 @@ def walk(port: RobotPort, spec: Spec, preset: str | None = None, steps: int | No
     return result
 
 
-def steered_walk(port: RobotPort, spec: Spec, preset: str | None = None, commands: Any = None, teleop: Any = None,
-                 action: Any = None, get_up: bool = False, options: Options = Options()) -> MotionResult:
+def steered_walk(port: RobotPort, spec: Spec, preset: str | None = None, commands: CommandTimeline | None = None,
+                 teleop: Teleop | None = None, action: ActionFile | None = None, get_up: bool = False,
+                 options: Options = Options()) -> MotionResult:
     """A steered walk on the robot: ``commands`` (a :class:`~op2motion.gait.commands.CommandTimeline`) feed it on
     its clock, ``teleop`` (a :class:`~.teleop.Teleop`) from the keys between ticks; the kicks are ``action``'s stock
     pages when it has them. It ends standing still after its stop (the timeline's end, the ``x`` key, or Ctrl-C),
@@ -134,7 +140,7 @@ def _approach(session: Session, state: Any, first: np.ndarray, result: MotionRes
     return run_planned(session, state, approach, result, "approach", options)
 
 
-def getup(port: RobotPort, spec: Spec, action: Any = None, options: Options = Options()) -> MotionResult:
+def getup(port: RobotPort, spec: Spec, action: ActionFile | None = None, options: Options = Options()) -> MotionResult:
     """Get the robot up from where it lies (:class:`~op2motion.motion.getup.GetUp`: the stock pages 10/11 when
     ``action`` has them, op2motion's own motions otherwise). Checked first in physics from the side it lies on
     (refused, exit 1, if it does not stand there, unless forced); runs until it stands (or gives up). A robot

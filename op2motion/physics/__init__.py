@@ -14,6 +14,7 @@ controller's :class:`Plan`. The result is a typed :class:`CheckReport`::
 
 from __future__ import annotations
 
+from op2motion.physics.ball import BALL_MASS_KG, BALL_RADIUS_M, Ball, BallReport
 from op2motion.physics.body import LYING, margin_to
 from op2motion.physics.controller import Controller, ControllerHooks, GoalMerger, Goals, Schedule, hooks_of
 from op2motion.physics.engine import Engine, make_engine
@@ -49,7 +50,8 @@ from op2motion.physics.scene import ENGINES, FLOOR_FRICTION, TIME_STEP_S, Engine
 from op2motion.physics.sensors import Sensors
 from op2motion.physics.track import Track
 
-__all__ = ["DEFAULT_SECONDS", "ENGINES", "FALL_REASONS", "FLOOR_FRICTION", "MAX_PUSH_N", "MAX_SECONDS",
+__all__ = ["BALL_MASS_KG", "BALL_RADIUS_M", "Ball", "BallReport",
+           "DEFAULT_SECONDS", "ENGINES", "FALL_REASONS", "FLOOR_FRICTION", "MAX_PUSH_N", "MAX_SECONDS",
            "LYING", "MIN_SECONDS", "MOTION_HOLD_S", "MOTION_SETTLE_S", "RAMP_S", "REASONS", "TIME_STEP_S",
            "CheckReport", "Controller", "ControllerHooks", "Engine", "EngineName", "EngineReport",
            "Failure", "FootLoad", "GoalMerger", "Goals", "hooks_of",

@@ -15,6 +15,7 @@ import numpy as np
 
 from op2motion.errors import InputError
 from op2motion.model.servo import ServoModel
+from op2motion.physics.ball import Ball
 from op2motion.physics.scene import ENGINES, FLOOR_FRICTION, TIME_STEP_S, Contact, EngineName
 from op2motion.robot.spec import Spec
 
@@ -47,23 +48,27 @@ class Engine(Protocol):
         """Velocity of the torso link frame's origin: linear [m/s] and angular [rad/s], both in the world frame."""
 
     def contacts(self) -> list[Contact]:
-        """Contacts of the robot with the floor (``other`` None) and with itself."""
+        """Contacts of the robot with the floor (``other`` None) and with itself (never the ball's)."""
+
+    def ball_state(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The ball's centre (3,) [m] and velocity (3,) [m/s], world frame (None: the world has no ball)."""
 
     def close(self) -> None:
         """Release the world."""
 
 
-def make_engine(name: EngineName, spec: Spec, servo: ServoModel, friction: float = FLOOR_FRICTION) -> Engine:
-    """A fresh world of engine ``name`` (one of :data:`ENGINES`) with the robot and a floor of Coulomb
-    ``friction``."""
+def make_engine(name: EngineName, spec: Spec, servo: ServoModel, friction: float = FLOOR_FRICTION,
+                ball: Ball | None = None) -> Engine:
+    """A fresh world of engine ``name`` (one of :data:`ENGINES`) with the robot, a floor of Coulomb ``friction``
+    and the ``ball`` (None: none)."""
     if name == "pybullet":
         from op2motion.physics.pybullet_engine import PyBulletEngine
 
-        return PyBulletEngine(spec, servo, TIME_STEP_S, friction=friction)
+        return PyBulletEngine(spec, servo, TIME_STEP_S, friction=friction, ball=ball)
     if name == "mujoco":
         from op2motion.physics.mujoco_engine import MuJoCoEngine
 
-        return MuJoCoEngine(spec, servo, TIME_STEP_S, friction)
+        return MuJoCoEngine(spec, servo, TIME_STEP_S, friction, ball)
     raise InputError(f"expected one of {', '.join(ENGINES)}, got {name!r}", "engine")
 
 

@@ -14,7 +14,8 @@ import numpy as np
 
 from op2motion.model.servo import ServoModel
 from op2motion.model.urdf import URDF_ROOT, build_urdf, frame_points
-from op2motion.physics.scene import FLOOR_FRICTION, Contact
+from op2motion.physics.ball import Ball
+from op2motion.physics.scene import BALL_NAME, FLOOR_FRICTION, Contact
 from op2motion.robot.spec import GRAVITY_M_S2, Spec
 
 SOLREF = (0.005, 1.0)                    # contact time constant [s] and damping ratio
@@ -27,7 +28,8 @@ class MuJoCoEngine:
 
     name = "mujoco"
 
-    def __init__(self, spec: Spec, servo: ServoModel, time_step: float, friction: float = FLOOR_FRICTION):
+    def __init__(self, spec: Spec, servo: ServoModel, time_step: float, friction: float = FLOOR_FRICTION,
+                 ball: Ball | None = None):
         import mujoco
 
         self.mj, self.spec, self.servo, self.time_step = mujoco, spec, servo, time_step
@@ -49,6 +51,14 @@ class MuJoCoEngine:
             if g.name != "floor":
                 g.friction, g.solref, g.solimp, g.condim = coefficients, list(SOLREF), list(SOLIMP), 3
         ms.body(URDF_ROOT).add_freejoint(name="root")
+        if ball is not None:
+            sphere = ms.worldbody.add_body(name=BALL_NAME, pos=ball.centre.tolist(), mass=ball.mass_kg,
+                                           ipos=[0.0, 0.0, 0.0], inertia=[ball.inertia_kg_m2] * 3,
+                                           explicitinertial=True)      # its centre of mass at its centre
+            sphere.add_freejoint(name=BALL_NAME)
+            sphere.add_geom(name=BALL_NAME, type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[ball.radius_m, 0, 0],
+                            friction=coefficients, solref=list(SOLREF), solimp=list(SOLIMP),
+                            condim=3)
         limit = servo.torque_max
         for j in ms.joints:
             if j.type != mujoco.mjtJoint.mjJNT_HINGE:
@@ -64,9 +74,14 @@ class MuJoCoEngine:
         self.qadr = np.array([m.jnt_qposadr[m.joint(n).id] for n in spec.joint_names])
         self.dadr = np.array([m.jnt_dofadr[m.joint(n).id] for n in spec.joint_names])
         self.root = m.body(spec.root_link).id
+        self.root_qadr = int(m.jnt_qposadr[m.joint("root").id])     # the torso's free joint (a ball has one too)
         self.floor = m.geom("floor").id
         self.body_name = {i: m.body(i).name for i in range(m.nbody)}
         self.geom_body = [self.body_name[int(b)] for b in m.geom_bodyid]      # each geom's body, by geom id
+        self.ball = m.body(BALL_NAME).id if ball is not None else None
+        self.ball_qadr = int(m.jnt_qposadr[m.joint(BALL_NAME).id]) if ball is not None else -1
+        self.ball_dof = int(m.jnt_dofadr[m.joint(BALL_NAME).id]) if ball is not None else -1
+        self.ball_geom = m.geom(BALL_NAME).id if ball is not None else -1
 
     def close(self) -> None:
         """Nothing to release."""
@@ -81,7 +96,8 @@ class MuJoCoEngine:
         mj.mj_resetData(self.model, d)
         quat = np.zeros(4)
         mj.mju_mat2Quat(quat, np.asarray(base_rot, dtype=float).reshape(-1))
-        d.qpos[0:3], d.qpos[3:7] = base_pos, quat
+        r = self.root_qadr
+        d.qpos[r:r + 3], d.qpos[r + 3:r + 7] = base_pos, quat
         d.qpos[self.qadr] = q
         mj.mj_forward(self.model, d)
 
@@ -113,6 +129,13 @@ class MuJoCoEngine:
         self.mj.mj_objectVelocity(self.model, self.data, self.mj.mjtObj.mjOBJ_BODY, self.root, twist, 0)
         return twist[3:].copy(), twist[:3].copy()
 
+    def ball_state(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The ball's centre (3,) [m] and velocity (3,) [m/s], world frame (None: no ball)."""
+        if self.ball is None:
+            return None
+        q, v = self.ball_qadr, self.ball_dof             # a free joint: position, then linear velocity (world)
+        return self.data.qpos[q:q + 3].copy(), self.data.qvel[v:v + 3].copy()
+
     def contacts(self) -> list[Contact]:
         """Contacts of the robot with the floor (``other`` None) and with itself, at the current state."""
         mj, m, d = self.mj, self.model, self.data
@@ -129,6 +152,8 @@ class MuJoCoEngine:
         points, normal = con.pos.copy(), local[:, 0].tolist()
         out = []
         for i, (g0, g1) in enumerate(con.geom.tolist()):
+            if self.ball_geom in (g0, g1):                          # the ball's contacts are not the robot's
+                continue
             if self.floor in (g0, g1):
                 robot, force = (g1, on_g1[i]) if g0 == self.floor else (g0, -on_g1[i])
                 out.append(Contact(self.geom_body[robot], None, normal[i], force, points[i]))

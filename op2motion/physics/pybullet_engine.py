@@ -27,6 +27,7 @@ import numpy as np
 from op2motion.kinematics.frames import quat_xyzw
 from op2motion.model.servo import ServoModel
 from op2motion.model.urdf import URDF_ROOT, build_urdf
+from op2motion.physics.ball import Ball
 from op2motion.physics.scene import FLOOR_FRICTION, Contact
 from op2motion.robot.spec import GRAVITY_M_S2, Spec
 
@@ -82,7 +83,7 @@ class PyBulletEngine:
     name = "pybullet"
 
     def __init__(self, spec: Spec, servo: ServoModel, time_step: float, use_inertia_from_file: bool = True,
-                 friction: float = FLOOR_FRICTION):
+                 friction: float = FLOOR_FRICTION, ball: Ball | None = None):
         with quiet_c_output():
             import pybullet as pb
             from pybullet_utils import bullet_client
@@ -118,6 +119,11 @@ class PyBulletEngine:
         self.torso = self.link_index[spec.root_link]
         self._dq = np.zeros(len(self.joints))
         self._zero = [0.0] * len(self.joints)
+        self.ball_spec, self.ball = ball, None
+        if ball is not None:
+            sphere = c.createCollisionShape(pb.GEOM_SPHERE, radius=ball.radius_m)
+            self.ball = c.createMultiBody(ball.mass_kg, sphere, -1, ball.centre.tolist())
+            c.changeDynamics(self.ball, -1, lateralFriction=friction, localInertiaDiagonal=[ball.inertia_kg_m2] * 3)
 
     def close(self) -> None:
         """Disconnect."""
@@ -136,6 +142,9 @@ class PyBulletEngine:
         com = c.multiplyTransforms(tuple(base_pos), orn, *self._inertial)
         c.resetBasePositionAndOrientation(self.robot, com[0], com[1])
         c.resetBaseVelocity(self.robot, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+        if self.ball is not None and self.ball_spec is not None:
+            c.resetBasePositionAndOrientation(self.ball, self.ball_spec.centre.tolist(), (0.0, 0.0, 0.0, 1.0))
+            c.resetBaseVelocity(self.ball, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
         self._dq[:] = 0.0
 
     def set_gravity(self, scale: float) -> None:
@@ -178,9 +187,18 @@ class PyBulletEngine:
         return (np.array([vx + wy * rz - wz * ry, vy + wz * rx - wx * rz, vz + wx * ry - wy * rx]),
                 np.array([wx, wy, wz]))
 
+    def ball_state(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The ball's centre (3,) [m] and velocity (3,) [m/s], world frame (None: no ball)."""
+        if self.ball is None:
+            return None
+        c = self.client
+        return np.array(c.getBasePositionAndOrientation(self.ball)[0]), np.array(c.getBaseVelocity(self.ball)[0])
+
     def contacts(self) -> list[Contact]:
-        """Contacts of the robot with the floor (``other`` None) and with itself."""
+        """Contacts of the robot with the floor (``other`` None) and with itself (the ball's are not the robot's)."""
         points = self.client.getContactPoints(self.robot)
+        if self.ball is not None:
+            points = [cp for cp in points if cp[2] != self.ball]
         if not points:
             return []
         # all contacts at once: (normal force, friction 1, friction 2) and their directions (the normal on B,

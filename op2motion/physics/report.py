@@ -23,7 +23,8 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from typing import Any, Protocol
 
-from op2motion.jsonout import JsonObject
+from op2motion.jsonout import JsonObject, json_object
+from op2motion.physics.ball import BallReport
 from op2motion.physics.scene import EngineName
 from op2motion.robot.sides import Side
 
@@ -140,6 +141,7 @@ class RunReport:
     feet: dict[str, FootLoad] = field(default_factory=dict)
     motion: MotionMeasures | None = None
     walk: Any = None                 # the plan's own measurements (:attr:`.plan.Plan.measure`; a walk's), if any
+    ball: BallReport | None = None   # what the run did to a ball on the floor (:mod:`.ball`), if one lay there
     snapshot_png: bytes | None = field(default=None, repr=False, compare=False)
     track: Any = field(default=None, repr=False, compare=False)     # the samples (:class:`.track.Track`), if kept
 
@@ -179,8 +181,10 @@ class RunReport:
     def as_dict(self) -> JsonObject:
         """JSON-ready (without the snapshot and the plan's own (a walk's) measurements)."""
         out = asdict(self)
-        for key in ("snapshot_png", "motion", "walk", "track"):
+        for key in ("snapshot_png", "motion", "walk", "track", "ball"):
             del out[key]
+        if self.ball is not None:                  # a key only where a ball lay (the reports without one unchanged)
+            out["ball"] = json_object(self.ball)
         out.update(stable=self.stable, reasons=self.reasons, torque_ok=self.torque_ok, reason=self.reason)
         m = self.motion
         out.update(tracking_max_deg=m.tracking_max_deg if m else {}, tracking_rms_deg=m.tracking_rms_deg if m else {},

@@ -18,6 +18,7 @@ import numpy as np
 
 from op2motion.errors import InputError
 from op2motion.model.servo import ServoModel
+from op2motion.physics.ball import Ball, BallWatch
 from op2motion.physics.body import LYING, Body
 from op2motion.physics.controller import Controller
 from op2motion.physics.engine import ENGINES, make_engine, snapshot_png
@@ -47,7 +48,8 @@ class Setup:
     (:class:`.track.Track`, e.g. to plot the joints); ``full_length`` plays every run for the plan's whole
     duration (by default a run ends once settled or fallen, :mod:`.stopping`); ``lying`` starts every run lying on
     the floor (``front``: face down, ``back``: face up, ``left`` or ``right``: on that side; the plan's first goals
-    laid on the floor, :func:`.body.lying_placement`) instead of on the feet."""
+    laid on the floor, :func:`.body.lying_placement`) instead of on the feet; ``ball`` lays a ball on the floor in
+    every run (:mod:`.ball`: each run reports what it did to it)."""
 
     stiffness: float = 1.0
     voltage: float | None = None
@@ -57,6 +59,7 @@ class Setup:
     sensors: Sensors = Sensors()
     full_length: bool = False
     lying: str | None = None
+    ball: Ball | None = None
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.friction) and 0.0 < self.friction <= MAX_FRICTION):
@@ -146,17 +149,26 @@ class _Runner:
     def run(self, engine_name: EngineName, run: RunSetup = RunSetup(), snapshot: bool = False,
             keep_track: bool = False) -> RunReport:
         """One run in a fresh world, judged and measured."""
-        engine = make_engine(engine_name, self.spec, self.servo, self.setup.friction)
+        engine = make_engine(engine_name, self.spec, self.servo, self.setup.friction, self.setup.ball)
         run = replace(run, sensors=self.setup.sensors, full_length=run.full_length or self.setup.full_length,
                       lying=self.setup.lying)
         plan = self.controller.plan
+        watch = None if self.setup.ball is None else BallWatch(engine, self.setup.ball)
+
+        def on_tick(t: float) -> None:
+            self._tick(t)
+            if watch is not None:
+                watch.sample(t)
+
         try:
-            track, start = simulate(engine, self.body, self.controller, self.servo, run, self._tick)
+            track, start = simulate(engine, self.body, self.controller, self.servo, run, on_tick)
             judged = judge(track, start, plan, self.spec, self.tilt_limit)
             report = run_report(track, start, plan, self.spec, judged,
                                 RunSetupFacts(engine_name, self.servo, engine.time_step))
             if plan.measure is not None:
                 report = replace(report, walk=plan.measure(track, start, plan, self.spec))
+            if watch is not None:
+                report = replace(report, ball=watch.report())
             if snapshot:
                 report = replace(report, snapshot_png=snapshot_png(engine, self.spec, self.servo))
             return replace(report, track=track) if keep_track else report

@@ -14,6 +14,7 @@ import numpy as np
 
 FLOOR_FRICTION = 0.8
 TIME_STEP_S = 0.001
+BALL_NAME = "ball"          # the ball's body (:mod:`.ball`), apart from the robot's links
 #: A physics engine that judges a run.
 EngineName = Literal["pybullet", "mujoco"]
 ENGINES: tuple[EngineName, ...] = get_args(EngineName)

@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from op2motion.motion.cartesian import LineMove, LineRequest
     from op2motion.motion.checks import MotionChecks
     from op2motion.motion.trajectory import Trajectory
-    from op2motion.physics import CheckReport, EngineName
+    from op2motion.physics import Ball, CheckReport, EngineName
     from op2motion.robot.pose import Pose
 
 
@@ -41,8 +41,8 @@ class CheckedMotion:
 @dataclass(frozen=True)
 class MotionCheck:
     """How a motion is checked and what it writes: physics (``validate``, in ``engines``, pushed ``push_n`` [N]
-    halfway through when above 0), and the outputs asked for (``plot`` PNG, ``csv`` of the goals, ``motion_file``
-    path for the motion file; None: not asked)."""
+    halfway through when above 0, a ``ball`` on the floor: what the motion does to it is reported), and the outputs
+    asked for (``plot`` PNG, ``csv`` of the goals, ``motion_file`` path for the motion file; None: not asked)."""
 
     validate: bool = False
     engines: tuple[EngineName, ...] = ("pybullet",)
@@ -50,6 +50,7 @@ class MotionCheck:
     plot: str | None = None
     csv: str | None = None
     motion_file: str | None = None
+    ball: Ball | None = None
 
 
 def goals_beyond_range(trajectory: Trajectory, spec: Spec) -> str | None:
@@ -83,6 +84,8 @@ def _physics_lines(report: CheckReport) -> list[str]:
         worst = f"{m.worst_torque.torque_nm:.2f} N·m at {m.worst_torque.joint}" if m else "-"
         tracking = max(m.tracking_max_deg.values()) if m else 0.0
         lines.append(f"  {engine}: {e.run.summary()}; tracking error <= {tracking:.1f}°, worst torque {worst}")
+        if e.run.ball is not None:
+            lines.append(f"  {engine}: {e.run.ball.describe()}")
     return lines
 
 
@@ -106,7 +109,7 @@ def check_motion(trajectory: Trajectory, spec: Spec, how: MotionCheck, told: Tol
     from op2motion.figures.motion import render_motion
     from op2motion.formats.tables import goals_csv
     from op2motion.motion.checks import check_trajectory, in_sole_frame
-    from op2motion.physics import Pushes, check
+    from op2motion.physics import Pushes, Setup, check
 
     unreachable = goals_beyond_range(trajectory, spec)
     if unreachable:
@@ -114,7 +117,7 @@ def check_motion(trajectory: Trajectory, spec: Spec, how: MotionCheck, told: Tol
     report = None
     if how.validate:
         report = check(trajectory.schedule(spec), spec, how.engines, Pushes(how.push_n) if how.push_n else None,
-                       on_progress=on_progress)
+                       setup=Setup(ball=how.ball), on_progress=on_progress)
     checks = check_trajectory(trajectory, spec)      # one frame, the fixed foot's, with or without physics
     data = {**data, "checks": checks.summary()}
     if report is not None:
