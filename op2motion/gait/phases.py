@@ -12,10 +12,11 @@ ZMP reference (:class:`Phase`):
 :func:`next_phase` decides from :class:`WalkState` (where the feet are, the body's path, the stride of the last step,
 which foot swings next) and :class:`Intent` (the commanded stride, and whether to stop): each step's stride moves
 towards the commanded one within the acceleration limits (:meth:`.envelope.Envelope.towards`); a zero command brings
-the stride down the same way and then closes the feet; :meth:`Intent.stop` ends within two steps (one at half the
-stride if it was long, :data:`CLOSE_SHARE`, then the closing one). The body's path advances by the stride per step and
-each foot lands half the step width beside it (:mod:`.footsteps`); a step whose side step or turn would bring the
-swing foot within :data:`~.footsteps.FOOT_GAP_M` of the standing one takes less of them (:func:`_clear_stride`).
+the stride down the same way (to within :data:`CLOSE_SHARE` of the envelope) and then stops as a stop does;
+:meth:`Intent.stop` takes a step at half the stride (unless the robot stood still) and then the one that closes the
+feet. The body's path advances by the stride per step and each foot lands half the step width beside it
+(:mod:`.footsteps`); a step whose side step or turn would bring the swing foot within
+:data:`~.footsteps.FOOT_GAP_M` of the standing one takes less of them (:func:`_clear_stride`).
 The same program, run ahead on a copy of the state, predicts the phases the ZMP preview looks at.
 """
 
@@ -34,7 +35,7 @@ from op2motion.robot.spec import Spec
 from op2motion.robot.support import Side, SupportName, other_side
 
 STAND_S = 0.16              # a standing phase [s] (the command is looked at again after each)
-CLOSE_SHARE = 0.5           # a stop closes the feet at once from a stride within this share of the envelope's
+CLOSE_SHARE = 0.5           # a zero command closes the feet once the stride is within this share of the envelope's
 SHRINK = (1.0, 0.75, 0.5, 0.25, 0.0)   # shares of a side step and turn tried until the swing foot stays clear
 
 
@@ -126,6 +127,11 @@ def _small(stride: Stride, envelope: Envelope, step_s: float) -> bool:
                for v, lim in zip((stride.dx, stride.dy, stride.dyaw), limits))
 
 
+def _still(stride: Stride) -> bool:
+    """No stride at all (to rounding): the feet close from it at once."""
+    return all(abs(v) <= 1e-12 for v in (stride.dx, stride.dy, stride.dyaw))
+
+
 def _clear_stride(state: WalkState, stride: Stride, width: float, spec: Spec) -> tuple[Stride, Footstep]:
     """The stride the swing foot can take without coming near the standing foot (its side step and turn shrunk as
     :data:`SHRINK` says) and where that foot lands."""
@@ -190,13 +196,16 @@ def next_phase(state: WalkState, intent: Intent, params: GaitParams, spec: Spec,
         return phase, replace(state, mode="walk", swing=swing, centre=centre, stride=Stride(),
                               row=state.row + n_start)
     step_s = params.step_s
-    if intent.stop or intent.stride.still:
-        if _small(state.stride, envelope, step_s) or (intent.stop and state.halved):
+    if intent.stop or (intent.stride.still and _small(state.stride, envelope, step_s)):
+        # a stop (or a zero command) comes unannounced: the preview has not seen the closing step, which a half step
+        # first gives it time to (closing at once put the planned ZMP outside the soles from any stride:
+        # docs/steering.md)
+        if state.halved or _still(state.stride):
             return _step(state, Stride(), params, spec, closing=True)
-        if intent.stop:
-            phase, nxt = _step(state, state.stride.scaled(0.5), params, spec)
-            return phase, replace(nxt, halved=True)
-    return _step(state, envelope.towards(state.stride, intent.stride, step_s), params, spec)
+        phase, nxt = _step(state, state.stride.scaled(0.5), params, spec)
+        return phase, replace(nxt, halved=True)
+    phase, nxt = _step(state, envelope.towards(state.stride, intent.stride, step_s), params, spec)
+    return phase, replace(nxt, halved=False)
 
 
 def predict(state: WalkState, intent: Intent, params: GaitParams, spec: Spec, envelope: Envelope,

@@ -116,7 +116,6 @@ class RollingPlanner:
         self.params, self.spec, self.envelope, self.legs, self.action = params, spec, envelope, dict(legs), action
         self.pending_kick: Side | None = None                    # a kick asked for (right or left), not yet planned
         self.row_now = -1                                       # the last row handed to the controller
-        self.stop_row: int | None = None                        # the row a stop was asked at
         self.state: WalkState = initial_state(params, spec) if seed is None else seed.state
         self.height = standing_height(params, spec)
         self.rows = RowBuffer(len(spec.joints)) if seed is None else seed.rows
@@ -209,10 +208,10 @@ class RollingPlanner:
 
     def stop(self) -> None:
         """A stop asked now: drop the planning in progress (it read the intent before; it starts again at the next
-        tick, finishing at once if the phase is due before its stages are through), and note the row, so that a
-        step already planned to begin after it counts as one of the two steps a stop may take."""
+        tick, finishing at once if the phase is due before its stages are through). A step already planned to begin
+        after it is walked; then the half step and the closing one (:func:`.phases.next_phase`): the preview sees
+        the closing step a step ahead, which closing right after the planned step would not give it."""
         self.task = None
-        self.stop_row = self.row_now
 
     def _plan(self, intent: Intent) -> Iterator[None]:
         """Plan the next phase (the module docstring's steps), yielding between stages; commit it at the end. A kick
@@ -223,9 +222,6 @@ class RollingPlanner:
                 self._kick(self.pending_kick)
                 return
             intent = replace(intent, stop=True)
-        if intent.stop and self.stop_row is not None and self.state.mode == "walk" and any(
-                p.kind == "step" and first > self.stop_row for first, p in self.phases):
-            self.state = replace(self.state, halved=True)     # a step already began after the stop: close next
         phase, after = next_phase(self.state, intent, self.params, self.spec, self.envelope)
         preview = len(self.gains.gp)
         ahead = predict(after, intent, self.params, self.spec, self.envelope,
