@@ -247,6 +247,9 @@ def test_a_command_takes_effect_from_the_next_step_and_stop_ends_in_done(spec):
 BRANCH_LEAD_S = 0.32        # the stop tests' shared walk ends this long before their earliest stop [s]
 STOP_END_S = 1.05           # a stop at 0.25 m/s has closed the feet this soon [s]: up to three steps of 0.32 s
 STOP_ZMP_MARGIN_M = 0.0     # ... with the planned ZMP inside the soles all the way [m]
+#: A stop as the first step is planned [m]: inside the soles from a slow command; from 0.25 m/s the first step, planned
+#: already at the command's stride, leaves the planned ZMP 8 mm outside (it was 29 mm: docs/steering.md)
+JUST_STARTED_MARGIN_M = {0.08: 0.0, 0.25: -0.010}
 
 
 @pytest.fixture(scope="module")
@@ -287,8 +290,9 @@ def test_a_stop_at_any_tick_closes_the_feet_after_a_half_step_with_the_zmp_insid
 @pytest.mark.parametrize("speed", [0.25, 0.08])
 def test_a_commanded_stop_anywhere_in_a_step_keeps_the_planned_zmp_inside_the_soles(spec, speed):
     """A stop in a command timeline at five points of one step (at 3.856 s the next step is already planned:
-    closing right after it put the planned ZMP 62 mm outside the soles at 0.25 m/s), and a zero command from the same
-    walk (closing at once from a slow stride put it 22 mm outside): the planned ZMP inside the soles all the way."""
+    closing right after it put the planned ZMP 62 mm outside the soles at 0.25 m/s), a zero command from the same
+    walk (closing at once from a slow stride put it 22 mm outside): the planned ZMP inside the soles all the way; and a
+    stop as the walk has just started (closing at once from the start put it 28 mm outside)."""
     from op2motion.gait.steer import planned_summary
 
     def margin(rows: str) -> float:
@@ -298,6 +302,7 @@ def test_a_commanded_stop_anywhere_in_a_step_keeps_the_planned_zmp_inside_the_so
     for t_s in 3.6 + np.arange(5) * STEP_S / 5:
         assert margin(f"{t_s:.3f},,,,stop\n") >= STOP_ZMP_MARGIN_M, t_s
     assert margin("3.6,0,0,0,\n6,,,,stop\n") >= STOP_ZMP_MARGIN_M
+    assert margin("2.2,,,,stop\n") >= JUST_STARTED_MARGIN_M[speed]
 
 
 def test_a_copied_walk_walks_on_as_the_original(spec, walking):

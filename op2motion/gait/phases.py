@@ -13,9 +13,9 @@ ZMP reference (:class:`Phase`):
 which foot swings next) and :class:`Intent` (the commanded stride, and whether to stop): each step's stride moves
 towards the commanded one within the acceleration limits (:meth:`.envelope.Envelope.towards`); a zero command brings
 the stride down the same way (to within :data:`CLOSE_SHARE` of the envelope) and then stops as a stop does;
-:meth:`Intent.stop` takes a step at half the stride (unless the robot stood still) and then the one that closes the
-feet. The body's path advances by the stride per step and each foot lands half the step width beside it
-(:mod:`.footsteps`); a step whose side step or turn would bring the swing foot within
+:meth:`Intent.stop` takes a step at half the stride (in place from a standstill: the robot has just started) and
+then the one that closes the feet. The body's path advances by the stride per step and each foot lands half the step
+width beside it (:mod:`.footsteps`); a step whose side step or turn would bring the swing foot within
 :data:`~.footsteps.FOOT_GAP_M` of the standing one takes less of them (:func:`_clear_stride`).
 The same program, run ahead on a copy of the state, predicts the phases the ZMP preview looks at.
 """
@@ -127,11 +127,6 @@ def _small(stride: Stride, envelope: Envelope, step_s: float) -> bool:
                for v, lim in zip((stride.dx, stride.dy, stride.dyaw), limits))
 
 
-def _still(stride: Stride) -> bool:
-    """No stride at all (to rounding): the feet close from it at once."""
-    return all(abs(v) <= 1e-12 for v in (stride.dx, stride.dy, stride.dyaw))
-
-
 def _clear_stride(state: WalkState, stride: Stride, width: float, spec: Spec) -> tuple[Stride, Footstep]:
     """The stride the swing foot can take without coming near the standing foot (its side step and turn shrunk as
     :data:`SHRINK` says) and where that foot lands."""
@@ -200,7 +195,7 @@ def next_phase(state: WalkState, intent: Intent, params: GaitParams, spec: Spec,
         # a stop (or a zero command) comes unannounced: the preview has not seen the closing step, which a half step
         # first gives it time to (closing at once put the planned ZMP outside the soles from any stride:
         # docs/steering.md)
-        if state.halved or _still(state.stride):
+        if state.halved:
             return _step(state, Stride(), params, spec, closing=True)
         phase, nxt = _step(state, state.stride.scaled(0.5), params, spec)
         return phase, replace(nxt, halved=True)
